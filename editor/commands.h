@@ -1,0 +1,11 @@
+/// @file commands.h
+/// @brief The subcommands of `spotshell`. Each takes the arguments after its name, returns the
+/// exit code, and throws InputError (exit 2) or anything else (exit 1) on failure.
+#pragma once
+
+namespace spot::cmd {
+
+int info(int argc, char** argv);
+int impulses(int argc, char** argv);
+
+} // namespace spot::cmd

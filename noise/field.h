@@ -1,0 +1,86 @@
+/// @file field.h
+/// @brief Fields: the artist-controlled quantities (density, orientation, scale, colour, weight)
+/// evaluated at points on the surface.
+///
+/// A field is described by data (`FieldDesc`, parsed from a preset, no I/O) and bound to a mesh
+/// by `makeField`, which loads what it needs (an image) and checks what it refers to (a vertex
+/// attribute). Kinds: constant, linear gradient, smooth value noise, vertex attribute, image map
+/// through uv. The painted sparse grid of the editor is one more `Field` subclass that reads
+/// `SurfacePoint::position` (it needs no uv), so nothing here has to change for it.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace spot::noise {
+
+struct Mesh;
+
+/// Where a field is evaluated: a point on the mesh surface, world units.
+struct SurfacePoint {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f, 0.0f, 1.0f};  ///< unit, interpolated vertex normal
+    glm::vec3 tangent{1.0f, 0.0f, 0.0f}; ///< unit, _|_ normal: +u direction, or a stable basis
+    glm::vec2 uv{0.0f};                  ///< valid when the mesh has uv
+    std::uint32_t triangle = 0;          ///< index into Mesh::triangles
+    glm::vec3 barycentric{1.0f, 0.0f, 0.0f};
+};
+
+/// Parsed description of a field. Values are 1 or 3 components (`components`, fixed by the slot
+/// the field fills: density is scalar, colour is RGB); scalars are stored in `.x`.
+struct FieldDesc {
+    enum class Kind { Constant, Gradient, Noise, Vertex, Image };
+    Kind kind = Kind::Constant;
+    int components = 1;
+
+    glm::vec3 value{0.0f}; ///< Constant
+
+    /// Gradient: `lo` at `from`, `hi` at `to` (world units), linear along from->to, clamped.
+    /// Noise and Image: the output maps [0,1] to [lo, hi].
+    glm::vec3 lo{0.0f};
+    glm::vec3 hi{1.0f};
+    glm::vec3 from{0.0f};
+    glm::vec3 to{0.0f, 1.0f, 0.0f};
+
+    float frequency = 1.0f; ///< Noise: cells per world unit
+    int octaves = 1;        ///< Noise: fractal octaves, each at double frequency, half amplitude
+    std::uint32_t seed = 0; ///< Noise: its own seed, independent of the impulse seed
+
+    std::vector<std::string> attributes; ///< Vertex: one attribute name per component
+
+    std::string file;     ///< Image: path, relative paths resolved against the preset's folder
+    int channel = 0;      ///< Image: first channel read
+    bool repeat = true;   ///< Image: wrap mode for uv outside [0,1] (else clamp)
+};
+
+/// Inclusive bounds of every value a field can return (componentwise).
+struct FieldRange {
+    glm::vec3 lo{0.0f};
+    glm::vec3 hi{0.0f};
+};
+
+class Field {
+public:
+    virtual ~Field() = default;
+    /// Value at a surface point; scalars in `.x`, unused components zero.
+    virtual glm::vec3 eval(const SurfacePoint& p) const = 0;
+    /// Bounds of every value `eval` can return.
+    virtual FieldRange range() const = 0;
+};
+
+/// Bind a description to a mesh. Throws InputError naming `context` (e.g. "preset fur.json,
+/// fields.density") for a missing attribute, a mesh without uv under an image field, or an
+/// unreadable, corrupt or oversized image.
+std::unique_ptr<Field> makeField(const FieldDesc& desc, const Mesh& mesh,
+                                 const std::filesystem::path& baseDir, const std::string& context);
+
+/// Smooth 3D value noise in [0,1] (quintic interpolation of hashed lattice values), fractal sum
+/// normalized to [0,1]. Deterministic for a seed.
+float valueNoise(glm::vec3 p, int octaves, std::uint32_t seed);
+
+} // namespace spot::noise

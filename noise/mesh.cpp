@@ -1,0 +1,2 @@
+// Implemented by the mesh work package (see noise/mesh.h).
+#include "noise/mesh.h"

@@ -1,0 +1,2 @@
+// Implemented by the preset/field work package.
+#include "noise/preset.h"

@@ -1,0 +1,289 @@
+/* spot_shared.h: the one source of the math that both the CPU and the GPU run.
+ *
+ * This file compiles as GLSL (450) and as C++ (with GLM). In C++ it is never included directly:
+ * shaders/spot_shared.hpp includes it twice, once inside namespace spot::shared::f32 with
+ * `real` = float (the GPU's twin, for tests) and once inside spot::shared::f64 with `real` =
+ * double (the CPU reference). In GLSL `real` is float. Keep to the common subset of the two
+ * languages: no templates, no references (use SPOT_OUT), no recursion, no pointers, uint
+ * arithmetic that wraps, literals wrapped in real(...).
+ *
+ * Spaces: "world" is the mesh's space; "kernel space" has x = comb direction in the tangent
+ * plane, y = bitangent, z = surface normal, in kernel units (world length = kernel units x the
+ * impulse's scale); "lobe space" is where a lobe is the unit isotropic Gaussian exp(-|u|^2/2).
+ */
+#ifndef __cplusplus
+#define real float
+#define rvec2 vec2
+#define rvec3 vec3
+#define rmat3 mat3
+#define SPOT_OUT(T) out T
+#define SPOT_INOUT(T) inout T
+#define SPOT_CONST const
+#define SPOT_FN
+#endif
+
+/* ------------------------------------------------------------------------------------------ */
+/* Counter-based random numbers. Every random value is a pure function of (key, counter), so   */
+/* results do not depend on traversal order or thread count, and C++ and GLSL agree bit for    */
+/* bit. The mixer is Chris Wellons' "lowbias32" (bias 0.17), chained for multi-word keys.      */
+/* ------------------------------------------------------------------------------------------ */
+
+SPOT_FN uint spotHash(uint x) {
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+SPOT_FN uint spotHashCombine(uint seed, uint value) { return spotHash(seed ^ spotHash(value + 0x9e3779b9u)); }
+
+/* Key of a surface cell: (cell i, j, k) and the global seed. */
+SPOT_FN uint spotCellKey(int i, int j, int k, uint seed) {
+    uint h = spotHash(seed + 0x68e31da4u);
+    h = spotHashCombine(h, uint(i));
+    h = spotHashCombine(h, uint(j));
+    h = spotHashCombine(h, uint(k));
+    return h;
+}
+
+/* Key of one impulse candidate inside a cell. */
+SPOT_FN uint spotImpulseKey(uint cellKey, uint index) { return spotHashCombine(cellKey ^ 0xb5297a4du, index); }
+
+/* Uniform in [0, 1): 24 random bits, exactly representable in float. */
+SPOT_FN real spotRand(uint key, uint counter) {
+    uint h = spotHash(key ^ spotHash(counter * 0x9e3779b9u + 0x1b873593u));
+    return real(h >> 8u) * real(1.0 / 16777216.0);
+}
+
+/* Random streams inside one impulse key: fixed counters, so adding a new attribute later does not
+ * reshuffle the existing ones. */
+SPOT_CONST uint kRandPiece = 0u;      /* which surface piece of the cell */
+SPOT_CONST uint kRandBary0 = 1u;      /* position inside the piece */
+SPOT_CONST uint kRandBary1 = 2u;
+SPOT_CONST uint kRandDensity = 3u;    /* the density test xi < d(p) */
+SPOT_CONST uint kRandHeight = 4u;
+SPOT_CONST uint kRandTilt = 5u;
+SPOT_CONST uint kRandSpin = 6u;
+SPOT_CONST uint kRandBend = 7u;
+SPOT_CONST uint kRandScale = 8u;
+SPOT_CONST uint kRandColor = 9u;
+SPOT_CONST uint kRandWeight = 10u;
+SPOT_CONST uint kRandJitterU = 11u;
+SPOT_CONST uint kRandJitterV = 12u;
+
+/* Largest Poisson mean drawn by inversion in one chunk: exp(-16) is far from underflow in float,
+ * and the inversion loop stays short. */
+SPOT_CONST real kPoissonChunk = real(16.0);
+/* Hard cap on the candidates of one cell, so no loop can approach lavapipe's 65,535-iteration
+ * limit; the cell builder refuses densities whose expected count comes near it. */
+SPOT_CONST uint kMaxCandidatesPerCell = 16384u;
+
+/* Poisson-distributed count with mean `lambda`, drawn by inversion in chunks of mean at most
+ * kPoissonChunk (a sum of independent Poisson variables is Poisson). `key` seeds the draws. */
+SPOT_FN uint spotPoisson(real lambda, uint key) {
+    uint count = 0u;
+    real remaining = max(lambda, real(0.0));
+    uint chunk = 0u;
+    while (remaining > real(0.0) && count < kMaxCandidatesPerCell) {
+        real mean = min(remaining, kPoissonChunk);
+        remaining -= mean;
+        real u = spotRand(key, 0x40000000u + chunk);
+        chunk += 1u;
+        real p = exp(-mean);
+        real cdf = p;
+        uint k = 0u;
+        /* Stop at 8x the chunk mean: the tail beyond is below 1e-30. */
+        while (u > cdf && k < 128u) {
+            k += 1u;
+            p *= mean / real(k);
+            cdf += p;
+        }
+        count += k;
+    }
+    return min(count, kMaxCandidatesPerCell);
+}
+
+/* Uniform point in a triangle from two uniforms: barycentric weights (w0, w1, w2). */
+SPOT_FN rvec3 spotSampleTriangle(real u1, real u2) {
+    real su = sqrt(u1);
+    return rvec3(real(1.0) - su, su * (real(1.0) - u2), su * u2);
+}
+
+/* Orthonormal basis around unit n (Duff et al. 2017, "Building an Orthonormal Basis, Revisited"):
+ * continuous everywhere except the z = 0 seam, no normalization needed. */
+SPOT_FN void spotOrthonormalBasis(rvec3 n, SPOT_OUT(rvec3) t, SPOT_OUT(rvec3) b) {
+    real s = n.z >= real(0.0) ? real(1.0) : real(-1.0);
+    real a = real(-1.0) / (s + n.z);
+    real c = n.x * n.y * a;
+    t = rvec3(real(1.0) + s * n.x * n.x * a, s * c, -s * n.x);
+    b = rvec3(c, s + n.y * n.y * a, -n.y);
+}
+
+/* Kernel frame at an impulse, as the columns of a rotation (kernel space -> world):
+ * x = comb direction projected on the tangent plane, then tilted by `tilt` radians from the
+ * normal towards the comb (fur lying down) and spun by `spin` radians about the tilted axis.
+ * If the comb is (nearly) parallel to n, `fallbackTangent` is used instead. */
+SPOT_FN rmat3 spotKernelFrame(rvec3 n, rvec3 comb, rvec3 fallbackTangent, real tilt, real spin) {
+    rvec3 x0 = comb - n * dot(comb, n);
+    real len = length(x0);
+    if (len < real(1e-6) * max(length(comb), real(1e-30)) || !(len > real(0.0))) {
+        x0 = fallbackTangent - n * dot(fallbackTangent, n);
+        len = length(x0);
+        if (!(len > real(1e-12))) {
+            rvec3 t;
+            rvec3 b;
+            spotOrthonormalBasis(n, t, b);
+            x0 = t;
+            len = real(1.0);
+        }
+    }
+    x0 = x0 / len;
+    rvec3 y0 = cross(n, x0);
+    real ct = cos(tilt);
+    real st = sin(tilt);
+    rvec3 z1 = ct * n + st * x0;
+    rvec3 x1 = ct * x0 - st * n;
+    real cs = cos(spin);
+    real ss = sin(spin);
+    rvec3 x2 = cs * x1 + ss * y0;
+    rvec3 y2 = cs * y0 - ss * x1;
+    return rmat3(x2, y2, z1);
+}
+
+/* Bend a lobe along a circular arc in the kernel's xz plane: a point at height z (kernel units) on
+ * the kernel's z axis moves to arc length z on a circle of curvature `kappa` (radians per kernel
+ * unit) curving towards +x, and the lobe turns with the arc's tangent. Returns the bent centre;
+ * `rot` receives the rotation to apply to the lobe's linear part. */
+SPOT_FN rvec3 spotBendLobe(rvec3 centre, real kappa, SPOT_OUT(rmat3) rot) {
+    real phi = kappa * centre.z;
+    real c = cos(phi);
+    real s = sin(phi);
+    rot = rmat3(rvec3(c, real(0.0), -s), rvec3(real(0.0), real(1.0), real(0.0)), rvec3(s, real(0.0), c));
+    rvec3 arc;
+    if (abs(phi) < real(1e-4)) {
+        arc = rvec3(real(0.5) * kappa * centre.z * centre.z, real(0.0), centre.z);
+    } else {
+        arc = rvec3((real(1.0) - c) / kappa, real(0.0), s / kappa);
+    }
+    return arc + rot * rvec3(centre.x, centre.y, real(0.0));
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Gaussian line integrals.                                                                     */
+/* ------------------------------------------------------------------------------------------ */
+
+/* erfc with fractional error below 1.2e-7 everywhere (Numerical Recipes' Chebyshev fit);
+ * written here because GLSL has no erf. */
+SPOT_FN real spotErfcApprox(real x) {
+    real z = abs(x);
+    real t = real(1.0) / (real(1.0) + real(0.5) * z);
+    real r = t * exp(-z * z - real(1.26551223) +
+                     t * (real(1.00002368) +
+                          t * (real(0.37409196) +
+                               t * (real(0.09678418) +
+                                    t * (real(-0.18628806) +
+                                         t * (real(0.27886807) +
+                                              t * (real(-1.13520398) +
+                                                   t * (real(1.48851587) +
+                                                        t * (real(-0.82215223) + t * real(0.17087277))))))))));
+    return x >= real(0.0) ? r : real(2.0) - r;
+}
+
+#ifdef __cplusplus
+/* In double precision the C++ side uses the library's erfc (the reference must be exact); the
+ * float instantiation uses the same approximation as the GPU. */
+SPOT_FN real spotErfc(real x) {
+    if constexpr (sizeof(real) == sizeof(double))
+        return std::erfc(x);
+    else
+        return spotErfcApprox(x);
+}
+#else
+SPOT_FN real spotErfc(real x) { return spotErfcApprox(x); }
+#endif
+
+/* 0.5 * (erf(b) - erf(a)) for a <= b, without cancellation in the tails. */
+SPOT_FN real spotErfDifferenceHalf(real a, real b) {
+    if (a >= real(0.0))
+        return real(0.5) * (spotErfc(a) - spotErfc(b));
+    if (b <= real(0.0))
+        return real(0.5) * (spotErfc(-b) - spotErfc(-a));
+    return real(1.0) - real(0.5) * (spotErfc(-a) + spotErfc(b));
+}
+
+SPOT_CONST real kSqrtTwoPi = real(2.5066282746310002);
+SPOT_CONST real kInvSqrtTwo = real(0.70710678118654752);
+
+/* Optical depth per unit peak extinction of one lobe along the ray o + t d, t in [t0, t1], with
+ * o and d already in lobe space (o = A (origin - centre), d = A dir). The lobe is truncated at
+ * radius k (sigmas): only the chord inside |u| < k counts. Returns 0 when the ray misses.
+ * `tPeak` receives the parameter of the density maximum along the ray. */
+SPOT_FN real spotLobeDepth(rvec3 o, rvec3 d, real t0, real t1, real k, SPOT_OUT(real) tPeak) {
+    real dd = dot(d, d);
+    tPeak = real(0.0);
+    if (!(dd > real(0.0)))
+        return real(0.0);
+    real tStar = -dot(o, d) / dd;
+    tPeak = tStar;
+    rvec3 perp = o + tStar * d;
+    real perp2 = dot(perp, perp);
+    real k2 = k * k;
+    if (perp2 >= k2)
+        return real(0.0);
+    real invLen = real(1.0) / sqrt(dd);
+    real halfChord = sqrt(k2 - perp2) * invLen;
+    real a = max(t0, tStar - halfChord);
+    real b = min(t1, tStar + halfChord);
+    if (!(b > a))
+        return real(0.0);
+    real len = sqrt(dd);
+    real fraction = spotErfDifferenceHalf((a - tStar) * len * kInvSqrtTwo, (b - tStar) * len * kInvSqrtTwo);
+    return kSqrtTwoPi * invLen * exp(real(-0.5) * perp2) * fraction;
+}
+
+/* Density of a lobe at lobe-space point u, per unit peak extinction, truncated at k. */
+SPOT_FN real spotLobeDensity(rvec3 u, real k) {
+    real r2 = dot(u, u);
+    return r2 < k * k ? exp(real(-0.5) * r2) : real(0.0);
+}
+
+/* Cholesky factor (lower triangular) of a symmetric positive definite 3x3 matrix, as columns. */
+SPOT_FN rmat3 spotCholesky3(rmat3 m) {
+    real l00 = sqrt(max(m[0][0], real(0.0)));
+    real l10 = l00 > real(0.0) ? m[0][1] / l00 : real(0.0);
+    real l20 = l00 > real(0.0) ? m[0][2] / l00 : real(0.0);
+    real l11 = sqrt(max(m[1][1] - l10 * l10, real(0.0)));
+    real l21 = l11 > real(0.0) ? (m[1][2] - l20 * l10) / l11 : real(0.0);
+    real l22 = sqrt(max(m[2][2] - l20 * l20 - l21 * l21, real(0.0)));
+    /* columns: (l00, l10, l20), (0, l11, l21), (0, 0, l22) */
+    return rmat3(rvec3(l00, l10, l20), rvec3(real(0.0), l11, l21), rvec3(real(0.0), real(0.0), l22));
+}
+
+/* EWA widening of a lobe by an isotropic pixel footprint of standard deviation s (world units)
+ * perpendicular to the unit view direction dir: V' = V + s^2 (I - dir dir^T), where V = L L^T is
+ * the lobe's world covariance and A = L^-1 is its world-to-lobe linear map. Works in lobe space,
+ * M = A V' A^T = I + s^2 (A A^T - (A dir)(A dir)^T) >= I, so the factorization is well
+ * conditioned even for degenerate lobes. Returns the widened world-to-lobe map A' = C^-1 A
+ * (M = C C^T); `amplitudeScale` receives sqrt(det V / det V') = 1 / det C, which conserves the
+ * lobe's mass (its integral over space) and so the optical depth integrated over the image. */
+SPOT_FN rmat3 spotWidenLobe(rmat3 A, rvec3 dir, real s, SPOT_OUT(real) amplitudeScale) {
+    rvec3 ad = A * dir;
+    rmat3 m = A * transpose(A) - outerProduct(ad, ad);
+    m = s * s * m;
+    m[0][0] += real(1.0);
+    m[1][1] += real(1.0);
+    m[2][2] += real(1.0);
+    rmat3 c = spotCholesky3(m);
+    amplitudeScale = real(1.0) / (c[0][0] * c[1][1] * c[2][2]);
+    /* Inverse of the lower-triangular c, by forward substitution. */
+    real i00 = real(1.0) / c[0][0];
+    real i11 = real(1.0) / c[1][1];
+    real i22 = real(1.0) / c[2][2];
+    real i10 = -c[0][1] * i00 * i11;
+    real i21 = -c[1][2] * i11 * i22;
+    real i20 = -(c[0][2] * i00 + c[1][2] * i10) * i22;
+    rmat3 cInv = rmat3(rvec3(i00, i10, i20), rvec3(real(0.0), i11, i21), rvec3(real(0.0), real(0.0), i22));
+    return cInv * A;
+}
