@@ -19,7 +19,7 @@ struct Command {
 };
 
 const Command kCommands[] = {
-    // SPOT_IMPULSES_COMMAND
+    {"impulses", spot::cmd::impulses, "generate the impulses of a preset on a mesh, write a PLY"},
     {"info", spot::cmd::info, "print a mesh's counts, bounds and dropped triangles"},
 };
 

@@ -287,3 +287,20 @@ SPOT_FN rmat3 spotWidenLobe(rmat3 A, rvec3 dir, real s, SPOT_OUT(real) amplitude
     rmat3 cInv = rmat3(rvec3(i00, i10, i20), rvec3(real(0.0), i11, i21), rvec3(real(0.0), real(0.0), i22));
     return cInv * A;
 }
+
+/* A kernel lobe placed in the world by an impulse. The lobe is T = [L | c] in kernel space
+ * (`lobeInv` = L^-1, `lobeCentre` = c); the impulse has kernel frame F (columns: kernel x, y, z in
+ * world), scale s (world units per kernel unit), bend curvature kappa (radians per kernel unit)
+ * and position p. A world point x lies at lobe-space u = A (x - centre), where the kernel-space
+ * lobe is first bent (spotBendLobe), then x = p + F (s * k). Returns A; `centre` receives the
+ * lobe's world centre. */
+SPOT_FN rmat3 spotPlaceLobe(rmat3 lobeInv, rvec3 lobeCentre, rmat3 frame, rvec3 scale, real kappa,
+                            rvec3 position, SPOT_OUT(rvec3) centre) {
+    rmat3 bendRot;
+    rvec3 c = spotBendLobe(lobeCentre, kappa, bendRot);
+    centre = position + frame * (scale * c);
+    rmat3 invScale = rmat3(rvec3(real(1.0) / scale.x, real(0.0), real(0.0)),
+                           rvec3(real(0.0), real(1.0) / scale.y, real(0.0)),
+                           rvec3(real(0.0), real(0.0), real(1.0) / scale.z));
+    return lobeInv * transpose(bendRot) * invScale * transpose(frame);
+}

@@ -1,0 +1,97 @@
+/// @file impulses.h
+/// @brief Impulses generated on the fly in surface cells (DESIGN section 2; paper eq. 2, 3.1).
+///
+/// For a constant density the impulses are uniform per unit of surface area, whatever the mesh's
+/// orientation against the grid and its triangle sizes: a cell's expected candidate count is
+/// density_max x (surface area inside the cell) and candidates are placed uniformly on the cell's
+/// exact surface pieces. Each candidate passes the density test xi < d(p). Every random number is
+/// a counter-based hash of (cell, candidate index, seed) (spot_shared.h), so the same seed gives
+/// the same impulses on any thread count and on the GPU.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cells.h"
+#include "field.h"
+#include "kernel.h"
+#include "preset.h"
+
+namespace spot::noise {
+
+struct Mesh;
+
+/// One impulse: where a kernel is placed and how. World units unless stated.
+struct Impulse {
+    glm::vec3 position{0.0f};  ///< kernel origin: surface point + height * normal
+    glm::vec3 normal{0.0f};    ///< unit surface normal at the anchor
+    glm::vec3 comb{0.0f};      ///< unit comb direction in the tangent plane (before tilt/spin)
+    glm::mat3 frame{1.0f};     ///< kernel space -> world rotation (columns: x, y, z after tilt, spin)
+    glm::vec3 scale{1.0f};     ///< world units per kernel unit, per kernel axis
+    glm::vec3 color{1.0f};     ///< multiplies each lobe's colour, linear RGB
+    float weight = 1.0f;       ///< |w|, multiplies each lobe's extinction
+    float bend = 0.0f;         ///< curvature, radians per kernel unit
+    float height = 0.0f;       ///< offset along the normal
+    std::uint32_t triangle = 0;          ///< anchor triangle
+    glm::vec2 barycentric{0.0f};         ///< anchor (b1, b2) in that triangle; b0 = 1 - b1 - b2
+    glm::ivec3 cell{0};                  ///< generating cell
+};
+
+struct GeneratorOptions {
+    std::uint32_t seed = 0;
+    /// Cell edge h in world units; 0 picks the smallest valid one (the kernel's world support
+    /// radius). A smaller explicit value is refused: kernels would reach past the 3x3x3
+    /// neighbourhood that the renderers search.
+    float cellSize = 0.0f;
+    CellLimits limits;
+};
+
+/// Fields of a preset bound to one mesh.
+struct BoundFields {
+    std::unique_ptr<Field> density, comb, tiltDeg, spinDeg, bendDeg, scale, color, weight;
+};
+
+class ImpulseGenerator {
+public:
+    /// Binds the preset's fields to the mesh, builds the kernel, picks and checks the cell size,
+    /// builds the surface cells. Throws InputError on anything the user must fix.
+    ImpulseGenerator(const Mesh& mesh, const PresetDesc& preset, const GeneratorOptions& options);
+    ~ImpulseGenerator();
+
+    const SurfaceCells& cells() const { return m_cells; }
+    const Kernel& kernel() const { return m_kernel; }
+    const PresetDesc& preset() const { return m_preset; }
+    float cellSize() const { return m_cells.cellSize; }
+    /// Smallest valid cell size for this preset: the kernel's world support radius plus the
+    /// largest height offset.
+    float minimumCellSize() const { return m_minCellSize; }
+    /// Expected impulse count over the whole mesh before the density test (density_max x area).
+    double expectedCandidates() const;
+
+    /// Append the impulses of cell `cellIndex` to `out`, in a fixed order.
+    void generateCell(std::size_t cellIndex, std::vector<Impulse>& out) const;
+    /// Impulses of the cells accepted by `keep` (all cells when empty), concatenated in cell
+    /// order; parallel over cells, identical for any thread count. Checks the memory budget first.
+    std::vector<Impulse> generate(const std::function<bool(const SurfaceCell&)>& keep = {}) const;
+
+private:
+    void finishImpulse(const SurfaceCell& cell, std::uint32_t key, std::uint32_t triangle,
+                       glm::dvec3 bary, std::vector<Impulse>& out) const;
+    void generatePoisson(const SurfaceCell& cell, std::vector<Impulse>& out) const;
+    void generateJittered(const SurfaceCell& cell, std::vector<Impulse>& out) const;
+
+    const Mesh& m_mesh;
+    PresetDesc m_preset;
+    GeneratorOptions m_options;
+    Kernel m_kernel;
+    BoundFields m_fields;
+    float m_minCellSize = 0.0f;
+    SurfaceCells m_cells;
+};
+
+} // namespace spot::noise

@@ -1,0 +1,81 @@
+#include "kernel.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "error.h"
+#include "impulses.h"
+#include "shaders/spot_shared.hpp"
+
+namespace spot::noise {
+
+namespace {
+
+/// R = Rz * Ry * Rx from XYZ Euler angles in degrees (x applied first).
+glm::mat3 eulerXyz(glm::vec3 degrees) {
+    const glm::vec3 r = glm::radians(degrees);
+    const glm::mat4 m = glm::rotate(glm::mat4(1.0f), r.z, glm::vec3(0, 0, 1)) *
+                        glm::rotate(glm::mat4(1.0f), r.y, glm::vec3(0, 1, 0)) *
+                        glm::rotate(glm::mat4(1.0f), r.x, glm::vec3(1, 0, 0));
+    return glm::mat3(m);
+}
+
+} // namespace
+
+float Kernel::supportRadius() const {
+    float radius = 0.0f;
+    for (const Lobe& lobe : lobes) {
+        const float sideways = std::hypot(lobe.centre.x, lobe.centre.y);
+        const float maxSigma = std::max({lobe.sigma.x, lobe.sigma.y, lobe.sigma.z});
+        radius = std::max(radius, std::abs(lobe.centre.z) + sideways + supportSigma * maxSigma);
+    }
+    return radius;
+}
+
+Kernel buildKernel(const KernelDesc& desc) {
+    SPOT_CHECK(!desc.lobes.empty());
+    SPOT_CHECK_LE(desc.lobes.size(), static_cast<std::size_t>(kMaxLobes));
+    float largest = 0.0f;
+    for (const LobeDesc& l : desc.lobes)
+        largest = std::max({largest, l.sigma.x, l.sigma.y, l.sigma.z});
+    // All-zero sigmas make an invisible kernel; keep it finite with an absolute floor.
+    const float floor = largest > 0.0f ? largest * kSigmaFloorRelative : 1e-9f;
+
+    Kernel kernel;
+    kernel.supportSigma = desc.supportSigma;
+    for (const LobeDesc& l : desc.lobes) {
+        Lobe lobe;
+        lobe.sigma = glm::max(l.sigma, glm::vec3(floor));
+        lobe.centre = l.offset;
+        const glm::mat3 rotation = eulerXyz(l.rotationDeg);
+        const glm::mat3 linear = rotation * glm::mat3(glm::vec3(lobe.sigma.x, 0, 0),
+                                                      glm::vec3(0, lobe.sigma.y, 0),
+                                                      glm::vec3(0, 0, lobe.sigma.z));
+        lobe.transform = glm::mat4(linear);
+        lobe.transform[3] = glm::vec4(l.offset, 1.0f);
+        // (R S)^-1 = S^-1 R^T, exact for a rotation.
+        lobe.inverseLinear = glm::mat3(glm::vec3(1.0f / lobe.sigma.x, 0, 0),
+                                       glm::vec3(0, 1.0f / lobe.sigma.y, 0),
+                                       glm::vec3(0, 0, 1.0f / lobe.sigma.z)) *
+                             glm::transpose(rotation);
+        lobe.extinction = l.extinction;
+        lobe.color = l.color;
+        kernel.lobes.push_back(lobe);
+    }
+    return kernel;
+}
+
+WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse) {
+    const Lobe& lobe = kernel.lobes.at(static_cast<std::size_t>(lobeIndex));
+    WorldLobe out;
+    out.toLobe = shared::f64::spotPlaceLobe(
+        glm::dmat3(lobe.inverseLinear), glm::dvec3(lobe.centre), glm::dmat3(impulse.frame),
+        glm::dvec3(impulse.scale), double(impulse.bend), glm::dvec3(impulse.position), out.centre);
+    out.extinction = double(lobe.extinction) * double(impulse.weight);
+    out.color = lobe.color * impulse.color;
+    return out;
+}
+
+} // namespace spot::noise

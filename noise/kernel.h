@@ -1,0 +1,58 @@
+/// @file kernel.h
+/// @brief Lobes and kernels (DESIGN section 1; paper eq. 1, 3, 4).
+///
+/// A kernel is a sum of up to 8 lobes in kernel space (x = comb direction, y = bitangent,
+/// z = surface normal; kernel units). Lobe l is g_l(p) = a_l exp(-1/2 |T_l^-1 p|^2) with the
+/// affine T_l = M R S (offset, rotation, axis sigmas) stored as one 4x4 matrix, truncated at
+/// `supportSigma` sigmas. An impulse places the kernel in the world with its frame F, scale S
+/// (world units per kernel unit) and bend; `placeLobe` gives the resulting world-space lobe.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "preset.h"
+
+namespace spot::noise {
+
+struct Impulse;
+
+/// Smallest sigma a lobe may have, relative to the kernel's largest sigma: zero sigmas from a
+/// preset are raised to this floor so every lobe stays invertible (its mass goes to ~0 instead of
+/// producing Inf/NaN). 1e-6 keeps 1e4:1 anisotropy exact.
+inline constexpr float kSigmaFloorRelative = 1e-6f;
+
+struct Lobe {
+    glm::mat4 transform{1.0f};  ///< T = M R S, lobe space -> kernel space (kernel units)
+    glm::mat3 inverseLinear{1.0f}; ///< (R S)^-1, kernel space -> lobe space (linear part)
+    glm::vec3 centre{0.0f};     ///< M's translation, kernel units
+    glm::vec3 sigma{1.0f};      ///< after the floor, kernel units
+    float extinction = 1.0f;    ///< peak extinction a, 1/world unit
+    glm::vec3 color{1.0f};      ///< linear RGB
+};
+
+struct Kernel {
+    std::vector<Lobe> lobes;
+    float supportSigma = 3.0f;
+
+    /// Radius (kernel units) of a ball about the kernel origin that holds every lobe's truncated
+    /// support for any bend: the arc a bent centre moves on is no longer than the straight one.
+    float supportRadius() const;
+};
+
+Kernel buildKernel(const KernelDesc& desc);
+
+/// A lobe placed in the world by one impulse: density(x) = extinction * exp(-1/2 |A (x - c)|^2)
+/// inside |A (x - c)| < supportSigma. Double precision: this is what the reference integrates.
+struct WorldLobe {
+    glm::dvec3 centre{0.0};
+    glm::dmat3 toLobe{1.0}; ///< A, world -> lobe space (linear)
+    double extinction = 0.0; ///< a * |w|, 1/world unit
+    glm::vec3 color{1.0f};   ///< lobe colour * impulse colour
+};
+
+/// World lobe `lobeIndex` of `kernel` placed by `impulse` (frame, scale, bend, weight, colour).
+WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse);
+
+} // namespace spot::noise

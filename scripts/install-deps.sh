@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Install the Debian 12 packages spotshell needs. Idempotent: installs only what is missing, and
+# does nothing (not even apt-get update) when everything is present. Needs root for installing.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  cmake ninja-build clang libclang-rt-14-dev g++ pkg-config
+  # libraries
+  libglm-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libtbb-dev
+  libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
+  # shaders and tests
+  glslang-tools libgtest-dev libgmock-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then
+    SUDO=sudo
+  else
+    echo "install-deps: error: need root to install: ${missing[*]}" >&2
+    exit 1
+  fi
+else
+  SUDO=
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -q
+$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+echo "install-deps: done"

@@ -1,0 +1,162 @@
+// The `spotshell` command as a user runs it: exit codes, one-line errors, byte-identical output on
+// any thread count, the PLY's properties.
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+struct Result {
+    int code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string tmp(const std::string& name) { return std::string(SPOT_TEST_TMP_DIR) + "/" + name; }
+
+std::string slurp(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+Result run(const std::string& args) {
+    static int counter = 0;
+    const std::string errFile = tmp("stderr" + std::to_string(counter++) + ".txt");
+    const std::string cmd = std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
+    Result r;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe)
+        return r;
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), int(buf.size()), pipe))
+        r.out += buf.data();
+    const int status = pclose(pipe);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.err = slurp(errFile);
+    return r;
+}
+
+void write(const std::string& file, const std::string& text) {
+    std::ofstream(file, std::ios::binary) << text;
+}
+
+std::string preset(const std::string& name) {
+    return std::string(SPOT_SOURCE_DIR) + "/presets/" + name + ".json";
+}
+std::string bunny() { return std::string(SPOT_SOURCE_DIR) + "/presets/meshes/bunny.ply"; }
+
+/// Exit code 2 with exactly one line on stderr that says what is wrong.
+void expectInputError(const std::string& args, const std::string& phrase) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("spotshell: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(phrase), std::string::npos) << "expected '" << phrase << "' in: " << r.err;
+}
+
+TEST(Cli, HelpForEverySubcommand) {
+    for (const char* cmd : {"--help", "impulses --help", "info --help"}) {
+        const Result r = run(cmd);
+        EXPECT_EQ(r.code, 0) << cmd;
+        EXPECT_NE(r.out.find("usage: spotshell"), std::string::npos) << cmd;
+    }
+}
+
+TEST(Cli, InfoPrintsCountsAndBounds) {
+    const Result r = run("info --mesh " + bunny());
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("vertices   1839"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("triangles"), std::string::npos);
+    EXPECT_NE(r.out.find("bounds"), std::string::npos);
+    EXPECT_NE(r.out.find("dropped"), std::string::npos);
+}
+
+TEST(Cli, BadInputGivesOneLineAndExitCode2) {
+    expectInputError("frobnicate", "unknown command");
+    expectInputError("impulses --preset " + preset("fur") + " --out " + tmp("x.ply"),
+                     "--mesh FILE is required");
+    expectInputError("impulses --mesh " + bunny() + " --preset " + preset("fur") + " --out " +
+                         tmp("x.ply") + " --colour red",
+                     "unknown option --colour");
+    expectInputError("impulses --mesh " + bunny() + " --preset " + preset("fur") + " --out " +
+                         tmp("x.ply") + " --seed banana",
+                     "--seed expects an integer");
+    expectInputError("impulses --mesh /nonexistent/mesh.ply --preset " + preset("fur") +
+                         " --out " + tmp("x.ply"),
+                     "mesh.ply");
+    write(tmp("broken.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                             "property float y\nproperty float z\nelement face 1\n"
+                             "property list uchar int vertex_indices\nend_header\n"
+                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+    expectInputError("info --mesh " + tmp("broken.ply"), "broken.ply");
+    write(tmp("nan.obj"), "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+    expectInputError("info --mesh " + tmp("nan.obj"), "nan.obj");
+    write(tmp("bad.json"), "{\"version\": 1, \"kernel\": {\"lobes\": [] }}");
+    expectInputError("impulses --mesh " + bunny() + " --preset " + tmp("bad.json") + " --out " +
+                         tmp("x.ply"),
+                     "bad.json");
+    expectInputError("impulses --mesh " + bunny() + " --preset " + preset("fur") + " --out " +
+                         tmp("x.ply") + " --cell-size 1e-6",
+                     "cell size");
+    expectInputError("impulses --mesh generated:cube --preset " + preset("fur") + " --out " +
+                         tmp("x.ply"),
+                     "unknown generated mesh");
+    expectInputError("impulses --mesh " + bunny() + " --preset " + preset("fur") +
+                         " --out /nonexistent/dir/x.ply",
+                     "does not exist");
+}
+
+TEST(Cli, FailedRunLeavesNoPartialOutput) {
+    const std::string out = tmp("kept.ply");
+    write(out, "previous contents");
+    const Result r = run("impulses --mesh " + bunny() + " --preset " + preset("fur") + " --out " +
+                         out + " --cell-size 1e-6");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_EQ(slurp(out), "previous contents");
+}
+
+TEST(Cli, ImpulsesPlyIsByteIdenticalOnOneAndTwoThreads) {
+    for (const char* name : {"fur", "grass", "lichen", "ring", "uniform"}) {
+        const std::string a = tmp(std::string(name) + "-t1.ply"), b = tmp(std::string(name) + "-t2.ply");
+        const std::string common = "impulses --mesh " + bunny() + " --preset " + preset(name) +
+                                   " --seed 7 --out ";
+        const Result r1 = run(common + a + " --threads 1");
+        const Result r2 = run(common + b + " --threads 2");
+        ASSERT_EQ(r1.code, 0) << r1.err;
+        ASSERT_EQ(r2.code, 0) << r2.err;
+        EXPECT_NE(r1.out.find("impulses"), std::string::npos);
+        EXPECT_NE(r1.out.find("wrote " + a), std::string::npos) << r1.out;
+        const std::string da = slurp(a), db = slurp(b);
+        EXPECT_GT(da.size(), 1000u) << name;
+        EXPECT_TRUE(da == db) << name << ": PLY differs between 1 and 2 threads";
+    }
+}
+
+TEST(Cli, ImpulsesPlyHasTheDocumentedProperties) {
+    const std::string out = tmp("props.ply");
+    const Result r = run("impulses --mesh generated:sphere --preset " + preset("uniform") +
+                         " --out " + out);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string data = slurp(out);
+    const std::string header = data.substr(0, data.find("end_header"));
+    for (const char* p : {"x", "y", "z", "nx", "ny", "nz", "tx", "ty", "tz", "sx", "sy", "sz",
+                          "red", "green", "blue"})
+        EXPECT_NE(header.find(std::string("property float ") + p + "\n"), std::string::npos) << p;
+    EXPECT_NE(header.find("property int face\n"), std::string::npos);
+    // The vertex count in the header matches the data that follows.
+    const auto at = header.find("element vertex ");
+    ASSERT_NE(at, std::string::npos);
+    const long count = std::stol(header.substr(at + 15));
+    const std::size_t body = data.size() - (data.find("end_header\n") + 11);
+    EXPECT_EQ(body, std::size_t(count) * (24 * 4 + 4));
+    EXPECT_GT(count, 1000);
+}
+
+} // namespace
