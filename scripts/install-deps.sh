@@ -10,7 +10,7 @@ packages=(
   libglm-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
   # shaders and tests
-  glslang-tools libgtest-dev libgmock-dev
+  glslang-tools libgtest-dev libgmock-dev libbenchmark-dev
 )
 
 missing=()
