@@ -1,2 +1,431 @@
-// Implemented by the preset/field work package.
 #include "noise/field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+
+#include "noise/error.h"
+#include "noise/mesh.h"
+#include "noise/system.h"
+#include "shaders/spot_shared.hpp"
+
+namespace spot::noise {
+
+namespace {
+
+/// Images are decoded to float in memory; this caps what one field may hold (all channels of the
+/// file count, since the decoder may allocate them even when only some are kept).
+constexpr std::uint64_t kMaxImageBytes = 1ull << 30;
+constexpr int kMaxNoiseOctaves = 16;
+constexpr float kMinGradientLength = 1e-6f;
+
+glm::vec3 keepComponents(glm::vec3 v, int components) {
+    return components == 1 ? glm::vec3(v.x, 0.0f, 0.0f) : v;
+}
+
+/// Messages from OIIO may span lines; ours are printed as one.
+/// Outputs of the mapped kinds (gradient, noise, image) are clamped to the interval spanned by
+/// lo and hi: `mix` in float can land one ulp outside it, and range() promises exact bounds.
+struct LinearMap {
+    glm::vec3 lo;
+    glm::vec3 hi;
+    glm::vec3 min;
+    glm::vec3 max;
+
+    LinearMap(glm::vec3 l, glm::vec3 h) : lo(l), hi(h), min(glm::min(l, h)), max(glm::max(l, h)) {}
+    glm::vec3 operator()(float t) const { return glm::clamp(lo * (1.0f - t) + hi * t, min, max); }
+};
+
+class ConstantField final : public Field {
+public:
+    explicit ConstantField(glm::vec3 value) : m_value(value) {}
+    glm::vec3 eval(const SurfacePoint&) const override { return m_value; }
+    FieldRange range() const override { return {m_value, m_value}; }
+
+private:
+    glm::vec3 m_value;
+};
+
+/// lo at `from`, hi at `to`, linear in the projection of the point on the from->to line.
+class GradientField final : public Field {
+public:
+    GradientField(glm::vec3 from, glm::vec3 to, LinearMap map)
+        : m_from(from), m_axis((to - from) / glm::dot(to - from, to - from)), m_map(map) {}
+    glm::vec3 eval(const SurfacePoint& p) const override {
+        const float t = glm::clamp(glm::dot(p.position - m_from, m_axis), 0.0f, 1.0f);
+        return m_map(std::isnan(t) ? 0.0f : t);
+    }
+    FieldRange range() const override { return {m_map.min, m_map.max}; }
+
+private:
+    glm::vec3 m_from;
+    glm::vec3 m_axis; ///< (to - from) / |to - from|^2, so the dot product is 0 at from, 1 at to
+    LinearMap m_map;
+};
+
+class NoiseField final : public Field {
+public:
+    NoiseField(float frequency, int octaves, std::uint32_t seed, LinearMap map)
+        : m_frequency(frequency), m_octaves(octaves), m_seed(seed), m_map(map) {}
+    glm::vec3 eval(const SurfacePoint& p) const override {
+        return m_map(valueNoise(p.position * m_frequency, m_octaves, m_seed));
+    }
+    FieldRange range() const override { return {m_map.min, m_map.max}; }
+
+private:
+    float m_frequency;
+    int m_octaves;
+    std::uint32_t m_seed;
+    LinearMap m_map;
+};
+
+/// Barycentric interpolation of per-vertex attributes. Holds pointers into the mesh, which must
+/// outlive the field (fields are bound to one mesh for one render or bake).
+class VertexField final : public Field {
+public:
+    VertexField(const Mesh& mesh, std::vector<const std::vector<float>*> attributes)
+        : m_mesh(&mesh), m_attributes(std::move(attributes)) {
+        m_range.lo = glm::vec3(0.0f);
+        m_range.hi = glm::vec3(0.0f);
+        for (std::size_t c = 0; c < m_attributes.size(); ++c) {
+            const auto [lo, hi] =
+                std::minmax_element(m_attributes[c]->begin(), m_attributes[c]->end());
+            m_range.lo[static_cast<int>(c)] = lo == m_attributes[c]->end() ? 0.0f : *lo;
+            m_range.hi[static_cast<int>(c)] = hi == m_attributes[c]->end() ? 0.0f : *hi;
+        }
+    }
+    glm::vec3 eval(const SurfacePoint& p) const override {
+        SPOT_CHECK_LT(p.triangle, m_mesh->triangles.size());
+        const glm::uvec3 tri = m_mesh->triangles[p.triangle];
+        glm::vec3 out(0.0f);
+        for (std::size_t c = 0; c < m_attributes.size(); ++c) {
+            const std::vector<float>& a = *m_attributes[c];
+            out[static_cast<int>(c)] = p.barycentric.x * a[tri.x] + p.barycentric.y * a[tri.y] +
+                                       p.barycentric.z * a[tri.z];
+        }
+        // A convex combination stays inside [min, max] up to rounding; clamp so range() is exact.
+        return glm::clamp(out, m_range.lo, m_range.hi);
+    }
+    FieldRange range() const override { return m_range; }
+
+private:
+    const Mesh* m_mesh;
+    std::vector<const std::vector<float>*> m_attributes; ///< one per component
+    FieldRange m_range;
+};
+
+/// Bilinear lookup of a float image through uv. Texels are stored top row first (as images are),
+/// so v is flipped: uv (0,0) is the bottom-left corner of the image and texel centres lie at
+/// ((i + 0.5) / width, 1 - (j + 0.5) / height).
+class ImageField final : public Field {
+public:
+    ImageField(int width, int height, int components, std::vector<float> texels, bool repeat,
+               LinearMap map)
+        : m_width(width), m_height(height), m_components(components), m_texels(std::move(texels)),
+          m_repeat(repeat), m_map(map) {
+        // Bounds of the stored texels; bilinear weights are convex, so no lookup leaves them.
+        m_tMin = glm::vec3(1.0f);
+        m_tMax = glm::vec3(0.0f);
+        for (std::size_t i = 0; i < m_texels.size(); ++i) {
+            const int c = static_cast<int>(i % static_cast<std::size_t>(m_components));
+            m_tMin[c] = std::min(m_tMin[c], m_texels[i]);
+            m_tMax[c] = std::max(m_tMax[c], m_texels[i]);
+        }
+        m_tMin = keepComponents(m_tMin, m_components);
+        m_tMax = keepComponents(m_tMax, m_components);
+        const glm::vec3 a = mapEach(m_tMin);
+        const glm::vec3 b = mapEach(m_tMax);
+        m_range = {keepComponents(glm::min(a, b), m_components),
+                   keepComponents(glm::max(a, b), m_components)};
+    }
+
+    glm::vec3 eval(const SurfacePoint& p) const override {
+        float u = std::isfinite(p.uv.x) ? p.uv.x : 0.0f;
+        float v = std::isfinite(p.uv.y) ? p.uv.y : 0.0f;
+        if (m_repeat) {
+            u -= std::floor(u);
+            v -= std::floor(v);
+        } else {
+            u = std::clamp(u, 0.0f, 1.0f);
+            v = std::clamp(v, 0.0f, 1.0f);
+        }
+        const float x = u * static_cast<float>(m_width) - 0.5f;
+        const float y = (1.0f - v) * static_cast<float>(m_height) - 0.5f;
+        const float xf = std::floor(x);
+        const float yf = std::floor(y);
+        const float fx = x - xf;
+        const float fy = y - yf;
+        const int x0 = static_cast<int>(xf);
+        const int y0 = static_cast<int>(yf);
+        const int xs[2] = {wrap(x0, m_width), wrap(x0 + 1, m_width)};
+        const int ys[2] = {wrap(y0, m_height), wrap(y0 + 1, m_height)};
+        glm::vec3 t(0.0f);
+        for (int c = 0; c < m_components; ++c) {
+            const float top = lerp(texel(xs[0], ys[0], c), texel(xs[1], ys[0], c), fx);
+            const float bottom = lerp(texel(xs[0], ys[1], c), texel(xs[1], ys[1], c), fx);
+            t[c] = std::clamp(lerp(top, bottom, fy), m_tMin[c], m_tMax[c]);
+        }
+        return keepComponents(mapEach(t), m_components);
+    }
+
+    FieldRange range() const override { return m_range; }
+
+private:
+    static float lerp(float a, float b, float t) { return a + (b - a) * t; }
+
+    int wrap(int i, int n) const {
+        if (m_repeat)
+            return ((i % n) + n) % n;
+        return std::clamp(i, 0, n - 1);
+    }
+
+    float texel(int x, int y, int c) const {
+        return m_texels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(m_width) +
+                         static_cast<std::size_t>(x)) *
+                            static_cast<std::size_t>(m_components) +
+                        static_cast<std::size_t>(c)];
+    }
+
+    /// Each component maps through its own lo/hi (a texel value t per component).
+    glm::vec3 mapEach(glm::vec3 t) const {
+        glm::vec3 out;
+        for (int c = 0; c < 3; ++c)
+            out[c] = std::clamp(m_map.lo[c] * (1.0f - t[c]) + m_map.hi[c] * t[c], m_map.min[c],
+                                m_map.max[c]);
+        return out;
+    }
+
+    int m_width;
+    int m_height;
+    int m_components;
+    std::vector<float> m_texels; ///< row-major, top row first, m_components floats per texel
+    bool m_repeat;
+    LinearMap m_map;
+    glm::vec3 m_tMin{0.0f};
+    glm::vec3 m_tMax{0.0f};
+    FieldRange m_range;
+};
+
+std::unique_ptr<Field> makeImageField(const FieldDesc& desc, const Mesh& mesh,
+                                      const std::filesystem::path& baseDir,
+                                      const std::string& context) {
+    if (desc.file.empty())
+        throw InputError(cat(context, ": image field has no file"));
+    const std::filesystem::path file = std::filesystem::path(desc.file).is_absolute()
+                                           ? std::filesystem::path(desc.file)
+                                           : baseDir / desc.file;
+    const std::string where = cat(context, ": image ", file.string());
+    if (!mesh.hasUv())
+        throw InputError(
+            cat(where, ": mesh ", mesh.name, " has no uv coordinates, which an image field needs"));
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec))
+        throw InputError(cat(where, ": no such file"));
+
+    // Alpha as stored: a density or weight map in the alpha channel must not be premultiplied.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    std::unique_ptr<OIIO::ImageInput> in;
+    StderrSilencer quiet; // libpng prints its own copy of errors we report ourselves
+    try {
+        in = OIIO::ImageInput::open(file.string(), &config);
+    } catch (const std::exception& e) {
+        throw InputError(cat(where, ": cannot read (", oneLine(e.what()), ")"));
+    }
+    if (!in)
+        throw InputError(cat(where, ": cannot read (", oneLine(OIIO::geterror()), ")"));
+
+    // Everything below is decided from the header, before any pixel is decoded.
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        throw InputError(cat(where, ": image has no pixels (", spec.width, "x", spec.height, ", ",
+                             spec.nchannels, " channels)"));
+    if (spec.depth > 1)
+        throw InputError(cat(where, ": volume images are not supported"));
+    if (desc.channel < 0 || desc.channel + desc.components > spec.nchannels)
+        throw InputError(cat(where, ": needs channels ", desc.channel, "..",
+                             desc.channel + desc.components - 1, " but the image has ",
+                             spec.nchannels, spec.nchannels == 1 ? " channel" : " channels"));
+    const std::uint64_t pixels =
+        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+    const std::uint64_t perPixel = static_cast<std::uint64_t>(spec.nchannels) * sizeof(float);
+    if (pixels > kMaxImageBytes / perPixel)
+        throw InputError(cat(where, ": image is too large (", spec.width, "x", spec.height, " x ",
+                             spec.nchannels, " channels as float exceeds ", kMaxImageBytes >> 20,
+                             " MiB)"));
+    requireMemory(pixels * perPixel, where);
+
+    std::vector<float> texels(pixels * static_cast<std::uint64_t>(desc.components));
+    bool ok = false;
+    try {
+        ok = in->read_image(0, 0, desc.channel, desc.channel + desc.components,
+                            OIIO::TypeDesc::FLOAT, texels.data());
+    } catch (const std::exception& e) {
+        throw InputError(cat(where, ": cannot decode (", oneLine(e.what()), ")"));
+    }
+    if (!ok)
+        throw InputError(cat(where, ": cannot decode (", oneLine(in->geterror()), ")"));
+    in->close();
+
+    // The field maps [0,1] to [lo, hi]; float images may hold anything, NaN included.
+    for (float& t : texels)
+        t = std::isnan(t) ? 0.0f : std::clamp(t, 0.0f, 1.0f);
+    return std::make_unique<ImageField>(spec.width, spec.height, desc.components, std::move(texels),
+                                        desc.repeat,
+                                        LinearMap(keepComponents(desc.lo, desc.components),
+                                                  keepComponents(desc.hi, desc.components)));
+}
+
+std::unique_ptr<Field> makeVertexField(const FieldDesc& desc, const Mesh& mesh,
+                                       const std::string& context) {
+    if (desc.attributes.size() != static_cast<std::size_t>(desc.components) &&
+        desc.attributes.size() != 1)
+        throw InputError(cat(context, ": vertex field names ", desc.attributes.size(),
+                             " attributes for ", desc.components, " components"));
+    std::vector<const std::vector<float>*> columns;
+    for (int c = 0; c < desc.components; ++c) {
+        const std::string& name = desc.attributes[desc.attributes.size() == 1 ? 0 : c];
+        const auto it = mesh.attributes.find(name);
+        if (it == mesh.attributes.end()) {
+            std::string available;
+            for (const auto& [key, values] : mesh.attributes)
+                available += (available.empty() ? "" : ", ") + key;
+            throw InputError(
+                cat(context, ": vertex attribute \"", name, "\" is not on mesh ", mesh.name,
+                    " (it has: ", available.empty() ? std::string("none") : available, ")"));
+        }
+        if (it->second.size() != mesh.positions.size())
+            throw InputError(cat(context, ": vertex attribute \"", name, "\" of mesh ", mesh.name,
+                                 " has ", it->second.size(), " values for ", mesh.positions.size(),
+                                 " vertices"));
+        for (float v : it->second)
+            if (!std::isfinite(v))
+                throw InputError(cat(context, ": vertex attribute \"", name, "\" of mesh ",
+                                     mesh.name, " holds a non-finite value"));
+        columns.push_back(&it->second);
+    }
+    // Loaders guarantee this (finalizeMesh); a mesh built by hand may not, and eval indexes with
+    // it.
+    for (const glm::uvec3& t : mesh.triangles)
+        if (t.x >= mesh.positions.size() || t.y >= mesh.positions.size() ||
+            t.z >= mesh.positions.size())
+            throw InputError(
+                cat(context, ": mesh ", mesh.name, " has a vertex index out of range"));
+    return std::make_unique<VertexField>(mesh, std::move(columns));
+}
+
+bool finite(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+/// Lattice value in [0,1] at integer point (ix, iy, iz): 24 hashed bits, so float holds it exactly
+/// and the GPU computes the same value from the same uint arithmetic.
+float latticeValue(std::uint32_t ix, std::uint32_t iy, std::uint32_t iz, std::uint32_t seed) {
+    using namespace spot::shared::f32;
+    std::uint32_t h = spotHash(seed ^ 0x3c6ef372u);
+    h = spotHashCombine(h, ix);
+    h = spotHashCombine(h, iy);
+    h = spotHashCombine(h, iz);
+    return static_cast<float>(h >> 8u) * (1.0f / 16777215.0f);
+}
+
+/// floor(x) as a lattice index; coordinates beyond the int32 range saturate rather than overflow.
+std::uint32_t latticeIndex(float floored) {
+    const double c = std::clamp(static_cast<double>(floored), -2147483648.0, 2147483647.0);
+    return static_cast<std::uint32_t>(static_cast<std::int32_t>(c));
+}
+
+/// Quintic fade 6t^5 - 15t^4 + 10t^3: zero first and second derivatives at the lattice, so the
+/// noise is C2 and shows no grid creases.
+float fade(float t) {
+    return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f);
+}
+
+float valueNoiseOctave(glm::vec3 p, std::uint32_t seed) {
+    const glm::vec3 fl = glm::floor(p);
+    const glm::vec3 f = p - fl;
+    const std::uint32_t x0 = latticeIndex(fl.x);
+    const std::uint32_t y0 = latticeIndex(fl.y);
+    const std::uint32_t z0 = latticeIndex(fl.z);
+    const float u = fade(f.x);
+    const float v = fade(f.y);
+    const float w = fade(f.z);
+    float corners[2][2][2];
+    for (std::uint32_t dz = 0; dz < 2; ++dz)
+        for (std::uint32_t dy = 0; dy < 2; ++dy)
+            for (std::uint32_t dx = 0; dx < 2; ++dx)
+                corners[dz][dy][dx] = latticeValue(x0 + dx, y0 + dy, z0 + dz, seed);
+    const auto lerp = [](float a, float b, float t) { return a + (b - a) * t; };
+    const float y0z0 = lerp(corners[0][0][0], corners[0][0][1], u);
+    const float y1z0 = lerp(corners[0][1][0], corners[0][1][1], u);
+    const float y0z1 = lerp(corners[1][0][0], corners[1][0][1], u);
+    const float y1z1 = lerp(corners[1][1][0], corners[1][1][1], u);
+    return lerp(lerp(y0z0, y1z0, v), lerp(y0z1, y1z1, v), w);
+}
+
+} // namespace
+
+float valueNoise(glm::vec3 p, int octaves, std::uint32_t seed) {
+    if (!finite(p))
+        p = glm::vec3(0.0f);
+    octaves = std::clamp(octaves, 1, kMaxNoiseOctaves);
+    float sum = 0.0f;
+    float amplitudeSum = 0.0f;
+    float amplitude = 1.0f;
+    for (int o = 0; o < octaves; ++o) {
+        // Each octave draws its own lattice: with one lattice the octaves would share values at
+        // the integer points and the sum would show the coarse grid.
+        const std::uint32_t octaveSeed =
+            spot::shared::f32::spotHashCombine(seed, static_cast<std::uint32_t>(o));
+        sum += amplitude * valueNoiseOctave(p, octaveSeed);
+        amplitudeSum += amplitude;
+        amplitude *= 0.5f;
+        p *= 2.0f;
+    }
+    return std::clamp(sum / amplitudeSum, 0.0f, 1.0f);
+}
+
+std::unique_ptr<Field> makeField(const FieldDesc& desc, const Mesh& mesh,
+                                 const std::filesystem::path& baseDir, const std::string& context) {
+    if (desc.components != 1 && desc.components != 3)
+        throw InputError(cat(context, ": a field has 1 or 3 components, not ", desc.components));
+    const int n = desc.components;
+    switch (desc.kind) {
+    case FieldDesc::Kind::Constant:
+        if (!finite(desc.value))
+            throw InputError(cat(context, ": constant value is not finite"));
+        return std::make_unique<ConstantField>(keepComponents(desc.value, n));
+    case FieldDesc::Kind::Gradient:
+        if (!finite(desc.from) || !finite(desc.to) || !finite(desc.lo) || !finite(desc.hi))
+            throw InputError(cat(context, ": gradient has a non-finite parameter"));
+        if (!(glm::length(desc.to - desc.from) >= kMinGradientLength))
+            throw InputError(cat(context, ": gradient \"from\" and \"to\" are the same point"));
+        return std::make_unique<GradientField>(
+            desc.from, desc.to, LinearMap(keepComponents(desc.lo, n), keepComponents(desc.hi, n)));
+    case FieldDesc::Kind::Noise:
+        if (!(std::isfinite(desc.frequency) && desc.frequency > 0.0f) || !finite(desc.lo) ||
+            !finite(desc.hi))
+            throw InputError(
+                cat(context, ": noise needs a finite frequency > 0 and a finite range"));
+        if (desc.octaves < 1 || desc.octaves > 8)
+            throw InputError(
+                cat(context, ": noise octaves = ", desc.octaves, " is out of range [1, 8]"));
+        return std::make_unique<NoiseField>(
+            desc.frequency, desc.octaves, desc.seed,
+            LinearMap(keepComponents(desc.lo, n), keepComponents(desc.hi, n)));
+    case FieldDesc::Kind::Vertex:
+        return makeVertexField(desc, mesh, context);
+    case FieldDesc::Kind::Image:
+        if (!finite(desc.lo) || !finite(desc.hi))
+            throw InputError(cat(context, ": image range is not finite"));
+        return makeImageField(desc, mesh, baseDir, context);
+    }
+    throw InputError(cat(context, ": unknown field kind ", static_cast<int>(desc.kind)));
+}
+
+} // namespace spot::noise
