@@ -7,5 +7,7 @@ namespace spot::cmd {
 
 int info(int argc, char** argv);
 int impulses(int argc, char** argv);
+int render(int argc, char** argv);
+int compare(int argc, char** argv);
 
 } // namespace spot::cmd

@@ -9,6 +9,7 @@
 
 #include "commands.h"
 #include "noise/error.h"
+#include "noise/system.h"
 
 namespace {
 
@@ -20,6 +21,8 @@ struct Command {
 
 const Command kCommands[] = {
     {"impulses", spot::cmd::impulses, "generate the impulses of a preset on a mesh, write a PLY"},
+    {"render", spot::cmd::render, "render a scene (reference: the converged CPU ground truth)"},
+    {"compare", spot::cmd::compare, "PSNR, SSIM and FLIP of an image against a reference"},
     {"info", spot::cmd::info, "print a mesh's counts, bounds and dropped triangles"},
 };
 
@@ -48,13 +51,13 @@ int main(int argc, char** argv) {
         try {
             return c.run(argc - 2, argv + 2);
         } catch (const spot::InputError& e) {
-            std::fprintf(stderr, "spotshell: error: %s\n", e.what());
+            std::fprintf(stderr, "spotshell: error: %s\n", spot::oneLine(e.what()).c_str());
             return 2;
         } catch (const std::bad_alloc&) {
             std::fprintf(stderr, "spotshell: internal error: out of memory\n");
             return 1;
         } catch (const std::exception& e) {
-            std::fprintf(stderr, "spotshell: internal error: %s\n", e.what());
+            std::fprintf(stderr, "spotshell: internal error: %s\n", spot::oneLine(e.what()).c_str());
             return 1;
         }
     }

@@ -9,6 +9,9 @@
 
 #include "error.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 namespace spot {
 
 std::string readFileCapped(const std::filesystem::path& file, std::uint64_t maxBytes) {
@@ -89,6 +92,38 @@ void requireMemory(std::uint64_t bytes, const std::string& what) {
     if (bytes > budget)
         throw InputError(cat(what, " needs ", (bytes >> 20), " MiB but only ", (budget >> 20),
                              " MiB are available; reduce the request"));
+}
+
+StderrSilencer::StderrSilencer() {
+    std::fflush(stderr);
+    m_saved = dup(2);
+    const int null = open("/dev/null", O_WRONLY);
+    if (null >= 0) {
+        dup2(null, 2);
+        close(null);
+    }
+}
+
+StderrSilencer::~StderrSilencer() {
+    std::fflush(stderr);
+    if (m_saved >= 0) {
+        dup2(m_saved, 2);
+        close(m_saved);
+    }
+}
+
+std::string oneLine(const std::string& message) {
+    std::string out;
+    out.reserve(message.size());
+    for (char c : message) {
+        const char d = (c == '\n' || c == '\r' || c == '\t') ? ' ' : c;
+        if (d == ' ' && (out.empty() || out.back() == ' '))
+            continue;
+        out += d;
+    }
+    while (!out.empty() && out.back() == ' ')
+        out.pop_back();
+    return out;
 }
 
 } // namespace spot

@@ -29,4 +29,22 @@ std::uint64_t memoryBudgetBytes();
 /// the budget.
 void requireMemory(std::uint64_t bytes, const std::string& what);
 
+/// While alive, file descriptor 2 points to /dev/null. Some libraries (libpng under
+/// OpenImageIO) print their own error lines to stderr before reporting the error to us; our
+/// contract is one clear line per failure, which we print ourselves from the error we get back.
+/// Not for use while other threads print to stderr.
+class StderrSilencer {
+public:
+    StderrSilencer();
+    ~StderrSilencer();
+    StderrSilencer(const StderrSilencer&) = delete;
+    StderrSilencer& operator=(const StderrSilencer&) = delete;
+
+private:
+    int m_saved = -1;
+};
+
+/// A message on one line: newlines and tabs become spaces, runs of spaces collapse.
+std::string oneLine(const std::string& message);
+
 } // namespace spot

@@ -1,0 +1,58 @@
+#include "scene_job.h"
+
+#include <chrono>
+#include <cstdio>
+
+#include "noise/camera.h"
+#include "noise/error.h"
+
+namespace spot::cli {
+
+std::vector<OptionSpec> sceneOptions() {
+    return {{"scene", "FILE", "scene JSON (presets/scenes/*.json)", true},
+            {"mesh", "FILE", "override the scene's mesh (.obj/.ply or generated:NAME)", false},
+            {"preset", "FILE", "override the scene's preset", false},
+            {"size", "WxH", "override the image size, e.g. 640x480", false},
+            {"seed", "N", "override the impulse seed", false}};
+}
+
+SceneJob prepareScene(const Args& args) {
+    SceneJob job;
+    job.scene = noise::loadScene(args.str("scene"));
+    if (args.has("mesh"))
+        job.scene.mesh = args.str("mesh");
+    if (args.has("preset"))
+        job.scene.preset = args.str("preset");
+    if (args.has("seed"))
+        job.scene.seed = std::uint32_t(args.integer("seed", 0, 0, 0xffffffffll));
+    if (args.has("size")) {
+        const std::string size = args.str("size");
+        int w = 0, h = 0;
+        char x = 0, extra = 0;
+        if (std::sscanf(size.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
+            w < 1 || h < 1 || w > 16384 || h > 16384)
+            throw InputError(cat("--size '", size, "' must be WxH with sides in [1, 16384]"));
+        job.scene.camera.width = w;
+        job.scene.camera.height = h;
+    }
+    job.mesh = loadMeshArg(job.scene.mesh);
+    job.preset = noise::loadPreset(job.scene.preset);
+    noise::GeneratorOptions options;
+    options.seed = job.scene.seed;
+    const auto start = std::chrono::steady_clock::now();
+    job.generator = std::make_unique<noise::ImpulseGenerator>(job.mesh, job.preset, options);
+    // A cell's kernels reach at most h beyond it: cull cells whose grown box is out of view.
+    const noise::CameraRays rays(job.scene.camera);
+    const double h = job.generator->cellSize();
+    job.impulses = job.generator->generate([&](const noise::SurfaceCell& cell) {
+        const glm::dvec3 lo = glm::dvec3(cell.ijk) * h - h, hi = glm::dvec3(cell.ijk + 1) * h + h;
+        const bool visible = rays.boxMayBeVisible(lo, hi);
+        job.visibleCells += visible;
+        return visible;
+    });
+    job.generateSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return job;
+}
+
+} // namespace spot::cli

@@ -1,0 +1,335 @@
+#include "reference.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "error.h"
+#include "mesh.h"
+#include "shaders/spot_shared.hpp"
+#include "surface.h"
+#include "system.h"
+
+namespace spot::noise {
+
+namespace sh = spot::shared::f64;
+
+namespace {
+
+/// Transmittance below which the rest of a ray cannot change a pixel visibly (1e-6 of white).
+constexpr double kOpaque = 1e-6;
+/// Quadrature steps per cluster at most: a bound on the work of one ray, far above what a
+/// converged step needs for the shipped presets (see the convergence tests).
+constexpr int kMaxStepsPerCluster = 1 << 16;
+
+/// Kensler's permutation of [0, l) with pattern p (hash with cycle walking).
+std::uint32_t permute(std::uint32_t i, std::uint32_t l, std::uint32_t p) {
+    std::uint32_t w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    do {
+        i ^= p;
+        i *= 0xe170893du;
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i *= 0x0929eb3fu;
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i *= 1 | p >> 27;
+        i *= 0x6935fa69u;
+        i ^= (i & w) >> 11;
+        i *= 0x74dcb303u;
+        i ^= (i & w) >> 2;
+        i *= 0x9e501cc3u;
+        i ^= (i & w) >> 2;
+        i *= 0xc860a3dfu;
+        i &= w;
+        i ^= i >> 5;
+    } while (i >= l);
+    return (i + p) % l;
+}
+
+double randUnit(std::uint32_t i, std::uint32_t p) {
+    return double(sh::spotHash(sh::spotHashCombine(p, i)) >> 8) * (1.0 / 16777216.0);
+}
+
+/// Möller-Trumbore; returns t or +inf, barycentrics (b1, b2) in u, v.
+double intersectTriangle(const Ray& r, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c, double& u, double& v) {
+    const glm::dvec3 e1 = b - a, e2 = c - a;
+    const glm::dvec3 p = glm::cross(r.dir, e2);
+    const double det = glm::dot(e1, p);
+    if (std::abs(det) < 1e-300)
+        return std::numeric_limits<double>::infinity();
+    const double inv = 1.0 / det;
+    const glm::dvec3 s = r.origin - a;
+    u = glm::dot(s, p) * inv;
+    if (u < 0.0 || u > 1.0)
+        return std::numeric_limits<double>::infinity();
+    const glm::dvec3 q = glm::cross(s, e1);
+    v = glm::dot(r.dir, q) * inv;
+    if (v < 0.0 || u + v > 1.0)
+        return std::numeric_limits<double>::infinity();
+    const double t = glm::dot(e2, q) * inv;
+    return t > 0.0 ? t : std::numeric_limits<double>::infinity();
+}
+
+} // namespace
+
+glm::dvec2 cmjSample(std::uint32_t s, std::uint32_t n, std::uint32_t p) {
+    const std::uint32_t m = std::max(1u, std::uint32_t(std::sqrt(double(n))));
+    const std::uint32_t rows = (n + m - 1) / m;
+    s = permute(s, n, p * 0x51633e2du);
+    const std::uint32_t sx = permute(s % m, m, p * 0x68bc21ebu);
+    const std::uint32_t sy = permute(s / m, rows, p * 0x02e5be93u);
+    const double jx = randUnit(s, p * 0x967a889bu);
+    const double jy = randUnit(s, p * 0x368cc8b7u);
+    return {(double(sx) + (double(sy) + jx) / double(rows)) / double(m), (double(s) + jy) / double(n)};
+}
+
+/// One lobe's chord along the current ray: the part of the ray inside its truncated support.
+struct ReferenceRenderer::Chord {
+    double ta, tb;        ///< chord, clipped to [0, end of ray]
+    double tStar, len;    ///< peak parameter, |A d|
+    double scale;         ///< a sqrt(2 pi) / |A d| exp(-perp^2 / 2): optical depth of the whole line
+    std::uint32_t lobe;
+    /// Optical depth from ta to t.
+    double depthTo(double t) const {
+        const double x0 = (ta - tStar) * len * 0.70710678118654752;
+        const double x1 = (std::min(t, tb) - tStar) * len * 0.70710678118654752;
+        return x1 > x0 ? scale * sh::spotErfDifferenceHalf(x0, x1) : 0.0;
+    }
+};
+
+ReferenceRenderer::ReferenceRenderer(const Mesh& mesh, const Kernel& kernel,
+                                     const std::vector<Impulse>& impulses, const Shading& shading,
+                                     glm::vec3 background, glm::vec3 baseColor)
+    : m_mesh(mesh), m_support(kernel.supportSigma), m_shading(shading), m_background(background),
+      m_baseColor(baseColor), m_impulseCount(impulses.size()) {
+    const std::size_t lobeCount = impulses.size() * kernel.lobes.size();
+    requireMemory(std::uint64_t(lobeCount) * (sizeof(Lobe) + sizeof(Aabb) + 2 * 64 + 8) +
+                      std::uint64_t(mesh.triangles.size()) * (sizeof(Aabb) + 2 * 64 + 8),
+                  cat("the reference's ", lobeCount, " lobes"));
+    m_lobes.reserve(lobeCount);
+    std::vector<Aabb> boxes;
+    boxes.reserve(lobeCount);
+    for (const Impulse& imp : impulses) {
+        if (!(imp.weight > 0.0f))
+            continue;
+        for (std::size_t l = 0; l < kernel.lobes.size(); ++l) {
+            const WorldLobe w = placeLobe(kernel, int(l), imp);
+            if (!(w.extinction > 0.0))
+                continue;
+            const glm::dmat3 toWorld = glm::inverse(w.toLobe);
+            glm::dvec3 half;
+            for (int i = 0; i < 3; ++i)
+                half[i] = m_support * glm::length(glm::dvec3(toWorld[0][i], toWorld[1][i], toWorld[2][i]));
+            if (!std::isfinite(half.x + half.y + half.z))
+                continue;
+            m_lobes.push_back({w.centre, w.toLobe, w.extinction, w.color});
+            boxes.push_back({w.centre - half, w.centre + half});
+        }
+    }
+    m_lobeBvh.build(boxes);
+    std::vector<Aabb> tris(mesh.triangles.size());
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int v = 0; v < 3; ++v)
+            tris[t].grow(glm::dvec3(mesh.positions[mesh.triangles[t][v]]));
+    m_meshBvh.build(tris);
+}
+
+double ReferenceRenderer::hitMesh(const Ray& ray, glm::vec3& normal) const {
+    double tMax = std::numeric_limits<double>::infinity();
+    std::uint32_t hitTri = 0;
+    double hu = 0.0, hv = 0.0;
+    m_meshBvh.traverse(ray, 0.0, tMax, [&](std::uint32_t t, double& tm) {
+        const glm::uvec3 tri = m_mesh.triangles[t];
+        double u = 0.0, v = 0.0;
+        const double d = intersectTriangle(ray, glm::dvec3(m_mesh.positions[tri.x]),
+                                           glm::dvec3(m_mesh.positions[tri.y]),
+                                           glm::dvec3(m_mesh.positions[tri.z]), u, v);
+        if (d < tm) {
+            tm = d;
+            hitTri = t;
+            hu = u;
+            hv = v;
+        }
+    });
+    if (std::isfinite(tMax))
+        normal = surfacePoint(m_mesh, hitTri, glm::dvec3(1.0 - hu - hv, hu, hv)).normal;
+    return tMax;
+}
+
+glm::vec3 ReferenceRenderer::shade(glm::vec3 color, glm::dvec3 normal) const {
+    if (m_shading.mode == Shading::Mode::Unlit)
+        return color;
+    const double lambert = std::max(0.0, glm::dot(normal, glm::dvec3(m_shading.lightDir)));
+    return color * float(m_shading.ambient + (1.0 - m_shading.ambient) * lambert);
+}
+
+glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, ReferenceStats* stats) const {
+    glm::vec3 meshNormal(0.0f);
+    const double tEnd = hitMesh(ray, meshNormal);
+    const double k2 = m_support * m_support;
+
+    // 1. Chords of every lobe the ray crosses before the mesh.
+    // Per-thread scratch: no allocation per ray once warm.
+    thread_local std::vector<Chord> chords;
+    thread_local std::vector<double> done; // optical depth of each cluster lobe so far
+    chords.clear();
+    double tMax = tEnd;
+    m_lobeBvh.traverse(ray, 0.0, tMax, [&](std::uint32_t l, double&) {
+        const Lobe& lobe = m_lobes[l];
+        const glm::dvec3 o = lobe.toLobe * (ray.origin - lobe.centre);
+        const glm::dvec3 d = lobe.toLobe * ray.dir;
+        const double dd = glm::dot(d, d);
+        if (!(dd > 0.0))
+            return;
+        const double tStar = -glm::dot(o, d) / dd;
+        const glm::dvec3 perp = o + tStar * d;
+        const double perp2 = glm::dot(perp, perp);
+        if (perp2 >= k2)
+            return;
+        const double half = std::sqrt((k2 - perp2) / dd);
+        const double ta = std::max(0.0, tStar - half), tb = std::min(tEnd, tStar + half);
+        if (!(tb > ta))
+            return;
+        const double len = std::sqrt(dd);
+        chords.push_back({ta, tb, tStar, len,
+                          lobe.extinction * sh::kSqrtTwoPi / len * std::exp(-0.5 * perp2), l});
+    });
+    std::sort(chords.begin(), chords.end(), [](const Chord& a, const Chord& b) {
+        return a.ta < b.ta || (a.ta == b.ta && a.lobe < b.lobe);
+    });
+
+    // 2. Front to back over clusters of overlapping chords.
+    glm::dvec3 radiance(0.0);
+    double transmittance = 1.0;
+    const bool lit = m_shading.mode == Shading::Mode::Lambert;
+    std::size_t i = 0;
+    while (i < chords.size() && transmittance > kOpaque) {
+        std::size_t j = i + 1;
+        double clusterEnd = chords[i].tb;
+        while (j < chords.size() && chords[j].ta < clusterEnd) {
+            clusterEnd = std::max(clusterEnd, chords[j].tb);
+            ++j;
+        }
+        if (stats)
+            stats->chords += j - i;
+        if (j == i + 1 && !lit) {
+            const Chord& c = chords[i];
+            const double tau = c.depthTo(c.tb);
+            radiance += transmittance * -std::expm1(-tau) * glm::dvec3(m_lobes[c.lobe].color);
+            transmittance *= std::exp(-tau);
+            if (stats)
+                stats->exactChords += 1;
+            i = j;
+            continue;
+        }
+        // Quadrature over the cluster.
+        const double clusterStart = chords[i].ta;
+        double thinnest = std::numeric_limits<double>::infinity();
+        for (std::size_t c = i; c < j; ++c)
+            thinnest = std::min(thinnest, 1.0 / chords[c].len);
+        const double step = std::max(stepScale * 0.25 * thinnest, 1e-300);
+        const int steps = int(std::clamp(std::ceil((clusterEnd - clusterStart) / step), 1.0,
+                                         double(kMaxStepsPerCluster)));
+        done.assign(j - i, 0.0);
+        double t0 = clusterStart;
+        for (int s = 1; s <= steps && transmittance > kOpaque; ++s) {
+            const double t1 = s == steps ? clusterEnd : clusterStart + (clusterEnd - clusterStart) * s / steps;
+            double tau = 0.0;
+            glm::dvec3 emitted(0.0), gradient(0.0);
+            const glm::dvec3 mid = ray.origin + 0.5 * (t0 + t1) * ray.dir;
+            for (std::size_t c = i; c < j; ++c) {
+                const Chord& ch = chords[c];
+                if (ch.ta >= t1 || ch.tb <= t0)
+                    continue;
+                const double upTo = ch.depthTo(t1);
+                const double dTau = upTo - done[c - i];
+                done[c - i] = upTo;
+                tau += dTau;
+                emitted += dTau * glm::dvec3(m_lobes[ch.lobe].color);
+                if (lit) {
+                    const Lobe& lobe = m_lobes[ch.lobe];
+                    const glm::dvec3 u = lobe.toLobe * (mid - lobe.centre);
+                    gradient -= lobe.extinction * sh::spotLobeDensity(u, m_support) *
+                                (glm::transpose(lobe.toLobe) * u);
+                }
+            }
+            if (tau > 0.0) {
+                glm::dvec3 color = emitted / tau;
+                if (lit) {
+                    const double g = glm::length(gradient);
+                    const glm::dvec3 n = g > 0.0 ? -gradient / g : -ray.dir;
+                    color = glm::dvec3(shade(glm::vec3(color), n));
+                }
+                radiance += transmittance * -std::expm1(-tau) * color;
+                transmittance *= std::exp(-tau);
+            }
+            t0 = t1;
+        }
+        if (stats)
+            stats->quadratureSteps += std::uint64_t(steps);
+        i = j;
+    }
+    const glm::vec3 behind = std::isfinite(tEnd) ? shade(m_baseColor, glm::dvec3(meshNormal)) : m_background;
+    radiance += transmittance * glm::dvec3(behind);
+    if (stats)
+        stats->rays += 1;
+    return glm::vec3(radiance);
+}
+
+Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& settings,
+                                const std::function<void(int, int)>& progress,
+                                ReferenceStats* stats) const {
+    if (settings.spp < 1 || settings.spp > 65536)
+        throw InputError(cat("spp ", settings.spp, " is outside [1, 65536]"));
+    if (!(settings.stepScale > 0.0) || !std::isfinite(settings.stepScale))
+        throw InputError(cat("step scale ", settings.stepScale, " must be positive"));
+    requireMemory(std::uint64_t(camera.width) * std::uint64_t(camera.height) * 64u,
+                  cat("a ", camera.width, "x", camera.height, " image"));
+    const CameraRays rays(camera);
+    const auto start = std::chrono::steady_clock::now();
+    Image image(camera.width, camera.height);
+    std::atomic<int> rowsDone{0};
+    std::vector<ReferenceStats> rowStats(std::size_t(camera.height));
+    tbb::parallel_for(0, camera.height, [&](int y) {
+        ReferenceStats& rs = rowStats[std::size_t(y)];
+        for (int x = 0; x < camera.width; ++x) {
+            const std::uint32_t pattern =
+                sh::spotHashCombine(sh::spotHashCombine(settings.seed ^ 0x2545f491u, std::uint32_t(x)),
+                                    std::uint32_t(y));
+            glm::dvec3 sum(0.0);
+            for (int s = 0; s < settings.spp; ++s) {
+                const glm::dvec2 u = cmjSample(std::uint32_t(s), std::uint32_t(settings.spp), pattern);
+                sum += glm::dvec3(radiance(rays.ray(x + u.x, y + u.y), settings.stepScale, &rs));
+            }
+            image.at(x, y) = glm::vec3(sum / double(settings.spp));
+        }
+        const int finished = ++rowsDone;
+        if (progress)
+            progress(finished, camera.height);
+    });
+    if (stats) {
+        for (const ReferenceStats& rs : rowStats) {
+            stats->rays += rs.rays;
+            stats->chords += rs.chords;
+            stats->exactChords += rs.exactChords;
+            stats->quadratureSteps += rs.quadratureSteps;
+        }
+        stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        stats->impulses = m_impulseCount;
+        stats->lobes = m_lobes.size();
+        stats->memoryBytes = m_lobes.capacity() * sizeof(Lobe) + m_lobeBvh.memoryBytes() +
+                             m_meshBvh.memoryBytes();
+    }
+    return image;
+}
+
+} // namespace spot::noise

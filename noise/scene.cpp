@@ -1,0 +1,120 @@
+#include "scene.h"
+
+#include <cmath>
+
+#include "json_reader.h"
+#include "system.h"
+
+namespace spot::noise {
+
+namespace {
+
+constexpr std::uint64_t kMaxSceneBytes = 1u << 20;
+constexpr json::Interval kCoordinate{-1e6, 1e6};
+constexpr json::Interval kColor{0.0, 1e3};
+constexpr json::Interval kUnit{0.0, 1.0};
+constexpr json::Interval kFov{0.0, 179.0, true, true};
+constexpr json::Interval kOrthoHeight{0.0, 1e6, true, false};
+/// Images larger than this per side are refused: a typo (256000) should not allocate gigabytes.
+constexpr std::int64_t kMaxImageSide = 16384;
+
+Camera parseCamera(const json::Reader& rd, const json::Json& j) {
+    rd.requireObject(j, "camera", {"projection", "eye", "target", "up", "fov_deg", "ortho_height"});
+    Camera c;
+    if (const json::Json* p = json::Reader::find(j, "projection")) {
+        const std::string mode = rd.string(*p, "camera.projection", false);
+        if (mode == "perspective")
+            c.projection = Projection::Perspective;
+        else if (mode == "orthographic")
+            c.projection = Projection::Orthographic;
+        else
+            rd.fail(cat("camera.projection = \"", json::printable(mode),
+                        "\" is not one of \"perspective\", \"orthographic\""));
+    }
+    c.eye = glm::dvec3(rd.vec3(rd.require(j, "camera", "eye"), "camera.eye", kCoordinate));
+    c.target = glm::dvec3(rd.vec3(rd.require(j, "camera", "target"), "camera.target", kCoordinate));
+    if (const json::Json* u = json::Reader::find(j, "up"))
+        c.up = glm::dvec3(rd.vec3(*u, "camera.up", kCoordinate));
+    if (const json::Json* f = json::Reader::find(j, "fov_deg"))
+        c.fovYDeg = rd.number(*f, "camera.fov_deg", kFov);
+    if (const json::Json* h = json::Reader::find(j, "ortho_height"))
+        c.orthoHeight = rd.number(*h, "camera.ortho_height", kOrthoHeight);
+    if (!(glm::length(c.target - c.eye) > 1e-9))
+        rd.fail("camera.eye and camera.target must be different points");
+    if (!(glm::length(glm::cross(glm::normalize(c.target - c.eye), c.up)) > 1e-6))
+        rd.fail("camera.up must not be parallel to the view direction (or zero)");
+    return c;
+}
+
+Shading parseShading(const json::Reader& rd, const json::Json& j) {
+    rd.requireObject(j, "shading", {"mode", "light_dir", "ambient"});
+    Shading s;
+    const std::string mode = rd.string(rd.require(j, "shading", "mode"), "shading.mode", false);
+    if (mode == "unlit") {
+        s.mode = Shading::Mode::Unlit;
+    } else if (mode == "lambert") {
+        s.mode = Shading::Mode::Lambert;
+    } else {
+        rd.fail(cat("shading.mode = \"", json::printable(mode), "\" is not one of \"unlit\", \"lambert\""));
+    }
+    if (const json::Json* l = json::Reader::find(j, "light_dir")) {
+        const glm::vec3 d = rd.vec3(*l, "shading.light_dir", kCoordinate);
+        if (!(glm::length(d) > 1e-6f))
+            rd.fail("shading.light_dir must not be zero");
+        s.lightDir = glm::normalize(d);
+    }
+    if (const json::Json* a = json::Reader::find(j, "ambient"))
+        s.ambient = rd.real(*a, "shading.ambient", kUnit);
+    return s;
+}
+
+} // namespace
+
+SceneDesc parseScene(std::string_view text, const std::string& name,
+                     const std::filesystem::path& baseDir) {
+    if (text.size() > kMaxSceneBytes)
+        throw InputError(cat(name, ": scene is ", text.size(), " bytes, more than the limit of ",
+                             kMaxSceneBytes));
+    const json::Json root = json::parse(text, name);
+    const json::Reader rd(name);
+    rd.requireObject(root, "", {"version", "name", "description", "mesh", "preset", "seed",
+                                "camera", "image", "background", "base_color", "shading",
+                                "reference"});
+    rd.requireVersion(root, kSceneVersion);
+    SceneDesc s;
+    if (const json::Json* n = json::Reader::find(root, "name"))
+        s.name = rd.string(*n, "name", false);
+    else
+        s.name = std::filesystem::path(name).stem().string();
+    if (const json::Json* d = json::Reader::find(root, "description"))
+        rd.string(*d, "description", true);
+    const std::string mesh = rd.string(rd.require(root, "", "mesh"), "mesh", false);
+    s.mesh = mesh.rfind("generated:", 0) == 0 ? mesh : (baseDir / mesh).string();
+    s.preset = baseDir / rd.string(rd.require(root, "", "preset"), "preset", false);
+    if (const json::Json* seed = json::Reader::find(root, "seed"))
+        s.seed = std::uint32_t(rd.integer(*seed, "seed", 0, 0xffffffffll));
+    s.camera = parseCamera(rd, rd.require(root, "", "camera"));
+    const json::Json& image = rd.require(root, "", "image");
+    rd.requireObject(image, "image", {"width", "height"});
+    s.camera.width = int(rd.integer(rd.require(image, "image", "width"), "image.width", 1, kMaxImageSide));
+    s.camera.height = int(rd.integer(rd.require(image, "image", "height"), "image.height", 1, kMaxImageSide));
+    if (const json::Json* b = json::Reader::find(root, "background"))
+        s.background = rd.vec3(*b, "background", kColor);
+    if (const json::Json* b = json::Reader::find(root, "base_color"))
+        s.baseColor = rd.vec3(*b, "base_color", kColor);
+    if (const json::Json* sh = json::Reader::find(root, "shading"))
+        s.shading = parseShading(rd, *sh);
+    if (const json::Json* r = json::Reader::find(root, "reference")) {
+        rd.requireObject(*r, "reference", {"spp"});
+        if (const json::Json* spp = json::Reader::find(*r, "spp"))
+            s.referenceSpp = int(rd.integer(*spp, "reference.spp", 1, 65536));
+    }
+    return s;
+}
+
+SceneDesc loadScene(const std::filesystem::path& file) {
+    const std::string text = readFileCapped(file, kMaxSceneBytes);
+    return parseScene(text, file.string(), file.parent_path());
+}
+
+} // namespace spot::noise
