@@ -160,3 +160,45 @@ TEST(Cli, ImpulsesPlyHasTheDocumentedProperties) {
 }
 
 } // namespace
+
+namespace {
+
+TEST(Cli, RenderReferenceWritesImageMetadataAndStats) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/ring-sphere.json";
+    const std::string exr = tmp("ring.exr"), png = tmp("ring.png"), stats = tmp("ring.json");
+    const Result r = run("render --scene " + scene + " --method reference --size 40x30 --spp 2 --out " +
+                         exr + " --stats " + stats);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("wrote " + exr), std::string::npos) << r.out;
+    const std::string data = slurp(exr);
+    EXPECT_EQ(data.substr(0, 4), std::string("\x76\x2f\x31\x01", 4)); // OpenEXR magic
+    EXPECT_NE(data.find("spotshell:method"), std::string::npos);
+    EXPECT_NE(data.find("spotshell:spp"), std::string::npos);
+    const std::string json = slurp(stats);
+    for (const char* key : {"\"method\": \"reference\"", "\"width\": 40", "\"height\": 30", "\"spp\": 2",
+                            "\"seconds\"", "\"kernels_generated\"", "\"memory_bytes\""})
+        EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+    const Result p = run("render --scene " + scene + " --method reference --size 40x30 --spp 1 --out " + png);
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(slurp(png).substr(1, 3), "PNG");
+}
+
+TEST(Cli, RenderRejectsBadRequests) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/ring-sphere.json";
+    expectInputError("render --scene " + scene + " --method teleport --out " + tmp("x.png"), "unknown method");
+    expectInputError("render --scene " + scene + " --method reference --size 40 --out " + tmp("x.png"), "--size");
+    expectInputError("render --scene " + scene + " --method reference --out " + tmp("x.bmp"), "unknown image format");
+    expectInputError("render --scene " + scene + " --method reference --spp 0 --out " + tmp("x.png"), "--spp");
+    write(tmp("scene.json"), "{\"version\": 1, \"mesh\": \"generated:sphere\", \"preset\": \"x.json\", "
+                             "\"camera\": {\"eye\": [0,0,1], \"target\": [0,0,1]}, "
+                             "\"image\": {\"width\": 8, \"height\": 8}}");
+    expectInputError("render --scene " + tmp("scene.json") + " --method reference --out " + tmp("x.png"),
+                     "camera.eye and camera.target must be different");
+    write(tmp("scene2.json"), "{\"version\": 1, \"mesh\": \"generated:sphere\", \"preset\": \"x.json\", "
+                              "\"camera\": {\"eye\": [0,0,3], \"target\": [0,0,0]}, "
+                              "\"image\": {\"width\": 100000, \"height\": 8}}");
+    expectInputError("render --scene " + tmp("scene2.json") + " --method reference --out " + tmp("x.png"),
+                     "image.width");
+}
+
+} // namespace
