@@ -1,2 +1,444 @@
-// Implemented by the mesh work package (see noise/mesh.h).
 #include "noise/mesh.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <ostream>
+
+#include "noise/error.h"
+#include "noise/system.h"
+
+namespace spot::noise {
+
+namespace {
+
+/// A triangle is degenerate when |e1 x e2| <= kDegenerateRelArea * (longest edge)^2: zero area
+/// relative to its size, so the threshold does not depend on the mesh's units.
+constexpr double kDegenerateRelArea = 1e-12;
+
+/// A vertex normal or tangent whose accumulated sum is this small relative to the largest
+/// contribution cancelled out (opposite faces sharing a vertex); its direction is noise.
+constexpr double kCancelledRel = 1e-6;
+
+bool isFinite(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+bool isFinite(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+/// Any unit vector orthogonal to the unit vector `n`, continuous except at n.z = -0 (Duff et al.
+/// 2017, "Building an Orthonormal Basis, Revisited").
+glm::dvec3 orthogonalUnit(const glm::dvec3& n) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double b = n.x * n.y * a;
+    return glm::normalize(glm::dvec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x));
+}
+
+std::string meshName(const Mesh& mesh) {
+    return mesh.name.empty() ? std::string("mesh") : mesh.name;
+}
+
+void checkSizes(const Mesh& mesh, const std::string& name) {
+    const std::size_t n = mesh.positions.size();
+    if (n > std::numeric_limits<std::uint32_t>::max())
+        throw InputError(cat(name, ": ", n, " vertices do not fit 32-bit indices"));
+    if (!mesh.normals.empty() && mesh.normals.size() != n)
+        throw InputError(cat(name, ": ", mesh.normals.size(), " normals for ", n, " vertices"));
+    if (!mesh.uvs.empty() && mesh.uvs.size() != n)
+        throw InputError(cat(name, ": ", mesh.uvs.size(), " uvs for ", n, " vertices"));
+    for (const auto& [key, values] : mesh.attributes) {
+        if (values.size() != n)
+            throw InputError(cat(name, ": attribute '", key, "' has ", values.size(),
+                                 " values for ", n, " vertices"));
+    }
+}
+
+void checkValues(const Mesh& mesh, const std::string& name) {
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+        if (!isFinite(mesh.positions[i]))
+            throw InputError(cat(name, ": vertex ", i, " has a non-finite coordinate (",
+                                 mesh.positions[i].x, " ", mesh.positions[i].y, " ",
+                                 mesh.positions[i].z, ")"));
+    }
+    for (std::size_t i = 0; i < mesh.uvs.size(); ++i) {
+        if (!std::isfinite(mesh.uvs[i].x) || !std::isfinite(mesh.uvs[i].y))
+            throw InputError(cat(name, ": vertex ", i, " has a non-finite uv (", mesh.uvs[i].x, " ",
+                                 mesh.uvs[i].y, ")"));
+    }
+    for (const auto& [key, values] : mesh.attributes) {
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            if (!std::isfinite(values[i]))
+                throw InputError(cat(name, ": vertex ", i, " has a non-finite value ", values[i],
+                                     " for attribute '", key, "'"));
+        }
+    }
+    const std::size_t n = mesh.positions.size();
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        for (int k = 0; k < 3; ++k) {
+            if (mesh.triangles[t][k] >= n)
+                throw InputError(cat(name, ": triangle ", t, " refers to vertex ",
+                                     mesh.triangles[t][k], " but there are ", n, " vertices"));
+        }
+    }
+}
+
+void dropDegenerate(Mesh& mesh) {
+    std::size_t kept = 0;
+    for (const glm::uvec3& tri : mesh.triangles) {
+        bool degenerate = tri.x == tri.y || tri.y == tri.z || tri.z == tri.x;
+        if (!degenerate) {
+            const glm::dvec3 p0(mesh.positions[tri.x]);
+            const glm::dvec3 e1 = glm::dvec3(mesh.positions[tri.y]) - p0;
+            const glm::dvec3 e2 = glm::dvec3(mesh.positions[tri.z]) - p0;
+            const glm::dvec3 e3 = e2 - e1;
+            const double longest2 =
+                std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
+            degenerate = glm::length(glm::cross(e1, e2)) <= kDegenerateRelArea * longest2;
+        }
+        if (degenerate)
+            ++mesh.droppedTriangles;
+        else
+            mesh.triangles[kept++] = tri;
+    }
+    mesh.triangles.resize(kept);
+    mesh.triangles.shrink_to_fit();
+}
+
+void computeNormals(Mesh& mesh) {
+    const std::size_t n = mesh.positions.size();
+    // Area-weighted: the un-normalized cross product is twice the triangle's area times its normal.
+    std::vector<glm::dvec3> sum(n, glm::dvec3(0.0));
+    // The largest incident face, used where the weighted sum cancels out.
+    std::vector<glm::dvec3> largest(n, glm::dvec3(0.0));
+    std::vector<double> largestLength(n, 0.0);
+    for (const glm::uvec3& tri : mesh.triangles) {
+        const glm::dvec3 p0(mesh.positions[tri.x]);
+        const glm::dvec3 c = glm::cross(glm::dvec3(mesh.positions[tri.y]) - p0,
+                                        glm::dvec3(mesh.positions[tri.z]) - p0);
+        const double length = glm::length(c);
+        for (int k = 0; k < 3; ++k) {
+            sum[tri[k]] += c;
+            if (length > largestLength[tri[k]]) {
+                largestLength[tri[k]] = length;
+                largest[tri[k]] = c;
+            }
+        }
+    }
+    const bool given = !mesh.normals.empty();
+    mesh.normals.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (given) {
+            const glm::dvec3 g(mesh.normals[i]);
+            const double length = glm::length(g);
+            if (isFinite(g) && std::isfinite(length) && length > 0.0) {
+                mesh.normals[i] = glm::vec3(g / length);
+                continue;
+            }
+        }
+        const double length = glm::length(sum[i]);
+        if (length > kCancelledRel * largestLength[i] && length > 0.0)
+            mesh.normals[i] = glm::vec3(sum[i] / length);
+        else if (largestLength[i] > 0.0)
+            mesh.normals[i] = glm::vec3(largest[i] / largestLength[i]);
+        else
+            mesh.normals[i] = glm::vec3(0.0f, 1.0f, 0.0f); // used by no triangle: any unit vector
+    }
+}
+
+void computeTangents(Mesh& mesh) {
+    mesh.tangents.clear();
+    if (mesh.uvs.empty())
+        return;
+    const std::size_t n = mesh.positions.size();
+    std::vector<glm::dvec3> sum(n, glm::dvec3(0.0));
+    std::vector<double> weight(n, 0.0);
+    for (const glm::uvec3& tri : mesh.triangles) {
+        const glm::dvec3 p0(mesh.positions[tri.x]);
+        const glm::dvec3 e1 = glm::dvec3(mesh.positions[tri.y]) - p0;
+        const glm::dvec3 e2 = glm::dvec3(mesh.positions[tri.z]) - p0;
+        const glm::dvec2 t0(mesh.uvs[tri.x]);
+        const glm::dvec2 d1 = glm::dvec2(mesh.uvs[tri.y]) - t0;
+        const glm::dvec2 d2 = glm::dvec2(mesh.uvs[tri.z]) - t0;
+        const double det = d1.x * d2.y - d2.x * d1.y;
+        if (det == 0.0)
+            continue; // uv collapsed to a line: no gradient
+        // Solve e1 = d1.x dP/du + d1.y dP/dv, e2 = d2.x dP/du + d2.y dP/dv for dP/du.
+        const glm::dvec3 dPdu = (e1 * d2.y - e2 * d1.y) / det;
+        const double length = glm::length(dPdu);
+        if (!std::isfinite(length) || length == 0.0)
+            continue;
+        // Direction weighted by area, like the normals, so a tiny triangle with a stretched uv
+        // map does not dominate its neighbours.
+        const double area = 0.5 * glm::length(glm::cross(e1, e2));
+        for (int k = 0; k < 3; ++k) {
+            sum[tri[k]] += dPdu * (area / length);
+            weight[tri[k]] += area;
+        }
+    }
+    mesh.tangents.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::dvec3 normal(mesh.normals[i]);
+        const glm::dvec3 t = sum[i] - normal * glm::dot(normal, sum[i]); // Gram-Schmidt
+        const double length = glm::length(t);
+        const glm::dvec3 unit = (length > kCancelledRel * weight[i] && length > 0.0)
+                                    ? t / length
+                                    : orthogonalUnit(normal);
+        mesh.tangents[i] = glm::vec3(unit);
+    }
+}
+
+/// Little-endian bytes of a 4-byte value, independent of the host's byte order.
+void appendLe32(std::string& out, std::uint32_t bits) {
+    for (int k = 0; k < 4; ++k)
+        out.push_back(static_cast<char>((bits >> (8 * k)) & 0xffu));
+}
+
+void appendFloat(std::string& out, float value) {
+    appendLe32(out, std::bit_cast<std::uint32_t>(value));
+}
+
+void checkGeneratorSize(const char* what, long long vertices) {
+    const MeshLimits limits;
+    if (vertices > static_cast<long long>(limits.maxVertices))
+        throw InputError(
+            cat(what, ": ", vertices, " vertices, more than the limit ", limits.maxVertices));
+}
+
+} // namespace
+
+Bounds Mesh::bounds() const {
+    if (positions.empty())
+        return {};
+    Bounds b{positions.front(), positions.front()};
+    for (const glm::vec3& p : positions) {
+        b.lo = glm::min(b.lo, p);
+        b.hi = glm::max(b.hi, p);
+    }
+    return b;
+}
+
+double Mesh::surfaceArea() const {
+    double area = 0.0;
+    for (const glm::uvec3& tri : triangles) {
+        const glm::dvec3 p0(positions[tri.x]);
+        area += 0.5 * glm::length(glm::cross(glm::dvec3(positions[tri.y]) - p0,
+                                             glm::dvec3(positions[tri.z]) - p0));
+    }
+    return area;
+}
+
+void finalizeMesh(Mesh& mesh) {
+    const std::string name = meshName(mesh);
+    checkSizes(mesh, name);
+    checkValues(mesh, name);
+    const std::size_t before = mesh.triangles.size();
+    const std::size_t droppedBefore = mesh.droppedTriangles;
+    dropDegenerate(mesh);
+    if (mesh.triangles.empty()) {
+        if (mesh.droppedTriangles > droppedBefore)
+            throw InputError(
+                cat(name, ": has no usable triangles (all ", before, " are degenerate)"));
+        throw InputError(cat(name, ": has no usable triangles"));
+    }
+    computeNormals(mesh);
+    computeTangents(mesh);
+}
+
+void savePly(const Mesh& mesh, const std::filesystem::path& file) {
+    const std::string name = file.string();
+    checkSizes(mesh, name);
+    const std::size_t n = mesh.positions.size();
+    const bool hasNormals = mesh.normals.size() == n;
+    for (const auto& [key, values] : mesh.attributes) {
+        const bool reserved = key == "x" || key == "y" || key == "z" ||
+                              (hasNormals && (key == "nx" || key == "ny" || key == "nz")) ||
+                              (mesh.hasUv() && (key == "u" || key == "v"));
+        const bool token = !key.empty() && std::none_of(key.begin(), key.end(), [](char c) {
+            return static_cast<unsigned char>(c) <= ' ' || static_cast<unsigned char>(c) > '~';
+        });
+        if (reserved || !token)
+            throw InputError(
+                cat(name, ": attribute '", key, "' cannot be written as a PLY property"));
+    }
+
+    std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by spotshell\n";
+    header += cat("element vertex ", n, "\n");
+    header += "property float x\nproperty float y\nproperty float z\n";
+    if (hasNormals)
+        header += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (mesh.hasUv())
+        header += "property float u\nproperty float v\n";
+    for (const auto& [key, values] : mesh.attributes)
+        header += cat("property float ", key, "\n");
+    header += cat("element face ", mesh.triangles.size(), "\n");
+    header += "property list uchar int vertex_indices\nend_header\n";
+
+    std::string body;
+    const std::size_t floatsPerVertex =
+        3 + (hasNormals ? 3 : 0) + (mesh.hasUv() ? 2 : 0) + mesh.attributes.size();
+    body.reserve(n * floatsPerVertex * 4 + mesh.triangles.size() * 13);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k)
+            appendFloat(body, mesh.positions[i][k]);
+        if (hasNormals) {
+            for (int k = 0; k < 3; ++k)
+                appendFloat(body, mesh.normals[i][k]);
+        }
+        if (mesh.hasUv()) {
+            appendFloat(body, mesh.uvs[i].x);
+            appendFloat(body, mesh.uvs[i].y);
+        }
+        for (const auto& [key, values] : mesh.attributes)
+            appendFloat(body, values[i]);
+    }
+    for (const glm::uvec3& tri : mesh.triangles) {
+        body.push_back(3);
+        for (int k = 0; k < 3; ++k) {
+            if (tri[k] >= n)
+                throw InputError(cat(name, ": triangle refers to vertex ", tri[k],
+                                     " but there are ", n, " vertices"));
+            appendLe32(body, tri[k]);
+        }
+    }
+    writeFileAtomic(file, [&](std::ostream& out) {
+        out.write(header.data(), static_cast<std::streamsize>(header.size()));
+        out.write(body.data(), static_cast<std::streamsize>(body.size()));
+    });
+}
+
+Mesh makeSphere(float radius, int rings, int segments) {
+    if (!(radius > 0.0f) || !std::isfinite(radius))
+        throw InputError(cat("sphere: radius must be positive and finite, got ", radius));
+    if (rings < 2 || segments < 3)
+        throw InputError(
+            cat("sphere: needs at least 2 rings and 3 segments, got ", rings, " and ", segments));
+    checkGeneratorSize("sphere", (static_cast<long long>(rings) + 1) *
+                                     (static_cast<long long>(segments) + 1));
+
+    // Rows from the north pole (v = 1) to the south pole (v = 0). Each pole is one vertex per
+    // segment, at the middle of that segment's u range, so the pole triangles have a proper uv
+    // gradient; the quads touching a pole collapse to one triangle, so none is degenerate.
+    Mesh mesh;
+    mesh.name = "sphere";
+    const double pi = std::numbers::pi;
+    auto addVertex = [&](double u, double v) {
+        const double theta = pi * (1.0 - v); // from +y
+        const double phi = 2.0 * pi * u;     // from +z towards +x
+        const glm::dvec3 n(std::sin(theta) * std::sin(phi), std::cos(theta),
+                           std::sin(theta) * std::cos(phi));
+        mesh.positions.push_back(glm::vec3(n * static_cast<double>(radius)));
+        mesh.normals.push_back(glm::vec3(n));
+        mesh.uvs.push_back(glm::vec2(static_cast<float>(u), static_cast<float>(v)));
+    };
+    const auto north = static_cast<std::uint32_t>(mesh.positions.size());
+    for (int j = 0; j < segments; ++j)
+        addVertex((j + 0.5) / segments, 1.0);
+    const auto firstRow = static_cast<std::uint32_t>(mesh.positions.size());
+    for (int i = 1; i < rings; ++i) {
+        for (int j = 0; j <= segments; ++j)
+            addVertex(static_cast<double>(j) / segments, 1.0 - static_cast<double>(i) / rings);
+    }
+    const auto south = static_cast<std::uint32_t>(mesh.positions.size());
+    for (int j = 0; j < segments; ++j)
+        addVertex((j + 0.5) / segments, 0.0);
+
+    const auto row = [&](int i, int j) { // ring i in 1..rings-1
+        return firstRow + static_cast<std::uint32_t>((i - 1) * (segments + 1) + j);
+    };
+    for (int j = 0; j < segments; ++j) {
+        // Counter-clockwise in uv (u right, v up) is counter-clockwise seen from outside.
+        const auto uj = static_cast<std::uint32_t>(j);
+        mesh.triangles.push_back({row(1, j), row(1, j + 1), north + uj});
+        for (int i = 1; i + 1 < rings; ++i) {
+            const std::uint32_t upperLeft = row(i, j), upperRight = row(i, j + 1);
+            const std::uint32_t lowerLeft = row(i + 1, j), lowerRight = row(i + 1, j + 1);
+            mesh.triangles.push_back({lowerLeft, lowerRight, upperRight});
+            mesh.triangles.push_back({lowerLeft, upperRight, upperLeft});
+        }
+        mesh.triangles.push_back({south + uj, row(rings - 1, j + 1), row(rings - 1, j)});
+    }
+    finalizeMesh(mesh);
+    return mesh;
+}
+
+Mesh makeTorus(float majorRadius, float minorRadius, int majorSegments, int minorSegments) {
+    if (!std::isfinite(majorRadius) || !std::isfinite(minorRadius) || !(minorRadius > 0.0f) ||
+        !(majorRadius > minorRadius))
+        throw InputError(cat("torus: radii must be finite with 0 < minor < major, got major ",
+                             majorRadius, " and minor ", minorRadius));
+    if (majorSegments < 3 || minorSegments < 3)
+        throw InputError(cat("torus: needs at least 3 segments each way, got ", majorSegments,
+                             " and ", minorSegments));
+    checkGeneratorSize("torus", (static_cast<long long>(majorSegments) + 1) *
+                                    (static_cast<long long>(minorSegments) + 1));
+
+    // u goes around the y axis, v around the tube; the seams are duplicated so uv stays in [0,1].
+    Mesh mesh;
+    mesh.name = "torus";
+    const double pi = std::numbers::pi;
+    for (int i = 0; i <= majorSegments; ++i) {
+        const double u = static_cast<double>(i) / majorSegments;
+        const double phi = 2.0 * pi * u; // from +z towards +x
+        for (int j = 0; j <= minorSegments; ++j) {
+            const double v = static_cast<double>(j) / minorSegments;
+            const double theta = 2.0 * pi * v; // from the outer equator towards +y
+            const glm::dvec3 n(std::cos(theta) * std::sin(phi), std::sin(theta),
+                               std::cos(theta) * std::cos(phi));
+            const glm::dvec3 centre(majorRadius * std::sin(phi), 0.0, majorRadius * std::cos(phi));
+            mesh.positions.push_back(glm::vec3(centre + n * static_cast<double>(minorRadius)));
+            mesh.normals.push_back(glm::vec3(n));
+            mesh.uvs.push_back(glm::vec2(static_cast<float>(u), static_cast<float>(v)));
+        }
+    }
+    const auto at = [&](int i, int j) {
+        return static_cast<std::uint32_t>(i * (minorSegments + 1) + j);
+    };
+    for (int i = 0; i < majorSegments; ++i) {
+        for (int j = 0; j < minorSegments; ++j) {
+            mesh.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            mesh.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    }
+    finalizeMesh(mesh);
+    return mesh;
+}
+
+Mesh makePlane(float size, int cells) {
+    if (!(size > 0.0f) || !std::isfinite(size))
+        throw InputError(cat("plane: size must be positive and finite, got ", size));
+    if (cells < 1)
+        throw InputError(cat("plane: needs at least 1 cell per side, got ", cells));
+    checkGeneratorSize("plane",
+                       (static_cast<long long>(cells) + 1) * (static_cast<long long>(cells) + 1));
+
+    // u along +x, v along -z: counter-clockwise in uv is then counter-clockwise seen from +y.
+    Mesh mesh;
+    mesh.name = "plane";
+    for (int i = 0; i <= cells; ++i) {
+        const double u = static_cast<double>(i) / cells;
+        for (int j = 0; j <= cells; ++j) {
+            const double v = static_cast<double>(j) / cells;
+            mesh.positions.push_back(glm::vec3(static_cast<float>((u - 0.5) * size), 0.0f,
+                                               static_cast<float>((0.5 - v) * size)));
+            mesh.normals.push_back(glm::vec3(0.0f, 1.0f, 0.0f));
+            mesh.uvs.push_back(glm::vec2(static_cast<float>(u), static_cast<float>(v)));
+        }
+    }
+    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(i * (cells + 1) + j); };
+    for (int i = 0; i < cells; ++i) {
+        for (int j = 0; j < cells; ++j) {
+            mesh.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            mesh.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    }
+    finalizeMesh(mesh);
+    return mesh;
+}
+
+} // namespace spot::noise
