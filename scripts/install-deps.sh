@@ -9,8 +9,10 @@ packages=(
   # libraries
   libglm-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
-  # shaders and tests
-  glslang-tools libgtest-dev libgmock-dev libbenchmark-dev
+  # Vulkan on the CPU (lavapipe) with validation, shaders
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
+  # tests
+  libgtest-dev libgmock-dev libbenchmark-dev
 )
 
 missing=()

@@ -1,0 +1,55 @@
+/* spot_layout.h: structs shared by C++ and GLSL (std430 storage buffers, push constants).
+ *
+ * Every member is a 16-byte vector so the std430 layout equals the C++ layout without padding
+ * rules to remember; C++ static_asserts sizes in splat/layout.h. In C++ this file is included by
+ * splat/layout.h inside namespace spot::gpu with glm types; in GLSL directly.
+ *
+ * Units: world units, radians; colours linear RGB.
+ */
+
+/* A surface cell as the GPU generator sees it. */
+struct SpotCell {
+    ivec4 ijk;  /* xyz: cell index; w: piece count */
+    uvec4 info; /* x: first piece; y: floatBitsToUint(area); z: output offset; w: unused */
+};
+
+/* A piece of one triangle inside a cell, in the triangle's barycentric coordinates (b1, b2). */
+struct SpotPiece {
+    vec4 c01; /* corner 0 (x, y), corner 1 (z, w) */
+    vec4 c2;  /* corner 2 (x, y); z: area; w: uintBitsToFloat(triangle) */
+};
+
+/* One impulse (144 bytes). */
+struct SpotImpulse {
+    vec4 position; /* xyz: kernel origin; w: weight |w| */
+    vec4 normal;   /* xyz: surface normal; w: bend (radians per kernel unit) */
+    vec4 comb;     /* xyz: comb direction in the tangent plane; w: height offset */
+    vec4 frameX;   /* kernel frame columns (kernel -> world rotation); w unused */
+    vec4 frameY;
+    vec4 frameZ;
+    vec4 scale;    /* xyz: world units per kernel unit; w: uintBitsToFloat(triangle) */
+    vec4 color;    /* rgb: colour multiplier; w: barycentric b1 */
+    ivec4 cell;    /* xyz: generating cell; w: floatBitsToInt(barycentric b2) */
+};
+
+/* One kernel lobe in kernel space (64 bytes). */
+struct SpotLobe {
+    vec4 inv0;  /* columns of (R S)^-1, kernel -> lobe space; w: centre.x (kernel units) */
+    vec4 inv1;  /* w: centre.y */
+    vec4 inv2;  /* w: centre.z */
+    vec4 color; /* rgb; w: peak extinction (1 / world unit) */
+};
+
+/* A lobe placed in the world for the current view, EWA-widened (64 bytes). */
+struct SpotWorldLobe {
+    vec4 a0;    /* columns of A (world -> lobe space); w: centre.x */
+    vec4 a1;    /* w: centre.y */
+    vec4 a2;    /* w: centre.z */
+    vec4 color; /* rgb: lobe colour x impulse colour; w: extinction x weight x EWA amplitude */
+};
+
+/* Screen-space bound of one kernel for the current view (32 bytes). */
+struct SpotKernelBound {
+    vec4 rect;  /* pixel rectangle (x0, y0, x1, y1); empty when x1 <= x0 */
+    vec4 depth; /* x: nearest view depth of the support; y: farthest; z: depth of the origin; w: lobe count */
+};

@@ -1,0 +1,674 @@
+#include "context_vk.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+
+#include "noise/error.h"
+#include "noise/system.h"
+
+namespace spot::splat {
+
+void vkCheck(VkResult result, const char* what) {
+    if (result != VK_SUCCESS)
+        throw std::runtime_error(cat("Vulkan: ", what, " failed (VkResult ", int(result), ")"));
+}
+
+ContextOptions contextOptionsFromEnvironment() {
+    ContextOptions o;
+    const char* v = std::getenv("SPOT_VALIDATION");
+    o.validation = v && std::strcmp(v, "1") == 0;
+    return o;
+}
+
+struct Context::Messenger {
+    mutable std::mutex mutex;
+    ValidationCounts counts;
+};
+
+namespace {
+
+VKAPI_ATTR VkBool32 VKAPI_CALL onMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                         VkDebugUtilsMessageTypeFlagsEXT,
+                                         const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                         void* user) {
+    auto* m = static_cast<Context::Messenger*>(user);
+    const std::lock_guard<std::mutex> lock(m->mutex);
+    if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) {
+        if (m->counts.errors++ == 0)
+            m->counts.firstError = data->pMessage ? data->pMessage : "(no message)";
+        std::fprintf(stderr, "vulkan validation error: %s\n", data->pMessage ? data->pMessage : "");
+    } else if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
+        ++m->counts.warnings;
+    }
+    return VK_FALSE;
+}
+
+bool hasLayer(const char* name) {
+    std::uint32_t n = 0;
+    vkEnumerateInstanceLayerProperties(&n, nullptr);
+    std::vector<VkLayerProperties> layers(n);
+    vkEnumerateInstanceLayerProperties(&n, layers.data());
+    return std::any_of(layers.begin(), layers.end(),
+                       [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
+}
+
+} // namespace
+
+Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Messenger>()) {
+    m_validation = options.validation;
+    const char* validationLayer = "VK_LAYER_KHRONOS_validation";
+    if (m_validation && !hasLayer(validationLayer))
+        throw std::runtime_error("Vulkan validation requested (SPOT_VALIDATION=1) but "
+                                 "VK_LAYER_KHRONOS_validation is not installed "
+                                 "(Debian package vulkan-validationlayers)");
+
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "spotshell";
+    app.apiVersion = VK_API_VERSION_1_3;
+    std::vector<const char*> extensions;
+    std::vector<const char*> layers;
+    VkDebugUtilsMessengerCreateInfoEXT messengerInfo{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    messengerInfo.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
+                                    VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    messengerInfo.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                                VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                                VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    messengerInfo.pfnUserCallback = onMessage;
+    messengerInfo.pUserData = m_messages.get();
+    if (m_validation) {
+        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+        layers.push_back(validationLayer);
+    }
+    VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    ici.pApplicationInfo = &app;
+    ici.enabledExtensionCount = std::uint32_t(extensions.size());
+    ici.ppEnabledExtensionNames = extensions.data();
+    ici.enabledLayerCount = std::uint32_t(layers.size());
+    ici.ppEnabledLayerNames = layers.data();
+    if (m_validation)
+        ici.pNext = &messengerInfo; // also catch messages from instance creation itself
+    const VkResult created = vkCreateInstance(&ici, nullptr, &m_instance);
+    if (created != VK_SUCCESS)
+        throw std::runtime_error(cat("Vulkan: no instance (VkResult ", int(created),
+                                     "); is the Vulkan loader (libvulkan1) installed?"));
+    if (m_validation) {
+        auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(m_instance, "vkCreateDebugUtilsMessengerEXT"));
+        vkCheck(create ? create(m_instance, &messengerInfo, nullptr, &m_messenger)
+                       : VK_ERROR_EXTENSION_NOT_PRESENT,
+                "vkCreateDebugUtilsMessengerEXT");
+    }
+
+    // A device with a graphics+compute queue, Vulkan 1.3, push descriptors, 64-bit buffer atomics.
+    std::uint32_t n = 0;
+    vkEnumeratePhysicalDevices(m_instance, &n, nullptr);
+    std::vector<VkPhysicalDevice> devices(n);
+    vkEnumeratePhysicalDevices(m_instance, &n, devices.data());
+    std::string rejected;
+    for (VkPhysicalDevice d : devices) {
+        VkPhysicalDeviceProperties p;
+        vkGetPhysicalDeviceProperties(d, &p);
+        if (p.apiVersion < VK_API_VERSION_1_3) {
+            rejected += cat(" ", p.deviceName, " (Vulkan < 1.3)");
+            continue;
+        }
+        std::uint32_t families = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(d, &families, nullptr);
+        std::vector<VkQueueFamilyProperties> fam(families);
+        vkGetPhysicalDeviceQueueFamilyProperties(d, &families, fam.data());
+        for (std::uint32_t f = 0; f < families; ++f)
+            if ((fam[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (fam[f].queueFlags & VK_QUEUE_COMPUTE_BIT) &&
+                fam[f].timestampValidBits > 0) {
+                // Prefer a real GPU when there is one (the device tool's machines), else lavapipe.
+                if (!m_physical || p.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU) {
+                    m_physical = d;
+                    m_queueFamily = f;
+                    m_properties = p;
+                }
+                break;
+            }
+    }
+    if (!m_physical)
+        throw std::runtime_error(cat("Vulkan: no usable device (need Vulkan 1.3 with a graphics and "
+                                     "compute queue; install mesa-vulkan-drivers for lavapipe)",
+                                     rejected.empty() ? "" : "; rejected:", rejected));
+    vkGetPhysicalDeviceMemoryProperties(m_physical, &m_memory);
+
+    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    f12.pNext = &f13;
+    f2.pNext = &f12;
+    vkGetPhysicalDeviceFeatures2(m_physical, &f2);
+    if (!f13.dynamicRendering || !f13.synchronization2 || !f12.shaderBufferInt64Atomics ||
+        !f2.features.shaderInt64 || !f2.features.fragmentStoresAndAtomics)
+        throw std::runtime_error(cat("Vulkan: device ", m_properties.deviceName,
+                                     " lacks dynamic rendering, synchronization2, shaderInt64, "
+                                     "64-bit buffer atomics or fragment stores"));
+    VkPhysicalDeviceVulkan13Features want13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    want13.dynamicRendering = VK_TRUE;
+    want13.synchronization2 = VK_TRUE;
+    VkPhysicalDeviceVulkan12Features want12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    want12.shaderBufferInt64Atomics = VK_TRUE;
+    want12.scalarBlockLayout = f12.scalarBlockLayout;
+    want12.pNext = &want13;
+    VkPhysicalDeviceFeatures2 want{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    want.features.shaderInt64 = VK_TRUE;
+    want.features.fragmentStoresAndAtomics = VK_TRUE;
+    want.features.vertexPipelineStoresAndAtomics = f2.features.vertexPipelineStoresAndAtomics;
+    want.features.geometryShader = f2.features.geometryShader;
+    want.features.shaderFloat64 = f2.features.shaderFloat64;
+    want.pNext = &want12;
+
+    const float priority = 1.0f;
+    VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    qci.queueFamilyIndex = m_queueFamily;
+    qci.queueCount = 1;
+    qci.pQueuePriorities = &priority;
+    const char* deviceExtensions[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+    VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    dci.pNext = &want;
+    dci.queueCreateInfoCount = 1;
+    dci.pQueueCreateInfos = &qci;
+    dci.enabledExtensionCount = 1;
+    dci.ppEnabledExtensionNames = deviceExtensions;
+    vkCheck(vkCreateDevice(m_physical, &dci, nullptr, &m_device), "vkCreateDevice");
+    vkGetDeviceQueue(m_device, m_queueFamily, 0, &m_queue);
+    pushDescriptorSet = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(
+        vkGetDeviceProcAddr(m_device, "vkCmdPushDescriptorSetKHR"));
+    if (!pushDescriptorSet)
+        throw std::runtime_error("Vulkan: VK_KHR_push_descriptor is missing");
+
+    VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pci.queueFamilyIndex = m_queueFamily;
+    vkCheck(vkCreateCommandPool(m_device, &pci, nullptr, &m_pool), "vkCreateCommandPool");
+
+    m_budget = options.memoryBudget ? options.memoryBudget : memoryBudgetBytes() / 10 * 8;
+}
+
+Context::~Context() {
+    if (m_device) {
+        vkDeviceWaitIdle(m_device);
+        vkDestroyCommandPool(m_device, m_pool, nullptr);
+        vkDestroyDevice(m_device, nullptr);
+    }
+    if (m_messenger) {
+        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(m_instance, "vkDestroyDebugUtilsMessengerEXT"));
+        if (destroy)
+            destroy(m_instance, m_messenger, nullptr);
+    }
+    if (m_instance)
+        vkDestroyInstance(m_instance, nullptr);
+}
+
+ValidationCounts Context::validation() const {
+    const std::lock_guard<std::mutex> lock(m_messages->mutex);
+    return m_messages->counts;
+}
+
+void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record) {
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = m_pool;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    vkCheck(vkAllocateCommandBuffers(m_device, &ai, &cmd), "vkAllocateCommandBuffers");
+    VkFence fence = VK_NULL_HANDLE;
+    try {
+        VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        vkCheck(vkBeginCommandBuffer(cmd, &bi), "vkBeginCommandBuffer");
+        record(cmd);
+        vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+        VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+        vkCheck(vkCreateFence(m_device, &fci, nullptr, &fence), "vkCreateFence");
+        VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        si.commandBufferCount = 1;
+        si.pCommandBuffers = &cmd;
+        vkCheck(vkQueueSubmit(m_queue, 1, &si, fence), "vkQueueSubmit");
+        vkCheck(vkWaitForFences(m_device, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    } catch (...) {
+        vkDeviceWaitIdle(m_device);
+        if (fence)
+            vkDestroyFence(m_device, fence, nullptr);
+        vkFreeCommandBuffers(m_device, m_pool, 1, &cmd);
+        throw;
+    }
+    vkDestroyFence(m_device, fence, nullptr);
+    vkFreeCommandBuffers(m_device, m_pool, 1, &cmd);
+}
+
+std::uint32_t Context::findMemoryType(std::uint32_t typeBits, VkMemoryPropertyFlags props) const {
+    for (std::uint32_t i = 0; i < m_memory.memoryTypeCount; ++i)
+        if ((typeBits & (1u << i)) && (m_memory.memoryTypes[i].propertyFlags & props) == props)
+            return i;
+    throw std::runtime_error(cat("Vulkan: no memory type with properties ", props));
+}
+
+void Context::reserveMemory(std::uint64_t bytes, const std::string& what) {
+    const std::uint64_t now = m_allocated.fetch_add(bytes) + bytes;
+    if (now > m_budget) {
+        m_allocated.fetch_sub(bytes);
+        throw InputError(cat(what, " needs ", bytes >> 20, " MiB of GPU memory; ",
+                             (now - bytes) >> 20, " MiB are in use and the budget is ",
+                             m_budget >> 20, " MiB; reduce the image size or the kernel count"));
+    }
+    std::uint64_t peak = m_peak.load();
+    while (now > peak && !m_peak.compare_exchange_weak(peak, now)) {
+    }
+}
+
+void Context::releaseMemory(std::uint64_t bytes) { m_allocated.fetch_sub(bytes); }
+
+// ---- Buffer -----------------------------------------------------------------------------------
+
+Buffer::Buffer(Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, Memory memory,
+               const std::string& what)
+    : m_ctx(&ctx), m_size(std::max<VkDeviceSize>(size, 16)) {
+    const VkDeviceSize maxRange = ctx.properties().limits.maxStorageBufferRange;
+    if ((usage & VK_BUFFER_USAGE_STORAGE_BUFFER_BIT) && m_size > maxRange)
+        throw InputError(cat(what, " needs a storage buffer of ", m_size >> 20,
+                             " MiB, more than this device's limit of ", maxRange >> 20, " MiB"));
+    ctx.reserveMemory(m_size, what);
+    m_reserved = m_size;
+    try {
+        VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+        bci.size = m_size;
+        bci.usage = usage;
+        bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+        vkCheck(vkCreateBuffer(ctx.device(), &bci, nullptr, &m_buffer), "vkCreateBuffer");
+        VkMemoryRequirements req;
+        vkGetBufferMemoryRequirements(ctx.device(), m_buffer, &req);
+        const VkMemoryPropertyFlags props =
+            memory == Memory::HostVisible
+                ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
+                : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+        VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        mai.allocationSize = req.size;
+        mai.memoryTypeIndex = ctx.findMemoryType(req.memoryTypeBits, props);
+        vkCheck(vkAllocateMemory(ctx.device(), &mai, nullptr, &m_memory), "vkAllocateMemory");
+        vkCheck(vkBindBufferMemory(ctx.device(), m_buffer, m_memory, 0), "vkBindBufferMemory");
+        if (memory == Memory::HostVisible)
+            vkCheck(vkMapMemory(ctx.device(), m_memory, 0, VK_WHOLE_SIZE, 0, &m_mapped), "vkMapMemory");
+    } catch (...) {
+        destroy();
+        throw;
+    }
+}
+
+void Buffer::destroy() {
+    if (!m_ctx)
+        return;
+    if (m_mapped)
+        vkUnmapMemory(m_ctx->device(), m_memory);
+    if (m_buffer)
+        vkDestroyBuffer(m_ctx->device(), m_buffer, nullptr);
+    if (m_memory)
+        vkFreeMemory(m_ctx->device(), m_memory, nullptr);
+    m_ctx->releaseMemory(m_reserved);
+    m_ctx = nullptr;
+    m_buffer = VK_NULL_HANDLE;
+    m_memory = VK_NULL_HANDLE;
+    m_mapped = nullptr;
+    m_reserved = 0;
+}
+
+Buffer::~Buffer() { destroy(); }
+
+Buffer::Buffer(Buffer&& o) noexcept { *this = std::move(o); }
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+    if (this != &o) {
+        destroy();
+        std::swap(m_ctx, o.m_ctx);
+        std::swap(m_buffer, o.m_buffer);
+        std::swap(m_memory, o.m_memory);
+        std::swap(m_size, o.m_size);
+        std::swap(m_reserved, o.m_reserved);
+        std::swap(m_mapped, o.m_mapped);
+    }
+    return *this;
+}
+
+void Buffer::upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+    SPOT_CHECK(m_mapped != nullptr);
+    SPOT_CHECK_LE(offset + bytes, m_size);
+    std::memcpy(static_cast<char*>(m_mapped) + offset, data, std::size_t(bytes));
+}
+
+// ---- Image ------------------------------------------------------------------------------------
+
+Image::Image(Context& ctx, std::uint32_t width, std::uint32_t height, VkFormat format,
+             VkImageUsageFlags usage, VkImageAspectFlags aspect, const std::string& what)
+    : m_ctx(&ctx), m_format(format), m_width(width), m_height(height) {
+    const std::uint32_t maxSide = ctx.properties().limits.maxImageDimension2D;
+    if (width == 0 || height == 0 || width > maxSide || height > maxSide)
+        throw InputError(cat(what, ": image of ", width, "x", height, " is outside this device's [1, ",
+                             maxSide, "] per side"));
+    try {
+        VkImageCreateInfo ici{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+        ici.imageType = VK_IMAGE_TYPE_2D;
+        ici.format = format;
+        ici.extent = {width, height, 1};
+        ici.mipLevels = 1;
+        ici.arrayLayers = 1;
+        ici.samples = VK_SAMPLE_COUNT_1_BIT;
+        ici.tiling = VK_IMAGE_TILING_OPTIMAL;
+        ici.usage = usage;
+        ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        vkCheck(vkCreateImage(ctx.device(), &ici, nullptr, &m_image), "vkCreateImage");
+        VkMemoryRequirements req;
+        vkGetImageMemoryRequirements(ctx.device(), m_image, &req);
+        ctx.reserveMemory(req.size, what);
+        m_reserved = req.size;
+        VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        mai.allocationSize = req.size;
+        mai.memoryTypeIndex = ctx.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+        vkCheck(vkAllocateMemory(ctx.device(), &mai, nullptr, &m_memory), "vkAllocateMemory");
+        vkCheck(vkBindImageMemory(ctx.device(), m_image, m_memory, 0), "vkBindImageMemory");
+        VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+        vci.image = m_image;
+        vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
+        vci.format = format;
+        vci.subresourceRange = {aspect, 0, 1, 0, 1};
+        vkCheck(vkCreateImageView(ctx.device(), &vci, nullptr, &m_view), "vkCreateImageView");
+    } catch (...) {
+        destroy();
+        throw;
+    }
+}
+
+void Image::destroy() {
+    if (!m_ctx)
+        return;
+    if (m_view)
+        vkDestroyImageView(m_ctx->device(), m_view, nullptr);
+    if (m_image)
+        vkDestroyImage(m_ctx->device(), m_image, nullptr);
+    if (m_memory)
+        vkFreeMemory(m_ctx->device(), m_memory, nullptr);
+    m_ctx->releaseMemory(m_reserved);
+    m_ctx = nullptr;
+    m_view = VK_NULL_HANDLE;
+    m_image = VK_NULL_HANDLE;
+    m_memory = VK_NULL_HANDLE;
+    m_reserved = 0;
+}
+
+Image::~Image() { destroy(); }
+
+Image::Image(Image&& o) noexcept { *this = std::move(o); }
+
+Image& Image::operator=(Image&& o) noexcept {
+    if (this != &o) {
+        destroy();
+        std::swap(m_ctx, o.m_ctx);
+        std::swap(m_image, o.m_image);
+        std::swap(m_view, o.m_view);
+        std::swap(m_memory, o.m_memory);
+        std::swap(m_format, o.m_format);
+        std::swap(m_reserved, o.m_reserved);
+        std::swap(m_width, o.m_width);
+        std::swap(m_height, o.m_height);
+    }
+    return *this;
+}
+
+void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect,
+                     VkImageLayout from, VkImageLayout to, VkPipelineStageFlags2 srcStage,
+                     VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
+                     VkAccessFlags2 dstAccess) {
+    VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+    b.srcStageMask = srcStage;
+    b.srcAccessMask = srcAccess;
+    b.dstStageMask = dstStage;
+    b.dstAccessMask = dstAccess;
+    b.oldLayout = from;
+    b.newLayout = to;
+    b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = image;
+    b.subresourceRange = {aspect, 0, 1, 0, 1};
+    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dep.imageMemoryBarrierCount = 1;
+    dep.pImageMemoryBarriers = &b;
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                   VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
+    VkMemoryBarrier2 b{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+    b.srcStageMask = srcStage;
+    b.srcAccessMask = srcAccess;
+    b.dstStageMask = dstStage;
+    b.dstAccessMask = dstAccess;
+    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dep.memoryBarrierCount = 1;
+    dep.pMemoryBarriers = &b;
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+// ---- Pipelines --------------------------------------------------------------------------------
+
+Pipeline::~Pipeline() { destroy(); }
+
+Pipeline::Pipeline(Pipeline&& o) noexcept { *this = std::move(o); }
+
+Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
+    if (this != &o) {
+        destroy();
+        std::swap(m_ctx, o.m_ctx);
+        std::swap(m_pipeline, o.m_pipeline);
+        std::swap(m_layout, o.m_layout);
+        std::swap(m_setLayout, o.m_setLayout);
+        std::swap(m_bindPoint, o.m_bindPoint);
+    }
+    return *this;
+}
+
+void Pipeline::destroy() {
+    if (!m_ctx)
+        return;
+    if (m_pipeline)
+        vkDestroyPipeline(m_ctx->device(), m_pipeline, nullptr);
+    if (m_layout)
+        vkDestroyPipelineLayout(m_ctx->device(), m_layout, nullptr);
+    if (m_setLayout)
+        vkDestroyDescriptorSetLayout(m_ctx->device(), m_setLayout, nullptr);
+    m_ctx = nullptr;
+    m_pipeline = VK_NULL_HANDLE;
+    m_layout = VK_NULL_HANDLE;
+    m_setLayout = VK_NULL_HANDLE;
+}
+
+namespace {
+
+VkShaderModule makeModule(Context& ctx, std::span<const std::uint32_t> spirv) {
+    VkShaderModuleCreateInfo ci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    ci.codeSize = spirv.size_bytes();
+    ci.pCode = spirv.data();
+    VkShaderModule m = VK_NULL_HANDLE;
+    vkCheck(vkCreateShaderModule(ctx.device(), &ci, nullptr, &m), "vkCreateShaderModule");
+    return m;
+}
+
+void makeLayout(Context& ctx, const std::vector<VkDescriptorType>& bindings, std::uint32_t pushBytes,
+                VkShaderStageFlags stages, VkDescriptorSetLayout& setLayout, VkPipelineLayout& layout) {
+    SPOT_CHECK_LE(pushBytes, 128u);
+    std::vector<VkDescriptorSetLayoutBinding> b(bindings.size());
+    for (std::size_t i = 0; i < bindings.size(); ++i)
+        b[i] = {std::uint32_t(i), bindings[i], 1, stages, nullptr};
+    VkDescriptorSetLayoutCreateInfo dci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    dci.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+    dci.bindingCount = std::uint32_t(b.size());
+    dci.pBindings = b.data();
+    vkCheck(vkCreateDescriptorSetLayout(ctx.device(), &dci, nullptr, &setLayout),
+            "vkCreateDescriptorSetLayout");
+    VkPushConstantRange range{stages, 0, pushBytes};
+    VkPipelineLayoutCreateInfo pci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    pci.setLayoutCount = 1;
+    pci.pSetLayouts = &setLayout;
+    pci.pushConstantRangeCount = pushBytes ? 1 : 0;
+    pci.pPushConstantRanges = &range;
+    vkCheck(vkCreatePipelineLayout(ctx.device(), &pci, nullptr, &layout), "vkCreatePipelineLayout");
+}
+
+} // namespace
+
+Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
+                             const std::vector<VkDescriptorType>& bindings, std::uint32_t pushBytes) {
+    Pipeline p;
+    p.m_ctx = &ctx;
+    p.m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
+    makeLayout(ctx, bindings, pushBytes, VK_SHADER_STAGE_COMPUTE_BIT, p.m_setLayout, p.m_layout);
+    VkShaderModule module = makeModule(ctx, spirv);
+    VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    ci.stage.module = module;
+    ci.stage.pName = "main";
+    ci.layout = p.m_layout;
+    const VkResult r = vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &p.m_pipeline);
+    vkDestroyShaderModule(ctx.device(), module, nullptr);
+    vkCheck(r, "vkCreateComputePipelines");
+    return p;
+}
+
+Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc) {
+    Pipeline p;
+    p.m_ctx = &ctx;
+    p.m_bindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    const VkShaderStageFlags stages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT |
+                                      (desc.geometry.empty() ? 0 : VK_SHADER_STAGE_GEOMETRY_BIT);
+    makeLayout(ctx, desc.bindings, desc.pushBytes, stages, p.m_setLayout, p.m_layout);
+
+    std::vector<VkShaderModule> modules;
+    std::vector<VkPipelineShaderStageCreateInfo> shaderStages;
+    auto addStage = [&](std::span<const std::uint32_t> code, VkShaderStageFlagBits stage) {
+        if (code.empty())
+            return;
+        modules.push_back(makeModule(ctx, code));
+        VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+        s.stage = stage;
+        s.module = modules.back();
+        s.pName = "main";
+        shaderStages.push_back(s);
+    };
+    addStage(desc.vertex, VK_SHADER_STAGE_VERTEX_BIT);
+    addStage(desc.geometry, VK_SHADER_STAGE_GEOMETRY_BIT);
+    addStage(desc.fragment, VK_SHADER_STAGE_FRAGMENT_BIT);
+
+    VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    assembly.topology = desc.topology;
+    VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+    viewport.viewportCount = 1;
+    viewport.scissorCount = 1;
+    VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+    raster.polygonMode = VK_POLYGON_MODE_FILL;
+    raster.cullMode = desc.cull;
+    raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    raster.lineWidth = 1.0f;
+    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+    VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+    depth.depthTestEnable = desc.depthTest;
+    depth.depthWriteEnable = desc.depthWrite;
+    depth.depthCompareOp = desc.depthCompare;
+    VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+    SPOT_CHECK_EQ(desc.blends.size(), desc.colorFormats.size());
+    blend.attachmentCount = std::uint32_t(desc.blends.size());
+    blend.pAttachments = desc.blends.data();
+    const VkDynamicState dynamicStates[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+    dynamic.dynamicStateCount = 2;
+    dynamic.pDynamicStates = dynamicStates;
+    VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+    rendering.colorAttachmentCount = std::uint32_t(desc.colorFormats.size());
+    rendering.pColorAttachmentFormats = desc.colorFormats.data();
+    rendering.depthAttachmentFormat = desc.depthFormat;
+
+    VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+    ci.pNext = &rendering;
+    ci.stageCount = std::uint32_t(shaderStages.size());
+    ci.pStages = shaderStages.data();
+    ci.pVertexInputState = &vertexInput;
+    ci.pInputAssemblyState = &assembly;
+    ci.pViewportState = &viewport;
+    ci.pRasterizationState = &raster;
+    ci.pMultisampleState = &multisample;
+    ci.pDepthStencilState = &depth;
+    ci.pColorBlendState = &blend;
+    ci.pDynamicState = &dynamic;
+    ci.layout = p.m_layout;
+    const VkResult r = vkCreateGraphicsPipelines(ctx.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &p.m_pipeline);
+    for (VkShaderModule m : modules)
+        vkDestroyShaderModule(ctx.device(), m, nullptr);
+    vkCheck(r, "vkCreateGraphicsPipelines");
+    return p;
+}
+
+// ---- Descriptors ------------------------------------------------------------------------------
+
+Descriptors& Descriptors::buffer(std::uint32_t binding, const Buffer& b, VkDescriptorType type) {
+    m_buffers.push_back(std::make_unique<VkDescriptorBufferInfo>(b.info()));
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstBinding = binding;
+    w.descriptorCount = 1;
+    w.descriptorType = type;
+    w.pBufferInfo = m_buffers.back().get();
+    m_writes.push_back(w);
+    return *this;
+}
+
+Descriptors& Descriptors::image(std::uint32_t binding, const Image& image, VkImageLayout layout,
+                                VkDescriptorType type, VkSampler sampler) {
+    m_images.push_back(std::make_unique<VkDescriptorImageInfo>(VkDescriptorImageInfo{sampler, image.view(), layout}));
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstBinding = binding;
+    w.descriptorCount = 1;
+    w.descriptorType = type;
+    w.pImageInfo = m_images.back().get();
+    m_writes.push_back(w);
+    return *this;
+}
+
+void Descriptors::push(Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline) {
+    ctx.pushDescriptorSet(cmd, pipeline.bindPoint(), pipeline.layout(), 0,
+                          std::uint32_t(m_writes.size()), m_writes.data());
+}
+
+// ---- Timestamps -------------------------------------------------------------------------------
+
+Timestamps::Timestamps(Context& ctx, std::uint32_t count) : m_ctx(ctx), m_count(count) {
+    VkQueryPoolCreateInfo ci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    ci.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    ci.queryCount = count;
+    vkCheck(vkCreateQueryPool(ctx.device(), &ci, nullptr, &m_pool), "vkCreateQueryPool");
+}
+
+Timestamps::~Timestamps() { vkDestroyQueryPool(m_ctx.device(), m_pool, nullptr); }
+
+void Timestamps::reset(VkCommandBuffer cmd) { vkCmdResetQueryPool(cmd, m_pool, 0, m_count); }
+
+void Timestamps::write(VkCommandBuffer cmd, std::uint32_t slot, VkPipelineStageFlags2 stage) {
+    vkCmdWriteTimestamp2(cmd, stage, m_pool, slot);
+}
+
+std::vector<double> Timestamps::milliseconds() {
+    std::vector<std::uint64_t> ticks(m_count);
+    vkCheck(vkGetQueryPoolResults(m_ctx.device(), m_pool, 0, m_count, ticks.size() * 8, ticks.data(), 8,
+                                  VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+            "vkGetQueryPoolResults");
+    std::vector<double> ms(m_count);
+    const double period = m_ctx.properties().limits.timestampPeriod;
+    for (std::uint32_t i = 0; i < m_count; ++i)
+        ms[i] = double(ticks[i] - ticks[0]) * period * 1e-6;
+    return ms;
+}
+
+} // namespace spot::splat

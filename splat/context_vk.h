@@ -1,0 +1,244 @@
+/// @file context_vk.h
+/// @brief Vulkan plumbing: instance, device, queue, memory, buffers, images, pipelines,
+/// timestamps. Headless (no window); the editor's window will drive the same context.
+///
+/// Everything is RAII: handles are destroyed in reverse order of creation when their owner goes
+/// away. Validation: when enabled, VK_LAYER_KHRONOS_validation is loaded and a debug messenger
+/// counts errors and warnings; tests require zero errors. Memory: lavapipe never reports
+/// VK_ERROR_OUT_OF_DEVICE_MEMORY (the process is killed instead), so every allocation is counted
+/// against a budget and refused with an InputError before it is made.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+namespace spot::splat {
+
+struct ContextOptions {
+    /// Load the Khronos validation layer and count its messages. Default: on when the
+    /// environment variable SPOT_VALIDATION is set to 1 (tests set it), off otherwise.
+    bool validation = false;
+    /// Device memory this context may allocate, bytes; 0 = 80% of spot::memoryBudgetBytes().
+    std::uint64_t memoryBudget = 0;
+};
+
+/// ContextOptions with `validation` taken from SPOT_VALIDATION.
+ContextOptions contextOptionsFromEnvironment();
+
+struct ValidationCounts {
+    std::uint32_t errors = 0;
+    std::uint32_t warnings = 0;
+    std::string firstError;
+};
+
+class Context {
+public:
+    explicit Context(const ContextOptions& options = contextOptionsFromEnvironment());
+    ~Context();
+    Context(const Context&) = delete;
+    Context& operator=(const Context&) = delete;
+
+    VkInstance instance() const { return m_instance; }
+    VkPhysicalDevice physicalDevice() const { return m_physical; }
+    VkDevice device() const { return m_device; }
+    VkQueue queue() const { return m_queue; }
+    std::uint32_t queueFamily() const { return m_queueFamily; }
+    const VkPhysicalDeviceProperties& properties() const { return m_properties; }
+    std::string deviceName() const { return m_properties.deviceName; }
+    bool validationEnabled() const { return m_validation; }
+    ValidationCounts validation() const;
+
+    /// Record commands into a one-shot command buffer, submit, wait.
+    void submitAndWait(const std::function<void(VkCommandBuffer)>& record);
+
+    /// vkCmdPushDescriptorSetKHR (every pipeline here uses push descriptors).
+    PFN_vkCmdPushDescriptorSetKHR pushDescriptorSet = nullptr;
+
+    std::uint32_t findMemoryType(std::uint32_t typeBits, VkMemoryPropertyFlags properties) const;
+
+    /// Memory accounting (bytes): reserve before allocating, release after freeing.
+    void reserveMemory(std::uint64_t bytes, const std::string& what);
+    void releaseMemory(std::uint64_t bytes);
+    std::uint64_t allocatedBytes() const { return m_allocated.load(); }
+    std::uint64_t peakAllocatedBytes() const { return m_peak.load(); }
+    std::uint64_t memoryBudget() const { return m_budget; }
+
+    struct Messenger; ///< the debug messenger's state (defined in the .cpp)
+
+private:
+    bool m_validation = false;
+    VkInstance m_instance = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT m_messenger = VK_NULL_HANDLE;
+    std::unique_ptr<Messenger> m_messages;
+    VkPhysicalDevice m_physical = VK_NULL_HANDLE;
+    VkPhysicalDeviceProperties m_properties{};
+    VkPhysicalDeviceMemoryProperties m_memory{};
+    VkDevice m_device = VK_NULL_HANDLE;
+    VkQueue m_queue = VK_NULL_HANDLE;
+    std::uint32_t m_queueFamily = 0;
+    VkCommandPool m_pool = VK_NULL_HANDLE;
+    std::uint64_t m_budget = 0;
+    std::atomic<std::uint64_t> m_allocated{0};
+    std::atomic<std::uint64_t> m_peak{0};
+};
+
+/// A buffer with its own memory. Host-visible buffers stay mapped (lavapipe's memory is host
+/// memory either way; on a discrete GPU they are for uploads and readback).
+class Buffer {
+public:
+    enum class Memory { HostVisible, DeviceLocal };
+    Buffer() = default;
+    Buffer(Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, Memory memory,
+           const std::string& what);
+    ~Buffer();
+    Buffer(Buffer&& other) noexcept;
+    Buffer& operator=(Buffer&& other) noexcept;
+
+    VkBuffer handle() const { return m_buffer; }
+    VkDeviceSize size() const { return m_size; }
+    void* mapped() const { return m_mapped; }
+    /// Copy into a host-visible buffer at byte offset.
+    void upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
+    template <typename T> void upload(std::span<const T> items) {
+        upload(items.data(), items.size_bytes());
+    }
+    VkDescriptorBufferInfo info() const { return {m_buffer, 0, VK_WHOLE_SIZE}; }
+
+private:
+    void destroy();
+    Context* m_ctx = nullptr;
+    VkBuffer m_buffer = VK_NULL_HANDLE;
+    VkDeviceMemory m_memory = VK_NULL_HANDLE;
+    VkDeviceSize m_size = 0;
+    VkDeviceSize m_reserved = 0;
+    void* m_mapped = nullptr;
+};
+
+/// A 2D image with one view.
+class Image {
+public:
+    Image() = default;
+    Image(Context& ctx, std::uint32_t width, std::uint32_t height, VkFormat format,
+          VkImageUsageFlags usage, VkImageAspectFlags aspect, const std::string& what);
+    ~Image();
+    Image(Image&& other) noexcept;
+    Image& operator=(Image&& other) noexcept;
+
+    VkImage handle() const { return m_image; }
+    VkImageView view() const { return m_view; }
+    VkFormat format() const { return m_format; }
+    std::uint32_t width() const { return m_width; }
+    std::uint32_t height() const { return m_height; }
+
+private:
+    void destroy();
+    Context* m_ctx = nullptr;
+    VkImage m_image = VK_NULL_HANDLE;
+    VkImageView m_view = VK_NULL_HANDLE;
+    VkDeviceMemory m_memory = VK_NULL_HANDLE;
+    VkFormat m_format = VK_FORMAT_UNDEFINED;
+    VkDeviceSize m_reserved = 0;
+    std::uint32_t m_width = 0, m_height = 0;
+};
+
+/// One image layout transition (and memory dependency) with a full pipeline barrier between
+/// the given stages.
+void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect,
+                     VkImageLayout from, VkImageLayout to, VkPipelineStageFlags2 srcStage,
+                     VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
+                     VkAccessFlags2 dstAccess);
+/// A global memory barrier (buffers written by one pass, read by the next).
+void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                   VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess);
+
+/// A pipeline with its layout and its push-descriptor set layout (set 0).
+class Pipeline {
+public:
+    Pipeline() = default;
+    ~Pipeline();
+    Pipeline(Pipeline&& other) noexcept;
+    Pipeline& operator=(Pipeline&& other) noexcept;
+
+    VkPipeline handle() const { return m_pipeline; }
+    VkPipelineLayout layout() const { return m_layout; }
+    VkPipelineBindPoint bindPoint() const { return m_bindPoint; }
+
+private:
+    friend Pipeline makeComputePipeline(Context&, std::span<const std::uint32_t>,
+                                        const std::vector<VkDescriptorType>&, std::uint32_t);
+    friend struct GraphicsPipelineDesc;
+    friend Pipeline makeGraphicsPipeline(Context&, const struct GraphicsPipelineDesc&);
+    void destroy();
+    Context* m_ctx = nullptr;
+    VkPipeline m_pipeline = VK_NULL_HANDLE;
+    VkPipelineLayout m_layout = VK_NULL_HANDLE;
+    VkDescriptorSetLayout m_setLayout = VK_NULL_HANDLE;
+    VkPipelineBindPoint m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
+};
+
+/// Compute pipeline: one SPIR-V module (entry "main"), bindings 0..n-1 of the given types,
+/// push constants of `pushBytes` (<= 128).
+Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
+                             const std::vector<VkDescriptorType>& bindings, std::uint32_t pushBytes);
+
+struct GraphicsPipelineDesc {
+    std::span<const std::uint32_t> vertex, fragment, geometry; ///< geometry optional
+    std::vector<VkDescriptorType> bindings;                    ///< visible to all stages
+    std::uint32_t pushBytes = 0;
+    std::vector<VkFormat> colorFormats;
+    std::vector<VkPipelineColorBlendAttachmentState> blends;   ///< one per colour attachment
+    VkFormat depthFormat = VK_FORMAT_UNDEFINED;
+    bool depthTest = false;
+    bool depthWrite = false;
+    VkCompareOp depthCompare = VK_COMPARE_OP_LESS;
+    VkPrimitiveTopology topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+    VkCullModeFlags cull = VK_CULL_MODE_NONE;
+};
+
+/// Graphics pipeline for dynamic rendering; vertices are pulled from storage buffers (no vertex
+/// input state); viewport and scissor are dynamic.
+Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc);
+
+/// Push-descriptor writes for set 0, built up then pushed with one call.
+class Descriptors {
+public:
+    Descriptors& buffer(std::uint32_t binding, const Buffer& b,
+                        VkDescriptorType type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    Descriptors& image(std::uint32_t binding, const Image& image, VkImageLayout layout,
+                       VkDescriptorType type, VkSampler sampler = VK_NULL_HANDLE);
+    void push(Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline);
+
+private:
+    std::vector<VkWriteDescriptorSet> m_writes;
+    std::vector<std::unique_ptr<VkDescriptorBufferInfo>> m_buffers;
+    std::vector<std::unique_ptr<VkDescriptorImageInfo>> m_images;
+};
+
+/// GPU timestamps: `count` slots, written with write(), read after the submit finished.
+class Timestamps {
+public:
+    Timestamps(Context& ctx, std::uint32_t count);
+    ~Timestamps();
+    void reset(VkCommandBuffer cmd);
+    void write(VkCommandBuffer cmd, std::uint32_t slot, VkPipelineStageFlags2 stage);
+    /// Milliseconds between two slots.
+    std::vector<double> milliseconds();
+
+private:
+    Context& m_ctx;
+    VkQueryPool m_pool = VK_NULL_HANDLE;
+    std::uint32_t m_count = 0;
+};
+
+/// Throw a descriptive error for a failed Vulkan call.
+void vkCheck(VkResult result, const char* what);
+
+} // namespace spot::splat
