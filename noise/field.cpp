@@ -12,6 +12,7 @@
 #include "noise/error.h"
 #include "noise/mesh.h"
 #include "noise/system.h"
+#include "shaders/spot_layout.hpp"
 #include "shaders/spot_shared.hpp"
 
 namespace spot::noise {
@@ -21,14 +22,26 @@ namespace {
 /// Images are decoded to float in memory; this caps what one field may hold (all channels of the
 /// file count, since the decoder may allocate them even when only some are kept).
 constexpr std::uint64_t kMaxImageBytes = 1ull << 30;
-constexpr int kMaxNoiseOctaves = 16;
 constexpr float kMinGradientLength = 1e-6f;
+
+gpu::SpotField sharedField(int kind, int components) {
+    gpu::SpotField f{};
+    f.kind = glm::ivec4(kind, components, 1, 0);
+    return f;
+}
+
+/// The offset of `values` once appended to the shared data array (checked to fit 32 bits).
+std::uint32_t appendData(std::vector<float>& data, const float* values, std::size_t count) {
+    SPOT_CHECK_LE(data.size() + count, std::size_t(UINT32_MAX));
+    const auto offset = static_cast<std::uint32_t>(data.size());
+    data.insert(data.end(), values, values + count);
+    return offset;
+}
 
 glm::vec3 keepComponents(glm::vec3 v, int components) {
     return components == 1 ? glm::vec3(v.x, 0.0f, 0.0f) : v;
 }
 
-/// Messages from OIIO may span lines; ours are printed as one.
 /// Outputs of the mapped kinds (gradient, noise, image) are clamped to the interval spanned by
 /// lo and hi: `mix` in float can land one ulp outside it, and range() promises exact bounds.
 struct LinearMap {
@@ -46,6 +59,11 @@ public:
     explicit ConstantField(glm::vec3 value) : m_value(value) {}
     glm::vec3 eval(const SurfacePoint&) const override { return m_value; }
     FieldRange range() const override { return {m_value, m_value}; }
+    gpu::SpotField shared(std::vector<float>&) const override {
+        gpu::SpotField f = sharedField(0, 3);
+        f.value = glm::vec4(m_value, 0.0f);
+        return f;
+    }
 
 private:
     glm::vec3 m_value;
@@ -61,6 +79,15 @@ public:
         return m_map(std::isnan(t) ? 0.0f : t);
     }
     FieldRange range() const override { return {m_map.min, m_map.max}; }
+    gpu::SpotField shared(std::vector<float>&) const override {
+        // Unused components have lo = hi = 0, so all three map to the same values as eval.
+        gpu::SpotField f = sharedField(1, 3);
+        f.from = glm::vec4(m_from, 0.0f);
+        f.axis = glm::vec4(m_axis, 0.0f);
+        f.lo = glm::vec4(m_map.lo, 0.0f);
+        f.hi = glm::vec4(m_map.hi, 0.0f);
+        return f;
+    }
 
 private:
     glm::vec3 m_from;
@@ -76,6 +103,15 @@ public:
         return m_map(valueNoise(p.position * m_frequency, m_octaves, m_seed));
     }
     FieldRange range() const override { return {m_map.min, m_map.max}; }
+    gpu::SpotField shared(std::vector<float>&) const override {
+        gpu::SpotField f = sharedField(2, 3);
+        f.kind.z = m_octaves;
+        f.kind.w = static_cast<std::int32_t>(m_seed);
+        f.from = glm::vec4(0.0f, 0.0f, 0.0f, m_frequency);
+        f.lo = glm::vec4(m_map.lo, 0.0f);
+        f.hi = glm::vec4(m_map.hi, 0.0f);
+        return f;
+    }
 
 private:
     float m_frequency;
@@ -112,6 +148,16 @@ public:
         return glm::clamp(out, m_range.lo, m_range.hi);
     }
     FieldRange range() const override { return m_range; }
+    gpu::SpotField shared(std::vector<float>& data) const override {
+        gpu::SpotField f = sharedField(3, static_cast<int>(m_attributes.size()));
+        std::uint32_t offsets[3] = {0, 0, 0};
+        for (std::size_t c = 0; c < m_attributes.size() && c < 3; ++c)
+            offsets[c] = appendData(data, m_attributes[c]->data(), m_attributes[c]->size());
+        f.data = glm::uvec4(offsets[0], offsets[1], offsets[2], 0u);
+        f.clampLo = glm::vec4(m_range.lo, 0.0f);
+        f.clampHi = glm::vec4(m_range.hi, 0.0f);
+        return f;
+    }
 
 private:
     const Mesh* m_mesh;
@@ -174,6 +220,17 @@ public:
     }
 
     FieldRange range() const override { return m_range; }
+    gpu::SpotField shared(std::vector<float>& data) const override {
+        gpu::SpotField f = sharedField(4, m_components);
+        f.data = glm::uvec4(appendData(data, m_texels.data(), m_texels.size()),
+                            static_cast<std::uint32_t>(m_width), static_cast<std::uint32_t>(m_height),
+                            m_repeat ? 1u : 0u);
+        f.clampLo = glm::vec4(m_tMin, 0.0f);
+        f.clampHi = glm::vec4(m_tMax, 0.0f);
+        f.lo = glm::vec4(m_map.lo, 0.0f);
+        f.hi = glm::vec4(m_map.hi, 0.0f);
+        return f;
+    }
 
 private:
     static float lerp(float a, float b, float t) { return a + (b - a) * t; }
@@ -323,71 +380,11 @@ bool finite(glm::vec3 v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-/// Lattice value in [0,1] at integer point (ix, iy, iz): 24 hashed bits, so float holds it exactly
-/// and the GPU computes the same value from the same uint arithmetic.
-float latticeValue(std::uint32_t ix, std::uint32_t iy, std::uint32_t iz, std::uint32_t seed) {
-    using namespace spot::shared::f32;
-    std::uint32_t h = spotHash(seed ^ 0x3c6ef372u);
-    h = spotHashCombine(h, ix);
-    h = spotHashCombine(h, iy);
-    h = spotHashCombine(h, iz);
-    return static_cast<float>(h >> 8u) * (1.0f / 16777215.0f);
-}
-
-/// floor(x) as a lattice index; coordinates beyond the int32 range saturate rather than overflow.
-std::uint32_t latticeIndex(float floored) {
-    const double c = std::clamp(static_cast<double>(floored), -2147483648.0, 2147483647.0);
-    return static_cast<std::uint32_t>(static_cast<std::int32_t>(c));
-}
-
-/// Quintic fade 6t^5 - 15t^4 + 10t^3: zero first and second derivatives at the lattice, so the
-/// noise is C2 and shows no grid creases.
-float fade(float t) {
-    return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f);
-}
-
-float valueNoiseOctave(glm::vec3 p, std::uint32_t seed) {
-    const glm::vec3 fl = glm::floor(p);
-    const glm::vec3 f = p - fl;
-    const std::uint32_t x0 = latticeIndex(fl.x);
-    const std::uint32_t y0 = latticeIndex(fl.y);
-    const std::uint32_t z0 = latticeIndex(fl.z);
-    const float u = fade(f.x);
-    const float v = fade(f.y);
-    const float w = fade(f.z);
-    float corners[2][2][2];
-    for (std::uint32_t dz = 0; dz < 2; ++dz)
-        for (std::uint32_t dy = 0; dy < 2; ++dy)
-            for (std::uint32_t dx = 0; dx < 2; ++dx)
-                corners[dz][dy][dx] = latticeValue(x0 + dx, y0 + dy, z0 + dz, seed);
-    const auto lerp = [](float a, float b, float t) { return a + (b - a) * t; };
-    const float y0z0 = lerp(corners[0][0][0], corners[0][0][1], u);
-    const float y1z0 = lerp(corners[0][1][0], corners[0][1][1], u);
-    const float y0z1 = lerp(corners[1][0][0], corners[1][0][1], u);
-    const float y1z1 = lerp(corners[1][1][0], corners[1][1][1], u);
-    return lerp(lerp(y0z0, y1z0, v), lerp(y0z1, y1z1, v), w);
-}
-
 } // namespace
 
 float valueNoise(glm::vec3 p, int octaves, std::uint32_t seed) {
-    if (!finite(p))
-        p = glm::vec3(0.0f);
-    octaves = std::clamp(octaves, 1, kMaxNoiseOctaves);
-    float sum = 0.0f;
-    float amplitudeSum = 0.0f;
-    float amplitude = 1.0f;
-    for (int o = 0; o < octaves; ++o) {
-        // Each octave draws its own lattice: with one lattice the octaves would share values at
-        // the integer points and the sum would show the coarse grid.
-        const std::uint32_t octaveSeed =
-            spot::shared::f32::spotHashCombine(seed, static_cast<std::uint32_t>(o));
-        sum += amplitude * valueNoiseOctave(p, octaveSeed);
-        amplitudeSum += amplitude;
-        amplitude *= 0.5f;
-        p *= 2.0f;
-    }
-    return std::clamp(sum / amplitudeSum, 0.0f, 1.0f);
+    // The shared header's noise, so CPU and GPU fields agree bit for bit.
+    return spot::shared::f32::spotValueNoise(p, octaves, seed);
 }
 
 std::unique_ptr<Field> makeField(const FieldDesc& desc, const Mesh& mesh,

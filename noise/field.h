@@ -17,6 +17,10 @@
 
 #include <glm/glm.hpp>
 
+namespace spot::gpu {
+struct SpotField;
+}
+
 namespace spot::noise {
 
 struct Mesh;
@@ -71,6 +75,10 @@ public:
     virtual glm::vec3 eval(const SurfacePoint& p) const = 0;
     /// Bounds of every value `eval` can return.
     virtual FieldRange range() const = 0;
+    /// The field in the form the shared generator evaluates on the CPU and the GPU
+    /// (shaders/spot_generate.h, spotFieldEval: the same arithmetic as eval). Per-vertex columns
+    /// and image texels are appended to `data` and referenced by offset.
+    virtual gpu::SpotField shared(std::vector<float>& data) const = 0;
 };
 
 /// Bind a description to a mesh. Throws InputError naming `context` (e.g. "preset fur.json,

@@ -21,6 +21,11 @@
 #include "field.h"
 #include "kernel.h"
 #include "preset.h"
+#include "shaders/spot_layout.hpp"
+
+namespace spot::shared::f32 {
+struct GeneratorArrays;
+}
 
 namespace spot::noise {
 
@@ -75,15 +80,19 @@ public:
 
     /// Append the impulses of cell `cellIndex` to `out`, in a fixed order.
     void generateCell(std::size_t cellIndex, std::vector<Impulse>& out) const;
+
+    /// What the shared generator reads (shaders/spot_generate.h), for the GPU to upload: pieces
+    /// with cumulative areas, the fields' data array and the parameters.
+    const std::vector<gpu::SpotPiece>& sharedPieces() const { return m_sharedPieces; }
+    const std::vector<float>& sharedFieldData() const { return m_fieldData; }
+    const gpu::SpotGenParams& sharedParams() const { return m_params; }
     /// Impulses of the cells accepted by `keep` (all cells when empty), concatenated in cell
     /// order; parallel over cells, identical for any thread count. Checks the memory budget first.
     std::vector<Impulse> generate(const std::function<bool(const SurfaceCell&)>& keep = {}) const;
 
 private:
-    void finishImpulse(const SurfaceCell& cell, std::uint32_t key, std::uint32_t triangle,
-                       glm::dvec3 bary, std::vector<Impulse>& out) const;
-    void generatePoisson(const SurfaceCell& cell, std::vector<Impulse>& out) const;
-    void generateJittered(const SurfaceCell& cell, std::vector<Impulse>& out) const;
+    void buildSharedData();
+    shared::f32::GeneratorArrays arrays() const;
 
     const Mesh& m_mesh;
     PresetDesc m_preset;
@@ -92,6 +101,9 @@ private:
     BoundFields m_fields;
     float m_minCellSize = 0.0f;
     SurfaceCells m_cells;
+    std::vector<gpu::SpotPiece> m_sharedPieces;
+    std::vector<float> m_fieldData;
+    gpu::SpotGenParams m_params{};
 };
 
 } // namespace spot::noise

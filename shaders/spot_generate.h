@@ -1,0 +1,347 @@
+/* spot_generate.h: impulse generation, one source for the CPU generator and the GPU compute pass.
+ *
+ * Included after spot_shared.h and spot_layout.h. The includer provides the data accessors:
+ *   uvec3 spotMeshTriangle(uint t); rvec3 spotMeshPosition(uint v); rvec3 spotMeshNormal(uint v);
+ *   rvec3 spotMeshTangent(uint v) (zero when the mesh has none); rvec2 spotMeshUv(uint v);
+ *   SpotPiece spotCellPiece(uint i); real spotFieldData(uint i);
+ *   vec4 spotParamDistribution(); vec4 spotParamVariation0(); vec4 spotParamVariation1();
+ *   uvec4 spotParamFlags(); SpotField spotParamField(uint slot);
+ * In GLSL these read storage buffers; in C++ this file is included inside a class body
+ * (noise/generator_shared.h) whose members read the model's arrays.
+ *
+ * Generation is split into candidates so that no GPU invocation loops long (lavapipe silently
+ * stops a shader invocation after 65,535 loop iterations): spotCellCandidates(cell) gives a
+ * cell's candidate count (a Poisson draw of density_max x area, or the jittered lattice sites to
+ * examine), spotCandidate(cell, m, imp) decides candidate m. Impulses are the accepted candidates
+ * in (cell, candidate) order, the same on both sides.
+ */
+
+/* Piece areas in SpotPiece.c2.z are cumulative within their cell (area up to and including the
+ * piece), so a candidate finds its piece by binary search. */
+
+struct SpotSurface {
+    rvec3 position;
+    rvec3 normal;
+    rvec3 tangent;
+    rvec2 uv;
+    uint triangle;
+    rvec3 bary;
+};
+
+SPOT_FN rvec3 spotDefaultTangent(rvec3 n) {
+    rvec3 t = rvec3(real(0.0), real(-1.0), real(0.0)) - n * -n.y;
+    if (dot(t, t) < real(1e-8))
+        t = rvec3(real(1.0), real(0.0), real(0.0)) - n * n.x;
+    return normalize(t);
+}
+
+SPOT_FN SpotSurface spotSurfaceAt(uint tri, rvec3 b) {
+    uvec3 t = spotMeshTriangle(tri);
+    SpotSurface s;
+    s.triangle = tri;
+    s.bary = b;
+    rvec3 p0 = spotMeshPosition(t.x);
+    rvec3 p1 = spotMeshPosition(t.y);
+    rvec3 p2 = spotMeshPosition(t.z);
+    s.position = b.x * p0 + b.y * p1 + b.z * p2;
+    rvec3 n = b.x * spotMeshNormal(t.x) + b.y * spotMeshNormal(t.y) + b.z * spotMeshNormal(t.z);
+    if (!(dot(n, n) > real(1e-12)))
+        n = cross(p1 - p0, p2 - p0);
+    s.normal = normalize(n);
+    s.uv = b.x * spotMeshUv(t.x) + b.y * spotMeshUv(t.y) + b.z * spotMeshUv(t.z);
+    rvec3 tg = b.x * spotMeshTangent(t.x) + b.y * spotMeshTangent(t.y) + b.z * spotMeshTangent(t.z);
+    tg -= s.normal * dot(tg, s.normal);
+    s.tangent = dot(tg, tg) > real(1e-12) ? normalize(tg) : spotDefaultTangent(s.normal);
+    return s;
+}
+
+/* The linear map of the mapped field kinds, clamped to the interval its ends span. */
+SPOT_FN rvec3 spotFieldMap(SpotField f, rvec3 t) {
+    rvec3 lo = rvec3(f.lo);
+    rvec3 hi = rvec3(f.hi);
+    return clamp(lo * (rvec3(real(1.0)) - t) + hi * t, min(lo, hi), max(lo, hi));
+}
+
+SPOT_FN rvec3 spotKeepComponents(rvec3 v, int components) {
+    return components == 1 ? rvec3(v.x, real(0.0), real(0.0)) : v;
+}
+
+SPOT_FN int spotWrapIndex(int i, int n, bool repeat) {
+    return repeat ? ((i % n) + n) % n : clamp(i, 0, n - 1);
+}
+
+SPOT_FN real spotImageTexel(SpotField f, int x, int y, int c) {
+    return spotFieldData(f.data.x + (uint(y) * f.data.y + uint(x)) * uint(f.kind.y) + uint(c));
+}
+
+/* A field's value at a surface point (scalars in .x). */
+SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
+    SpotField f = spotParamField(slot);
+    int kind = f.kind.x;
+    int components = f.kind.y;
+    if (kind == 1) {
+        rvec3 from = rvec3(f.from);
+        real t = clamp(dot(s.position - from, rvec3(f.axis)), real(0.0), real(1.0));
+        if (!(t == t))
+            t = real(0.0);
+        return spotKeepComponents(spotFieldMap(f, rvec3(t)), components);
+    }
+    if (kind == 2) {
+        real v = spotValueNoise(s.position * f.from.w, f.kind.z, uint(f.kind.w));
+        return spotKeepComponents(spotFieldMap(f, rvec3(v)), components);
+    }
+    if (kind == 3) {
+        uvec3 t = spotMeshTriangle(s.triangle);
+        rvec3 out = rvec3(real(0.0));
+        for (int c = 0; c < components; ++c) {
+            uint column = c == 0 ? f.data.x : (c == 1 ? f.data.y : f.data.z);
+            out[c] = s.bary.x * spotFieldData(column + t.x) + s.bary.y * spotFieldData(column + t.y) +
+                     s.bary.z * spotFieldData(column + t.z);
+        }
+        return spotKeepComponents(clamp(out, rvec3(f.clampLo), rvec3(f.clampHi)), components);
+    }
+    if (kind == 4) {
+        bool repeat = f.data.w != 0u;
+        real u = s.uv.x == s.uv.x && abs(s.uv.x) < real(1e30) ? s.uv.x : real(0.0);
+        real v = s.uv.y == s.uv.y && abs(s.uv.y) < real(1e30) ? s.uv.y : real(0.0);
+        if (repeat) {
+            u -= floor(u);
+            v -= floor(v);
+        } else {
+            u = clamp(u, real(0.0), real(1.0));
+            v = clamp(v, real(0.0), real(1.0));
+        }
+        int width = int(f.data.y);
+        int height = int(f.data.z);
+        real x = u * real(width) - real(0.5);
+        real y = (real(1.0) - v) * real(height) - real(0.5);
+        real xf = floor(x);
+        real yf = floor(y);
+        real fx = x - xf;
+        real fy = y - yf;
+        int xa = spotWrapIndex(int(xf), width, repeat);
+        int xb = spotWrapIndex(int(xf) + 1, width, repeat);
+        int ya = spotWrapIndex(int(yf), height, repeat);
+        int yb = spotWrapIndex(int(yf) + 1, height, repeat);
+        rvec3 t = rvec3(real(0.0));
+        for (int c = 0; c < components; ++c) {
+            real a = spotImageTexel(f, xa, ya, c);
+            real b = spotImageTexel(f, xb, ya, c);
+            real top = a + (b - a) * fx;
+            real d = spotImageTexel(f, xa, yb, c);
+            real e = spotImageTexel(f, xb, yb, c);
+            real bottom = d + (e - d) * fx;
+            t[c] = clamp(top + (bottom - top) * fy, f.clampLo[c], f.clampHi[c]);
+        }
+        return spotKeepComponents(spotFieldMap(f, t), components);
+    }
+    return rvec3(f.value);
+}
+
+SPOT_FN real spotSymmetric(uint key, uint counter) { return real(2.0) * spotRand(key, counter) - real(1.0); }
+
+/* The candidate at barycentric `bary` of triangle `tri`: the density test, then the impulse. */
+SPOT_FN bool spotFinishImpulse(ivec3 cell, uint key, uint tri, rvec3 bary, SPOT_OUT(SpotImpulse) imp) {
+    SpotSurface sp = spotSurfaceAt(tri, bary);
+    real density = spotFieldEval(uint(SPOT_FIELD_DENSITY), sp).x;
+    if (!(spotRand(key, kRandDensity) < density))
+        return false;
+    rvec4 dist = rvec4(spotParamDistribution());
+    rvec4 var0 = rvec4(spotParamVariation0());
+    rvec4 var1 = rvec4(spotParamVariation1());
+    uvec4 flags = spotParamFlags();
+    real height = dist.z + dist.w * spotSymmetric(key, kRandHeight);
+    rvec3 comb = flags.z != 0u ? spotFieldEval(uint(SPOT_FIELD_COMB), sp) : sp.tangent;
+    real tilt = radians(spotFieldEval(uint(SPOT_FIELD_TILT), sp).x + var0.x * spotSymmetric(key, kRandTilt));
+    real spin = radians(spotFieldEval(uint(SPOT_FIELD_SPIN), sp).x + var0.y * spotSymmetric(key, kRandSpin));
+    rmat3 frame = spotKernelFrame(sp.normal, comb, sp.tangent, tilt, spin);
+    /* The comb as it lies in the tangent plane: the frame's x axis before tilt and spin. */
+    rvec3 combPlane = normalize(frame[0] * cos(spin) - frame[1] * sin(spin));
+    combPlane = normalize(combPlane * cos(tilt) + frame[2] * sin(tilt));
+    real bend = radians(spotFieldEval(uint(SPOT_FIELD_BEND), sp).x + var0.z * spotSymmetric(key, kRandBend));
+    rvec3 scale = spotFieldEval(uint(SPOT_FIELD_SCALE), sp) * (real(1.0) + var0.w * spotSymmetric(key, kRandScale));
+    scale = max(scale, rvec3(real(1e-12)));
+    rvec3 color = clamp(spotFieldEval(uint(SPOT_FIELD_COLOR), sp) * (real(1.0) + var1.x * spotSymmetric(key, kRandColor)),
+                        rvec3(real(0.0)), rvec3(real(1.0)));
+    real weight = max(real(0.0), spotFieldEval(uint(SPOT_FIELD_WEIGHT), sp).x *
+                                     (real(1.0) + var1.y * spotSymmetric(key, kRandWeight)));
+    imp.position = rvec4(sp.position + height * sp.normal, weight);
+    imp.normal = rvec4(sp.normal, bend);
+    imp.comb = rvec4(combPlane, height);
+    imp.frameX = rvec4(frame[0], real(1.0));
+    imp.frameY = rvec4(frame[1], real(0.0));
+    imp.frameZ = rvec4(frame[2], real(0.0));
+    imp.scale = rvec4(scale, uintBitsToFloat(tri));
+    imp.color = rvec4(color, bary.y);
+    imp.cell = ivec4(cell, floatBitsToInt(float(bary.z)));
+    return true;
+}
+
+/* ---- Poisson: count ~ Poisson(density_max x area), uniform on the cell's pieces --------------- */
+
+SPOT_FN uint spotCellKeyOf(SpotCell cell) {
+    return spotCellKey(cell.ijk.x, cell.ijk.y, cell.ijk.z, spotParamFlags().x);
+}
+
+SPOT_FN bool spotPoissonCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
+    uint key = spotImpulseKey(spotCellKeyOf(cell), m);
+    uint first = cell.info.x;
+    uint count = uint(cell.ijk.w);
+    real area = uintBitsToFloat(cell.info.y);
+    real pick = spotRand(key, kRandPiece) * area;
+    /* First piece whose cumulative area exceeds pick (binary search, at most 32 steps). */
+    uint lo = 0u;
+    uint hi = count - 1u;
+    for (int step = 0; step < 32 && lo < hi; ++step) {
+        uint mid = (lo + hi) / 2u;
+        if (pick < spotCellPiece(first + mid).c2.z)
+            hi = mid;
+        else
+            lo = mid + 1u;
+    }
+    SpotPiece piece = spotCellPiece(first + lo);
+    rvec3 w = spotSampleTriangle(spotRand(key, kRandBary0), spotRand(key, kRandBary1));
+    rvec2 b = w.x * rvec2(piece.c01.x, piece.c01.y) + w.y * rvec2(piece.c01.z, piece.c01.w) +
+              w.z * rvec2(piece.c2.x, piece.c2.y);
+    return spotFinishImpulse(ivec3(cell.ijk), key, floatBitsToUint(piece.c2.w),
+                             rvec3(real(1.0) - b.x - b.y, b.x, b.y), imp);
+}
+
+/* ---- Jittered: a square lattice in each triangle's plane ------------------------------------- */
+/* Spacing 1/sqrt(density_max), anchored at the plane's point nearest the world origin and aligned
+ * with the surface tangent, so coplanar triangles share one lattice. Each site is jittered by up to
+ * +-jitter/2 spacing and belongs to the triangle and cell its jittered point falls in; its random
+ * numbers come from (triangle, site, seed), so every cell that examines it decides the same way.
+ * Irrational-looking offsets keep a regular lattice (jitter 0) off cell faces and shared edges.
+ * Double precision: lattice coordinates of a large mesh need more than float's 24 bits. */
+
+/* Float-exact so GLSL (float literals) and C++ agree on the same double values. */
+SPOT_CONST real kLatticeOffsetA = real(0.2360679774997897);
+SPOT_CONST real kLatticeOffsetB = real(0.6180339887498949);
+
+struct SpotLattice {
+    dvec3 p0;
+    dvec3 e1;
+    dvec3 e2;
+    dvec3 origin;
+    dvec3 v0;
+    dvec3 v1;
+    int a0;
+    int b0;
+    uint rows;    /* sites along b */
+    uint sites;   /* (a1 - a0 + 1) x rows */
+};
+
+SPOT_FN SpotLattice spotLatticeOf(uint first, uint last, uint tri, double spacing, double jitter) {
+    uvec3 t = spotMeshTriangle(tri);
+    SpotLattice l;
+    l.p0 = dvec3(spotMeshPosition(t.x));
+    dvec3 p1 = dvec3(spotMeshPosition(t.y));
+    dvec3 p2 = dvec3(spotMeshPosition(t.z));
+    dvec3 n = normalize(cross(p1 - l.p0, p2 - l.p0));
+    dvec3 e1 = dvec3(spotMeshTangent(t.x) + spotMeshTangent(t.y) + spotMeshTangent(t.z));
+    e1 -= n * dot(e1, n);
+    e1 = dot(e1, e1) > 1e-12 ? normalize(e1) : dvec3(spotDefaultTangent(rvec3(n)));
+    l.e1 = e1;
+    l.e2 = cross(n, e1);
+    l.origin = n * dot(n, l.p0);
+    l.v0 = p1 - l.p0;
+    l.v1 = p2 - l.p0;
+    dvec2 lo = dvec2(1e30);
+    dvec2 hi = dvec2(-1e30);
+    for (uint p = first; p < last; ++p) {
+        SpotPiece piece = spotCellPiece(p);
+        for (int c = 0; c < 3; ++c) {
+            rvec2 b = c == 0 ? rvec2(piece.c01.x, piece.c01.y)
+                             : (c == 1 ? rvec2(piece.c01.z, piece.c01.w) : rvec2(piece.c2.x, piece.c2.y));
+            dvec3 q = (1.0 - double(b.x) - double(b.y)) * l.p0 + double(b.x) * p1 + double(b.y) * p2 - l.origin;
+            dvec2 lc = dvec2(dot(q, l.e1) / spacing, dot(q, l.e2) / spacing);
+            lo = min(lo, lc);
+            hi = max(hi, lc);
+        }
+    }
+    l.a0 = int(ceil(lo.x - double(kLatticeOffsetA) - 0.5 * jitter));
+    int a1 = int(floor(hi.x - double(kLatticeOffsetA) + 0.5 * jitter));
+    l.b0 = int(ceil(lo.y - double(kLatticeOffsetB) - 0.5 * jitter));
+    int b1 = int(floor(hi.y - double(kLatticeOffsetB) + 0.5 * jitter));
+    l.rows = b1 >= l.b0 ? uint(b1 - l.b0 + 1) : 0u;
+    l.sites = a1 >= l.a0 ? uint(a1 - l.a0 + 1) * l.rows : 0u;
+    return l;
+}
+
+/* The end of the group of consecutive pieces (same triangle) starting at `first`. */
+SPOT_FN uint spotGroupEnd(uint first, uint end) {
+    uint tri = floatBitsToUint(spotCellPiece(first).c2.w);
+    uint last = first + 1u;
+    while (last < end && floatBitsToUint(spotCellPiece(last).c2.w) == tri)
+        last += 1u;
+    return last;
+}
+
+SPOT_FN uint spotJitteredCandidates(SpotCell cell) {
+    double spacing = double(spotParamVariation1().w);
+    double jitter = double(spotParamDistribution().y);
+    uint end = cell.info.x + uint(cell.ijk.w);
+    uint total = 0u;
+    for (uint first = cell.info.x; first < end;) {
+        uint last = spotGroupEnd(first, end);
+        total += spotLatticeOf(first, last, floatBitsToUint(spotCellPiece(first).c2.w), spacing, jitter).sites;
+        first = last;
+    }
+    return min(total, kMaxCandidatesPerCell);
+}
+
+SPOT_FN bool spotJitteredCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
+    double spacing = double(spotParamVariation1().w);
+    double jitter = double(spotParamDistribution().y);
+    uint end = cell.info.x + uint(cell.ijk.w);
+    uint seedKey = spotHash(spotParamFlags().x ^ 0x3c6ef372u);
+    double h = double(spotParamVariation1().z);
+    for (uint first = cell.info.x; first < end;) {
+        uint last = spotGroupEnd(first, end);
+        uint tri = floatBitsToUint(spotCellPiece(first).c2.w);
+        SpotLattice l = spotLatticeOf(first, last, tri, spacing, jitter);
+        if (m < l.sites) {
+            int a = l.a0 + int(m / l.rows);
+            int b = l.b0 + int(m % l.rows);
+            uint key = spotHashCombine(spotHashCombine(spotHashCombine(seedKey, tri), uint(a)), uint(b));
+            double la = double(a) + double(kLatticeOffsetA) + jitter * (double(spotRand(key, kRandJitterU)) - 0.5);
+            double lb = double(b) + double(kLatticeOffsetB) + jitter * (double(spotRand(key, kRandJitterV)) - 0.5);
+            dvec3 point = l.origin + spacing * (la * l.e1 + lb * l.e2);
+            dvec3 v2 = point - l.p0;
+            double d00 = dot(l.v0, l.v0);
+            double d01 = dot(l.v0, l.v1);
+            double d11 = dot(l.v1, l.v1);
+            double d20 = dot(v2, l.v0);
+            double d21 = dot(v2, l.v1);
+            double denom = d00 * d11 - d01 * d01;
+            double w1 = (d11 * d20 - d01 * d21) / denom;
+            double w2 = (d00 * d21 - d01 * d20) / denom;
+            double w0 = 1.0 - w1 - w2;
+            if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0)
+                return false;
+            ivec3 owner = ivec3(floor(point / h));
+            if (owner != ivec3(cell.ijk))
+                return false;
+            return spotFinishImpulse(ivec3(cell.ijk), key, tri, rvec3(real(w0), real(w1), real(w2)), imp);
+        }
+        m -= l.sites;
+        first = last;
+    }
+    return false;
+}
+
+/* ---- Both distributions ---------------------------------------------------------------------- */
+
+SPOT_FN uint spotCellCandidates(SpotCell cell) {
+    if (spotParamFlags().y == 1u)
+        return spotJitteredCandidates(cell);
+    real lambda = spotParamDistribution().x * uintBitsToFloat(cell.info.y);
+    return spotPoisson(lambda, spotCellKeyOf(cell));
+}
+
+SPOT_FN bool spotCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
+    if (spotParamFlags().y == 1u)
+        return spotJitteredCandidate(cell, m, imp);
+    return spotPoissonCandidate(cell, m, imp);
+}

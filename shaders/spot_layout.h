@@ -53,3 +53,38 @@ struct SpotKernelBound {
     vec4 rect;  /* pixel rectangle (x0, y0, x1, y1); empty when x1 <= x0 */
     vec4 depth; /* x: nearest view depth of the support; y: farthest; z: depth of the origin; w: lobe count */
 };
+
+/* A bound field in the shared form (144 bytes): what the generator evaluates, on either side. */
+struct SpotField {
+    ivec4 kind;    /* x: 0 constant, 1 gradient, 2 noise, 3 vertex, 4 image; y: components (1|3);
+                      z: noise octaves; w: noise seed (bits) */
+    vec4 value;    /* constant value */
+    vec4 lo;       /* mapped kinds: output at t = 0 (per component) */
+    vec4 hi;       /* output at t = 1 */
+    vec4 from;     /* gradient: xyz start point; noise: w frequency (cells per world unit) */
+    vec4 axis;     /* gradient: (to - from) / |to - from|^2 */
+    uvec4 data;    /* vertex: xyz offsets of the attribute columns in the field data array;
+                      image: x offset, y width, z height, w repeat (1) or clamp (0) */
+    vec4 clampLo;  /* vertex: bounds of the attribute values; image: bounds of the texels */
+    vec4 clampHi;
+};
+
+/* Everything the generator needs besides mesh and cells. Field slots: */
+#define SPOT_FIELD_DENSITY 0
+#define SPOT_FIELD_COMB 1
+#define SPOT_FIELD_TILT 2
+#define SPOT_FIELD_SPIN 3
+#define SPOT_FIELD_BEND 4
+#define SPOT_FIELD_SCALE 5
+#define SPOT_FIELD_COLOR 6
+#define SPOT_FIELD_WEIGHT 7
+#define SPOT_FIELD_COUNT 8
+
+struct SpotGenParams {
+    vec4 distribution; /* x: density_max (1 / world unit^2); y: jitter; z: height offset; w: height jitter */
+    vec4 variation0;   /* x: tilt (deg); y: spin (deg); z: bend (deg per kernel unit); w: scale (relative) */
+    vec4 variation1;   /* x: colour (relative); y: weight (relative); z: cell size h; w: lattice spacing */
+    uvec4 flags;       /* x: seed; y: 0 poisson, 1 jittered; z: 1 if a comb field is set;
+                          w: bit 0 mesh has uv, bit 1 mesh has tangents */
+    SpotField fields[SPOT_FIELD_COUNT];
+};

@@ -15,6 +15,7 @@
 #define real float
 #define rvec2 vec2
 #define rvec3 vec3
+#define rvec4 vec4
 #define rmat3 mat3
 #define SPOT_OUT(T) out T
 #define SPOT_INOUT(T) inout T
@@ -304,3 +305,153 @@ SPOT_FN rmat3 spotPlaceLobe(rmat3 lobeInv, rvec3 lobeCentre, rmat3 frame, rvec3 
                            rvec3(real(0.0), real(0.0), real(1.0) / scale.z));
     return lobeInv * transpose(bendRot) * invScale * transpose(frame);
 }
+
+/* ------------------------------------------------------------------------------------------ */
+/* Smooth value noise (fields).                                                                 */
+/* ------------------------------------------------------------------------------------------ */
+
+/* Lattice value in [0,1] at integer point (ix, iy, iz): 24 hashed bits, exact in float. */
+SPOT_FN real spotLatticeValue(uint ix, uint iy, uint iz, uint seed) {
+    uint h = spotHash(seed ^ 0x3c6ef372u);
+    h = spotHashCombine(h, ix);
+    h = spotHashCombine(h, iy);
+    h = spotHashCombine(h, iz);
+    return real(h >> 8u) * real(1.0 / 16777215.0);
+}
+
+/* Quintic fade 6t^5 - 15t^4 + 10t^3: the noise is C2, no grid creases. */
+SPOT_FN real spotFade(real t) { return t * t * t * (t * (t * real(6.0) - real(15.0)) + real(10.0)); }
+
+/* floor(x) as a lattice index; coordinates are clamped to +-2^30 first (beyond that, float has
+ * no fractional part and the noise is meaningless anyway). */
+SPOT_FN uint spotLatticeIndex(real floored) {
+    return uint(int(clamp(floored, real(-1073741824.0), real(1073741824.0))));
+}
+
+SPOT_FN real spotValueNoiseOctave(rvec3 p, uint seed) {
+    rvec3 fl = floor(p);
+    rvec3 f = p - fl;
+    uint x0 = spotLatticeIndex(fl.x);
+    uint y0 = spotLatticeIndex(fl.y);
+    uint z0 = spotLatticeIndex(fl.z);
+    real u = spotFade(f.x);
+    real v = spotFade(f.y);
+    real w = spotFade(f.z);
+    real c000 = spotLatticeValue(x0, y0, z0, seed);
+    real c100 = spotLatticeValue(x0 + 1u, y0, z0, seed);
+    real c010 = spotLatticeValue(x0, y0 + 1u, z0, seed);
+    real c110 = spotLatticeValue(x0 + 1u, y0 + 1u, z0, seed);
+    real c001 = spotLatticeValue(x0, y0, z0 + 1u, seed);
+    real c101 = spotLatticeValue(x0 + 1u, y0, z0 + 1u, seed);
+    real c011 = spotLatticeValue(x0, y0 + 1u, z0 + 1u, seed);
+    real c111 = spotLatticeValue(x0 + 1u, y0 + 1u, z0 + 1u, seed);
+    real y0z0 = c000 + (c100 - c000) * u;
+    real y1z0 = c010 + (c110 - c010) * u;
+    real y0z1 = c001 + (c101 - c001) * u;
+    real y1z1 = c011 + (c111 - c011) * u;
+    real z0v = y0z0 + (y1z0 - y0z0) * v;
+    real z1v = y0z1 + (y1z1 - y0z1) * v;
+    return z0v + (z1v - z0v) * w;
+}
+
+/* Fractal value noise in [0,1]: `octaves` (1..8) at doubling frequency and halving amplitude,
+ * each octave on its own lattice, normalized back to [0,1]. */
+SPOT_FN real spotValueNoise(rvec3 p, int octaves, uint seed) {
+    if (!(abs(p.x) < real(1e30)) || !(abs(p.y) < real(1e30)) || !(abs(p.z) < real(1e30)))
+        p = rvec3(real(0.0));
+    int n = clamp(octaves, 1, 8);
+    real sum = real(0.0);
+    real amplitudeSum = real(0.0);
+    real amplitude = real(1.0);
+    for (int o = 0; o < n; ++o) {
+        sum += amplitude * spotValueNoiseOctave(p, spotHashCombine(seed, uint(o)));
+        amplitudeSum += amplitude;
+        amplitude *= real(0.5);
+        p *= real(2.0);
+    }
+    return clamp(sum / amplitudeSum, real(0.0), real(1.0));
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Splatting (splat/renderer_vk.cpp and the splat_*.glsl shaders).                             */
+/* ------------------------------------------------------------------------------------------ */
+
+/* 1 - exp(-x) for x >= 0, without cancellation for small x (GLSL has no expm1): the opacity of
+ * an optical depth x. */
+SPOT_FN real spotOneMinusExp(real x) {
+    if (x < real(1e-3))
+        return x * (real(1.0) - x * (real(0.5) - x * real(1.0 / 6.0)));
+    return real(1.0) - exp(-x);
+}
+
+/* The chord [ta, tb] of the ray o + t d (lobe space, as for spotLobeDepth) inside a lobe truncated
+ * at k sigmas. Returns false (and ta = tb = 0) when the ray misses the support. */
+SPOT_FN bool spotLobeChord(rvec3 o, rvec3 d, real k, SPOT_OUT(real) ta, SPOT_OUT(real) tb) {
+    ta = real(0.0);
+    tb = real(0.0);
+    real dd = dot(d, d);
+    if (!(dd > real(0.0)))
+        return false;
+    real tStar = -dot(o, d) / dd;
+    rvec3 perp = o + tStar * d;
+    real perp2 = dot(perp, perp);
+    if (!(perp2 < k * k))
+        return false;
+    real halfChord = sqrt((k * k - perp2) / dd);
+    ta = tStar - halfChord;
+    tb = tStar + halfChord;
+    return true;
+}
+
+/* Half extents (world units, along the world axes) of the axis-aligned box around the ellipsoid
+ * |A (x - c)| < k, A the world-to-lobe map: k times the norms of the rows of A^-1. */
+SPOT_FN rvec3 spotEllipsoidHalfExtent(rmat3 A, real k) {
+    rmat3 inv = inverse(A);
+    real x = sqrt(inv[0][0] * inv[0][0] + inv[1][0] * inv[1][0] + inv[2][0] * inv[2][0]);
+    real y = sqrt(inv[0][1] * inv[0][1] + inv[1][1] * inv[1][1] + inv[2][1] * inv[2][1]);
+    real z = sqrt(inv[0][2] * inv[0][2] + inv[1][2] * inv[1][2] + inv[2][2] * inv[2][2]);
+    return k * rvec3(x, y, z);
+}
+
+/* Lambert + ambient shading factor (DESIGN section 4): ambient + (1 - ambient) max(0, n.l), n and
+ * l unit. The reference shades with the same formula. */
+SPOT_FN real spotLambertFactor(rvec3 n, rvec3 l, real ambient) {
+    return ambient + (real(1.0) - ambient) * max(real(0.0), dot(n, l));
+}
+
+/* The primary ray of a camera, as noise::CameraRays builds it: sx in [-1, 1] left to right, sy in
+ * [-1, 1] bottom to top (sx = 2 px / width - 1, sy = 1 - 2 py / height); `right` and `up` are the
+ * unit camera axes times the half width and half height of the view at unit distance
+ * (perspective) or in world units (orthographic). `dir` is unit length, so t is world distance. */
+SPOT_FN void spotCameraRay(rvec3 eye, rvec3 forward, rvec3 right, rvec3 up, bool orthographic,
+                           real sx, real sy, SPOT_OUT(rvec3) origin, SPOT_OUT(rvec3) dir) {
+    if (orthographic) {
+        origin = eye + sx * right + sy * up;
+        dir = forward;
+    } else {
+        origin = eye;
+        dir = normalize(forward + sx * right + sy * up);
+    }
+}
+
+/* Weighted blended OIT weights (McGuire and Bavoil 2013, "Weighted Blended Order-Independent
+ * Transparency", JCGT 2(2)). Constant: w = 1, a plain unordered blend (paper fig. 3.3).
+ * McGuire-Bavoil: their eq. (7), w = alpha clamp(10 / (1e-5 + (z/5)^2 + (z/200)^6), 1e-2, 3e3),
+ * with z the view depth in world units, unscaled: MB13 tuned the constants for depths of about
+ * 0.1 to 500; our scenes are 1-10 units deep, the steep (z/5)^2 part, so a kernel twice as far
+ * weighs about four times less. */
+SPOT_CONST uint kSpotWeightConstant = 0u;
+SPOT_CONST uint kSpotWeightMcGuireBavoil = 1u;
+SPOT_FN real spotOitWeight(real z, real alpha, uint mode) {
+    if (mode == kSpotWeightConstant)
+        return real(1.0);
+    real a = z / real(5.0);
+    real b = z / real(200.0);
+    real b2 = b * b;
+    return alpha * min(max(real(10.0) / (real(1e-5) + a * a + b2 * b2 * b2), real(1e-2)), real(3e3));
+}
+
+/* Reversed depth-buffer value of view depth z (world units) with near plane `zNear`: near / z,
+ * 1 at the near plane and falling towards 0 far away, so float depth keeps its relative precision
+ * at every distance. Compare with GREATER. */
+SPOT_FN real spotReversedDepth(real z, real zNear) { return zNear / max(z, zNear); }

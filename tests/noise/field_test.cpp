@@ -534,3 +534,88 @@ TEST_F(FieldImage, MemoryBudgetIsCheckedBeforeReading) {
 
 } // namespace
 } // namespace spot::noise
+
+// ---- The shared evaluation (CPU generator and GPU) equals Field::eval ------------------------
+
+#include "noise/generator_shared.h"
+#include "noise/image.h"
+#include "noise/surface.h"
+
+namespace {
+
+TEST(FieldShared, SharedEvaluationEqualsFieldEvalForEveryKind) {
+    using namespace spot;
+    noise::Mesh mesh = noise::makePlane(2.0f, 4);
+    mesh.attributes["heat"].resize(mesh.positions.size());
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+        mesh.attributes["heat"][i] = 0.1f + 0.8f * float(i % 7) / 6.0f;
+    const std::string texture = std::string(SPOT_TEST_TMP_DIR) + "/shared_eval.exr";
+    {
+        spot::noise::Image img(5, 3);
+        for (int y = 0; y < 3; ++y)
+            for (int x = 0; x < 5; ++x)
+                img.at(x, y) = glm::vec3(0.1f * float(x), 0.3f * float(y), 0.05f * float(x + y));
+        spot::noise::writeImage(texture, img);
+    }
+    std::vector<noise::FieldDesc> descs(5);
+    descs[0].kind = noise::FieldDesc::Kind::Constant;
+    descs[0].value = glm::vec3(0.25f, 0.5f, 0.75f);
+    descs[1].kind = noise::FieldDesc::Kind::Gradient;
+    descs[1].from = glm::vec3(-1.0f, 0.0f, 0.3f);
+    descs[1].to = glm::vec3(0.7f, 0.2f, -0.4f);
+    descs[1].lo = glm::vec3(0.9f, 0.1f, 0.2f);
+    descs[1].hi = glm::vec3(0.0f, 0.8f, 0.6f);
+    descs[2].kind = noise::FieldDesc::Kind::Noise;
+    descs[2].frequency = 3.7f;
+    descs[2].octaves = 4;
+    descs[2].seed = 99;
+    descs[2].lo = glm::vec3(0.2f);
+    descs[2].hi = glm::vec3(0.9f);
+    descs[3].kind = noise::FieldDesc::Kind::Vertex;
+    descs[3].attributes = {"heat", "heat", "heat"};
+    descs[4].kind = noise::FieldDesc::Kind::Image;
+    descs[4].file = texture;
+    descs[4].lo = glm::vec3(0.0f);
+    descs[4].hi = glm::vec3(2.0f);
+    for (int components : {1, 3}) {
+        for (std::size_t k = 0; k < descs.size(); ++k) {
+            noise::FieldDesc d = descs[k];
+            d.components = components;
+            if (components == 1 && d.kind == noise::FieldDesc::Kind::Vertex)
+                d.attributes = {"heat"};
+            const auto field = noise::makeField(d, mesh, "", "test");
+            std::vector<float> data;
+            gpu::SpotGenParams params{};
+            params.fields[0] = field->shared(data);
+            shared::f32::GeneratorArrays arrays;
+            arrays.triangles = mesh.triangles.data();
+            arrays.positions = mesh.positions.data();
+            arrays.normals = mesh.normals.data();
+            arrays.tangents = mesh.tangents.data();
+            arrays.uvs = mesh.uvs.data();
+            arrays.fieldData = data.data();
+            arrays.params = &params;
+            shared::f32::SharedGenerator generator(arrays);
+            for (std::uint32_t i = 0; i < 300; ++i) {
+                const std::uint32_t tri = i % std::uint32_t(mesh.triangles.size());
+                const glm::vec3 w = shared::f32::spotSampleTriangle(shared::f32::spotRand(i, 0u),
+                                                                     shared::f32::spotRand(i, 1u));
+                const auto s = generator.spotSurfaceAt(tri, w);
+                noise::SurfacePoint p;
+                p.position = s.position;
+                p.normal = s.normal;
+                p.tangent = s.tangent;
+                p.uv = s.uv;
+                p.triangle = tri;
+                p.barycentric = w;
+                const glm::vec3 expected = field->eval(p);
+                const glm::vec3 got = generator.spotFieldEval(0u, s);
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(got[c], expected[c]) << "kind " << k << " components " << components
+                                                   << " point " << i << " component " << c;
+            }
+        }
+    }
+}
+
+} // namespace

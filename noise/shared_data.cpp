@@ -1,4 +1,4 @@
-#include "layout.h"
+#include "shared_data.h"
 
 #include <bit>
 
@@ -9,7 +9,7 @@ SpotImpulse toGpu(const noise::Impulse& m) {
     g.position = vec4(m.position, m.weight);
     g.normal = vec4(m.normal, m.bend);
     g.comb = vec4(m.comb, m.height);
-    g.frameX = vec4(m.frame[0], 0.0f);
+    g.frameX = vec4(m.frame[0], 1.0f);
     g.frameY = vec4(m.frame[1], 0.0f);
     g.frameZ = vec4(m.frame[2], 0.0f);
     g.scale = vec4(m.scale, std::bit_cast<float>(m.triangle));
@@ -52,6 +52,28 @@ std::vector<SpotLobe> toGpu(const noise::Kernel& kernel) {
         g.inv2 = vec4(l.inverseLinear[2], l.centre.z);
         g.color = vec4(l.color, l.extinction);
         out.push_back(g);
+    }
+    return out;
+}
+
+SpotCell toGpu(const noise::SurfaceCell& c) {
+    SpotCell g;
+    g.ijk = ivec4(c.ijk, std::int32_t(c.pieceCount));
+    g.info = uvec4(c.firstPiece, std::bit_cast<std::uint32_t>(c.area), 0u, 0u);
+    return g;
+}
+
+std::vector<SpotPiece> piecesToGpu(const noise::SurfaceCells& cells) {
+    std::vector<SpotPiece> out(cells.pieces.size());
+    for (const noise::SurfaceCell& c : cells.cells) {
+        float cumulative = 0.0f;
+        for (std::uint32_t i = 0; i < c.pieceCount; ++i) {
+            const noise::SurfacePiece& p = cells.pieces[c.firstPiece + i];
+            cumulative += p.area;
+            SpotPiece& g = out[c.firstPiece + i];
+            g.c01 = vec4(p.corner[0], p.corner[1]);
+            g.c2 = vec4(p.corner[2], cumulative, std::bit_cast<float>(p.triangle));
+        }
     }
     return out;
 }

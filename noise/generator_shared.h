@@ -1,0 +1,64 @@
+/// @file generator_shared.h
+/// @brief shaders/spot_generate.h compiled for the CPU: the same candidate-by-candidate impulse
+/// generation the GPU runs, with the data accessors reading the model's arrays.
+///
+/// The shared functions become member functions of SharedGenerator (a class body can hold them
+/// unchanged), in namespace spot::shared::f32 so they see the float twin of spot_shared.h.
+#pragma once
+
+#include <bit>
+#include <vector>
+
+#include "shaders/spot_layout.hpp"
+#include "shaders/spot_shared.hpp"
+
+namespace spot::shared::f32 {
+
+using gpu::SpotCell;
+using gpu::SpotField;
+using gpu::SpotGenParams;
+using gpu::SpotImpulse;
+using gpu::SpotPiece;
+
+/// What the generator reads: the CPU side of the GPU's storage buffers.
+struct GeneratorArrays {
+    const glm::uvec3* triangles = nullptr;
+    const glm::vec3* positions = nullptr;
+    const glm::vec3* normals = nullptr;
+    const glm::vec3* tangents = nullptr; ///< null: the mesh has none
+    const glm::vec2* uvs = nullptr;      ///< null: the mesh has none
+    const SpotPiece* pieces = nullptr;   ///< cumulative areas (gpu::piecesToGpu)
+    const float* fieldData = nullptr;
+    const SpotGenParams* params = nullptr;
+};
+
+class SharedGenerator {
+public:
+    explicit SharedGenerator(const GeneratorArrays& arrays) : m_a(arrays) {}
+
+private:
+    GeneratorArrays m_a;
+    glm::uvec3 spotMeshTriangle(uint t) const { return m_a.triangles[t]; }
+    glm::vec3 spotMeshPosition(uint v) const { return m_a.positions[v]; }
+    glm::vec3 spotMeshNormal(uint v) const { return m_a.normals[v]; }
+    glm::vec3 spotMeshTangent(uint v) const { return m_a.tangents ? m_a.tangents[v] : glm::vec3(0.0f); }
+    glm::vec2 spotMeshUv(uint v) const { return m_a.uvs ? m_a.uvs[v] : glm::vec2(0.0f); }
+    SpotPiece spotCellPiece(uint i) const { return m_a.pieces[i]; }
+    float spotFieldData(uint i) const { return m_a.fieldData[i]; }
+    glm::vec4 spotParamDistribution() const { return m_a.params->distribution; }
+    glm::vec4 spotParamVariation0() const { return m_a.params->variation0; }
+    glm::vec4 spotParamVariation1() const { return m_a.params->variation1; }
+    glm::uvec4 spotParamFlags() const { return m_a.params->flags; }
+    const SpotField& spotParamField(uint slot) const { return m_a.params->fields[slot]; }
+
+public:
+#define SPOT_FN
+#define SPOT_CONST static constexpr
+#define SPOT_OUT(T) T&
+#include "spot_generate.h"
+#undef SPOT_FN
+#undef SPOT_CONST
+#undef SPOT_OUT
+};
+
+} // namespace spot::shared::f32

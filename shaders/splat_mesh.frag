@@ -1,0 +1,27 @@
+#version 450
+// Base mesh colour (unlit, or Lambert with the interpolated vertex normal), the ray distance t to
+// the surface (what kernels integrate up to) and the reversed depth.
+#extension GL_GOOGLE_include_directive : require
+#include "splat_common.glsl"
+
+layout(location = 0) in vec3 vWorld;
+layout(location = 1) in vec3 vNormal;
+
+layout(location = 0) out vec4 outColor;
+layout(location = 1) out float outT;
+
+void main() {
+    vec3 rel = vWorld - frame.eye.xyz;
+    float z = dot(rel, frame.forward.xyz);
+    if (!(z > 0.0))
+        discard; // behind the orthographic camera's plane: rays start at t = 0
+    vec3 color = frame.base.rgb;
+    if (splatFlag(kSplatFlagLambert)) {
+        float len = length(vNormal);
+        vec3 n = len > 0.0 ? vNormal / len : -frame.forward.xyz;
+        color *= spotLambertFactor(n, frame.light.xyz, frame.light.w);
+    }
+    outColor = vec4(color, 1.0);
+    outT = splatOrthographic() ? z : length(rel);
+    gl_FragDepth = spotReversedDepth(z, frame.forward.w);
+}

@@ -1,0 +1,24 @@
+#version 450
+// The opaque base mesh, vertices pulled from a storage buffer. Depth is reversed (near / z, see
+// spotReversedDepth): perspective clip z = near, w = z; orthographic depth comes from the fragment.
+#extension GL_GOOGLE_include_directive : require
+#include "splat_common.glsl"
+
+layout(std430, binding = 0) readonly buffer Vertices { SpotMeshVertex vertices[]; };
+
+layout(location = 0) out vec3 vWorld;
+layout(location = 1) out vec3 vNormal;
+
+void main() {
+    SpotMeshVertex v = vertices[gl_VertexIndex];
+    vWorld = v.position.xyz;
+    vNormal = v.normal.xyz;
+    vec3 rel = v.position.xyz - frame.eye.xyz;
+    float x = dot(rel, frame.right.xyz) / frame.right.w;
+    float y = -dot(rel, frame.up.xyz) / frame.up.w; // image rows grow downwards (Vulkan NDC)
+    float z = dot(rel, frame.forward.xyz);
+    if (splatOrthographic())
+        gl_Position = vec4(x, y, 0.5, 1.0);
+    else
+        gl_Position = vec4(x, y, frame.forward.w, z); // clipped where z < near
+}

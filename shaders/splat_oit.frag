@@ -1,0 +1,39 @@
+#version 450
+// OIT splatting (paper eq. 10-12): the kernel's premultiplied colour and alpha at this pixel,
+// weighted (McGuire and Bavoil 2013) into an additive accumulation target, and alpha into the
+// multiplicative revealage target. Hybrid (eq. 13): the kernel also competes for the pixel's
+// closest kernel with a 64-bit atomicMin of (depth bits << 32 | kernel index); depth is >= 0, so
+// its float bits order as the floats do, and the kernel index breaks ties the same way every run.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+#define SPLAT_LOBES_BINDING 2
+#include "splat_common.glsl"
+
+layout(binding = 3, r32f) uniform readonly image2D meshDistance;
+layout(std430, binding = 4) buffer Closest { uint64_t closest[]; };
+
+layout(location = 0) flat in uint vKernel;
+
+layout(location = 0) out vec4 outAccum;
+layout(location = 1) out float outRevealage;
+
+void main() {
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    float tMesh = imageLoad(meshDistance, pixel).r;
+    vec3 o;
+    vec3 d;
+    splatPixelRay(gl_FragCoord.xy, o, d);
+    SplatKernelSample s = splatKernel(vKernel, o, d, tMesh);
+    if (!(s.alpha > 0.0))
+        discard;
+    if (splatFlag(kSplatFlagHybrid) && s.alpha > kSplatHybridMinAlpha) {
+        uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
+        atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);
+    }
+    float z = splatViewDepth(o + s.depth * d);
+    float w = spotOitWeight(z, s.alpha, splatFlag(kSplatFlagMcGuireBavoil) ? kSpotWeightMcGuireBavoil
+                                                                            : kSpotWeightConstant);
+    outAccum = vec4(s.premul, s.alpha) * w;
+    outRevealage = s.alpha;
+}
