@@ -92,13 +92,13 @@ SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
     }
     if (kind == 3) {
         uvec3 t = spotMeshTriangle(s.triangle);
-        rvec3 out = rvec3(real(0.0));
+        rvec3 acc = rvec3(real(0.0));
         for (int c = 0; c < components; ++c) {
             uint column = c == 0 ? f.data.x : (c == 1 ? f.data.y : f.data.z);
-            out[c] = s.bary.x * spotFieldData(column + t.x) + s.bary.y * spotFieldData(column + t.y) +
+            acc[c] = s.bary.x * spotFieldData(column + t.x) + s.bary.y * spotFieldData(column + t.y) +
                      s.bary.z * spotFieldData(column + t.z);
         }
-        return spotKeepComponents(clamp(out, rvec3(f.clampLo), rvec3(f.clampHi)), components);
+        return spotKeepComponents(clamp(acc, rvec3(f.clampLo), rvec3(f.clampHi)), components);
     }
     if (kind == 4) {
         bool repeat = f.data.w != 0u;

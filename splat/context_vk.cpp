@@ -142,14 +142,16 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
     f12.pNext = &f13;
     f2.pNext = &f12;
     vkGetPhysicalDeviceFeatures2(m_physical, &f2);
-    if (!f13.dynamicRendering || !f13.synchronization2 || !f12.shaderBufferInt64Atomics ||
+    if (!f13.dynamicRendering || !f13.synchronization2 || !f13.maintenance4 || !f12.shaderBufferInt64Atomics ||
         !f2.features.shaderInt64 || !f2.features.fragmentStoresAndAtomics)
         throw std::runtime_error(cat("Vulkan: device ", m_properties.deviceName,
-                                     " lacks dynamic rendering, synchronization2, shaderInt64, "
+                                     " lacks dynamic rendering, synchronization2, maintenance4, shaderInt64, "
                                      "64-bit buffer atomics or fragment stores"));
     VkPhysicalDeviceVulkan13Features want13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
     want13.dynamicRendering = VK_TRUE;
     want13.synchronization2 = VK_TRUE;
+    // glslang targeting Vulkan 1.3 declares workgroup sizes with LocalSizeId, which needs this.
+    want13.maintenance4 = f13.maintenance4;
     VkPhysicalDeviceVulkan12Features want12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
     want12.shaderBufferInt64Atomics = VK_TRUE;
     want12.scalarBlockLayout = f12.scalarBlockLayout;
