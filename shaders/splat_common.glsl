@@ -31,6 +31,7 @@ layout(std430, binding = SPLAT_LOBES_BINDING) readonly buffer WorldLobes { SpotW
 struct SplatKernelSample {
     vec3 premul;  // premultiplied colour
     float alpha;  // 1 - transmittance through the kernel
+    float tau;    // optical depth through the kernel: alpha = 1 - exp(-tau)
     float depth;  // ray parameter t (world distance) of the kernel at this pixel: the mean of the
                   // lobe peaks (or samples) weighted by what each contributes to alpha
 };
@@ -58,6 +59,26 @@ vec3 splatKernelNormal(uint first, uint lobes, vec3 x, vec3 dir) {
     }
     float len = length(g);
     return len > 0.0 && !isinf(len) ? g / len : -dir;
+}
+
+// Lambert factor of one lobe along the ray (optical depth tau over [0, tMesh]): the mean of the
+// factor with the kernel's normal at kSplatShadingSamples points splitting what the lobe emits
+// towards the camera into equal shares. One point at the lobe's density peak would not do: the
+// gradient there is perpendicular to the ray, whatever the lobe's orientation; the shares put
+// the points on the lobe's front for an opaque lobe and across it for a thin one, like the
+// reference's quadrature.
+float splatLobeShading(uint first, uint lobes, SpotWorldLobe w, vec3 o, vec3 d, float tMesh, float tau) {
+    mat3 A = splatLobeMatrix(w);
+    vec3 ol = A * (o - splatLobeCentre(w));
+    vec3 dl = A * d;
+    float sum = 0.0;
+    for (uint j = 0u; j < kSplatShadingSamples; ++j) {
+        float q = (float(j) + 0.5) / float(kSplatShadingSamples);
+        float t = spotLobeDepthQuantile(ol, dl, 0.0, tMesh, frame.size.w, spotEmissionQuantileFraction(tau, q));
+        vec3 normal = splatKernelNormal(first, lobes, o + t * d, d);
+        sum += spotLambertFactor(normal, frame.light.xyz, frame.light.w);
+    }
+    return sum / float(kSplatShadingSamples);
 }
 
 // Analytic: each lobe's exact optical depth over [0, tMesh] (spotLobeDepth), lobes composited
@@ -95,19 +116,24 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec3 o, vec3 d, float tMesh) 
     SplatKernelSample s;
     s.premul = vec3(0.0);
     s.depth = 0.0;
+    s.tau = 0.0;
     float transmittance = 1.0;
     float depthSum = 0.0;
+    float weightSum = 0.0;
     bool lit = splatFlag(kSplatFlagLambert);
     for (uint i = 0u; i < n; ++i) {
+        s.tau += depths[i];
         float a = spotOneMinusExp(depths[i]);
         float t = clamp(peaks[i], 0.0, tMesh);
-        vec3 normal = lit ? splatKernelNormal(first, lobes, o + t * d, d) : -d;
-        s.premul += transmittance * a * splatShade(worldLobes[first + ids[i]].color.rgb, normal);
+        SpotWorldLobe w = worldLobes[first + ids[i]];
+        float shade = lit ? splatLobeShading(first, lobes, w, o, d, tMesh, depths[i]) : 1.0;
+        s.premul += transmittance * a * shade * w.color.rgb;
         depthSum += transmittance * a * t;
+        weightSum += transmittance * a;
         transmittance *= 1.0 - a;
     }
-    s.alpha = 1.0 - transmittance;
-    s.depth = s.alpha > 0.0 ? depthSum / s.alpha : 0.0;
+    s.alpha = spotOneMinusExp(s.tau);
+    s.depth = weightSum > 0.0 ? depthSum / weightSum : 0.0;
     return s;
 }
 
@@ -138,11 +164,13 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, uin
     s.premul = vec3(0.0);
     s.alpha = 0.0;
     s.depth = 0.0;
+    s.tau = 0.0;
     if (!(tb > ta))
         return s;
     float dt = (tb - ta) / float(samples);
     float transmittance = 1.0;
     float depthSum = 0.0;
+    float weightSum = 0.0;
     bool lit = splatFlag(kSplatFlagLambert);
     for (uint i = 0u; i < samples && transmittance > 1e-6; ++i) {
         float t = ta + (float(i) + 0.5) * dt;
@@ -165,13 +193,15 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, uin
             continue;
         float gLen = length(g);
         vec3 normal = lit && gLen > 0.0 && !isinf(gLen) ? g / gLen : -d;
+        s.tau += sigma * dt;
         float a = spotOneMinusExp(sigma * dt);
         s.premul += transmittance * a * splatShade(emitted / sigma, normal);
         depthSum += transmittance * a * t;
+        weightSum += transmittance * a;
         transmittance *= 1.0 - a;
     }
-    s.alpha = 1.0 - transmittance;
-    s.depth = s.alpha > 0.0 ? depthSum / s.alpha : ta;
+    s.alpha = spotOneMinusExp(s.tau);
+    s.depth = weightSum > 0.0 ? depthSum / weightSum : ta;
     return s;
 }
 

@@ -1,7 +1,10 @@
 #version 450
 // OIT splatting (paper eq. 10-12): the kernel's premultiplied colour and alpha at this pixel,
-// weighted (McGuire and Bavoil 2013) into an additive accumulation target, and alpha into the
-// multiplicative revealage target. Hybrid (eq. 13): the kernel also competes for the pixel's
+// weighted (McGuire and Bavoil 2013) into an additive accumulation target. MB13's revealage
+// prod (1 - alpha) is kept as its logarithm, the sum of the kernels' optical depths
+// (-ln(1 - alpha) = tau), with the same additive blend: the same value, one blend state for both
+// targets (the context does not enable independentBlend), no precision lost for opaque kernels,
+// and the hybrid's resolve can take one kernel out exactly. Hybrid (eq. 13): the kernel also competes for the pixel's
 // closest kernel with a 64-bit atomicMin of (depth bits << 32 | kernel index); depth is >= 0, so
 // its float bits order as the floats do, and the kernel index breaks ties the same way every run.
 #extension GL_GOOGLE_include_directive : require
@@ -16,7 +19,7 @@ layout(std430, binding = 4) buffer Closest { uint64_t closest[]; };
 layout(location = 0) flat in uint vKernel;
 
 layout(location = 0) out vec4 outAccum;
-layout(location = 1) out float outRevealage;
+layout(location = 1) out float outOpticalDepth;
 
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
@@ -35,5 +38,5 @@ void main() {
     float w = spotOitWeight(z, s.alpha, splatFlag(kSplatFlagMcGuireBavoil) ? kSpotWeightMcGuireBavoil
                                                                             : kSpotWeightConstant);
     outAccum = vec4(s.premul, s.alpha) * w;
-    outRevealage = s.alpha;
+    outOpticalDepth = s.tau;
 }

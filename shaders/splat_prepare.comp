@@ -24,7 +24,6 @@ void main() {
     float k = frame.size.w;
     mat3 kernelFrame = mat3(imp.frameX.xyz, imp.frameY.xyz, imp.frameZ.xyz);
     bool perspective = !splatOrthographic();
-    float zNear = frame.forward.w;
     // Pixel bounds of the kernel, and the view depth range of its support.
     vec2 lo = vec2(1e30);
     vec2 hi = vec2(-1e30);
@@ -48,9 +47,9 @@ void main() {
             A = spotWidenLobe(A, dir, footprint * 0.28867513459481287, scale);
             amplitude *= scale;
         }
-        vec3 half_ = spotEllipsoidHalfExtent(A, k);
+        mat3 M = inverse(A);
         bool ok = amplitude > 0.0 && !isinf(amplitude) && finite3(A[0]) && finite3(A[1]) &&
-                  finite3(A[2]) && finite3(centre) && finite3(half_);
+                  finite3(A[2]) && finite3(centre) && finite3(M[0]) && finite3(M[1]) && finite3(M[2]);
         SpotWorldLobe w;
         w.a0 = vec4(A[0], centre.x);
         w.a1 = vec4(A[1], centre.y);
@@ -64,35 +63,27 @@ void main() {
         worldLobes[i * lobeCount + l] = w;
         if (!ok)
             continue;
-        // Project the 8 corners of the support's world box.
-        vec2 lobeLo = vec2(1e30);
-        vec2 lobeHi = vec2(-1e30);
-        float lobeZMin = 1e30;
-        float lobeZMax = -1e30;
-        for (uint c = 0u; c < 8u; ++c) {
-            vec3 corner = centre + vec3((c & 1u) != 0u ? half_.x : -half_.x,
-                                        (c & 2u) != 0u ? half_.y : -half_.y,
-                                        (c & 4u) != 0u ? half_.z : -half_.z);
-            vec3 rel = corner - frame.eye.xyz;
-            float z = dot(rel, frame.forward.xyz);
-            float x = dot(rel, frame.right.xyz) / frame.right.w;
-            float y = dot(rel, frame.up.xyz) / frame.up.w;
-            lobeZMin = min(lobeZMin, z);
-            lobeZMax = max(lobeZMax, z);
-            if (perspective) {
-                x /= max(z, zNear);
-                y /= max(z, zNear);
-            }
-            vec2 p = vec2(0.5 * (x + 1.0) * frame.size.x, 0.5 * (1.0 - y) * frame.size.y);
-            lobeLo = min(lobeLo, p);
-            lobeHi = max(lobeHi, p);
-        }
+        // The support's exact screen extent (tangent planes through the eye).
+        vec3 rel = centre - frame.eye.xyz;
+        float x0;
+        float x1;
+        float y0;
+        float y1;
+        float lobeZMin;
+        float lobeZMax;
+        bool bounded = spotEllipsoidRange(rel, M, k, frame.right.xyz, frame.forward.xyz, !perspective,
+                                          x0, x1, lobeZMin, lobeZMax);
+        spotEllipsoidRange(rel, M, k, frame.up.xyz, frame.forward.xyz, !perspective, y0, y1, lobeZMin,
+                           lobeZMax);
         if (lobeZMax <= 0.0)
             continue; // wholly behind the camera: no ray (t >= 0) reaches it
-        if (perspective && lobeZMin <= zNear) {
-            // Straddles the eye plane: the projection is unbounded, take the whole image.
-            lobeLo = vec2(0.0);
-            lobeHi = frame.size.xy;
+        vec2 lobeLo = vec2(0.0);
+        vec2 lobeHi = frame.size.xy; // reaches the eye plane: the projection is unbounded
+        if (bounded && !isnan(x0 + x1 + y0 + y1)) {
+            lobeLo = vec2(0.5 * (x0 / frame.right.w + 1.0) * frame.size.x,
+                          0.5 * (1.0 - y1 / frame.up.w) * frame.size.y);
+            lobeHi = vec2(0.5 * (x1 / frame.right.w + 1.0) * frame.size.x,
+                          0.5 * (1.0 - y0 / frame.up.w) * frame.size.y);
         }
         lo = min(lo, lobeLo);
         hi = max(hi, lobeHi);

@@ -1,12 +1,16 @@
 #version 450
 // The final image, one thread per pixel, into a linear float RGBA buffer for readback.
 // Instanced: the base colour image (mesh, background and opaque kernels).
-// OIT (eq. 12, MB13): avg = accum.rgb / max(accum.a, 1e-5); avg (1 - revealage) + base revealage.
+// OIT (eq. 12, MB13): avg = accum.rgb / max(accum.a, eps); avg (1 - revealage) + base revealage,
+// revealage = exp(-sum of the kernels' optical depths) (see splat_oit.frag). MB13 floor accum.a
+// at eps = 1e-5 for their 16-bit float targets; ours are 32-bit, and with w proportional to alpha
+// (accum.a = sum alpha^2 c(z)) that floor darkens every faint fringe (4e-4 of the colour on one
+// isolated lobe), so eps here only keeps 0 / 0 away.
 // Hybrid (eq. 13): the closest kernel f found in the OIT pass is re-evaluated here (C_f, alpha_f)
 // and composited over the OIT of the others: C_f alpha_f + (1 - alpha_f) OIT_rest. The
 // accumulators hold every kernel, f included, so f's own terms are taken out first (its weight
-// and alpha recomputed by the same code): accum - w_f (C_f alpha_f, alpha_f), revealage / (1 -
-// alpha_f). Taken literally, eq. 13 would count f twice: on one isolated kernel of alpha 0.5 it
+// and alpha recomputed by the same code): accum - w_f (C_f alpha_f, alpha_f), optical depth -
+// tau_f. Taken literally, eq. 13 would count f twice: on one isolated kernel of alpha 0.5 it
 // would give 0.75 of its colour instead of 0.5.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -17,13 +21,15 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0, rgba32f) uniform readonly image2D baseColor;
 layout(binding = 1, rgba32f) uniform readonly image2D accumulation;
-layout(binding = 2, r32f) uniform readonly image2D revealage;
+layout(binding = 2, r32f) uniform readonly image2D opticalDepth;
 layout(binding = 3, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = 4) readonly buffer Closest { uint64_t closest[]; };
 layout(std430, binding = 6) writeonly buffer Result { vec4 result[]; };
 
-vec3 oitComposite(vec4 accum, float reveal, vec3 behind) {
-    vec3 average = accum.rgb / max(accum.a, 1e-5);
+vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
+
+vec3 oitComposite(vec3 average, float tau, vec3 behind) {
+    float reveal = exp(-tau);
     return average * (1.0 - reveal) + behind * reveal;
 }
 
@@ -37,7 +43,7 @@ void main() {
     vec3 color = base;
     if (!splatFlag(kSplatFlagInstanced)) {
         vec4 accum = imageLoad(accumulation, pixel);
-        float reveal = imageLoad(revealage, pixel).r;
+        float tau = imageLoad(opticalDepth, pixel).r;
         uint64_t key = closest[p.y * width + p.x];
         if (splatFlag(kSplatFlagHybrid) && key != ~uint64_t(0)) {
             uint kernel = uint(key & 0xffffffffUL);
@@ -48,11 +54,13 @@ void main() {
             float w = spotOitWeight(splatViewDepth(o + f.depth * d), f.alpha,
                                     splatFlag(kSplatFlagMcGuireBavoil) ? kSpotWeightMcGuireBavoil
                                                                         : kSpotWeightConstant);
-            vec4 rest = max(accum - w * vec4(f.premul, f.alpha), vec4(0.0));
-            float restReveal = f.alpha < 1.0 ? min(reveal / (1.0 - f.alpha), 1.0) : 1.0;
-            color = f.premul + (1.0 - f.alpha) * oitComposite(rest, restReveal, base);
+            vec4 rest = accum - w * vec4(f.premul, f.alpha);
+            // Below about 1e-6 of accum.a the difference is float noise and the others' mean
+            // colour cannot be told: take the mean of all (f's, mostly) there.
+            vec3 average = rest.a > 1e-5 * accum.a ? max(rest.rgb, vec3(0.0)) / rest.a : oitAverage(accum);
+            color = f.premul + (1.0 - f.alpha) * oitComposite(average, max(tau - f.tau, 0.0), base);
         } else {
-            color = oitComposite(accum, reveal, base);
+            color = oitComposite(oitAverage(accum), tau, base);
         }
     }
     result[p.y * width + p.x] = vec4(color, 1.0);

@@ -403,14 +403,42 @@ SPOT_FN bool spotLobeChord(rvec3 o, rvec3 d, real k, SPOT_OUT(real) ta, SPOT_OUT
     return true;
 }
 
-/* Half extents (world units, along the world axes) of the axis-aligned box around the ellipsoid
- * |A (x - c)| < k, A the world-to-lobe map: k times the norms of the rows of A^-1. */
-SPOT_FN rvec3 spotEllipsoidHalfExtent(rmat3 A, real k) {
-    rmat3 inv = inverse(A);
-    real x = sqrt(inv[0][0] * inv[0][0] + inv[1][0] * inv[1][0] + inv[2][0] * inv[2][0]);
-    real y = sqrt(inv[0][1] * inv[0][1] + inv[1][1] * inv[1][1] + inv[2][1] * inv[2][1]);
-    real z = sqrt(inv[0][2] * inv[0][2] + inv[1][2] * inv[1][2] + inv[2][2] * inv[2][2]);
-    return k * rvec3(x, y, z);
+/* Exact extent along one image axis of the ellipsoid x = c + M u, |u| <= k (M = A^-1, A the
+ * world-to-lobe map), seen from `eye` looking along unit `forward`: the range [lo, hi] of
+ * s(x) = dot(x - eye, axis) / dot(x - eye, forward) (perspective: tangent units) or of
+ * dot(x - eye, axis) (orthographic: world units), `axis` a unit image axis. The bounding values
+ * are the planes through the eye tangent to the ellipsoid, roots of a quadratic (a plane
+ * n.x = d touches the ellipsoid where |n.(c - eye) - d| = k |M^T n|). `zLo`, `zHi` receive the
+ * view depth range. Returns false (and an unbounded range) when a perspective ellipsoid reaches
+ * the eye plane. */
+SPOT_FN bool spotEllipsoidRange(rvec3 rel, rmat3 M, real k, rvec3 axis, rvec3 forward, bool orthographic,
+                                SPOT_OUT(real) lo, SPOT_OUT(real) hi, SPOT_OUT(real) zLo, SPOT_OUT(real) zHi) {
+    rvec3 ma = transpose(M) * axis;
+    rvec3 mf = transpose(M) * forward;
+    real ar = dot(rel, axis);
+    real af = dot(rel, forward);
+    real k2 = k * k;
+    real depthHalf = k * length(mf);
+    zLo = af - depthHalf;
+    zHi = af + depthHalf;
+    if (orthographic) {
+        real h = k * length(ma);
+        lo = ar - h;
+        hi = ar + h;
+        return true;
+    }
+    real qa = af * af - k2 * dot(mf, mf);
+    if (!(af > real(0.0)) || !(qa > real(0.0))) {
+        lo = real(-3.0e38);
+        hi = real(3.0e38);
+        return false;
+    }
+    real qb = ar * af - k2 * dot(ma, mf);
+    real qc = ar * ar - k2 * dot(ma, ma);
+    real root = sqrt(max(qb * qb - qa * qc, real(0.0)));
+    lo = (qb - root) / qa;
+    hi = (qb + root) / qa;
+    return true;
 }
 
 /* Lambert + ambient shading factor (DESIGN section 4): ambient + (1 - ambient) max(0, n.l), n and
@@ -455,3 +483,72 @@ SPOT_FN real spotOitWeight(real z, real alpha, uint mode) {
  * 1 at the near plane and falling towards 0 far away, so float depth keeps its relative precision
  * at every distance. Compare with GREATER. */
 SPOT_FN real spotReversedDepth(real z, real zNear) { return zNear / max(z, zNear); }
+
+/* Inverse of erf on (-1, 1), Giles 2010 ("Approximating the erfinv function", GPU Computing Gems):
+ * relative error about 4e-7 in single precision (also in the double instantiation: nothing on the
+ * CPU reference's path uses it). Arguments are clamped just inside (-1, 1). */
+SPOT_FN real spotErfinvApprox(real x) {
+    x = min(max(x, real(-0.99999994)), real(0.99999994));
+    real w = -log((real(1.0) - x) * (real(1.0) + x));
+    real p;
+    if (w < real(5.0)) {
+        w = w - real(2.5);
+        p = real(2.81022636e-08);
+        p = real(3.43273939e-07) + p * w;
+        p = real(-3.5233877e-06) + p * w;
+        p = real(-4.39150654e-06) + p * w;
+        p = real(0.00021858087) + p * w;
+        p = real(-0.00125372503) + p * w;
+        p = real(-0.00417768164) + p * w;
+        p = real(0.246640727) + p * w;
+        p = real(1.50140941) + p * w;
+    } else {
+        w = sqrt(w) - real(3.0);
+        p = real(-0.000200214257);
+        p = real(0.000100950558) + p * w;
+        p = real(0.00134934322) + p * w;
+        p = real(-0.00367342844) + p * w;
+        p = real(0.00573950773) + p * w;
+        p = real(-0.0076224613) + p * w;
+        p = real(0.00943887047) + p * w;
+        p = real(1.00167406) + p * w;
+        p = real(2.83297682) + p * w;
+    }
+    return p * x;
+}
+
+/* The ray parameter t at which a lobe's optical depth along o + t d, counted from the start of its
+ * chord inside [t0, t1] (as spotLobeDepth integrates it), reaches `fraction` (in [0, 1]) of its
+ * total. The peak parameter when the ray misses. */
+SPOT_FN real spotLobeDepthQuantile(rvec3 o, rvec3 d, real t0, real t1, real k, real fraction) {
+    real dd = dot(d, d);
+    if (!(dd > real(0.0)))
+        return t0;
+    real tStar = -dot(o, d) / dd;
+    rvec3 perp = o + tStar * d;
+    real perp2 = dot(perp, perp);
+    if (!(perp2 < k * k))
+        return tStar;
+    real halfChord = sqrt((k * k - perp2) / dd);
+    real a = max(t0, tStar - halfChord);
+    real b = min(t1, tStar + halfChord);
+    if (!(b > a))
+        return tStar;
+    real len = sqrt(dd);
+    real erfA = real(1.0) - spotErfc((a - tStar) * len * kInvSqrtTwo);
+    real erfB = real(1.0) - spotErfc((b - tStar) * len * kInvSqrtTwo);
+    real x = spotErfinvApprox(erfA + fraction * (erfB - erfA));
+    return min(max(tStar + x / (len * kInvSqrtTwo), a), b);
+}
+
+/* Where, as a fraction of a medium's optical depth tau, the emission seen through it reaches the
+ * share q (in [0, 1]) of its total: seen from the front, emission up to depth s is 1 - exp(-s), so
+ * s = -ln(1 - q (1 - exp(-tau))). Tends to q for a thin medium and to ln(1 / (1 - q)) / tau for an
+ * opaque one (its front surface). */
+SPOT_FN real spotEmissionQuantileFraction(real tau, real q) {
+    if (!(tau > real(0.0)))
+        return q;
+    real x = q * spotOneMinusExp(tau);
+    real s = x < real(1e-3) ? x * (real(1.0) + x * (real(0.5) + x * real(1.0 / 3.0))) : -log(real(1.0) - x);
+    return min(s / tau, real(1.0));
+}

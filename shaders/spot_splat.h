@@ -41,8 +41,12 @@ SPOT_CONST uint kSplatFlagInstanced = 16u;  /* instanced: the base colour image 
 
 /* Kernel samples (paper eq. 10's N_s) at most. Every shader invocation stays far below lavapipe's
  * 65,535 loop iterations: a march costs N x (lobes + 1) <= 2048 x 9 = 18,432 iterations, the
- * analytic path about 100. */
+ * analytic path at most about 300. */
 SPOT_CONST uint kSplatMaxKernelSamples = 2048u;
+
+/* Analytic path with Lambert shading: normals per lobe and pixel (splatLobeShading). Loop budget
+ * of the analytic path: 8 lobes x 4 points x 8 lobes of gradient = 256 iterations. */
+SPOT_CONST uint kSplatShadingSamples = 4u;
 
 /* Hybrid: a kernel competes for "closest" at a pixel only where its alpha exceeds this (one 8-bit
  * step): fainter kernels would claim the front while hiding nothing. */

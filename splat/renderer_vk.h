@@ -53,15 +53,15 @@ const char* methodName(Method method);
 
 struct SplatSettings {
     Method method = Method::Hybrid;
-    bool ewa = true;          ///< widen lobes by the pixel footprint (anti-aliasing)
-    int kernelSamples = 0;    ///< 0: analytic optical depths; N in [1, 2048]: paper eq. 10's N_s
+    bool ewa = true;       ///< widen lobes by the pixel footprint (anti-aliasing)
+    int kernelSamples = 0; ///< 0: analytic optical depths; N in [1, 2048]: paper eq. 10's N_s
     OitWeight weight = OitWeight::McGuireBavoil;
 };
 
 struct FrameStats {
     std::vector<std::pair<std::string, double>> passMs; ///< GPU time per pass, milliseconds
     double totalMs = 0.0;                               ///< GPU time of the frame, milliseconds
-    std::uint32_t kernelsDrawn = 0;  ///< kernels with a non-empty pixel rectangle
+    std::uint32_t kernelsDrawn = 0;   ///< kernels with a non-empty pixel rectangle
     std::uint64_t gpuMemoryBytes = 0; ///< the context's peak allocation so far
 };
 

@@ -1,0 +1,482 @@
+#include "renderer_vk.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <span>
+#include <stdexcept>
+
+#include "noise/error.h"
+#include "noise/mesh.h"
+#include "splat/layout.h"
+
+#include "splat_compact.comp.h"
+#include "splat_instanced.frag.h"
+#include "splat_mesh.frag.h"
+#include "splat_mesh.vert.h"
+#include "splat_oit.frag.h"
+#include "splat_prepare.comp.h"
+#include "splat_quad.vert.h"
+#include "splat_resolve.comp.h"
+
+namespace spot::splat {
+
+namespace gpu_splat {
+using glm::uvec4;
+using glm::vec4;
+#define SPOT_CONST inline constexpr
+#include "shaders/spot_splat.h"
+#undef SPOT_CONST
+static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
+static_assert(sizeof(SpotMeshVertex) == 32);
+} // namespace gpu_splat
+
+namespace {
+
+using gpu_splat::SpotMeshVertex;
+using gpu_splat::SpotSplatFrame;
+
+constexpr VkFormat kColorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kScalarFormat = VK_FORMAT_R32_SFLOAT;
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+/// Near plane of the reversed depth mapping (world units): float depth near / z keeps its
+/// relative precision at every distance, so the near plane can sit this close to the eye.
+constexpr float kNearPlane = 1e-4f;
+/// Bytes per pixel of a frame: base colour, accumulation (RGBA32F), t, optical depth, depth
+/// (32-bit), closest kernel (64-bit), result (RGBA32F).
+constexpr std::uint64_t kBytesPerPixel = 16 + 16 + 4 + 4 + 4 + 8 + 16;
+/// Timestamp slots: frame start, then the end of each pass.
+constexpr const char* kPassNames[] = {"prepare", "mesh", "splat", "resolve"};
+constexpr std::uint32_t kTimestampCount = 5;
+/// prepare.comp runs 64 impulses per workgroup and a dispatch has at most 65,535 workgroups.
+constexpr std::uint32_t kMaxImpulses = 65535u * 64u;
+
+template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
+    return {code, N};
+}
+
+void requireFormat(Context& ctx, VkFormat format, VkFormatFeatureFlags features, const char* what) {
+    VkFormatProperties props;
+    vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), format, &props);
+    if ((props.optimalTilingFeatures & features) != features)
+        throw std::runtime_error(cat("Vulkan: device ", ctx.deviceName(), " cannot use format ",
+                                     int(format), " for ", what));
+}
+
+VkPipelineColorBlendAttachmentState opaqueBlend() {
+    VkPipelineColorBlendAttachmentState b{};
+    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                       VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+    return b;
+}
+
+/// dst = src + dst: MB13's weighted sums, and the optical-depth sum that stands for its revealage
+/// (exp(-sum tau) = prod (1 - alpha); see splat_oit.frag). One blend state for both targets:
+/// the context does not enable independentBlend.
+VkPipelineColorBlendAttachmentState additiveBlend() {
+    VkPipelineColorBlendAttachmentState b = opaqueBlend();
+    b.blendEnable = VK_TRUE;
+    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.colorBlendOp = VK_BLEND_OP_ADD;
+    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.alphaBlendOp = VK_BLEND_OP_ADD;
+    return b;
+}
+
+VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp load,
+                                          glm::vec4 clear = glm::vec4(0.0f)) {
+    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    a.imageView = image.view();
+    a.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    a.loadOp = load;
+    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.clearValue.color = {{clear.r, clear.g, clear.b, clear.a}};
+    return a;
+}
+
+VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load) {
+    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    a.imageView = image.view();
+    a.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    a.loadOp = load;
+    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.clearValue.depthStencil = {0.0f, 0}; // reversed depth: 0 is infinitely far
+    return a;
+}
+
+void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    const std::vector<VkRenderingAttachmentInfo>& colors,
+                    const VkRenderingAttachmentInfo* depth) {
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {width, height}};
+    info.layerCount = 1;
+    info.colorAttachmentCount = std::uint32_t(colors.size());
+    info.pColorAttachments = colors.data();
+    info.pDepthAttachment = depth;
+    vkCmdBeginRendering(cmd, &info);
+    const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+    const VkRect2D scissor{{0, 0}, {width, height}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+}
+
+void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const SpotSplatFrame& frame) {
+    const VkShaderStageFlags stages =
+        pipeline.bindPoint() == VK_PIPELINE_BIND_POINT_COMPUTE
+            ? VK_SHADER_STAGE_COMPUTE_BIT
+            : VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+    vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
+}
+
+constexpr VkImageUsageFlags kTargetUsage =
+    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
+
+} // namespace
+
+const char* methodName(Method method) {
+    switch (method) {
+    case Method::Instanced:
+        return "instanced";
+    case Method::Oit:
+        return "oit";
+    case Method::Hybrid:
+        return "hybrid";
+    }
+    return "?";
+}
+
+SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
+    : m_ctx(ctx), m_timestamps(ctx, kTimestampCount) {
+    if (kernel.lobes.empty() || kernel.lobes.size() > 8)
+        throw InputError(
+            cat("splat renderer: a kernel needs 1 to 8 lobes, this one has ", kernel.lobes.size()));
+    if (!(kernel.supportSigma > 0.0f) || !std::isfinite(kernel.supportSigma))
+        throw InputError(
+            cat("splat renderer: support ", kernel.supportSigma, " sigmas must be positive"));
+    requireFormat(ctx, kColorFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT |
+                      VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "blended, stored RGBA32F targets");
+    requireFormat(ctx, kScalarFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT |
+                      VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "blended, stored R32F targets");
+    requireFormat(ctx, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth");
+    m_lobeCount = std::uint32_t(kernel.lobes.size());
+    m_support = kernel.supportSigma;
+
+    const std::vector<gpu::SpotLobe> lobes = gpu::toGpu(kernel);
+    m_lobes = Buffer(ctx, lobes.size() * sizeof(gpu::SpotLobe), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                     Buffer::Memory::HostVisible, "splat kernel lobes");
+    m_lobes.upload(std::span<const gpu::SpotLobe>(lobes));
+
+    std::vector<SpotMeshVertex> vertices(mesh.positions.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+        vertices[i].position = glm::vec4(mesh.positions[i], 1.0f);
+        vertices[i].normal =
+            glm::vec4(i < mesh.normals.size() ? mesh.normals[i] : glm::vec3(0.0f), 0.0f);
+    }
+    m_vertices =
+        Buffer(ctx, vertices.size() * sizeof(SpotMeshVertex), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+               Buffer::Memory::HostVisible, cat("splat mesh vertices (", mesh.name, ")"));
+    if (!vertices.empty())
+        m_vertices.upload(std::span<const SpotMeshVertex>(vertices));
+    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
+    m_indices =
+        Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+               Buffer::Memory::HostVisible, cat("splat mesh indices (", mesh.name, ")"));
+    if (!mesh.triangles.empty())
+        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
+
+    const std::uint32_t push = sizeof(SpotSplatFrame);
+    constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    constexpr VkDescriptorType kImg = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    m_prepare =
+        makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), {kBuf, kBuf, kBuf, kBuf}, push);
+    m_compact = makeComputePipeline(ctx, spirv(spv_splat_compact_comp), {kBuf, kBuf, kBuf}, push);
+    m_resolve = makeComputePipeline(ctx, spirv(spv_splat_resolve_comp),
+                                    {kImg, kImg, kImg, kImg, kBuf, kBuf, kBuf}, push);
+
+    GraphicsPipelineDesc mesh3d;
+    mesh3d.vertex = spirv(spv_splat_mesh_vert);
+    mesh3d.fragment = spirv(spv_splat_mesh_frag);
+    mesh3d.bindings = {kBuf};
+    mesh3d.pushBytes = push;
+    mesh3d.colorFormats = {kColorFormat, kScalarFormat};
+    mesh3d.blends = {opaqueBlend(), opaqueBlend()};
+    mesh3d.depthFormat = kDepthFormat;
+    mesh3d.depthTest = true;
+    mesh3d.depthWrite = true;
+    mesh3d.depthCompare = VK_COMPARE_OP_GREATER;
+    m_mesh = makeGraphicsPipeline(ctx, mesh3d);
+
+    // Splat pipelines: 0 bounds, 1 kept kernels, 2 world lobes, 3 mesh distance, 4 closest.
+    GraphicsPipelineDesc quads;
+    quads.vertex = spirv(spv_splat_quad_vert);
+    quads.bindings = {kBuf, kBuf, kBuf, kImg, kBuf};
+    quads.pushBytes = push;
+    quads.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
+
+    GraphicsPipelineDesc instanced = quads;
+    instanced.fragment = spirv(spv_splat_instanced_frag);
+    instanced.colorFormats = {kColorFormat};
+    instanced.blends = {opaqueBlend()};
+    instanced.depthFormat = kDepthFormat;
+    instanced.depthTest = true;
+    instanced.depthWrite = true;
+    instanced.depthCompare = VK_COMPARE_OP_GREATER;
+    m_instanced = makeGraphicsPipeline(ctx, instanced);
+
+    GraphicsPipelineDesc oit = quads;
+    oit.fragment = spirv(spv_splat_oit_frag);
+    oit.colorFormats = {kColorFormat, kScalarFormat};
+    oit.blends = {additiveBlend(), additiveBlend()};
+    m_oit = makeGraphicsPipeline(ctx, oit);
+}
+
+std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t count) const {
+    return std::uint64_t(width) * std::uint64_t(height) * kBytesPerPixel +
+           std::uint64_t(count) * (std::uint64_t(m_lobeCount) * sizeof(gpu::SpotWorldLobe) +
+                                   sizeof(gpu::SpotKernelBound) + sizeof(std::uint32_t)) +
+           16;
+}
+
+noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Shading& shading,
+                                   glm::vec3 background, glm::vec3 baseColor,
+                                   const Buffer& impulses, std::uint32_t count,
+                                   const SplatSettings& settings, FrameStats* stats) {
+    const noise::CameraRays rays(camera); // validates the camera (InputError)
+    if (settings.kernelSamples < 0 ||
+        settings.kernelSamples > int(gpu_splat::kSplatMaxKernelSamples))
+        throw InputError(cat("splat renderer: kernel samples ", settings.kernelSamples,
+                             " outside [0, ", gpu_splat::kSplatMaxKernelSamples,
+                             "] (0 = analytic; more would exceed lavapipe's loop budget)"));
+    if (count > kMaxImpulses)
+        throw InputError(cat("splat renderer: ", count, " impulses, more than the ", kMaxImpulses,
+                             " one frame can prepare"));
+    if (std::uint64_t(count) * sizeof(gpu::SpotImpulse) > impulses.size() || !impulses.handle())
+        throw InputError(cat("splat renderer: the impulse buffer holds ", impulses.size(),
+                             " bytes, ", count, " impulses need ",
+                             std::uint64_t(count) * sizeof(gpu::SpotImpulse)));
+    const std::uint32_t width = std::uint32_t(camera.width), height = std::uint32_t(camera.height);
+    const std::uint64_t need = frameBytes(camera.width, camera.height, count);
+    if (m_ctx.allocatedBytes() + need > m_ctx.memoryBudget())
+        throw InputError(cat("splat renderer: a ", width, "x", height, " frame of ", count,
+                             " kernels needs ", need >> 20, " MiB of GPU memory; ",
+                             m_ctx.allocatedBytes() >> 20, " MiB are in use and the budget is ",
+                             m_ctx.memoryBudget() >> 20,
+                             " MiB; reduce the image size or the kernel count"));
+
+    // The frame's constants: the camera basis exactly as noise::CameraRays builds it.
+    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
+    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
+    const glm::dvec3 up = glm::cross(right, forward);
+    const bool ortho = camera.projection == noise::Projection::Orthographic;
+    const double halfHeight =
+        ortho ? 0.5 * camera.orthoHeight : std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
+    const double halfWidth = halfHeight * double(camera.width) / double(camera.height);
+    std::uint32_t flags = 0;
+    if (settings.ewa)
+        flags |= gpu_splat::kSplatFlagEwa;
+    if (shading.mode == noise::Shading::Mode::Lambert)
+        flags |= gpu_splat::kSplatFlagLambert;
+    if (settings.weight == OitWeight::McGuireBavoil)
+        flags |= gpu_splat::kSplatFlagMcGuireBavoil;
+    if (settings.method == Method::Hybrid)
+        flags |= gpu_splat::kSplatFlagHybrid;
+    if (settings.method == Method::Instanced)
+        flags |= gpu_splat::kSplatFlagInstanced;
+    SpotSplatFrame frame{};
+    frame.eye = glm::vec4(glm::vec3(camera.eye), ortho ? 1.0f : 0.0f);
+    frame.forward = glm::vec4(glm::vec3(forward), kNearPlane);
+    frame.right = glm::vec4(glm::vec3(right), float(halfWidth));
+    frame.up = glm::vec4(glm::vec3(up), float(halfHeight));
+    frame.size = glm::vec4(float(width), float(height), float(rays.pixelFootprint(1.0)), m_support);
+    frame.counts = glm::uvec4(count, m_lobeCount, std::uint32_t(settings.kernelSamples), flags);
+    frame.light = glm::vec4(shading.lightDir, shading.ambient);
+    frame.base = glm::vec4(baseColor, 0.0f);
+
+    // Per-frame resources (the budget was checked above; each allocation checks again).
+    const std::uint64_t lobeCount = std::uint64_t(count) * m_lobeCount;
+    Buffer worldLobes(m_ctx, lobeCount * sizeof(gpu::SpotWorldLobe),
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::DeviceLocal,
+                      cat("splat world lobes (", count, " kernels)"));
+    Buffer bounds(m_ctx, std::uint64_t(count) * sizeof(gpu::SpotKernelBound),
+                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::DeviceLocal,
+                  "splat kernel bounds");
+    Buffer kept(m_ctx, std::uint64_t(count) * sizeof(std::uint32_t),
+                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::DeviceLocal,
+                "splat kept kernels");
+    Buffer draw(m_ctx, sizeof(VkDrawIndirectCommand),
+                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                Buffer::Memory::HostVisible, "splat indirect draw");
+    const std::uint64_t pixels = std::uint64_t(width) * height;
+    Buffer closest(m_ctx, pixels * sizeof(std::uint64_t),
+                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                   Buffer::Memory::DeviceLocal, "splat closest kernels");
+    Buffer result(m_ctx, pixels * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                  Buffer::Memory::HostVisible, "splat result");
+    Image base(m_ctx, width, height, kColorFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
+               "splat base colour");
+    Image distance(m_ctx, width, height, kScalarFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
+                   "splat mesh distance");
+    Image depth(m_ctx, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                VK_IMAGE_ASPECT_DEPTH_BIT, "splat depth");
+    Image accum(m_ctx, width, height, kColorFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
+                "splat OIT accumulation");
+    Image opticalDepth(m_ctx, width, height, kScalarFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
+                       "splat OIT optical depth");
+
+    constexpr VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+    constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+    constexpr VkPipelineStageFlags2 kColorOut = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+    constexpr VkPipelineStageFlags2 kTests =
+        VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+    constexpr VkPipelineStageFlags2 kFragment = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
+    constexpr VkAccessFlags2 kColorRW =
+        VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
+    constexpr VkAccessFlags2 kDepthRW = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT |
+                                        VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+    constexpr VkAccessFlags2 kStorageRead = VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
+    constexpr VkAccessFlags2 kStorageRW =
+        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+    constexpr VkImageAspectFlags kColorAspect = VK_IMAGE_ASPECT_COLOR_BIT;
+    constexpr VkImageLayout kAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    constexpr VkImageLayout kGeneral = VK_IMAGE_LAYOUT_GENERAL;
+
+    const bool instanced = settings.method == Method::Instanced;
+    m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
+        m_timestamps.reset(cmd);
+        m_timestamps.write(cmd, 0, kAll);
+
+        // 1. Prepare: world lobes and bounds, then the kept kernels in order and the draw.
+        if (count > 0) {
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_prepare.handle());
+            pushFrame(cmd, m_prepare, frame);
+            Descriptors()
+                .buffer(0, impulses)
+                .buffer(1, m_lobes)
+                .buffer(2, worldLobes)
+                .buffer(3, bounds)
+                .push(m_ctx, cmd, m_prepare);
+            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+            memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute,
+                          kStorageRead);
+        }
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_compact.handle());
+        pushFrame(cmd, m_compact, frame);
+        Descriptors().buffer(0, bounds).buffer(1, kept).buffer(2, draw).push(m_ctx, cmd, m_compact);
+        vkCmdDispatch(cmd, 1, 1, 1);
+        vkCmdFillBuffer(cmd, closest.handle(), 0, VK_WHOLE_SIZE, 0xffffffffu); // "no kernel"
+        memoryBarrier(cmd, kCompute | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                      VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT |
+                          VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | kFragment | kCompute,
+                      VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | kStorageRW);
+        m_timestamps.write(cmd, 1, kAll);
+
+        // 2. The base mesh.
+        for (const Image* image : {&base, &distance, &accum, &opticalDepth})
+            transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED,
+                            kAttachment, VK_PIPELINE_STAGE_2_NONE, 0, kColorOut, kColorRW);
+        transitionImage(cmd, depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                        VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                        kTests, kDepthRW);
+        {
+            const VkRenderingAttachmentInfo depthInfo =
+                depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+            beginRendering(
+                cmd, width, height,
+                {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
+                 colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR,
+                                 glm::vec4(gpu_splat::kSplatNoMesh))},
+                &depthInfo);
+            if (m_indexCount > 0) {
+                vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_mesh.handle());
+                pushFrame(cmd, m_mesh, frame);
+                Descriptors().buffer(0, m_vertices).push(m_ctx, cmd, m_mesh);
+                vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+                vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
+            }
+            vkCmdEndRendering(cmd);
+        }
+        transitionImage(cmd, distance.handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
+                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kFragment | kCompute, kStorageRead);
+        // Base colour and depth stay attachments: the instanced pass draws over them.
+        transitionImage(cmd, base.handle(), kColorAspect, kAttachment, kAttachment, kColorOut,
+                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kColorOut, kColorRW);
+        transitionImage(cmd, depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
+                        VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                        VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kTests,
+                        VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
+        m_timestamps.write(cmd, 2, kAll);
+
+        // 3. The kernels: one quad each, drawn in impulse order.
+        const Pipeline& splat = instanced ? m_instanced : m_oit;
+        const VkRenderingAttachmentInfo depthInfo =
+            depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_LOAD);
+        if (instanced)
+            beginRendering(cmd, width, height, {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_LOAD)},
+                           &depthInfo);
+        else
+            beginRendering(
+                cmd, width, height,
+                {colorAttachment(accum, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f)),
+                 colorAttachment(opticalDepth, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f))},
+                nullptr);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, splat.handle());
+        pushFrame(cmd, splat, frame);
+        Descriptors()
+            .buffer(0, bounds)
+            .buffer(1, kept)
+            .buffer(2, worldLobes)
+            .image(3, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(4, closest)
+            .push(m_ctx, cmd, splat);
+        vkCmdDrawIndirect(cmd, draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+        vkCmdEndRendering(cmd);
+        for (const Image* image : {&base, &accum, &opticalDepth})
+            transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
+                            VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute, kStorageRead);
+        memoryBarrier(cmd, kFragment, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRead);
+        m_timestamps.write(cmd, 3, kAll);
+
+        // 4. Resolve into the readback buffer.
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_resolve.handle());
+        pushFrame(cmd, m_resolve, frame);
+        Descriptors()
+            .image(0, base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(1, accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(2, opticalDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(3, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(4, closest)
+            .buffer(5, worldLobes)
+            .buffer(6, result)
+            .push(m_ctx, cmd, m_resolve);
+        vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+        m_timestamps.write(cmd, 4, kAll);
+    });
+
+    noise::Image image(camera.width, camera.height);
+    const auto* rgba = static_cast<const glm::vec4*>(result.mapped());
+    for (std::size_t i = 0; i < image.pixels.size(); ++i)
+        image.pixels[i] = glm::vec3(rgba[i]);
+    if (stats) {
+        const std::vector<double> ms = m_timestamps.milliseconds();
+        stats->passMs.clear();
+        for (std::uint32_t p = 0; p + 1 < kTimestampCount; ++p)
+            stats->passMs.emplace_back(kPassNames[p], ms[p + 1] - ms[p]);
+        stats->totalMs = ms[kTimestampCount - 1];
+        VkDrawIndirectCommand command;
+        std::memcpy(&command, draw.mapped(), sizeof(command));
+        stats->kernelsDrawn = command.instanceCount;
+        stats->gpuMemoryBytes = m_ctx.peakAllocatedBytes();
+    }
+    return image;
+}
+
+} // namespace spot::splat

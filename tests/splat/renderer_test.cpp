@@ -1,0 +1,709 @@
+// The splatting renderers (instanced, oit, hybrid) against the closed form on one lobe and against
+// the converged CPU reference on every shipped scene; the paper's claim (hybrid beats oit on the
+// close-up fur); determinism; finite output for degenerate lobes; refused settings.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "noise/camera.h"
+#include "noise/error.h"
+#include "noise/impulses.h"
+#include "noise/mesh.h"
+#include "noise/preset.h"
+#include "noise/reference.h"
+#include "noise/scene.h"
+#include "shaders/spot_shared.hpp"
+#include "splat/image_compare.h"
+#include "splat/layout.h"
+#include "splat/renderer_vk.h"
+
+namespace {
+
+using namespace spot;
+
+splat::ContextOptions validated() {
+    splat::ContextOptions o;
+    o.validation = true;
+    return o;
+}
+
+void expectNoValidationErrors(const splat::Context& ctx) {
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+splat::Buffer upload(splat::Context& ctx, const std::vector<noise::Impulse>& impulses) {
+    const std::vector<gpu::SpotImpulse> g = gpu::toGpu(impulses);
+    splat::Buffer b(ctx, g.size() * sizeof(gpu::SpotImpulse), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                    splat::Buffer::Memory::HostVisible, "test impulses");
+    if (!g.empty())
+        b.upload(std::span<const gpu::SpotImpulse>(g));
+    return b;
+}
+
+// ---- One lobe against its closed form --------------------------------------------------------
+
+noise::Kernel oneLobeKernel(glm::vec3 sigma, glm::vec3 rotationDeg, float extinction,
+                            glm::vec3 color, float support) {
+    noise::KernelDesc desc;
+    noise::LobeDesc lobe;
+    lobe.sigma = sigma;
+    lobe.rotationDeg = rotationDeg;
+    lobe.extinction = extinction;
+    lobe.color = color;
+    desc.lobes = {lobe};
+    desc.supportSigma = support;
+    return noise::buildKernel(desc);
+}
+
+noise::Impulse impulseAt(glm::vec3 position) {
+    noise::Impulse imp;
+    imp.position = position;
+    imp.frame = glm::mat3(1.0f);
+    imp.scale = glm::vec3(1.0f);
+    return imp;
+}
+
+/// Optical depth of a world lobe along a whole line (DESIGN section 1), written independently.
+double closedFormDepth(const noise::WorldLobe& lobe, glm::dvec3 o, glm::dvec3 d) {
+    const glm::dvec3 op = lobe.toLobe * (o - lobe.centre), dp = lobe.toLobe * d;
+    const double dd = glm::dot(dp, dp), od = glm::dot(op, dp);
+    return lobe.extinction * std::sqrt(2.0 * M_PI) / std::sqrt(dd) *
+           std::exp(-0.5 * (glm::dot(op, op) - od * od / dd));
+}
+
+noise::Camera lobeCamera(noise::Projection projection, int size) {
+    noise::Camera cam;
+    cam.projection = projection;
+    cam.eye = glm::dvec3(0.3, 0.4, 5.0);
+    cam.target = glm::dvec3(0.0);
+    cam.orthoHeight = 2.0;
+    cam.fovYDeg = 22.0;
+    cam.width = cam.height = size;
+    return cam;
+}
+
+// ---- The splatting math of spot_shared.h, on the CPU (float: the GPU's twin) --------------------
+
+namespace sh = spot::shared::f32;
+
+TEST(SplatShared, CameraRayMatchesCameraRays) {
+    for (auto projection : {noise::Projection::Perspective, noise::Projection::Orthographic}) {
+        noise::Camera cam = lobeCamera(projection, 40);
+        cam.width = 64;
+        const noise::CameraRays rays(cam);
+        const glm::dvec3 f = glm::normalize(cam.target - cam.eye);
+        const glm::dvec3 r = glm::normalize(glm::cross(f, cam.up));
+        const glm::dvec3 u = glm::cross(r, f);
+        const double halfH = projection == noise::Projection::Orthographic
+                                 ? 0.5 * cam.orthoHeight
+                                 : std::tan(0.5 * cam.fovYDeg * M_PI / 180.0);
+        const double halfW = halfH * cam.width / cam.height;
+        for (double py : {0.0, 7.5, 40.0})
+            for (double px : {0.0, 31.25, 64.0}) {
+                glm::vec3 o, d;
+                sh::spotCameraRay(
+                    glm::vec3(cam.eye), glm::vec3(f), glm::vec3(r * halfW), glm::vec3(u * halfH),
+                    projection == noise::Projection::Orthographic,
+                    float(2.0 * px / cam.width - 1.0), float(1.0 - 2.0 * py / cam.height), o, d);
+                const noise::Ray ray = rays.ray(px, py);
+                EXPECT_LT(glm::length(glm::dvec3(o) - ray.origin), 1e-5);
+                EXPECT_LT(glm::length(glm::dvec3(d) - ray.dir), 1e-6);
+            }
+    }
+}
+
+TEST(SplatShared, EllipsoidRangeBoundsItsProjection) {
+    // A tilted ellipsoid in front of a perspective eye: its projection's extent along x, found by
+    // brute force over the ellipsoid's surface, equals the tangent-plane range.
+    const glm::mat3 A = glm::inverse(glm::mat3(
+        glm::vec3(0.3f, 0.1f, 0.0f), glm::vec3(-0.05f, 0.2f, 0.1f), glm::vec3(0.0f, 0.2f, 0.6f)));
+    const glm::vec3 centre(0.4f, -0.2f, -3.0f), eye(0.0f), forward(0.0f, 0.0f, -1.0f),
+        axis(1.0f, 0.0f, 0.0f);
+    const float k = 2.0f;
+    float lo, hi, zLo, zHi;
+    ASSERT_TRUE(sh::spotEllipsoidRange(centre - eye, glm::inverse(A), k, axis, forward, false, lo,
+                                       hi, zLo, zHi));
+    float bruteLo = 1e9f, bruteHi = -1e9f, bruteZLo = 1e9f, bruteZHi = -1e9f;
+    for (int i = 0; i <= 400; ++i)
+        for (int j = 0; j < 800; ++j) {
+            const float theta = float(M_PI) * i / 400.0f, phi = 2.0f * float(M_PI) * j / 800.0f;
+            const glm::vec3 unit(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                                 std::cos(theta));
+            const glm::vec3 x = centre + glm::inverse(A) * (k * unit);
+            const float z = glm::dot(x - eye, forward);
+            bruteLo = std::min(bruteLo, glm::dot(x - eye, axis) / z);
+            bruteHi = std::max(bruteHi, glm::dot(x - eye, axis) / z);
+            bruteZLo = std::min(bruteZLo, z);
+            bruteZHi = std::max(bruteZHi, z);
+        }
+    EXPECT_NEAR(lo, bruteLo, 1e-3f);
+    EXPECT_NEAR(hi, bruteHi, 1e-3f);
+    EXPECT_LE(lo, bruteLo + 1e-5f); // a bound, never inside
+    EXPECT_GE(hi, bruteHi - 1e-5f);
+    EXPECT_NEAR(zLo, bruteZLo, 1e-3f);
+    EXPECT_NEAR(zHi, bruteZHi, 1e-3f);
+    // Reaching the eye plane: unbounded.
+    EXPECT_FALSE(sh::spotEllipsoidRange(glm::vec3(0.0f, 0.0f, -0.5f), glm::inverse(A), k, axis,
+                                        forward, false, lo, hi, zLo, zHi));
+}
+
+TEST(SplatShared, LobeDepthQuantileInvertsTheDepth) {
+    const glm::vec3 o(0.3f, -0.4f, 2.5f), d = glm::normalize(glm::vec3(0.1f, 0.2f, -1.0f));
+    float tPeak = 0.0f;
+    const float total = sh::spotLobeDepth(o, d, 0.0f, 100.0f, 3.0f, tPeak);
+    ASSERT_GT(total, 0.1f);
+    for (float fraction : {0.01f, 0.25f, 0.5f, 0.9f, 0.999f}) {
+        const float t = sh::spotLobeDepthQuantile(o, d, 0.0f, 100.0f, 3.0f, fraction);
+        EXPECT_NEAR(sh::spotLobeDepth(o, d, 0.0f, t, 3.0f, tPeak) / total, fraction, 2e-4f)
+            << fraction;
+    }
+    for (float x : {-0.999f, -0.5f, 0.0f, 0.3f, 0.99f, 0.99999f})
+        EXPECT_NEAR(std::erf(double(sh::spotErfinvApprox(x))), x, 2e-6) << x;
+    // The emission shares: the median of a thin medium is its middle, of an opaque one ln 2 deep.
+    EXPECT_NEAR(sh::spotEmissionQuantileFraction(1e-6f, 0.5f), 0.5f, 1e-5f);
+    EXPECT_NEAR(sh::spotEmissionQuantileFraction(100.0f, 0.5f) * 100.0f, std::log(2.0f), 1e-4f);
+}
+
+TEST(SplatShared, OitWeights) {
+    EXPECT_EQ(sh::spotOitWeight(3.0f, 0.5f, sh::kSpotWeightConstant), 1.0f);
+    // MB13 eq. 7 at z = 5: alpha x 10 / (1e-5 + 1 + 2.44e-10).
+    EXPECT_NEAR(sh::spotOitWeight(5.0f, 0.5f, sh::kSpotWeightMcGuireBavoil),
+                0.5f * 10.0f / 1.00001f, 1e-5f);
+    EXPECT_NEAR(sh::spotOitWeight(1e-3f, 1.0f, sh::kSpotWeightMcGuireBavoil), 3e3f,
+                1e-2f); // clamped
+    EXPECT_NEAR(sh::spotOitWeight(1e4f, 1.0f, sh::kSpotWeightMcGuireBavoil), 1e-2f, 1e-7f);
+    EXPECT_LT(sh::spotOitWeight(4.0f, 1.0f, sh::kSpotWeightMcGuireBavoil),
+              sh::spotOitWeight(2.0f, 1.0f, sh::kSpotWeightMcGuireBavoil));
+    EXPECT_NEAR(sh::spotOneMinusExp(1e-6f), 1e-6f, 1e-12f);
+    EXPECT_NEAR(sh::spotOneMinusExp(2.0f), 1.0f - std::exp(-2.0f), 1e-7f);
+}
+
+struct LobeCase {
+    noise::Kernel kernel;
+    std::vector<noise::Impulse> impulses;
+    glm::vec3 color{0.9f, 0.6f, 0.3f};
+    glm::vec3 background{0.1f, 0.2f, 0.3f};
+};
+
+/// A tilted anisotropic lobe; support 6 sigma so the truncation is far below the tolerances.
+LobeCase isolatedLobe(float extinction) {
+    LobeCase c;
+    c.kernel = oneLobeKernel({0.3f, 0.2f, 0.5f}, {20.0f, 35.0f, -10.0f}, extinction, c.color, 6.0f);
+    c.impulses = {impulseAt(glm::vec3(0.05f, -0.1f, 0.0f))};
+    return c;
+}
+
+/// Closed-form alpha of the lobe at a continuous pixel position.
+double lobeAlpha(const LobeCase& c, const noise::CameraRays& rays, double px, double py) {
+    const noise::Ray r = rays.ray(px, py);
+    return 1.0 - std::exp(-closedFormDepth(noise::placeLobe(c.kernel, 0, c.impulses[0]), r.origin,
+                                           r.dir));
+}
+
+TEST(SplatRenderer, IsolatedLobeMatchesTheClosedForm) {
+    const LobeCase c = isolatedLobe(3.0f);
+    splat::Context ctx(validated());
+    const noise::Mesh empty;
+    splat::SplatRenderer renderer(ctx, empty, c.kernel);
+    const splat::Buffer impulses = upload(ctx, c.impulses);
+    for (auto projection : {noise::Projection::Orthographic, noise::Projection::Perspective}) {
+        const noise::Camera cam = lobeCamera(projection, 48);
+        const noise::CameraRays rays(cam);
+        // OIT and hybrid on a lone kernel reduce to the exact composite C alpha + bg (1 - alpha),
+        // whatever the weight; without EWA at pixel centres, with EWA against the box-filtered
+        // pixel (16x16 midpoint grid), whose variance EWA matches.
+        for (splat::Method method : {splat::Method::Oit, splat::Method::Hybrid}) {
+            for (auto weight : {splat::OitWeight::Constant, splat::OitWeight::McGuireBavoil}) {
+                for (bool ewa : {false, true}) {
+                    splat::SplatSettings s;
+                    s.method = method;
+                    s.weight = weight;
+                    s.ewa = ewa;
+                    splat::FrameStats stats;
+                    const noise::Image image =
+                        renderer.render(cam, noise::Shading{}, c.background, glm::vec3(0.0f),
+                                        impulses, 1, s, &stats);
+                    EXPECT_EQ(stats.kernelsDrawn, 1u);
+                    double worst = 0.0;
+                    for (int y = 0; y < cam.height; ++y)
+                        for (int x = 0; x < cam.width; ++x) {
+                            double alpha = 0.0;
+                            if (!ewa) {
+                                alpha = lobeAlpha(c, rays, x + 0.5, y + 0.5);
+                            } else {
+                                for (int j = 0; j < 16; ++j)
+                                    for (int i = 0; i < 16; ++i)
+                                        alpha += lobeAlpha(c, rays, x + (i + 0.5) / 16.0,
+                                                           y + (j + 0.5) / 16.0);
+                                alpha /= 256.0;
+                            }
+                            for (int ch = 0; ch < 3; ++ch) {
+                                const double expected =
+                                    alpha * c.color[ch] + (1.0 - alpha) * c.background[ch];
+                                worst = std::max(worst, std::abs(image.at(x, y)[ch] - expected));
+                            }
+                        }
+                    // Float32 erfc (1.2e-7) and camera maths: 1e-4 at pixel centres. EWA's
+                    // Gaussian against the box: the lobe spans ~10 pixels, 2e-3.
+                    EXPECT_LT(worst, ewa ? 2e-3 : 1e-4)
+                        << splat::methodName(method) << " weight " << int(weight) << " ewa " << ewa
+                        << (projection == noise::Projection::Orthographic ? " ortho"
+                                                                          : " perspective");
+                }
+            }
+        }
+        // N_s samples (paper eq. 10) converge to the analytic result.
+        for (int samples : {64, 512}) {
+            splat::SplatSettings s;
+            s.method = splat::Method::Oit;
+            s.ewa = false;
+            s.kernelSamples = samples;
+            const noise::Image image = renderer.render(cam, noise::Shading{}, c.background,
+                                                       glm::vec3(0.0f), impulses, 1, s);
+            double worst = 0.0;
+            for (int y = 0; y < cam.height; ++y)
+                for (int x = 0; x < cam.width; ++x) {
+                    const double alpha = lobeAlpha(c, rays, x + 0.5, y + 0.5);
+                    worst = std::max(
+                        worst, std::abs(image.at(x, y).r -
+                                        (alpha * c.color.r + (1.0 - alpha) * c.background.r)));
+                }
+            EXPECT_LT(worst, samples == 64 ? 5e-3 : 2e-4) << samples << " samples";
+        }
+        // Instanced: opaque where the closed-form alpha passes 0.5, background elsewhere (pixels
+        // within 0.02 of the threshold are not judged).
+        splat::SplatSettings s;
+        s.method = splat::Method::Instanced;
+        s.ewa = false;
+        const noise::Image image =
+            renderer.render(cam, noise::Shading{}, c.background, glm::vec3(0.0f), impulses, 1, s);
+        int covered = 0, wrong = 0;
+        for (int y = 0; y < cam.height; ++y)
+            for (int x = 0; x < cam.width; ++x) {
+                const double alpha = lobeAlpha(c, rays, x + 0.5, y + 0.5);
+                if (std::abs(alpha - 0.5) < 0.02)
+                    continue;
+                const glm::vec3 expected = alpha > 0.5 ? c.color : c.background;
+                covered += alpha > 0.5;
+                wrong += glm::length(image.at(x, y) - expected) > 1e-5f;
+            }
+        EXPECT_GT(covered, 50);
+        EXPECT_EQ(wrong, 0);
+    }
+    expectNoValidationErrors(ctx);
+}
+
+TEST(SplatRenderer, LongestMarchStaysWithinTheLoopBudget) {
+    // lavapipe silently stops a shader after 65,535 loop iterations: the longest march allowed
+    // (2048 samples x 8 lobes) must still reach the analytic result. Eight lobes of one colour,
+    // so the analytic composite is exact whatever their overlap.
+    noise::KernelDesc desc;
+    for (int l = 0; l < 8; ++l) {
+        noise::LobeDesc lobe;
+        lobe.sigma = glm::vec3(0.15f + 0.02f * l, 0.2f, 0.1f + 0.03f * l);
+        lobe.offset = glm::vec3(0.05f * l - 0.2f, 0.03f * l, 0.08f * l - 0.3f);
+        lobe.rotationDeg = glm::vec3(10.0f * l, 0.0f, 5.0f * l);
+        lobe.extinction = 1.5f;
+        lobe.color = glm::vec3(0.8f, 0.5f, 0.2f);
+        desc.lobes.push_back(lobe);
+    }
+    desc.supportSigma = 3.0f;
+    const noise::Kernel kernel = noise::buildKernel(desc);
+    splat::Context ctx(validated());
+    const noise::Mesh empty;
+    splat::SplatRenderer renderer(ctx, empty, kernel);
+    const splat::Buffer impulses = upload(ctx, {impulseAt(glm::vec3(0.0f))});
+    const noise::Camera cam = lobeCamera(noise::Projection::Perspective, 32);
+    splat::SplatSettings s;
+    s.method = splat::Method::Oit;
+    s.ewa = false;
+    const noise::Image analytic =
+        renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 1, s);
+    s.kernelSamples = 2048;
+    const noise::Image marched =
+        renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 1, s);
+    double worst = 0.0, brightest = 0.0;
+    for (std::size_t i = 0; i < analytic.pixels.size(); ++i) {
+        worst = std::max(worst, double(glm::length(analytic.pixels[i] - marched.pixels[i])));
+        brightest = std::max(brightest, double(analytic.pixels[i].r));
+    }
+    EXPECT_GT(brightest, 0.3); // a visible kernel
+    EXPECT_LT(worst, 1e-3);
+    expectNoValidationErrors(ctx);
+}
+
+TEST(SplatRenderer, MeshEndsTheKernelAndOccludesIt) {
+    // A lobe centred on a plane seen from above: only its upper half shows, over the plane's
+    // colour; past the plane's edge the background.
+    const noise::Mesh plane = noise::makePlane(2.0f, 2); // y = 0, normal +y
+    const noise::Kernel kernel =
+        oneLobeKernel(glm::vec3(0.1f), glm::vec3(0.0f), 20.0f, glm::vec3(1.0f), 6.0f);
+    const std::vector<noise::Impulse> imps{impulseAt(glm::vec3(0.0f))};
+    splat::Context ctx(validated());
+    splat::SplatRenderer renderer(ctx, plane, kernel);
+    const splat::Buffer impulses = upload(ctx, imps);
+    noise::Camera cam;
+    cam.projection = noise::Projection::Orthographic;
+    cam.eye = glm::dvec3(0.0, 3.0, 0.0);
+    cam.target = glm::dvec3(0.0);
+    cam.up = glm::dvec3(0.0, 0.0, -1.0);
+    cam.orthoHeight = 4.0;
+    cam.width = cam.height = 32;
+    const glm::vec3 base(0.2f, 0.5f, 0.1f), background(1.0f, 0.0f, 1.0f);
+    const noise::WorldLobe w = noise::placeLobe(kernel, 0, imps[0]);
+    const noise::CameraRays rays(cam);
+    const noise::Ray centre = rays.ray(16.0, 16.0); // the lobe's axis: a pixel corner
+    const double half = 0.5 * closedFormDepth(w, centre.origin, centre.dir);
+    for (splat::Method method : {splat::Method::Oit, splat::Method::Hybrid}) {
+        splat::SplatSettings s;
+        s.method = method;
+        s.ewa = false;
+        const noise::Image image =
+            renderer.render(cam, noise::Shading{}, background, base, impulses, 1, s);
+        // The four pixels around the axis are 0.0625 units off it; check one against its own ray.
+        const noise::Ray r = rays.ray(16.5, 16.5);
+        const double h = 0.5 * closedFormDepth(w, r.origin, r.dir);
+        EXPECT_NEAR(image.at(16, 16).g, (1.0 - std::exp(-h)) + std::exp(-h) * base.g, 1e-4)
+            << splat::methodName(method);
+        EXPECT_GT(half, 1.0);                          // the test must exercise real occlusion
+        EXPECT_NEAR(image.at(22, 16).g, base.g, 1e-6); // plane beside the lobe
+        EXPECT_NEAR(image.at(31, 31).r, background.r, 1e-6); // past the plane's corner
+    }
+    expectNoValidationErrors(ctx);
+}
+
+// ---- The shipped scenes against the reference ------------------------------------------------
+
+struct SceneSetup {
+    noise::SceneDesc scene;
+    noise::Mesh mesh;
+    noise::Kernel kernel;
+    std::vector<noise::Impulse> impulses;
+};
+
+noise::Mesh sceneMesh(const noise::SceneDesc& scene) {
+    if (scene.mesh == "generated:sphere")
+        return noise::makeSphere(1.0f, 96, 192);
+    if (scene.mesh == "generated:torus")
+        return noise::makeTorus(1.0f, 0.35f, 192, 64);
+    if (scene.mesh == "generated:plane")
+        return noise::makePlane(2.0f, 32);
+    return noise::loadMesh(scene.mesh);
+}
+
+SceneSetup loadSetup(const std::string& name, int size) {
+    SceneSetup s;
+    s.scene = noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    s.scene.camera.width = s.scene.camera.height = size;
+    s.mesh = sceneMesh(s.scene);
+    noise::GeneratorOptions options;
+    options.seed = s.scene.seed;
+    const noise::ImpulseGenerator generator(s.mesh, noise::loadPreset(s.scene.preset), options);
+    s.kernel = generator.kernel();
+    s.impulses = generator.generate();
+    return s;
+}
+
+constexpr int kSceneSize = 128;
+constexpr int kReferenceSpp = 64;
+
+/// Reference renders, computed once per test process (the scene test uses all six).
+const noise::Image& referenceImage(const std::string& name) {
+    static std::map<std::string, noise::Image> cache;
+    auto it = cache.find(name);
+    if (it == cache.end()) {
+        const SceneSetup s = loadSetup(name, kSceneSize);
+        const noise::ReferenceRenderer reference(s.mesh, s.kernel, s.impulses, s.scene.shading,
+                                                 s.scene.background, s.scene.baseColor);
+        noise::ReferenceSettings settings;
+        settings.spp = kReferenceSpp;
+        settings.seed = 3;
+        it = cache.emplace(name, reference.render(s.scene.camera, settings)).first;
+    }
+    return it->second;
+}
+
+struct Configuration {
+    const char* label;
+    splat::SplatSettings settings;
+};
+
+std::vector<Configuration> configurations() {
+    splat::SplatSettings instanced, oit, oitConstant, hybrid, hybridSamples;
+    instanced.method = splat::Method::Instanced;
+    oit.method = splat::Method::Oit;
+    oitConstant.method = splat::Method::Oit;
+    oitConstant.weight = splat::OitWeight::Constant;
+    hybrid.method = splat::Method::Hybrid;
+    hybridSamples.method = splat::Method::Hybrid;
+    hybridSamples.kernelSamples = 16;
+    return {{"instanced", instanced},
+            {"oit", oit},
+            {"oit-constant", oitConstant},
+            {"hybrid", hybrid},
+            {"hybrid-N16", hybridSamples}};
+}
+
+struct Measured {
+    double psnr = 0.0, flip = 0.0, ms = 0.0;
+    std::uint32_t kernels = 0;
+    noise::Image image;
+    std::vector<float> flipMap;
+};
+
+Measured measure(splat::Context& ctx, const SceneSetup& s, const noise::Image& reference,
+                 const splat::SplatSettings& settings) {
+    splat::SplatRenderer renderer(ctx, s.mesh, s.kernel);
+    const splat::Buffer impulses = upload(ctx, s.impulses);
+    splat::FrameStats stats;
+    Measured out;
+    out.image =
+        renderer.render(s.scene.camera, s.scene.shading, s.scene.background, s.scene.baseColor,
+                        impulses, std::uint32_t(s.impulses.size()), settings, &stats);
+    const splat::ImageMetrics m = splat::compareImages(reference, out.image, &out.flipMap);
+    out.psnr = m.psnr;
+    out.flip = m.flip;
+    out.ms = stats.totalMs;
+    out.kernels = stats.kernelsDrawn;
+    if (std::getenv("SPOT_SPLAT_TEST_PASSES"))
+        for (const auto& [pass, ms] : stats.passMs)
+            std::printf("    %s %.2f ms\n", pass.c_str(), ms);
+    return out;
+}
+
+/// The render, the reference and the FLIP map, into the test's temporary folder (on failure, or
+/// always when SPOT_SPLAT_TEST_IMAGES is set).
+void writeImages(const std::string& scene, const std::string& label, const Measured& m,
+                 const noise::Image& reference) {
+    const std::filesystem::path dir = SPOT_TEST_TMP_DIR;
+    noise::writeImage(dir / ("splat-" + scene + "-" + label + ".png"), m.image);
+    noise::writeImage(dir / ("splat-" + scene + "-reference.png"), reference);
+    noise::writeImage(dir / ("splat-" + scene + "-" + label + "-flip.png"),
+                      splat::heatMap(m.flipMap, m.image.width, m.image.height));
+    std::printf("wrote %s\n", (dir / ("splat-" + scene + "-" + label + "*.png")).c_str());
+}
+
+/// Tolerances per scene and configuration: about 0.5 dB below the PSNR and 10% above the mean
+/// FLIP measured at 128x128 against the reference at 64 spp (lavapipe, Mesa 22.3). Measured:
+///
+///   scene                instanced     oit           oit-constant  hybrid        hybrid-N16
+///   fur-bunny-close      26.03 .1462   29.83 .1188   29.11 .1262   31.92 .1121   33.89 .0713
+///   fur-bunny            25.41 .0903   32.14 .0664   32.94 .0632   32.54 .0691   32.88 .0655
+///   fur-bunny-far        32.08 .0159   44.16 .0041   44.22 .0042   44.18 .0042   44.14 .0042
+///   grass-plane-grazing  26.86 .1021   38.74 .0567   38.59 .0595   39.04 .0548   39.32 .0537
+///   lichen-torus         25.37 .1826   26.20 .1826   25.48 .2022   26.04 .1860   26.74 .1776
+///   ring-sphere          20.22 .1945   27.77 .0982   27.99 .0824   27.94 .0942   28.13 .0821
+///
+/// Where they stand: instanced cannot show semi-transparency nor sub-pixel strands (its proxies
+/// are all or nothing at alpha 0.5); lichen (Lambert, overlapping semi-transparent blobs) is the
+/// weakest for every method because a splat sees only its own kernel's density, so its shading
+/// normal misses the neighbours' (the reference's normal is the gradient of all overlapping
+/// lobes): unlit, the same scene measures 30.4 dB / 0.053 with oit.
+struct Tolerance {
+    const char* scene;
+    double minPsnr[5]; // in the order of configurations()
+    double maxFlip[5];
+};
+
+// clang-format off
+const Tolerance kTolerances[] = {
+    {"fur-bunny-close",     {25.5, 29.3, 28.6, 31.4, 33.4}, {0.161, 0.131, 0.139, 0.124, 0.079}},
+    {"fur-bunny",           {24.9, 31.6, 32.4, 32.0, 32.4}, {0.100, 0.074, 0.070, 0.077, 0.073}},
+    {"fur-bunny-far",       {31.5, 43.6, 43.7, 43.6, 43.6}, {0.018, 0.005, 0.005, 0.005, 0.005}},
+    {"grass-plane-grazing", {26.3, 38.2, 38.0, 38.5, 38.8}, {0.113, 0.063, 0.066, 0.061, 0.060}},
+    {"lichen-torus",        {24.8, 25.7, 24.9, 25.5, 26.2}, {0.201, 0.201, 0.223, 0.205, 0.196}},
+    {"ring-sphere",         {19.7, 27.2, 27.4, 27.4, 27.6}, {0.214, 0.109, 0.091, 0.104, 0.091}},
+};
+// clang-format on
+
+TEST(SplatRendererScenes, EveryMethodOnEveryShippedSceneAgainstTheReference) {
+    splat::Context ctx(validated());
+    const std::vector<Configuration> configs = configurations();
+    std::map<std::string, std::map<std::string, Measured>> table;
+    for (const Tolerance& tol : kTolerances) {
+        const SceneSetup s = loadSetup(tol.scene, kSceneSize);
+        const noise::Image& reference = referenceImage(tol.scene);
+        for (std::size_t c = 0; c < configs.size(); ++c) {
+            Measured m = measure(ctx, s, reference, configs[c].settings);
+            std::printf("%-20s %-13s PSNR %6.2f dB  FLIP %.4f  %7.2f ms  %6u kernels\n", tol.scene,
+                        configs[c].label, m.psnr, m.flip, m.ms, m.kernels);
+            EXPECT_GE(m.psnr, tol.minPsnr[c]) << tol.scene << " " << configs[c].label;
+            EXPECT_LE(m.flip, tol.maxFlip[c]) << tol.scene << " " << configs[c].label;
+            EXPECT_GT(m.kernels, 0u) << tol.scene;
+            if (m.psnr < tol.minPsnr[c] || m.flip > tol.maxFlip[c] ||
+                std::getenv("SPOT_SPLAT_TEST_IMAGES"))
+                writeImages(tol.scene, configs[c].label, m, reference);
+            m.image = {};
+            m.flipMap.clear();
+            table[tol.scene][configs[c].label] = m;
+        }
+    }
+    // The paper's claim (sec. 4, fig. 3-4): compositing the closest kernel over the OIT result
+    // fixes the close-up of opaque strands (measured: 31.92 dB / 0.112 against 29.83 / 0.119;
+    // eq. 13 taken literally, with the closest kernel also left in the OIT sums, measured
+    // 30.03 / 0.149: see splat_resolve.comp).
+    const Measured& oit = table["fur-bunny-close"]["oit"];
+    const Measured& hybrid = table["fur-bunny-close"]["hybrid"];
+    EXPECT_GT(hybrid.psnr, oit.psnr);
+    EXPECT_LT(hybrid.flip, oit.flip);
+    expectNoValidationErrors(ctx);
+}
+
+// ---- Determinism, degenerate input, refused settings ----------------------------------------
+
+TEST(SplatRenderer, ImagesAreByteIdenticalAcrossRuns) {
+    // lavapipe's rasterizer threads: pinned before any context exists in this test.
+    setenv("LP_NUM_THREADS", "2", 1);
+    const SceneSetup s = loadSetup("fur-bunny-close", 64);
+    std::vector<noise::Image> images[2];
+    for (int run = 0; run < 2; ++run) {
+        splat::Context ctx(validated());
+        splat::SplatRenderer renderer(ctx, s.mesh, s.kernel);
+        const splat::Buffer impulses = upload(ctx, s.impulses);
+        for (const Configuration& c : configurations())
+            for (int repeat = 0; repeat < 2; ++repeat)
+                images[run].push_back(renderer.render(
+                    s.scene.camera, s.scene.shading, s.scene.background, s.scene.baseColor,
+                    impulses, std::uint32_t(s.impulses.size()), c.settings));
+        expectNoValidationErrors(ctx);
+    }
+    ASSERT_EQ(images[0].size(), images[1].size());
+    for (std::size_t i = 0; i < images[0].size(); ++i) {
+        const noise::Image& first = images[0][i & ~std::size_t(1)];
+        for (const noise::Image* other : {&images[0][i], &images[1][i]})
+            EXPECT_EQ(std::memcmp(first.pixels.data(), other->pixels.data(),
+                                  first.pixels.size() * sizeof(glm::vec3)),
+                      0)
+                << configurations()[i / 2].label;
+    }
+}
+
+TEST(SplatRenderer, DegenerateLobesGiveFiniteImages) {
+    noise::KernelDesc desc;
+    noise::LobeDesc flat, needle, empty, normal;
+    flat.sigma = glm::vec3(0.0f, 0.2f, 0.2f);     // zero sigma: floored to 1e-6 of the largest
+    needle.sigma = glm::vec3(1e-4f, 1.0f, 1e-4f); // 1e4:1 anisotropy
+    needle.rotationDeg = glm::vec3(30.0f, 10.0f, 70.0f);
+    needle.extinction = 1e4f;
+    empty.sigma = glm::vec3(0.3f);
+    empty.extinction = 0.0f; // zero density
+    normal.sigma = glm::vec3(0.1f, 0.2f, 0.3f);
+    normal.offset = glm::vec3(0.1f, 0.0f, 0.2f);
+    desc.lobes = {flat, needle, empty, normal};
+    const noise::Kernel kernel = noise::buildKernel(desc);
+    noise::KernelDesc zeroDesc;
+    noise::LobeDesc zero;
+    zero.sigma = glm::vec3(0.0f); // every sigma zero: an absolute floor
+    zeroDesc.lobes = {zero};
+    const noise::Kernel zeroKernel = noise::buildKernel(zeroDesc);
+
+    std::vector<noise::Impulse> imps;
+    for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 5; ++j) {
+            noise::Impulse imp =
+                impulseAt(glm::vec3(0.3f * i - 0.6f, 0.3f * j - 0.6f, 0.1f * (i - j)));
+            imp.bend = 0.3f * float(i);
+            imp.scale = glm::vec3(0.5f + 0.1f * float(j));
+            imps.push_back(imp);
+        }
+    imps[3].weight = 0.0f;           // zero weight
+    imps[7].scale = glm::vec3(0.0f); // zero scale: infinite A
+    imps[11].scale = glm::vec3(1e-20f);
+    imps[12].position = glm::vec3(0.0f, 0.0f, 3.0f); // around the perspective eye
+    imps[13].position = glm::vec3(0.0f, 0.0f, 9.0f); // behind the camera
+    const noise::Mesh plane = noise::makePlane(2.0f, 4);
+
+    splat::Context ctx(validated());
+    const splat::Buffer impulses = upload(ctx, imps);
+    for (const noise::Kernel* k : {&kernel, &zeroKernel}) {
+        splat::SplatRenderer renderer(ctx, plane, *k);
+        for (auto projection : {noise::Projection::Perspective, noise::Projection::Orthographic}) {
+            noise::Camera cam;
+            cam.projection = projection;
+            cam.eye = glm::dvec3(0.0, 0.0, 3.0);
+            cam.up = glm::dvec3(0.0, 1.0, 0.0);
+            cam.target = glm::dvec3(0.0, -0.5, 0.0);
+            cam.width = cam.height = 40;
+            for (auto mode : {noise::Shading::Mode::Unlit, noise::Shading::Mode::Lambert})
+                for (splat::Method method :
+                     {splat::Method::Instanced, splat::Method::Oit, splat::Method::Hybrid})
+                    for (int samples : {0, 16})
+                        for (bool ewa : {false, true}) {
+                            noise::Shading shading;
+                            shading.mode = mode;
+                            splat::SplatSettings s;
+                            s.method = method;
+                            s.kernelSamples = samples;
+                            s.ewa = ewa;
+                            const noise::Image image =
+                                renderer.render(cam, shading, glm::vec3(0.1f), glm::vec3(0.4f),
+                                                impulses, std::uint32_t(imps.size()), s);
+                            int bad = 0;
+                            for (const glm::vec3& p : image.pixels)
+                                for (int c = 0; c < 3; ++c)
+                                    if (!std::isfinite(p[c]) || p[c] < -1e-6f ||
+                                        p[c] > 1.0f + 1e-5f) {
+                                        ++bad;
+                                        std::printf("bad %g at %d\n", p[c],
+                                                    int(&p - image.pixels.data()));
+                                    }
+                            EXPECT_EQ(bad, 0)
+                                << splat::methodName(method) << " samples " << samples << " ewa "
+                                << ewa << " lit " << int(mode) << " ortho " << int(projection);
+                        }
+        }
+    }
+    expectNoValidationErrors(ctx);
+}
+
+TEST(SplatRenderer, RefusesWhatItCannotDo) {
+    splat::ContextOptions options = validated();
+    options.memoryBudget = 64ull << 20;
+    splat::Context ctx(options);
+    const LobeCase c = isolatedLobe(3.0f);
+    const noise::Mesh empty;
+    splat::SplatRenderer renderer(ctx, empty, c.kernel);
+    const splat::Buffer impulses = upload(ctx, c.impulses);
+    noise::Camera cam = lobeCamera(noise::Projection::Perspective, 32);
+    splat::SplatSettings s;
+    for (int samples : {-1, 2049}) {
+        s.kernelSamples = samples;
+        EXPECT_THROW(renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f),
+                                     impulses, 1, s),
+                     InputError)
+            << samples;
+    }
+    s.kernelSamples = 2048; // the largest allowed
+    EXPECT_NO_THROW(
+        renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 1, s));
+    s.kernelSamples = 0;
+    // More impulses than the buffer holds.
+    EXPECT_THROW(
+        renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 2, s),
+        InputError);
+    // A frame beyond the memory budget (2048^2 x 68 bytes = 272 MiB > 64 MiB).
+    cam.width = cam.height = 2048;
+    const std::uint64_t before = ctx.allocatedBytes();
+    EXPECT_THROW(
+        renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 1, s),
+        InputError);
+    EXPECT_EQ(ctx.allocatedBytes(), before); // nothing allocated by the refused frame
+    cam.width = cam.height = 32;
+    EXPECT_NO_THROW(
+        renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 1, s));
+    // A kernel of 9 lobes.
+    noise::Kernel nine = c.kernel;
+    nine.lobes.resize(9, nine.lobes[0]);
+    EXPECT_THROW(splat::SplatRenderer(ctx, empty, nine), InputError);
+    expectNoValidationErrors(ctx);
+}
+
+} // namespace
