@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <map>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -12,81 +13,170 @@
 #include "noise/system.h"
 #include "progress.h"
 #include "scene_job.h"
+#include "splat/context_vk.h"
+#include "splat/generate_vk.h"
+#include "splat/renderer_vk.h"
 
 namespace spot::cmd {
 
-int render(int argc, char** argv) {
-    std::vector<cli::OptionSpec> specs = cli::sceneOptions();
-    specs.insert(specs.end(),
-                 {{"method", "NAME", "renderer: reference (the converged CPU ground truth)", true},
-                  {"spp", "N", "samples per pixel (default: the scene's)", false},
-                  {"step-scale", "X", "reference quadrature step multiplier (default 1)", false},
-                  {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},
-                  {"stats", "FILE", "also write timings and counts as JSON", false},
-                  cli::threadsOption()});
-    cli::Args args("render", "Render a scene with one of the methods.", specs, argc, argv);
-    if (args.helpRequested()) {
-        std::fputs(args.usage().c_str(), stdout);
-        return 0;
-    }
-    const std::string method = args.str("method");
-    if (method != "reference")
-        throw InputError(cat("spotshell render: unknown method '", method, "' (available: reference)"));
-    const auto threads = args.integer("threads", 0, 0, 1024);
-    std::optional<tbb::global_control> threadLimit;
-    if (threads > 0)
-        threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+namespace {
 
-    cli::SceneJob job = cli::prepareScene(args);
+struct Rendered {
+    noise::Image image;
+    nlohmann::json stats;
+    std::size_t kernels = 0;
+    double seconds = 0.0;
+    std::string summary; ///< for the closing line
+};
+
+Rendered renderReference(const cli::Args& args, cli::SceneJob& job) {
     noise::ReferenceSettings settings;
     settings.spp = int(args.integer("spp", job.scene.referenceSpp, 1, 65536));
     settings.stepScale = args.number("step-scale", 1.0, 1e-3, 1e3);
     settings.seed = job.scene.seed;
-    const std::string out = args.str("out");
-
     const noise::ReferenceRenderer renderer(job.mesh, job.generator->kernel(), job.impulses,
                                             job.scene.shading, job.scene.background,
                                             job.scene.baseColor);
     noise::ReferenceStats stats;
     cli::ProgressBar bar("reference");
-    const noise::Image image = renderer.render(
-        job.scene.camera, settings, [&](int done, int total) { bar.update(done, total); }, &stats);
+    Rendered r;
+    r.image = renderer.render(job.scene.camera, settings,
+                              [&](int done, int total) { bar.update(done, total); }, &stats);
     bar.finish();
+    r.kernels = job.impulses.size();
+    r.seconds = stats.seconds;
+    r.stats = {{"spp", settings.spp},
+               {"step_scale", settings.stepScale},
+               {"kernels_generated", r.kernels},
+               {"kernels_drawn", r.kernels},
+               {"lobes", stats.lobes},
+               {"rays", stats.rays},
+               {"chords", stats.chords},
+               {"exact_chords", stats.exactChords},
+               {"quadrature_steps", stats.quadratureSteps},
+               {"memory_bytes", stats.memoryBytes}};
+    r.summary = cat(settings.spp, " spp, ", r.kernels, " kernels, ", stats.seconds, " s");
+    return r;
+}
 
-    const std::size_t kernels = job.impulses.size();
-    noise::writeImage(out, image,
-                      {{"method", method},
-                       {"scene", job.scene.name},
-                       {"spp", std::to_string(settings.spp)},
-                       {"step_scale", cat(settings.stepScale)},
-                       {"seconds", cat(stats.seconds)},
-                       {"kernels", std::to_string(kernels)},
-                       {"lobes", std::to_string(stats.lobes)},
-                       {"seed", std::to_string(job.scene.seed)}});
+Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method method) {
+    splat::SplatSettings settings;
+    settings.method = method;
+    settings.kernelSamples = int(args.integer("kernel-samples", 0, 0, 2048));
+    const std::string ewa = args.str("ewa", "on");
+    if (ewa != "on" && ewa != "off")
+        throw InputError(cat("spotshell render: --ewa must be on or off, not '", ewa, "'"));
+    settings.ewa = ewa == "on";
+    const std::string weight = args.str("weight", "mcguire-bavoil");
+    if (weight == "constant")
+        settings.weight = splat::OitWeight::Constant;
+    else if (weight == "mcguire-bavoil")
+        settings.weight = splat::OitWeight::McGuireBavoil;
+    else
+        throw InputError(cat("spotshell render: --weight must be constant or mcguire-bavoil, not '",
+                             weight, "'"));
+
+    splat::Context ctx;
+    splat::GpuGenerator generator(ctx, job.mesh, *job.generator);
+    const splat::GpuImpulses impulses =
+        generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
+    splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
+    splat::FrameStats frame;
+    Rendered r;
+    r.image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
+                              job.scene.baseColor, impulses.impulses, impulses.count, settings,
+                              &frame);
+    const splat::ValidationCounts v = ctx.validation();
+    if (v.errors > 0)
+        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
+    nlohmann::json passes = nlohmann::json::object();
+    passes["generate"] = impulses.milliseconds;
+    for (const auto& [name, ms] : frame.passMs)
+        passes[name] = ms;
+    r.kernels = impulses.count;
+    r.seconds = (impulses.milliseconds + frame.totalMs) * 1e-3;
+    r.stats = {{"device", ctx.deviceName()},
+               {"ewa", settings.ewa},
+               {"kernel_samples", settings.kernelSamples},
+               {"weight", weight},
+               {"kernels_generated", impulses.count},
+               {"kernel_candidates", impulses.candidates},
+               {"kernels_drawn", frame.kernelsDrawn},
+               {"gpu_ms", passes},
+               {"gpu_total_ms", impulses.milliseconds + frame.totalMs},
+               {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
+               {"validation_errors", v.errors}};
+    r.summary = cat(impulses.count, " kernels, ", frame.kernelsDrawn, " drawn, ",
+                    impulses.milliseconds + frame.totalMs, " ms GPU on ", ctx.deviceName());
+    return r;
+}
+
+} // namespace
+
+int render(int argc, char** argv) {
+    std::vector<cli::OptionSpec> specs = cli::sceneOptions();
+    specs.insert(specs.end(),
+                 {{"method", "NAME", "reference (converged CPU ground truth), instanced, oit or hybrid", true},
+                  {"spp", "N", "reference: samples per pixel (default: the scene's)", false},
+                  {"step-scale", "X", "reference: quadrature step multiplier (default 1)", false},
+                  {"kernel-samples", "N", "oit/hybrid: march N samples per kernel (paper eq. 10) "
+                                          "instead of the analytic integral (default 0)", false},
+                  {"ewa", "on|off", "GPU methods: EWA filtering by the pixel footprint (default on)", false},
+                  {"weight", "W", "oit/hybrid: constant or mcguire-bavoil (default)", false},
+                  {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},
+                  {"stats", "FILE", "also write timings and counts as JSON", false},
+                  cli::threadsOption()});
+    cli::Args args("render", "Render a scene with one of the methods. GPU methods run on Vulkan "
+                             "(lavapipe without a GPU); SPOT_VALIDATION=1 turns validation on.",
+                   specs, argc, argv);
+    if (args.helpRequested()) {
+        std::fputs(args.usage().c_str(), stdout);
+        return 0;
+    }
+    const std::string method = args.str("method");
+    std::optional<splat::Method> gpuMethod;
+    if (method == "instanced")
+        gpuMethod = splat::Method::Instanced;
+    else if (method == "oit")
+        gpuMethod = splat::Method::Oit;
+    else if (method == "hybrid")
+        gpuMethod = splat::Method::Hybrid;
+    else if (method != "reference")
+        throw InputError(cat("spotshell render: unknown method '", method,
+                             "' (reference, instanced, oit, hybrid)"));
+    const auto threads = args.integer("threads", 0, 0, 1024);
+    std::optional<tbb::global_control> threadLimit;
+    if (threads > 0)
+        threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+
+    cli::SceneJob job = cli::prepareScene(args, !gpuMethod);
+    const std::string out = args.str("out");
+    Rendered r = gpuMethod ? renderGpu(args, job, *gpuMethod) : renderReference(args, job);
+
+    std::map<std::string, std::string> metadata = {{"method", method},
+                                                   {"scene", job.scene.name},
+                                                   {"seconds", cat(r.seconds)},
+                                                   {"kernels", std::to_string(r.kernels)},
+                                                   {"seed", std::to_string(job.scene.seed)},
+                                                   {"stats", r.stats.dump()}};
+    if (r.stats.contains("spp"))
+        metadata["spp"] = r.stats["spp"].dump();
+    noise::writeImage(out, r.image, metadata);
     if (args.has("stats")) {
-        const nlohmann::json j = {{"method", method},
-                                  {"scene", job.scene.name},
-                                  {"width", image.width},
-                                  {"height", image.height},
-                                  {"spp", settings.spp},
-                                  {"step_scale", settings.stepScale},
-                                  {"seed", job.scene.seed},
-                                  {"seconds", stats.seconds},
-                                  {"generate_seconds", job.generateSeconds},
-                                  {"cells", job.generator->cells().cells.size()},
-                                  {"visible_cells", job.visibleCells},
-                                  {"kernels_generated", kernels},
-                                  {"kernels_drawn", kernels},
-                                  {"lobes", stats.lobes},
-                                  {"rays", stats.rays},
-                                  {"chords", stats.chords},
-                                  {"exact_chords", stats.exactChords},
-                                  {"quadrature_steps", stats.quadratureSteps},
-                                  {"memory_bytes", stats.memoryBytes}};
+        nlohmann::json j = r.stats;
+        j["method"] = method;
+        j["scene"] = job.scene.name;
+        j["width"] = r.image.width;
+        j["height"] = r.image.height;
+        j["seed"] = job.scene.seed;
+        j["seconds"] = r.seconds;
+        j["generate_seconds"] = job.generateSeconds;
+        j["cells"] = job.generator->cells().cells.size();
+        j["visible_cells"] = job.visibleCells;
         writeFileAtomic(args.str("stats"), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
     }
-    std::printf("wrote %s (%s, %dx%d, %d spp, %zu kernels, %.2f s)\n", out.c_str(), method.c_str(),
-                image.width, image.height, settings.spp, kernels, stats.seconds);
+    std::printf("wrote %s (%s, %dx%d, %s)\n", out.c_str(), method.c_str(), r.image.width,
+                r.image.height, r.summary.c_str());
     return 0;
 }
 

@@ -16,7 +16,12 @@ std::vector<OptionSpec> sceneOptions() {
             {"seed", "N", "override the impulse seed", false}};
 }
 
-SceneJob prepareScene(const Args& args) {
+bool SceneJob::cellVisible(const noise::SurfaceCell& cell) const {
+    const double h = generator->cellSize();
+    return rays->boxMayBeVisible(glm::dvec3(cell.ijk) * h - h, glm::dvec3(cell.ijk + 1) * h + h);
+}
+
+SceneJob prepareScene(const Args& args, bool cpuImpulses) {
     SceneJob job;
     job.scene = noise::loadScene(args.str("scene"));
     if (args.has("mesh"))
@@ -35,21 +40,18 @@ SceneJob prepareScene(const Args& args) {
         job.scene.camera.width = w;
         job.scene.camera.height = h;
     }
+    job.rays = std::make_unique<noise::CameraRays>(job.scene.camera);
     job.mesh = loadMeshArg(job.scene.mesh);
     job.preset = noise::loadPreset(job.scene.preset);
     noise::GeneratorOptions options;
     options.seed = job.scene.seed;
     const auto start = std::chrono::steady_clock::now();
     job.generator = std::make_unique<noise::ImpulseGenerator>(job.mesh, job.preset, options);
-    // A cell's kernels reach at most h beyond it: cull cells whose grown box is out of view.
-    const noise::CameraRays rays(job.scene.camera);
-    const double h = job.generator->cellSize();
-    job.impulses = job.generator->generate([&](const noise::SurfaceCell& cell) {
-        const glm::dvec3 lo = glm::dvec3(cell.ijk) * h - h, hi = glm::dvec3(cell.ijk + 1) * h + h;
-        const bool visible = rays.boxMayBeVisible(lo, hi);
-        job.visibleCells += visible;
-        return visible;
-    });
+    for (const noise::SurfaceCell& cell : job.generator->cells().cells)
+        job.visibleCells += job.cellVisible(cell);
+    if (cpuImpulses)
+        job.impulses = job.generator->generate(
+            [&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
     job.generateSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return job;

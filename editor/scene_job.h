@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "noise/camera.h"
 #include "noise/impulses.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
@@ -20,7 +21,11 @@ namespace spot::cli {
 std::vector<OptionSpec> sceneOptions();
 
 struct SceneJob {
+    /// Cells whose kernels may reach the view (a cell's kernels reach at most h beyond it).
+    bool cellVisible(const noise::SurfaceCell& cell) const;
+
     noise::SceneDesc scene;
+    std::unique_ptr<noise::CameraRays> rays; ///< the scene's camera, after the overrides
     noise::Mesh mesh;
     noise::PresetDesc preset;
     std::unique_ptr<noise::ImpulseGenerator> generator;
@@ -29,8 +34,8 @@ struct SceneJob {
     double generateSeconds = 0.0;
 };
 
-/// Load the scene, apply the overrides in `args`, load mesh and preset, generate the impulses of
-/// the cells whose kernels may reach the view.
-SceneJob prepareScene(const Args& args);
+/// Load the scene, apply the overrides in `args`, load mesh and preset, build the surface cells;
+/// with `cpuImpulses`, also generate the impulses of the visible cells on the CPU.
+SceneJob prepareScene(const Args& args, bool cpuImpulses);
 
 } // namespace spot::cli

@@ -29,7 +29,8 @@ std::string slurp(const std::string& file) {
 Result run(const std::string& args) {
     static int counter = 0;
     const std::string errFile = tmp("stderr" + std::to_string(counter++) + ".txt");
-    const std::string cmd = std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
+    // Validation on for every GPU method the command runs: any error fails the command (exit 1).
+    const std::string cmd = "SPOT_VALIDATION=1 " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
     Result r;
     FILE* pipe = popen(cmd.c_str(), "r");
     if (!pipe)
@@ -199,6 +200,34 @@ TEST(Cli, RenderRejectsBadRequests) {
                               "\"image\": {\"width\": 100000, \"height\": 8}}");
     expectInputError("render --scene " + tmp("scene2.json") + " --method reference --out " + tmp("x.png"),
                      "image.width");
+}
+
+} // namespace
+
+namespace {
+
+TEST(Cli, RenderGpuMethodsWithValidation) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+    for (const char* method : {"instanced", "oit", "hybrid"}) {
+        const std::string out = tmp(std::string("gpu-") + method + ".png");
+        const std::string stats = tmp(std::string("gpu-") + method + ".json");
+        const Result r = run("render --scene " + scene + " --method " + method +
+                             " --size 64x48 --out " + out + " --stats " + stats);
+        ASSERT_EQ(r.code, 0) << method << ": " << r.err;
+        EXPECT_NE(r.out.find("wrote " + out), std::string::npos) << r.out;
+        const std::string json = slurp(stats);
+        for (const char* key : {"\"gpu_ms\"", "\"kernels_generated\"", "\"kernels_drawn\"",
+                                "\"gpu_memory_bytes\"", "\"validation_errors\": 0", "\"width\": 64"})
+            EXPECT_NE(json.find(key), std::string::npos) << method << ": " << key << " in " << json;
+    }
+}
+
+TEST(Cli, RenderGpuRejectsBadSettings) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+    expectInputError("render --scene " + scene + " --method oit --ewa maybe --out " + tmp("x.png"), "--ewa");
+    expectInputError("render --scene " + scene + " --method oit --weight heavy --out " + tmp("x.png"), "--weight");
+    expectInputError("render --scene " + scene + " --method oit --kernel-samples 100000 --out " + tmp("x.png"),
+                     "--kernel-samples");
 }
 
 } // namespace
