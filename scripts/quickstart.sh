@@ -5,8 +5,8 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh
 mkdir -p out
-# The default job: the furry bunny rendered by the converged reference, and its impulses.
-build/spotshell impulses --mesh presets/meshes/bunny.ply --preset presets/fur.json \
-  --out out/fur-bunny-impulses.ply
-build/spotshell render --scene presets/scenes/fur-bunny.json --method reference \
-  --out out/fur-bunny-reference.png
+# The default job: the furry bunny rendered by the hybrid splatting renderer (fast; Vulkan on
+# the GPU, or on the CPU through lavapipe).
+build/spotshell render --scene presets/scenes/fur-bunny.json --method hybrid --size 640x480 \
+  --out out/fur-bunny.png
+echo "image: $(pwd)/out/fur-bunny.png"
