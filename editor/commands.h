@@ -9,5 +9,6 @@ int info(int argc, char** argv);
 int impulses(int argc, char** argv);
 int render(int argc, char** argv);
 int compare(int argc, char** argv);
+int bench(int argc, char** argv);
 
 } // namespace spot::cmd

@@ -21,6 +21,39 @@ bool SceneJob::cellVisible(const noise::SurfaceCell& cell) const {
     return rays->boxMayBeVisible(glm::dvec3(cell.ijk) * h - h, glm::dvec3(cell.ijk + 1) * h + h);
 }
 
+namespace {
+
+/// The part after the scene description is settled.
+void finishJob(SceneJob& job, bool cpuImpulses) {
+    job.rays = std::make_unique<noise::CameraRays>(job.scene.camera);
+    job.mesh = loadMeshArg(job.scene.mesh);
+    job.preset = noise::loadPreset(job.scene.preset);
+    noise::GeneratorOptions options;
+    options.seed = job.scene.seed;
+    const auto start = std::chrono::steady_clock::now();
+    job.generator = std::make_unique<noise::ImpulseGenerator>(job.mesh, job.preset, options);
+    for (const noise::SurfaceCell& cell : job.generator->cells().cells)
+        job.visibleCells += job.cellVisible(cell);
+    if (cpuImpulses)
+        job.impulses = job.generator->generate(
+            [&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
+    job.generateSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace
+
+SceneJob loadSceneJob(const std::filesystem::path& scene, int width, int height, bool cpuImpulses) {
+    SceneJob job;
+    job.scene = noise::loadScene(scene);
+    if (width > 0 && height > 0) {
+        job.scene.camera.width = width;
+        job.scene.camera.height = height;
+    }
+    finishJob(job, cpuImpulses);
+    return job;
+}
+
 SceneJob prepareScene(const Args& args, bool cpuImpulses) {
     SceneJob job;
     job.scene = noise::loadScene(args.str("scene"));
@@ -40,20 +73,7 @@ SceneJob prepareScene(const Args& args, bool cpuImpulses) {
         job.scene.camera.width = w;
         job.scene.camera.height = h;
     }
-    job.rays = std::make_unique<noise::CameraRays>(job.scene.camera);
-    job.mesh = loadMeshArg(job.scene.mesh);
-    job.preset = noise::loadPreset(job.scene.preset);
-    noise::GeneratorOptions options;
-    options.seed = job.scene.seed;
-    const auto start = std::chrono::steady_clock::now();
-    job.generator = std::make_unique<noise::ImpulseGenerator>(job.mesh, job.preset, options);
-    for (const noise::SurfaceCell& cell : job.generator->cells().cells)
-        job.visibleCells += job.cellVisible(cell);
-    if (cpuImpulses)
-        job.impulses = job.generator->generate(
-            [&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
-    job.generateSeconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    finishJob(job, cpuImpulses);
     return job;
 }
 

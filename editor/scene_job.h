@@ -34,6 +34,10 @@ struct SceneJob {
     double generateSeconds = 0.0;
 };
 
+/// Load a scene file with an optional image size override; mesh, preset and surface cells, and
+/// with `cpuImpulses` the impulses of the visible cells generated on the CPU.
+SceneJob loadSceneJob(const std::filesystem::path& scene, int width, int height, bool cpuImpulses);
+
 /// Load the scene, apply the overrides in `args`, load mesh and preset, build the surface cells;
 /// with `cpuImpulses`, also generate the impulses of the visible cells on the CPU.
 SceneJob prepareScene(const Args& args, bool cpuImpulses);

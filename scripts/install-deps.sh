@@ -13,6 +13,8 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   # tests
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the benchmark's charts
+  python3 python3-matplotlib
 )
 
 missing=()

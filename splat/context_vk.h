@@ -69,6 +69,8 @@ public:
     void releaseMemory(std::uint64_t bytes);
     std::uint64_t allocatedBytes() const { return m_allocated.load(); }
     std::uint64_t peakAllocatedBytes() const { return m_peak.load(); }
+    /// Start a new peak measurement from what is allocated now.
+    void resetPeak() { m_peak.store(m_allocated.load()); }
     std::uint64_t memoryBudget() const { return m_budget; }
 
     struct Messenger; ///< the debug messenger's state (defined in the .cpp)

@@ -1,0 +1,508 @@
+// spotshell bench: every scene x method x setting against the converged reference: speed, error,
+// temporal flicker, memory, and the charts that put speed against accuracy (DESIGN section 7).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "bench_plot.h"
+#include "cli.h"
+#include "commands.h"
+#include "noise/error.h"
+#include "noise/image.h"
+#include "noise/reference.h"
+#include "noise/system.h"
+#include "progress.h"
+#include "scene_job.h"
+#include "splat/context_vk.h"
+#include "splat/generate_vk.h"
+#include "splat/image_compare.h"
+#include "splat/renderer_vk.h"
+
+namespace spot::cmd {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+/// Bump when the reference renderer changes, so cached references are not reused.
+constexpr int kReferenceVersion = 1;
+/// Verdicts (documented in the stability report): FLIP above this is "degraded"...
+constexpr double kDegradedFlip = 0.15;
+/// ... and so is flicker above the reference's own by more than this (mean display difference).
+constexpr double kDegradedFlicker = 0.01;
+
+struct Variant {
+    std::string method;  ///< instanced, oit, hybrid
+    std::string setting; ///< human-readable settings, unique per method
+    splat::SplatSettings splat;
+};
+
+struct SceneEntry {
+    std::string file;     ///< relative to presets/scenes
+    std::string scenario; ///< the stability matrix's row
+};
+
+struct Suite {
+    std::string name;
+    int size = 64;
+    int frames = 5;        ///< warm frames timed (one more, the first, is not)
+    int referenceSpp = 16;
+    int orbitFrames = 8;
+    double orbitDeg = 0.5; ///< camera step per orbit frame, degrees about the target's up axis
+    std::vector<SceneEntry> scenes;
+    std::vector<Variant> variants;
+    bool scaling = false;
+};
+
+splat::SplatSettings splatSettings(splat::Method m, bool ewa, splat::OitWeight w, int samples) {
+    splat::SplatSettings s;
+    s.method = m;
+    s.ewa = ewa;
+    s.weight = w;
+    s.kernelSamples = samples;
+    return s;
+}
+
+std::vector<Variant> variants(bool full) {
+    using M = splat::Method;
+    using W = splat::OitWeight;
+    std::vector<Variant> v = {
+        {"instanced", "default", splatSettings(M::Instanced, true, W::McGuireBavoil, 0)},
+        {"oit", "ewa mb analytic", splatSettings(M::Oit, true, W::McGuireBavoil, 0)},
+        {"oit", "ewa constant analytic", splatSettings(M::Oit, true, W::Constant, 0)},
+        {"hybrid", "ewa mb analytic", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0)},
+    };
+    if (full) {
+        v.push_back({"oit", "no-ewa mb analytic", splatSettings(M::Oit, false, W::McGuireBavoil, 0)});
+        v.push_back({"oit", "ewa mb N16", splatSettings(M::Oit, true, W::McGuireBavoil, 16)});
+        v.push_back({"hybrid", "no-ewa mb analytic", splatSettings(M::Hybrid, false, W::McGuireBavoil, 0)});
+        v.push_back({"hybrid", "ewa mb N16", splatSettings(M::Hybrid, true, W::McGuireBavoil, 16)});
+    }
+    return v;
+}
+
+Suite makeSuite(const std::string& name) {
+    Suite s;
+    s.name = name;
+    if (name == "quick") {
+        // 128 px: below that the close-up's strands are sub-pixel and the methods' ranking is
+        // decided by EWA rather than by compositing.
+        s.size = 128;
+        s.frames = 5;
+        s.referenceSpp = 16;
+        s.scenes = {{"fur-bunny.json", "whole object"}, {"fur-bunny-close.json", "close-up"}};
+        s.variants = variants(false);
+    } else if (name == "full") {
+        s.size = 128;
+        s.frames = 7;
+        s.referenceSpp = 64;
+        s.scenes = {{"fur-bunny.json", "whole object"},
+                    {"fur-bunny-far.json", "far view"},
+                    {"fur-bunny-close.json", "close-up"},
+                    {"grass-plane-grazing.json", "grazing angle"},
+                    {"lichen-torus.json", "semi-transparent overlap"},
+                    {"ring-sphere.json", "ring kernel"},
+                    {"bench/fur-dense-bunny.json", "high density"},
+                    {"bench/flakes-sphere.json", "1e4:1 anisotropy"},
+                    {"bench/grass-plane-top.json", "thin flat blades"}};
+        s.variants = variants(true);
+        s.scaling = true;
+    } else {
+        throw InputError(cat("spotshell bench: unknown suite '", name, "' (quick or full)"));
+    }
+    return s;
+}
+
+/// FNV-1a, 64 bits: the reference cache key.
+std::uint64_t fnv(const std::string& text, std::uint64_t h = 1469598103934665603ull) {
+    for (unsigned char c : text) {
+        h ^= c;
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+std::string slurp(const fs::path& file) {
+    if (file.string().rfind("generated:", 0) == 0)
+        return file.string();
+    return readFileCapped(file, 1ull << 30);
+}
+
+/// The camera of orbit frame k: the eye turned k steps about the target's up axis.
+noise::Camera orbit(noise::Camera c, int k, double stepDeg) {
+    const double a = k * stepDeg * M_PI / 180.0;
+    const glm::dvec3 up = glm::normalize(c.up), d = c.eye - c.target;
+    const glm::dvec3 along = up * glm::dot(up, d), across = d - along;
+    c.eye = c.target + along + across * std::cos(a) + glm::cross(up, across) * std::sin(a);
+    return c;
+}
+
+/// Mean absolute difference of consecutive frames (display values), averaged over the orbit.
+double flicker(const std::vector<noise::Image>& frames) {
+    double sum = 0.0;
+    for (std::size_t k = 1; k < frames.size(); ++k)
+        sum += splat::compareImages(frames[k - 1], frames[k]).meanAbs;
+    return frames.size() > 1 ? sum / double(frames.size() - 1) : 0.0;
+}
+
+std::uint64_t hostResidentBytes() {
+    std::ifstream status("/proc/self/status");
+    std::string key;
+    while (status >> key) {
+        std::uint64_t kb = 0;
+        if (key == "VmRSS:" && status >> kb)
+            return kb * 1024;
+        status.ignore(1 << 20, '\n');
+    }
+    return 0;
+}
+
+double percentile(std::vector<double> v, double p) {
+    if (v.empty())
+        return 0.0;
+    std::sort(v.begin(), v.end());
+    const double at = p * double(v.size() - 1);
+    const std::size_t lo = std::size_t(std::floor(at)), hi = std::min(lo + 1, v.size() - 1);
+    return v[lo] + (v[hi] - v[lo]) * (at - double(lo));
+}
+
+struct Bench {
+    splat::Context ctx;
+    fs::path out;
+    fs::path scenesDir;
+    Suite suite;
+    json rows = json::array();
+
+    /// The reference for one scene, camera and size, from the cache or rendered.
+    noise::Image reference(const fs::path& sceneFile, cli::SceneJob& job, const noise::Camera& cam) {
+        std::ostringstream key;
+        key << kReferenceVersion << slurp(sceneFile) << slurp(job.scene.preset) << job.scene.mesh
+            << cam.eye.x << cam.eye.y << cam.eye.z << cam.width << "x" << cam.height << " "
+            << suite.referenceSpp;
+        const fs::path cached = out / "cache" / cat(std::hex, fnv(key.str()), ".exr");
+        if (fs::exists(cached))
+            return noise::readImage(cached);
+        if (job.impulses.empty())
+            job.impulses = job.generator->generate();
+        const noise::ReferenceRenderer ref(job.mesh, job.generator->kernel(), job.impulses,
+                                           job.scene.shading, job.scene.background,
+                                           job.scene.baseColor);
+        noise::ReferenceSettings settings;
+        settings.spp = suite.referenceSpp;
+        const noise::Image image = ref.render(cam, settings);
+        noise::writeImage(cached, image, {{"method", "reference"}});
+        return image;
+    }
+
+    struct Frame {
+        noise::Image image;
+        double gpuMs = 0.0, wallMs = 0.0;
+        std::uint32_t generated = 0, drawn = 0;
+    };
+
+    Frame renderGpu(cli::SceneJob& job, splat::GpuGenerator& gen, splat::SplatRenderer& renderer,
+                    const noise::Camera& cam, const splat::SplatSettings& settings) {
+        const auto start = std::chrono::steady_clock::now();
+        const noise::CameraRays rays(cam);
+        const double h = job.generator->cellSize();
+        const splat::GpuImpulses impulses = gen.generate([&](const noise::SurfaceCell& c) {
+            return rays.boxMayBeVisible(glm::dvec3(c.ijk) * h - h, glm::dvec3(c.ijk + 1) * h + h);
+        });
+        splat::FrameStats stats;
+        Frame f;
+        f.image = renderer.render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
+                                  impulses.impulses, impulses.count, settings, &stats);
+        f.wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        f.gpuMs = impulses.milliseconds + stats.totalMs;
+        f.generated = impulses.count;
+        f.drawn = stats.kernelsDrawn;
+        return f;
+    }
+
+    json runVariant(const SceneEntry& entry, cli::SceneJob& job, splat::GpuGenerator& gen,
+                    splat::SplatRenderer& renderer, const Variant& v, const noise::Image& ref,
+                    const std::vector<noise::Image>& refOrbit, double refFlicker) {
+        json row = {{"scene", job.scene.name}, {"scenario", entry.scenario}, {"method", v.method},
+                    {"setting", v.setting}, {"width", job.scene.camera.width},
+                    {"height", job.scene.camera.height}};
+        try {
+            ctx.resetPeak();
+            std::vector<double> gpu, wall;
+            Frame last;
+            for (int f = 0; f <= suite.frames; ++f) {
+                last = renderGpu(job, gen, renderer, job.scene.camera, v.splat);
+                if (f > 0) { // the first frame is not warm
+                    gpu.push_back(last.gpuMs);
+                    wall.push_back(last.wallMs);
+                }
+            }
+            const splat::ImageMetrics m = splat::compareImages(ref, last.image);
+            std::vector<noise::Image> frames;
+            for (int k = 0; k < suite.orbitFrames; ++k)
+                frames.push_back(renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg), v.splat).image);
+            const double flick = flicker(frames) - refFlicker;
+            std::size_t nonFinite = 0;
+            for (const glm::vec3& p : last.image.pixels)
+                nonFinite += !std::isfinite(p.r + p.g + p.b);
+            row.update({{"kernels_generated", last.generated},
+                        {"kernels_drawn", last.drawn},
+                        {"ms_median", percentile(gpu, 0.5)},
+                        {"ms_p90", percentile(gpu, 0.9)},
+                        {"wall_ms_median", percentile(wall, 0.5)},
+                        {"psnr", std::isfinite(m.psnr) ? m.psnr : 99.0},
+                        {"ssim", m.ssim},
+                        {"flip", m.flip},
+                        {"flicker", flick},
+                        {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
+                        {"host_memory_bytes", hostResidentBytes()}});
+            const splat::ValidationCounts val = ctx.validation();
+            if (nonFinite > 0) {
+                row["status"] = "failed";
+                row["reason"] = cat(nonFinite, " non-finite pixels");
+            } else if (val.errors > 0) {
+                row["status"] = "failed";
+                row["reason"] = cat(val.errors, " validation errors");
+            } else if (m.flip > kDegradedFlip || flick > kDegradedFlicker) {
+                row["status"] = "degraded";
+                row["reason"] = m.flip > kDegradedFlip ? cat("FLIP ", m.flip, " > ", kDegradedFlip)
+                                                        : cat("flicker +", flick, " > ", kDegradedFlicker);
+            } else {
+                row["status"] = "ok";
+                row["reason"] = "";
+            }
+        } catch (const std::exception& e) {
+            row["status"] = "failed";
+            row["reason"] = oneLine(e.what());
+        }
+        return row;
+    }
+
+    void runScene(const SceneEntry& entry, cli::ProgressBar& bar, int& done, int total) {
+        const fs::path file = scenesDir / entry.file;
+        cli::SceneJob job = cli::loadSceneJob(file, suite.size, suite.size, false);
+        const noise::Image ref = reference(file, job, job.scene.camera);
+        std::vector<noise::Image> refOrbit;
+        for (int k = 0; k < suite.orbitFrames; ++k)
+            refOrbit.push_back(reference(file, job, orbit(job.scene.camera, k, suite.orbitDeg)));
+        const double refFlicker = flicker(refOrbit);
+        splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
+        splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
+        for (const Variant& v : suite.variants) {
+            json row = runVariant(entry, job, gen, renderer, v, ref, refOrbit, refFlicker);
+            row["reference_flicker"] = refFlicker;
+            rows.push_back(row);
+            bar.update(++done, total);
+        }
+    }
+
+    /// Milliseconds and memory against visible kernels (the uniform preset on a sphere at rising
+    /// density) and against resolution (fur-bunny).
+    void runScaling(cli::ProgressBar& bar, int& done, int total) {
+        const fs::path sphere = scenesDir / "ring-sphere.json";
+        for (double density : {1e3, 4e3, 1.6e4, 6.4e4, 1.28e5}) {
+            cli::SceneJob job = cli::loadSceneJob(sphere, 256, 256, false);
+            job.preset = noise::loadPreset(scenesDir.parent_path() / "uniform.json");
+            job.preset.distribution.densityMax = float(density);
+            for (const char* method : {"oit", "hybrid"}) {
+                json row = {{"scene", "uniform-sphere"}, {"scenario", "scaling-kernels"},
+                            {"method", method}, {"setting", cat("density ", density)},
+                            {"width", 256}, {"height", 256}};
+                try {
+                    noise::GeneratorOptions options;
+                    options.seed = job.scene.seed;
+                    job.generator = std::make_unique<noise::ImpulseGenerator>(job.mesh, job.preset, options);
+                    splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
+                    splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
+                    const splat::SplatSettings s = splatSettings(
+                        std::string(method) == "oit" ? splat::Method::Oit : splat::Method::Hybrid, true,
+                        splat::OitWeight::McGuireBavoil, 0);
+                    ctx.resetPeak();
+                    std::vector<double> gpu;
+                    Frame f;
+                    for (int k = 0; k <= 3; ++k) {
+                        f = renderGpu(job, gen, renderer, job.scene.camera, s);
+                        if (k > 0)
+                            gpu.push_back(f.gpuMs);
+                    }
+                    row.update({{"kernels_generated", f.generated}, {"kernels_drawn", f.drawn},
+                                {"ms_median", percentile(gpu, 0.5)}, {"ms_p90", percentile(gpu, 0.9)},
+                                {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
+                                {"host_memory_bytes", hostResidentBytes()}, {"status", "ok"},
+                                {"reason", ""}});
+                } catch (const std::exception& e) {
+                    row.update({{"status", "failed"}, {"reason", oneLine(e.what())}});
+                }
+                rows.push_back(row);
+                bar.update(++done, total);
+            }
+        }
+        for (int size : {64, 128, 256, 512}) {
+            cli::SceneJob job = cli::loadSceneJob(scenesDir / "fur-bunny.json", size, size, false);
+            splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
+            splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
+            json row = {{"scene", "fur-bunny"}, {"scenario", "scaling-resolution"},
+                        {"method", "hybrid"}, {"setting", cat(size, "x", size)},
+                        {"width", size}, {"height", size}};
+            ctx.resetPeak();
+            std::vector<double> gpu;
+            Frame f;
+            for (int k = 0; k <= 3; ++k) {
+                f = renderGpu(job, gen, renderer, job.scene.camera,
+                              splatSettings(splat::Method::Hybrid, true, splat::OitWeight::McGuireBavoil, 0));
+                if (k > 0)
+                    gpu.push_back(f.gpuMs);
+            }
+            row.update({{"kernels_generated", f.generated}, {"kernels_drawn", f.drawn},
+                        {"ms_median", percentile(gpu, 0.5)}, {"ms_p90", percentile(gpu, 0.9)},
+                        {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
+                        {"host_memory_bytes", hostResidentBytes()}, {"status", "ok"}, {"reason", ""}});
+            rows.push_back(row);
+            bar.update(++done, total);
+        }
+    }
+};
+
+/// The stability matrix as markdown: scenario rows, method columns, error / flicker / verdict.
+std::string stabilityMarkdown(const json& rows, const Suite& suite) {
+    std::vector<std::string> methods;
+    std::vector<std::pair<std::string, std::string>> scenarios; // scenario, scene
+    std::map<std::pair<std::string, std::string>, json> best;  // (scenario, method) -> best row
+    for (const json& r : rows) {
+        const std::string scenario = r["scenario"], method = r["method"];
+        if (scenario.rfind("scaling", 0) == 0)
+            continue;
+        if (std::find(methods.begin(), methods.end(), method) == methods.end())
+            methods.push_back(method);
+        if (std::find_if(scenarios.begin(), scenarios.end(), [&](auto& s) { return s.first == scenario; }) ==
+            scenarios.end())
+            scenarios.emplace_back(scenario, r["scene"]);
+        json& b = best[{scenario, method}];
+        const bool better = b.is_null() || (r["status"] != "failed" && (b["status"] == "failed" ||
+                                                                        r.value("flip", 1.0) < b.value("flip", 1.0)));
+        if (better)
+            b = r;
+    }
+    std::ostringstream md;
+    md << "# Stability matrix (suite " << suite.name << ", " << suite.size << "x" << suite.size
+       << ")\n\nEach cell: the method's best setting on the scenario: FLIP against the reference / "
+          "temporal flicker above the reference's own (mean display difference between frames of "
+          "a slow "
+       << suite.orbitFrames << "-frame orbit) / verdict. Verdicts: **ok**; **degraded** when FLIP > "
+       << kDegradedFlip << " or flicker > +" << kDegradedFlicker
+       << "; **failed** with the reason (non-finite pixels, validation errors, refused).\n\n| "
+          "scenario (scene) |";
+    for (const std::string& m : methods)
+        md << " " << m << " |";
+    md << "\n| --- |";
+    for (std::size_t i = 0; i < methods.size(); ++i)
+        md << " --- |";
+    md << "\n";
+    for (const auto& [scenario, scene] : scenarios) {
+        md << "| " << scenario << " (" << scene << ") |";
+        for (const std::string& m : methods) {
+            const json& r = best[{scenario, m}];
+            if (r.is_null()) {
+                md << " - |";
+                continue;
+            }
+            char cell[160];
+            if (r["status"] == "failed")
+                std::snprintf(cell, sizeof cell, " failed: %s |", std::string(r["reason"]).c_str());
+            else
+                std::snprintf(cell, sizeof cell, " %.3f / %+.4f / %s |", double(r["flip"]),
+                              double(r["flicker"]), std::string(r["status"]).c_str());
+            md << cell;
+        }
+        md << "\n";
+    }
+    return md.str();
+}
+
+void writeCsv(const fs::path& file, const json& rows) {
+    const char* cols[] = {"scene", "scenario", "method", "setting", "width", "height",
+                          "kernels_generated", "kernels_drawn", "ms_median", "ms_p90",
+                          "wall_ms_median", "psnr", "ssim", "flip", "flicker", "reference_flicker",
+                          "gpu_memory_bytes", "host_memory_bytes", "status", "reason"};
+    writeFileAtomic(file, [&](std::ostream& o) {
+        for (std::size_t i = 0; i < std::size(cols); ++i)
+            o << (i ? "," : "") << cols[i];
+        o << "\n";
+        for (const json& r : rows) {
+            for (std::size_t i = 0; i < std::size(cols); ++i) {
+                o << (i ? "," : "");
+                if (!r.contains(cols[i]))
+                    continue;
+                const json& v = r[cols[i]];
+                if (v.is_string()) {
+                    std::string s = v;
+                    std::replace(s.begin(), s.end(), '"', '\'');
+                    o << '"' << s << '"';
+                } else {
+                    o << v.dump();
+                }
+            }
+            o << "\n";
+        }
+    });
+}
+
+} // namespace
+
+int bench(int argc, char** argv) {
+    cli::Args args("bench",
+                   "Render every scene x method x setting, measure speed, error against the "
+                   "reference, flicker and memory; write results.csv/json, pareto.png, "
+                   "stability.md/png and scaling.png into DIR.",
+                   {{"suite", "NAME", "quick (a few minutes) or full (default quick)", false},
+                    {"out", "DIR", "output folder (created; references are cached in DIR/cache)", true},
+                    {"scenes", "DIR", "scene folder (default: presets/scenes next to the source)", false},
+                    cli::threadsOption()},
+                   argc, argv);
+    if (args.helpRequested()) {
+        std::fputs(args.usage().c_str(), stdout);
+        return 0;
+    }
+    Bench b{splat::Context(), fs::path(args.str("out")),
+            fs::path(args.str("scenes", SPOT_SOURCE_DIR "/presets/scenes")),
+            makeSuite(args.str("suite", "quick"))};
+    std::error_code ec;
+    fs::create_directories(b.out / "cache", ec);
+    if (ec)
+        throw InputError(cat("spotshell bench: cannot create ", (b.out / "cache").string(), " (", ec.message(), ")"));
+    if (!fs::is_directory(b.scenesDir))
+        throw InputError(cat("spotshell bench: scene folder ", b.scenesDir.string(), " does not exist"));
+
+    const int total = int(b.suite.scenes.size() * b.suite.variants.size()) + (b.suite.scaling ? 14 : 0);
+    int done = 0;
+    cli::ProgressBar bar("bench " + b.suite.name);
+    for (const SceneEntry& entry : b.suite.scenes)
+        b.runScene(entry, bar, done, total);
+    if (b.suite.scaling)
+        b.runScaling(bar, done, total);
+    bar.finish();
+
+    const json doc = {{"suite", b.suite.name}, {"size", b.suite.size}, {"frames", b.suite.frames},
+                      {"reference_spp", b.suite.referenceSpp}, {"device", b.ctx.deviceName()},
+                      {"rows", b.rows}};
+    writeFileAtomic(b.out / "results.json", [&](std::ostream& o) { o << doc.dump(2) << "\n"; });
+    writeCsv(b.out / "results.csv", b.rows);
+    const std::string md = stabilityMarkdown(b.rows, b.suite);
+    writeFileAtomic(b.out / "stability.md", [&](std::ostream& o) { o << md; });
+    drawBenchCharts(b.out);
+    std::printf("wrote %s/{results.csv,results.json,stability.md,stability.png,pareto.png%s} "
+                "(%zu rows, suite %s)\n",
+                b.out.string().c_str(), b.suite.scaling ? ",scaling.png" : "", b.rows.size(),
+                b.suite.name.c_str());
+    return 0;
+}
+
+} // namespace spot::cmd
