@@ -44,6 +44,7 @@ struct Variant {
     std::string method;  ///< instanced, oit, hybrid
     std::string setting; ///< human-readable settings, unique per method
     splat::SplatSettings splat;
+    double lod = 0.0;    ///< level-of-detail size in pixels (0 = off)
 };
 
 struct SceneEntry {
@@ -86,6 +87,8 @@ std::vector<Variant> variants(bool full) {
         v.push_back({"oit", "ewa mb N16", splatSettings(M::Oit, true, W::McGuireBavoil, 16)});
         v.push_back({"hybrid", "no-ewa mb analytic", splatSettings(M::Hybrid, false, W::McGuireBavoil, 0)});
         v.push_back({"hybrid", "ewa mb N16", splatSettings(M::Hybrid, true, W::McGuireBavoil, 16)});
+        v.push_back({"hybrid", "lod 2px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 2.0});
+        v.push_back({"hybrid", "lod 4px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 4.0});
     }
     return v;
 }
@@ -210,13 +213,13 @@ struct Bench {
     };
 
     Frame renderGpu(cli::SceneJob& job, splat::GpuGenerator& gen, splat::SplatRenderer& renderer,
-                    const noise::Camera& cam, const splat::SplatSettings& settings) {
+                    const noise::Camera& cam, const splat::SplatSettings& settings, double lod = 0.0) {
         const auto start = std::chrono::steady_clock::now();
         const noise::CameraRays rays(cam);
         const double h = job.generator->cellSize();
         const splat::GpuImpulses impulses = gen.generate([&](const noise::SurfaceCell& c) {
             return rays.boxMayBeVisible(glm::dvec3(c.ijk) * h - h, glm::dvec3(c.ijk + 1) * h + h);
-        });
+        }, splat::lodParameters(cam, lod));
         splat::FrameStats stats;
         Frame f;
         f.image = renderer.render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
@@ -239,7 +242,7 @@ struct Bench {
             std::vector<double> gpu, wall;
             Frame last;
             for (int f = 0; f <= suite.frames; ++f) {
-                last = renderGpu(job, gen, renderer, job.scene.camera, v.splat);
+                last = renderGpu(job, gen, renderer, job.scene.camera, v.splat, v.lod);
                 if (f > 0) { // the first frame is not warm
                     gpu.push_back(last.gpuMs);
                     wall.push_back(last.wallMs);
@@ -248,7 +251,8 @@ struct Bench {
             const splat::ImageMetrics m = splat::compareImages(ref, last.image);
             std::vector<noise::Image> frames;
             for (int k = 0; k < suite.orbitFrames; ++k)
-                frames.push_back(renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg), v.splat).image);
+                frames.push_back(
+                    renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg), v.splat, v.lod).image);
             const double flick = flicker(frames) - refFlicker;
             std::size_t nonFinite = 0;
             for (const glm::vec3& p : last.image.pixels)

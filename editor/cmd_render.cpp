@@ -78,8 +78,10 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method meth
 
     splat::Context ctx;
     splat::GpuGenerator generator(ctx, job.mesh, *job.generator);
+    const double lod = args.number("lod", 0.0, 0.0, 64.0);
     const splat::GpuImpulses impulses =
-        generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
+        generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); },
+                           splat::lodParameters(job.scene.camera, lod));
     splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
     splat::FrameStats frame;
     Rendered r;
@@ -99,6 +101,7 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method meth
                {"ewa", settings.ewa},
                {"kernel_samples", settings.kernelSamples},
                {"weight", weight},
+               {"lod_pixels", lod},
                {"kernels_generated", impulses.count},
                {"kernel_candidates", impulses.candidates},
                {"kernels_drawn", frame.kernelsDrawn},
@@ -123,6 +126,8 @@ int render(int argc, char** argv) {
                                           "instead of the analytic integral (default 0)", false},
                   {"ewa", "on|off", "GPU methods: EWA filtering by the pixel footprint (default on)", false},
                   {"weight", "W", "oit/hybrid: constant or mcguire-bavoil (default)", false},
+                  {"lod", "PIXELS", "GPU methods: thin the kernels of cells smaller than PIXELS on "
+                                    "screen, conserving mass (default 0: off)", false},
                   {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},
                   {"stats", "FILE", "also write timings and counts as JSON", false},
                   cli::threadsOption()});

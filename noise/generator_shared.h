@@ -49,6 +49,7 @@ private:
     glm::vec4 spotParamVariation0() const { return m_a.params->variation0; }
     glm::vec4 spotParamVariation1() const { return m_a.params->variation1; }
     glm::uvec4 spotParamFlags() const { return m_a.params->flags; }
+    glm::vec4 spotParamLod() const { return m_a.params->lod; }
     const SpotField& spotParamField(uint slot) const { return m_a.params->fields[slot]; }
 
 public:

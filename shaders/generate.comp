@@ -46,6 +46,7 @@ vec4 spotParamDistribution() { return params.distribution; }
 vec4 spotParamVariation0() { return params.variation0; }
 vec4 spotParamVariation1() { return params.variation1; }
 uvec4 spotParamFlags() { return params.flags; }
+vec4 spotParamLod() { return params.lod; }
 SpotField spotParamField(uint slot) { return params.fields[slot]; }
 
 #include "spot_generate.h"

@@ -165,6 +165,20 @@ SPOT_FN bool spotFinishImpulse(ivec3 cell, uint key, uint tri, rvec3 bary, SPOT_
                         rvec3(real(0.0)), rvec3(real(1.0)));
     real weight = max(real(0.0), spotFieldEval(uint(SPOT_FIELD_WEIGHT), sp).x *
                                      (real(1.0) + var1.y * spotSymmetric(key, kRandWeight)));
+    /* Level of detail: thin the impulses of cells far below the LOD size on screen, conserving
+     * their expected mass. */
+    rvec4 lod = rvec4(spotParamLod());
+    if (lod.w > real(0.0)) {
+        real h = var1.z;
+        rvec3 centre = (rvec3(cell) + rvec3(real(0.5))) * h;
+        real size = h * lod.w / max(length(centre - rvec3(lod)), real(1e-6) * h);
+        real keep = clamp(size * size, real(kMinLodKeep), real(1.0));
+        if (keep < real(1.0)) {
+            if (!(spotRand(key, kRandLod) < keep))
+                return false;
+            weight /= keep;
+        }
+    }
     imp.position = rvec4(sp.position + height * sp.normal, weight);
     imp.normal = rvec4(sp.normal, bend);
     imp.comb = rvec4(combPlane, height);

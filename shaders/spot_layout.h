@@ -86,5 +86,9 @@ struct SpotGenParams {
     vec4 variation1;   /* x: colour (relative); y: weight (relative); z: cell size h; w: lattice spacing */
     uvec4 flags;       /* x: seed; y: 0 poisson, 1 jittered; z: 1 if a comb field is set;
                           w: bit 0 mesh has uv, bit 1 mesh has tangents */
+    vec4 lod;          /* level of detail for the current view: xyz eye (world); w: focal length in
+                          pixels / LOD size in pixels (0 = off). A cell seen smaller than the LOD
+                          size keeps each impulse with probability (size / LOD size)^2 and divides
+                          the kept ones' weight by it (stochastic simplification). */
     SpotField fields[SPOT_FIELD_COUNT];
 };

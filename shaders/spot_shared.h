@@ -73,6 +73,10 @@ SPOT_CONST uint kRandColor = 9u;
 SPOT_CONST uint kRandWeight = 10u;
 SPOT_CONST uint kRandJitterU = 11u;
 SPOT_CONST uint kRandJitterV = 12u;
+SPOT_CONST uint kRandLod = 13u;      /* level-of-detail thinning */
+/* The level of detail keeps at least this fraction of a cell's impulses (weights grow by at most
+ * its inverse, which keeps the optical depths finite and the noise bounded). */
+SPOT_CONST float kMinLodKeep = 1.0 / 64.0;
 
 /* Largest Poisson mean drawn by inversion in one chunk: exp(-16) is far from underflow in float,
  * and the inversion loop stays short. */

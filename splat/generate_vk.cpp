@@ -1,5 +1,6 @@
 #include "generate_vk.h"
 
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -48,6 +49,13 @@ void dispatch(VkCommandBuffer cmd, std::uint32_t n) {
 
 } // namespace
 
+glm::vec4 lodParameters(const noise::Camera& camera, double pixels) {
+    if (!(pixels > 0.0) || camera.projection != noise::Projection::Perspective)
+        return glm::vec4(0.0f);
+    const double focalPixels = 0.5 * camera.height / std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
+    return glm::vec4(glm::vec3(camera.eye), float(focalPixels / pixels));
+}
+
 GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
                            const noise::ImpulseGenerator& generator)
     : m_ctx(ctx), m_generator(generator) {
@@ -68,8 +76,10 @@ GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
     m_fieldData = upload(ctx, generator.sharedFieldData(), "field data");
 }
 
-GpuImpulses GpuGenerator::generate(const std::function<bool(const noise::SurfaceCell&)>& keep) {
+GpuImpulses GpuGenerator::generate(const std::function<bool(const noise::SurfaceCell&)>& keep,
+                                   glm::vec4 lod) {
     GpuImpulses result;
+    static_cast<gpu::SpotGenParams*>(m_params.mapped())->lod = lod;
     std::vector<gpu::SpotCell> cells;
     for (const noise::SurfaceCell& c : m_generator.cells().cells)
         if (!keep || keep(c))

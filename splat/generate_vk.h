@@ -7,6 +7,7 @@
 #include <functional>
 
 #include "context_vk.h"
+#include "noise/camera.h"
 #include "noise/impulses.h"
 
 namespace spot::splat {
@@ -19,14 +20,20 @@ struct GpuImpulses {
     double milliseconds = 0.0;      ///< GPU time of the three passes
 };
 
+/// SpotGenParams::lod for a camera: cells smaller on screen than `pixels` are thinned. 0 pixels,
+/// or an orthographic camera (no perspective shrinking to adapt to), turns the LOD off.
+glm::vec4 lodParameters(const noise::Camera& camera, double pixels);
+
 class GpuGenerator {
 public:
     /// Uploads what the generator reads (mesh, pieces, fields, parameters) once.
     GpuGenerator(Context& ctx, const noise::Mesh& mesh, const noise::ImpulseGenerator& generator);
 
     /// Generate the impulses of the cells accepted by `keep` (all when empty); culled cells
-    /// generate nothing and cost nothing.
-    GpuImpulses generate(const std::function<bool(const noise::SurfaceCell&)>& keep = {});
+    /// generate nothing and cost nothing. `lod` is SpotGenParams::lod for this view (w = 0: no
+    /// level of detail, the CPU generator's impulses exactly).
+    GpuImpulses generate(const std::function<bool(const noise::SurfaceCell&)>& keep = {},
+                         glm::vec4 lod = glm::vec4(0.0f));
 
 private:
     Context& m_ctx;

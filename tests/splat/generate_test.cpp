@@ -100,3 +100,42 @@ TEST(GpuGenerate, CellsOutsideTheViewGenerateNothing) {
 }
 
 } // namespace
+
+namespace {
+
+TEST(GpuGenerate, LevelOfDetailThinsFarCellsAndConservesMass) {
+    const noise::Mesh mesh = meshFor("bunny");
+    const noise::PresetDesc preset = noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur.json");
+    const noise::ImpulseGenerator generator(mesh, preset, noise::GeneratorOptions{});
+    splat::Context ctx(validated());
+    splat::GpuGenerator gpuGenerator(ctx, mesh, generator);
+    noise::Camera far;
+    far.eye = glm::dvec3(5.2, 3.4, 10.4); // the bunny about 40 pixels tall
+    far.target = glm::dvec3(0.0, 0.45, 0.0);
+    far.fovYDeg = 30.0;
+    far.width = far.height = 256;
+    auto mass = [](const splat::GpuImpulses& g) {
+        const auto* p = static_cast<const gpu::SpotImpulse*>(g.impulses.mapped());
+        double sum = 0.0;
+        for (std::uint32_t i = 0; i < g.count; ++i)
+            sum += double(p[i].position.w); // weight
+        return sum;
+    };
+    const splat::GpuImpulses full = gpuGenerator.generate({}, splat::lodParameters(far, 0.0));
+    const splat::GpuImpulses thin = gpuGenerator.generate({}, splat::lodParameters(far, 6.0));
+    EXPECT_LT(thin.count, full.count / 2);
+    // Expected mass is conserved: the kept impulses carry the weight of the dropped ones.
+    const double sigma = std::sqrt(double(full.count)) * 4.0; // weights up to ~4 after thinning
+    EXPECT_NEAR(mass(thin), mass(full), 4.0 * sigma);
+    // Close up, nothing is thinned.
+    noise::Camera close = far;
+    close.eye = glm::dvec3(0.8, 0.6, 1.6);
+    EXPECT_EQ(gpuGenerator.generate({}, splat::lodParameters(close, 1.0)).count, full.count);
+    // Off for an orthographic camera.
+    noise::Camera ortho = far;
+    ortho.projection = noise::Projection::Orthographic;
+    EXPECT_EQ(splat::lodParameters(ortho, 6.0).w, 0.0f);
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+} // namespace
