@@ -24,6 +24,7 @@
 #include "splat/context_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/image_compare.h"
+#include "splat/raymarch_vk.h"
 #include "splat/renderer_vk.h"
 
 namespace spot::cmd {
@@ -45,6 +46,7 @@ struct Variant {
     std::string setting; ///< human-readable settings, unique per method
     splat::SplatSettings splat;
     double lod = 0.0;    ///< level-of-detail size in pixels (0 = off)
+    int steps = 0;       ///< raymarch: samples per pixel
 };
 
 struct SceneEntry {
@@ -90,6 +92,10 @@ std::vector<Variant> variants(bool full) {
         v.push_back({"hybrid", "lod 2px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 2.0});
         v.push_back({"hybrid", "lod 4px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 4.0});
     }
+    // The ray-march baseline at rising step counts (refused, as a failed row, where a shader
+    // invocation would loop past lavapipe's limit).
+    for (int steps : full ? std::vector<int>{8, 16, 32, 64, 128} : std::vector<int>{8, 16, 32})
+        v.push_back({"raymarch", cat(steps, " steps"), splat::SplatSettings{}, 0.0, steps});
     return v;
 }
 
@@ -212,22 +218,38 @@ struct Bench {
         std::uint32_t generated = 0, drawn = 0;
     };
 
+    /// The ray-march renderer of the current scene (made on first use).
+    std::unique_ptr<splat::RaymarchRenderer> marcher;
+
     Frame renderGpu(cli::SceneJob& job, splat::GpuGenerator& gen, splat::SplatRenderer& renderer,
-                    const noise::Camera& cam, const splat::SplatSettings& settings, double lod = 0.0) {
+                    const noise::Camera& cam, const splat::SplatSettings& settings, double lod = 0.0,
+                    int steps = 0) {
         const auto start = std::chrono::steady_clock::now();
         const noise::CameraRays rays(cam);
         const double h = job.generator->cellSize();
         const splat::GpuImpulses impulses = gen.generate([&](const noise::SurfaceCell& c) {
             return rays.boxMayBeVisible(glm::dvec3(c.ijk) * h - h, glm::dvec3(c.ijk + 1) * h + h);
         }, splat::lodParameters(cam, lod));
-        splat::FrameStats stats;
         Frame f;
-        f.image = renderer.render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
-                                  impulses.impulses, impulses.count, settings, &stats);
+        if (steps > 0) {
+            if (!marcher)
+                marcher = std::make_unique<splat::RaymarchRenderer>(ctx, job.mesh, job.generator->kernel());
+            splat::RaymarchSettings rs;
+            rs.steps = steps;
+            splat::RaymarchStats stats;
+            f.image = marcher->render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
+                                      job.generator->cells(), impulses.impulses, impulses.count, rs, &stats);
+            f.gpuMs = impulses.milliseconds + stats.totalMs;
+            f.drawn = impulses.count;
+        } else {
+            splat::FrameStats stats;
+            f.image = renderer.render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
+                                      impulses.impulses, impulses.count, settings, &stats);
+            f.gpuMs = impulses.milliseconds + stats.totalMs;
+            f.drawn = stats.kernelsDrawn;
+        }
         f.wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        f.gpuMs = impulses.milliseconds + stats.totalMs;
         f.generated = impulses.count;
-        f.drawn = stats.kernelsDrawn;
         return f;
     }
 
@@ -242,7 +264,7 @@ struct Bench {
             std::vector<double> gpu, wall;
             Frame last;
             for (int f = 0; f <= suite.frames; ++f) {
-                last = renderGpu(job, gen, renderer, job.scene.camera, v.splat, v.lod);
+                last = renderGpu(job, gen, renderer, job.scene.camera, v.splat, v.lod, v.steps);
                 if (f > 0) { // the first frame is not warm
                     gpu.push_back(last.gpuMs);
                     wall.push_back(last.wallMs);
@@ -252,7 +274,7 @@ struct Bench {
             std::vector<noise::Image> frames;
             for (int k = 0; k < suite.orbitFrames; ++k)
                 frames.push_back(
-                    renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg), v.splat, v.lod).image);
+                    renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg), v.splat, v.lod, v.steps).image);
             const double flick = flicker(frames) - refFlicker;
             std::size_t nonFinite = 0;
             for (const glm::vec3& p : last.image.pixels)
@@ -300,12 +322,14 @@ struct Bench {
         const double refFlicker = flicker(refOrbit);
         splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
         splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
+        marcher.reset();
         for (const Variant& v : suite.variants) {
             json row = runVariant(entry, job, gen, renderer, v, ref, refOrbit, refFlicker);
             row["reference_flicker"] = refFlicker;
             rows.push_back(row);
             bar.update(++done, total);
         }
+        marcher.reset(); // it refers to this scene's mesh
     }
 
     /// Milliseconds and memory against visible kernels (the uniform preset on a sphere at rising
@@ -477,7 +501,7 @@ int bench(int argc, char** argv) {
     }
     Bench b{splat::Context(), fs::path(args.str("out")),
             fs::path(args.str("scenes", SPOT_SOURCE_DIR "/presets/scenes")),
-            makeSuite(args.str("suite", "quick"))};
+            makeSuite(args.str("suite", "quick")), json::array(), nullptr};
     std::error_code ec;
     fs::create_directories(b.out / "cache", ec);
     if (ec)

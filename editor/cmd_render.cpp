@@ -15,6 +15,7 @@
 #include "scene_job.h"
 #include "splat/context_vk.h"
 #include "splat/generate_vk.h"
+#include "splat/raymarch_vk.h"
 #include "splat/renderer_vk.h"
 
 namespace spot::cmd {
@@ -114,18 +115,59 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method meth
     return r;
 }
 
+Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
+    splat::RaymarchSettings settings;
+    settings.steps = int(args.integer("steps", 32, 1, 4096));
+    splat::Context ctx;
+    splat::GpuGenerator generator(ctx, job.mesh, *job.generator);
+    const splat::GpuImpulses impulses =
+        generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
+    splat::RaymarchRenderer renderer(ctx, job.mesh, job.generator->kernel());
+    splat::RaymarchStats stats;
+    Rendered r;
+    r.image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
+                              job.scene.baseColor, job.generator->cells(), impulses.impulses,
+                              impulses.count, settings, &stats);
+    const splat::ValidationCounts v = ctx.validation();
+    if (v.errors > 0)
+        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
+    nlohmann::json passes = nlohmann::json::object();
+    passes["generate"] = impulses.milliseconds;
+    for (const auto& [name, ms] : stats.passMs)
+        passes[name] = ms;
+    r.kernels = impulses.count;
+    r.seconds = (impulses.milliseconds + stats.totalMs) * 1e-3;
+    r.stats = {{"device", ctx.deviceName()},
+               {"steps", settings.steps},
+               {"kernels_generated", impulses.count},
+               {"kernels_drawn", impulses.count},
+               {"gpu_ms", passes},
+               {"gpu_total_ms", impulses.milliseconds + stats.totalMs},
+               {"loop_bound", stats.loopBound},
+               {"max_loop_iterations", stats.maxLoopIterations},
+               {"max_steps", stats.maxSteps},
+               {"shell_cells", stats.shellCells},
+               {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
+               {"validation_errors", v.errors}};
+    r.summary = cat(impulses.count, " kernels, ", settings.steps, " steps (", stats.maxSteps,
+                    " fit), ", impulses.milliseconds + stats.totalMs, " ms GPU on ", ctx.deviceName());
+    return r;
+}
+
 } // namespace
 
 int render(int argc, char** argv) {
     std::vector<cli::OptionSpec> specs = cli::sceneOptions();
     specs.insert(specs.end(),
-                 {{"method", "NAME", "reference (converged CPU ground truth), instanced, oit or hybrid", true},
+                 {{"method", "NAME", "reference (converged CPU ground truth), instanced, oit, hybrid or raymarch", true},
                   {"spp", "N", "reference: samples per pixel (default: the scene's)", false},
                   {"step-scale", "X", "reference: quadrature step multiplier (default 1)", false},
                   {"kernel-samples", "N", "oit/hybrid: march N samples per kernel (paper eq. 10) "
                                           "instead of the analytic integral (default 0)", false},
                   {"ewa", "on|off", "GPU methods: EWA filtering by the pixel footprint (default on)", false},
                   {"weight", "W", "oit/hybrid: constant or mcguire-bavoil (default)", false},
+                  {"steps", "N", "raymarch: samples per pixel through the shell (default 32; "
+                                 "refused when a shader invocation would loop too long)", false},
                   {"lod", "PIXELS", "GPU methods: thin the kernels of cells smaller than PIXELS on "
                                     "screen, conserving mass (default 0: off)", false},
                   {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},
@@ -146,17 +188,20 @@ int render(int argc, char** argv) {
         gpuMethod = splat::Method::Oit;
     else if (method == "hybrid")
         gpuMethod = splat::Method::Hybrid;
-    else if (method != "reference")
+    else if (method != "reference" && method != "raymarch")
         throw InputError(cat("spotshell render: unknown method '", method,
-                             "' (reference, instanced, oit, hybrid)"));
+                             "' (reference, instanced, oit, hybrid, raymarch)"));
     const auto threads = args.integer("threads", 0, 0, 1024);
     std::optional<tbb::global_control> threadLimit;
     if (threads > 0)
         threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
 
-    cli::SceneJob job = cli::prepareScene(args, !gpuMethod);
+    const bool reference = method == "reference";
+    cli::SceneJob job = cli::prepareScene(args, reference);
     const std::string out = args.str("out");
-    Rendered r = gpuMethod ? renderGpu(args, job, *gpuMethod) : renderReference(args, job);
+    Rendered r = gpuMethod   ? renderGpu(args, job, *gpuMethod)
+                 : reference ? renderReference(args, job)
+                             : renderRaymarch(args, job);
 
     std::map<std::string, std::string> metadata = {{"method", method},
                                                    {"scene", job.scene.name},

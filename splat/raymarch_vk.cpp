@@ -1,0 +1,756 @@
+#include "raymarch_vk.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <span>
+#include <thread>
+
+#include "noise/error.h"
+#include "noise/mesh.h"
+#include "noise/system.h"
+#include "shaders/spot_shared.hpp"
+#include "splat/layout.h"
+
+#include "raymarch_bin.comp.h"
+#include "raymarch_march.comp.h"
+#include "splat_mesh.frag.h"
+#include "splat_mesh.vert.h"
+#include "splat_prepare.comp.h"
+
+namespace spot::splat {
+
+/// The splat renderer's frame (push constants of the prepare and mesh passes, which the march
+/// reuses, and of the march itself: its camera rays).
+namespace march_frame {
+using glm::uvec4;
+using glm::vec4;
+#define SPOT_CONST inline constexpr
+#include "shaders/spot_splat.h"
+#undef SPOT_CONST
+static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
+static_assert(sizeof(SpotMeshVertex) == 32);
+} // namespace march_frame
+
+} // namespace spot::splat
+
+namespace spot::shared::f32 {
+
+using gpu::SpotWorldLobe;
+using splat::gpu_march::kMarchFar;
+using splat::gpu_march::kMarchFlagLambert;
+using splat::gpu_march::kMarchMaxSegments;
+using splat::gpu_march::kMarchOpaque;
+using splat::gpu_march::SpotMarchCell;
+using splat::gpu_march::SpotMarchParams;
+
+/// shaders/raymarch_shared.glsl compiled for the CPU: the march the GPU runs, as member functions
+/// reading host arrays (the pattern of noise/generator_shared.h).
+class MarchTwin {
+public:
+    struct Arrays {
+        const SpotMarchParams* params = nullptr;
+        const glm::ivec4* table = nullptr;
+        const SpotMarchCell* cells = nullptr;
+        const SpotWorldLobe* lobes = nullptr;
+    };
+    explicit MarchTwin(const Arrays& arrays) : m_a(arrays) {}
+
+private:
+    Arrays m_a;
+    const SpotMarchParams& marchParams() const { return *m_a.params; }
+    glm::ivec4 marchSlot(uint i) const { return m_a.table[i]; }
+    const SpotMarchCell& marchCell(uint record) const { return m_a.cells[record]; }
+    const SpotWorldLobe& marchLobe(uint i) const { return m_a.lobes[i]; }
+
+public:
+#define SPOT_FN
+#define SPOT_CONST static constexpr
+#define SPOT_OUT(T) T&
+#define SPOT_INOUT(T) T&
+#include "shaders/raymarch_shared.glsl"
+#undef SPOT_FN
+#undef SPOT_CONST
+#undef SPOT_OUT
+#undef SPOT_INOUT
+};
+
+} // namespace spot::shared::f32
+
+namespace spot::splat {
+
+namespace {
+
+using gpu_march::SpotMarchCell;
+using gpu_march::SpotMarchParams;
+using march_frame::SpotMeshVertex;
+using march_frame::SpotSplatFrame;
+using shared::f32::MarchTwin;
+
+constexpr VkFormat kColorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kScalarFormat = VK_FORMAT_R32_SFLOAT;
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+/// Near plane of the reversed depth mapping (world units), as the splat renderer's.
+constexpr float kNearPlane = 1e-4f;
+/// prepare.comp and raymarch_bin.comp run 64 impulses per workgroup; a dispatch has at most
+/// 65,535 workgroups.
+constexpr std::uint32_t kMaxImpulses = 65535u * 64u;
+/// Hash table: at most half full; a longer probe than this doubles the table (the bound pays P
+/// per lookup, so a short probe matters more than memory).
+constexpr std::int32_t kWantedProbe = 8;
+constexpr int kTableGrowths = 4;
+
+template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
+    return {code, N};
+}
+
+// ---- Small Vulkan helpers (the splat renderer's, which keeps them private) --------------------
+
+VkPipelineColorBlendAttachmentState opaqueBlend() {
+    VkPipelineColorBlendAttachmentState b{};
+    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                       VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+    return b;
+}
+
+VkRenderingAttachmentInfo colorAttachment(const Image& image, glm::vec4 clear) {
+    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    a.imageView = image.view();
+    a.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    a.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.clearValue.color = {{clear.r, clear.g, clear.b, clear.a}};
+    return a;
+}
+
+void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const SpotSplatFrame& frame) {
+    const VkShaderStageFlags stages =
+        pipeline.bindPoint() == VK_PIPELINE_BIND_POINT_COMPUTE
+            ? VK_SHADER_STAGE_COMPUTE_BIT
+            : VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+    vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
+}
+
+/// The frame constants, the camera basis exactly as noise::CameraRays builds it (and as the
+/// splat renderer fills them): the march's rays are the splat renderers' rays.
+SpotSplatFrame makeFrame(const noise::Camera& camera, const noise::Shading& shading,
+                         glm::vec3 baseColor, std::uint32_t count, std::uint32_t lobes,
+                         float support) {
+    const noise::CameraRays rays(camera);
+    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
+    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
+    const glm::dvec3 up = glm::cross(right, forward);
+    const bool ortho = camera.projection == noise::Projection::Orthographic;
+    const double halfHeight =
+        ortho ? 0.5 * camera.orthoHeight : std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
+    const double halfWidth = halfHeight * double(camera.width) / double(camera.height);
+    // No EWA: the march samples the density itself; lobes widened by the pixel footprint could
+    // also reach past the 27 cells it searches.
+    const std::uint32_t flags =
+        shading.mode == noise::Shading::Mode::Lambert ? march_frame::kSplatFlagLambert : 0u;
+    SpotSplatFrame frame{};
+    frame.eye = glm::vec4(glm::vec3(camera.eye), ortho ? 1.0f : 0.0f);
+    frame.forward = glm::vec4(glm::vec3(forward), kNearPlane);
+    frame.right = glm::vec4(glm::vec3(right), float(halfWidth));
+    frame.up = glm::vec4(glm::vec3(up), float(halfHeight));
+    frame.size = glm::vec4(float(camera.width), float(camera.height),
+                           float(rays.pixelFootprint(1.0)), support);
+    frame.counts = glm::uvec4(count, lobes, 0u, flags);
+    frame.light = glm::vec4(shading.lightDir, shading.ambient);
+    frame.base = glm::vec4(baseColor, 0.0f);
+    return frame;
+}
+
+/// 91234 -> "91,234".
+std::string withCommas(std::uint64_t n) {
+    std::string digits = std::to_string(n), out;
+    for (std::size_t i = 0; i < digits.size(); ++i) {
+        if (i > 0 && (digits.size() - i) % 3 == 0)
+            out += ',';
+        out += digits[i];
+    }
+    return out;
+}
+
+bool lexLess(const glm::ivec3& a, const glm::ivec3& b) {
+    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+}
+
+std::uint64_t fingerprint(const noise::SurfaceCells& cells) {
+    std::uint64_t h = 0xcbf29ce484222325ull; // FNV-1a over the cell size and every ijk
+    const auto mix = [&h](std::uint32_t v) {
+        for (int b = 0; b < 4; ++b) {
+            h ^= (v >> (8 * b)) & 0xffu;
+            h *= 0x100000001b3ull;
+        }
+    };
+    std::uint32_t bits;
+    std::memcpy(&bits, &cells.cellSize, 4);
+    mix(bits);
+    mix(std::uint32_t(cells.cells.size()));
+    for (const noise::SurfaceCell& c : cells.cells) {
+        mix(std::uint32_t(c.ijk.x));
+        mix(std::uint32_t(c.ijk.y));
+        mix(std::uint32_t(c.ijk.z));
+    }
+    return h;
+}
+
+} // namespace
+
+std::uint64_t raymarchLoopBound(std::uint64_t steps, std::uint64_t walkCells,
+                                std::uint64_t longestProbe, std::uint64_t neighbourhoodLobes) {
+    // raymarch_shared.glsl: marchShell costs 1 + W (1 + marchFind), marchFind at most P + 2;
+    // marchRay adds 1 + N (1 + (1 + S - 1) + marchFind + 1 + L T).
+    const std::uint64_t find = longestProbe + 2;
+    const std::uint64_t walk = 1 + walkCells * (1 + find);
+    const std::uint64_t perStep = 1 + gpu_march::kMarchMaxSegments + find + 1 + neighbourhoodLobes;
+    return walk + 1 + steps * perStep;
+}
+
+/// The shell: surface cells dilated by one cell, sorted by (i, j, k) like the surface cells, and
+/// the hash table that finds them. Depends only on the cells, so it is kept while they stay the
+/// same (checked by a fingerprint of every ijk).
+struct RaymarchRenderer::Shell {
+    std::uint64_t fingerprint = 0;
+    float cellSize = 0.0f;
+    std::vector<glm::ivec3> cells;
+    std::vector<std::uint8_t> surface; ///< per shell cell: 1 for a surface cell
+    std::vector<glm::ivec4> table;
+    glm::ivec3 lo{0}, hi{-1};
+    std::uint32_t mask = 0;
+    std::int32_t longestProbe = 0;
+    Buffer tableBuffer;
+
+    std::uint32_t walkCells() const {
+        return cells.empty()
+                   ? 0u
+                   : std::uint32_t((hi.x - lo.x + 1) + (hi.y - lo.y + 1) + (hi.z - lo.z + 1));
+    }
+    /// Params with the shell's part filled in.
+    SpotMarchParams params() const {
+        SpotMarchParams p{};
+        p.grid = glm::vec4(cellSize, 1.0f / cellSize, 0.0f, 0.0f);
+        p.lo = glm::ivec4(lo, std::int32_t(mask));
+        p.hi = glm::ivec4(hi, longestProbe);
+        p.counts = glm::uvec4(0u, 0u, walkCells(), 0u);
+        return p;
+    }
+};
+
+const RaymarchRenderer::Shell& RaymarchRenderer::shellFor(const noise::SurfaceCells& cells) {
+    const std::uint64_t print = fingerprint(cells);
+    if (m_shell && m_shell->fingerprint == print && m_shell->cellSize == cells.cellSize)
+        return *m_shell;
+    auto shell = std::make_shared<Shell>();
+    shell->fingerprint = print;
+    shell->cellSize = cells.cellSize;
+    // Dilate: 27 neighbours of every surface cell (|ijk| < 2^20 + 1, no overflow).
+    requireMemory(std::uint64_t(cells.cells.size()) * 27 * sizeof(glm::ivec3),
+                  cat("the ray march's shell of ", cells.cells.size(), " cells"));
+    shell->cells.reserve(cells.cells.size() * 27);
+    for (const noise::SurfaceCell& c : cells.cells)
+        for (int i = -1; i <= 1; ++i)
+            for (int j = -1; j <= 1; ++j)
+                for (int k = -1; k <= 1; ++k)
+                    shell->cells.push_back(c.ijk + glm::ivec3(i, j, k));
+    std::sort(shell->cells.begin(), shell->cells.end(), lexLess);
+    shell->cells.erase(std::unique(shell->cells.begin(), shell->cells.end()), shell->cells.end());
+    shell->cells.shrink_to_fit();
+    shell->surface.assign(shell->cells.size(), 0);
+    for (const noise::SurfaceCell& c : cells.cells)
+        shell->surface[std::size_t(
+            std::lower_bound(shell->cells.begin(), shell->cells.end(), c.ijk, lexLess) -
+            shell->cells.begin())] = 1;
+    if (!shell->cells.empty()) {
+        shell->lo = shell->cells.front();
+        shell->hi = shell->cells.front();
+        for (const glm::ivec3& c : shell->cells) {
+            shell->lo = glm::min(shell->lo, c);
+            shell->hi = glm::max(shell->hi, c);
+        }
+    }
+
+    // Open addressing with linear probing, at most half full; grown until no key lies more than
+    // kWantedProbe slots past its home (or kTableGrowths doublings: the bound pays for the rest).
+    std::uint64_t capacity = 16;
+    while (capacity < 2 * std::uint64_t(shell->cells.size()))
+        capacity *= 2;
+    const SpotMarchParams none{};
+    MarchTwin hasher(MarchTwin::Arrays{&none, nullptr, nullptr, nullptr});
+    for (int growth = 0;; ++growth, capacity *= 2) {
+        shell->table.assign(capacity, glm::ivec4(0, 0, 0, gpu_march::kMarchEmptySlot));
+        shell->mask = std::uint32_t(capacity - 1);
+        shell->longestProbe = 0;
+        for (std::size_t r = 0; r < shell->cells.size(); ++r) {
+            const glm::ivec3 c = shell->cells[r];
+            std::uint32_t slot = hasher.marchHash(c) & shell->mask;
+            std::int32_t probe = 0;
+            while (shell->table[slot].w != gpu_march::kMarchEmptySlot) {
+                slot = (slot + 1) & shell->mask;
+                ++probe;
+            }
+            shell->table[slot] = glm::ivec4(c, std::int32_t(r));
+            shell->longestProbe = std::max(shell->longestProbe, probe);
+        }
+        if (shell->longestProbe <= kWantedProbe || growth == kTableGrowths)
+            break;
+    }
+    shell->tableBuffer =
+        Buffer(m_ctx, shell->table.size() * sizeof(glm::ivec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+               Buffer::Memory::HostVisible,
+               cat("ray march cell table (", shell->cells.size(), " shell cells)"));
+    shell->tableBuffer.upload(std::span<const glm::ivec4>(shell->table));
+    m_shell = std::move(shell);
+    return *m_shell;
+}
+
+RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
+                                   const noise::Kernel& kernel)
+    : m_ctx(ctx), m_binTimes(ctx, 4), m_marchTimes(ctx, 2) {
+    if (kernel.lobes.empty() || kernel.lobes.size() > 8)
+        throw InputError(cat("raymarch renderer: a kernel needs 1 to 8 lobes, this one has ",
+                             kernel.lobes.size()));
+    if (!(kernel.supportSigma > 0.0f) || !std::isfinite(kernel.supportSigma))
+        throw InputError(
+            cat("raymarch renderer: support ", kernel.supportSigma, " sigmas must be positive"));
+    m_lobeCount = std::uint32_t(kernel.lobes.size());
+    m_support = kernel.supportSigma;
+
+    const std::vector<gpu::SpotLobe> lobes = gpu::toGpu(kernel);
+    m_lobes = Buffer(ctx, lobes.size() * sizeof(gpu::SpotLobe), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                     Buffer::Memory::HostVisible, "raymarch kernel lobes");
+    m_lobes.upload(std::span<const gpu::SpotLobe>(lobes));
+
+    std::vector<SpotMeshVertex> vertices(mesh.positions.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+        vertices[i].position = glm::vec4(mesh.positions[i], 1.0f);
+        vertices[i].normal =
+            glm::vec4(i < mesh.normals.size() ? mesh.normals[i] : glm::vec3(0.0f), 0.0f);
+    }
+    m_vertices =
+        Buffer(ctx, vertices.size() * sizeof(SpotMeshVertex), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+               Buffer::Memory::HostVisible, cat("raymarch mesh vertices (", mesh.name, ")"));
+    if (!vertices.empty())
+        m_vertices.upload(std::span<const SpotMeshVertex>(vertices));
+    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
+    m_indices =
+        Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+               Buffer::Memory::HostVisible, cat("raymarch mesh indices (", mesh.name, ")"));
+    if (!mesh.triangles.empty())
+        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
+
+    constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    constexpr VkDescriptorType kImg = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    const std::uint32_t push = sizeof(SpotSplatFrame);
+    m_prepare =
+        makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), {kBuf, kBuf, kBuf, kBuf}, push);
+    m_bin = makeComputePipeline(ctx, spirv(spv_raymarch_bin_comp), {kBuf, kBuf, kBuf, kBuf},
+                                2 * sizeof(std::uint32_t));
+    m_march = makeComputePipeline(ctx, spirv(spv_raymarch_march_comp),
+                                  {kBuf, kBuf, kBuf, kBuf, kImg, kImg, kBuf, kBuf}, push);
+    GraphicsPipelineDesc mesh3d;
+    mesh3d.vertex = spirv(spv_splat_mesh_vert);
+    mesh3d.fragment = spirv(spv_splat_mesh_frag);
+    mesh3d.bindings = {kBuf};
+    mesh3d.pushBytes = push;
+    mesh3d.colorFormats = {kColorFormat, kScalarFormat};
+    mesh3d.blends = {opaqueBlend(), opaqueBlend()};
+    mesh3d.depthFormat = kDepthFormat;
+    mesh3d.depthTest = true;
+    mesh3d.depthWrite = true;
+    mesh3d.depthCompare = VK_COMPARE_OP_GREATER;
+    m_mesh = makeGraphicsPipeline(ctx, mesh3d);
+}
+
+noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::Shading& shading,
+                                      glm::vec3 background, glm::vec3 baseColor,
+                                      const noise::SurfaceCells& cells, const Buffer& impulses,
+                                      std::uint32_t count, const RaymarchSettings& settings,
+                                      RaymarchStats* stats, RaymarchCapture* capture) {
+    const SpotSplatFrame frame =
+        makeFrame(camera, shading, baseColor, count, m_lobeCount, m_support); // checks the camera
+    if (settings.steps < 1)
+        throw InputError(cat("raymarch: --steps ", settings.steps, " must be at least 1"));
+    if (count > kMaxImpulses)
+        throw InputError(cat("raymarch: ", count, " impulses, more than the ", kMaxImpulses,
+                             " one frame can place"));
+    if (std::uint64_t(count) * sizeof(gpu::SpotImpulse) > impulses.size() || !impulses.handle())
+        throw InputError(cat("raymarch: the impulse buffer holds ", impulses.size(), " bytes, ",
+                             count, " impulses need ",
+                             std::uint64_t(count) * sizeof(gpu::SpotImpulse)));
+    if (!(cells.cellSize > 0.0f) || !std::isfinite(cells.cellSize))
+        throw InputError(cat("raymarch: cell size ", cells.cellSize, " must be positive"));
+    const Shell& shell = shellFor(cells);
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    const std::uint32_t width = std::uint32_t(camera.width), height = std::uint32_t(camera.height);
+    const std::uint64_t pixels = std::uint64_t(width) * height;
+
+    // Memory: world lobes and kernel bounds (prepare), bins, records, images, result, loop counts.
+    const std::uint64_t need =
+        std::uint64_t(count) *
+            (m_lobeCount * sizeof(gpu::SpotWorldLobe) + sizeof(gpu::SpotKernelBound)) +
+        std::uint64_t(records) * (3 * 4 + sizeof(SpotMarchCell)) + 4 + sizeof(SpotMarchParams) +
+        pixels * (16 + 4 + 4 + 16 + 4) + 4 + (capture ? pixels * 20 : 0);
+    if (m_ctx.allocatedBytes() + need > m_ctx.memoryBudget())
+        throw InputError(cat("raymarch: a ", width, "x", height, " frame of ", count,
+                             " kernels over ", records, " shell cells needs ", need >> 20,
+                             " MiB of GPU memory; ", m_ctx.allocatedBytes() >> 20,
+                             " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
+                             " MiB; reduce the image size or the kernel count"));
+    const std::uint64_t allocatedBefore = m_ctx.allocatedBytes();
+
+    SpotMarchParams params = shell.params();
+    params.grid.z = m_support;
+    params.counts.x = std::uint32_t(settings.steps);
+    params.counts.y = m_lobeCount;
+    params.counts.w =
+        shading.mode == noise::Shading::Mode::Lambert ? gpu_march::kMarchFlagLambert : 0u;
+    params.light = glm::vec4(shading.lightDir, shading.ambient);
+
+    constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+    constexpr VkBufferUsageFlags kFilled = kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
+    constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
+    Buffer paramBuffer(m_ctx, sizeof(SpotMarchParams), kStorage, kHost, "ray march parameters");
+    paramBuffer.upload(&params, sizeof(params));
+    Buffer worldLobes(m_ctx, std::uint64_t(count) * m_lobeCount * sizeof(gpu::SpotWorldLobe),
+                      kStorage, capture ? kHost : kDevice,
+                      cat("ray march world lobes (", count, " kernels)"));
+    Buffer bounds(m_ctx, std::uint64_t(count) * sizeof(gpu::SpotKernelBound), kStorage, kDevice,
+                  "ray march kernel bounds (unused)");
+    Buffer bins(m_ctx, (3 * std::uint64_t(records) + 1) * sizeof(std::uint32_t), kFilled, kHost,
+                "ray march cell bins");
+    Buffer recordBuffer(m_ctx, std::uint64_t(records) * sizeof(SpotMarchCell), kStorage, kHost,
+                        cat("ray march neighbourhoods (", records, " shell cells)"));
+    Buffer result(m_ctx, pixels * sizeof(glm::vec4), kStorage, kHost, "ray march result");
+    Buffer loopCounts(m_ctx, (pixels + 1) * sizeof(std::uint32_t), kFilled, kHost,
+                      "ray march loop counts");
+    constexpr VkImageUsageFlags kTarget = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                                          VK_IMAGE_USAGE_STORAGE_BIT |
+                                          VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    Image base(m_ctx, width, height, kColorFormat, kTarget, VK_IMAGE_ASPECT_COLOR_BIT,
+               "ray march base colour");
+    Image distance(m_ctx, width, height, kScalarFormat, kTarget, VK_IMAGE_ASPECT_COLOR_BIT,
+                   "ray march mesh distance");
+    Image depth(m_ctx, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                VK_IMAGE_ASPECT_DEPTH_BIT, "ray march depth");
+    Buffer baseCopy, distanceCopy;
+    if (capture) {
+        baseCopy = Buffer(m_ctx, pixels * sizeof(glm::vec4), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                          kHost, "ray march capture: base colour");
+        distanceCopy = Buffer(m_ctx, pixels * sizeof(float), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                              kHost, "ray march capture: mesh distance");
+    }
+
+    constexpr VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+    constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+    constexpr VkPipelineStageFlags2 kColorOut = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+    constexpr VkPipelineStageFlags2 kTests =
+        VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+    constexpr VkPipelineStageFlags2 kTransfer = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
+    constexpr VkPipelineStageFlags2 kHostStage = VK_PIPELINE_STAGE_2_HOST_BIT;
+    constexpr VkAccessFlags2 kColorRW =
+        VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
+    constexpr VkAccessFlags2 kDepthRW = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT |
+                                        VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+    constexpr VkAccessFlags2 kStorageRead = VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
+    constexpr VkAccessFlags2 kStorageRW =
+        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+    constexpr VkImageLayout kAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    constexpr VkImageLayout kGeneral = VK_IMAGE_LAYOUT_GENERAL;
+
+    // Submit 1: world lobes, bins, the mesh (what the march needs besides the neighbourhoods).
+    m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
+        m_binTimes.reset(cmd);
+        m_binTimes.write(cmd, 0, kAll);
+        if (count > 0) {
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_prepare.handle());
+            pushFrame(cmd, m_prepare, frame);
+            Descriptors()
+                .buffer(0, impulses)
+                .buffer(1, m_lobes)
+                .buffer(2, worldLobes)
+                .buffer(3, bounds)
+                .push(m_ctx, cmd, m_prepare);
+            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+        }
+        m_binTimes.write(cmd, 1, kAll);
+        const std::uint64_t firstBytes = std::uint64_t(records) * sizeof(std::uint32_t);
+        if (records > 0)
+            vkCmdFillBuffer(cmd, bins.handle(), 0, firstBytes, 0xffffffffu);
+        vkCmdFillBuffer(cmd, bins.handle(), firstBytes, VK_WHOLE_SIZE, 0u);
+        vkCmdFillBuffer(cmd, loopCounts.handle(), 0, VK_WHOLE_SIZE, 0u);
+        memoryBarrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
+                      kStorageRW);
+        if (count > 0) {
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_bin.handle());
+            const std::uint32_t push[2] = {count, records};
+            vkCmdPushConstants(cmd, m_bin.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push),
+                               push);
+            Descriptors()
+                .buffer(0, paramBuffer)
+                .buffer(1, shell.tableBuffer)
+                .buffer(2, impulses)
+                .buffer(3, bins)
+                .push(m_ctx, cmd, m_bin);
+            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+        }
+        m_binTimes.write(cmd, 2, kAll);
+
+        for (const Image* image : {&base, &distance})
+            transitionImage(cmd, image->handle(), VK_IMAGE_ASPECT_COLOR_BIT,
+                            VK_IMAGE_LAYOUT_UNDEFINED, kAttachment, VK_PIPELINE_STAGE_2_NONE, 0,
+                            kColorOut, kColorRW);
+        transitionImage(cmd, depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                        VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                        kTests, kDepthRW);
+        const VkRenderingAttachmentInfo colors[2] = {
+            colorAttachment(base, glm::vec4(background, 1.0f)),
+            colorAttachment(distance, glm::vec4(march_frame::kSplatNoMesh))};
+        VkRenderingAttachmentInfo depthInfo{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+        depthInfo.imageView = depth.view();
+        depthInfo.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+        depthInfo.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+        depthInfo.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        depthInfo.clearValue.depthStencil = {0.0f, 0}; // reversed depth: 0 is infinitely far
+        VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+        info.renderArea = {{0, 0}, {width, height}};
+        info.layerCount = 1;
+        info.colorAttachmentCount = 2;
+        info.pColorAttachments = colors;
+        info.pDepthAttachment = &depthInfo;
+        vkCmdBeginRendering(cmd, &info);
+        const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+        const VkRect2D scissor{{0, 0}, {width, height}};
+        vkCmdSetViewport(cmd, 0, 1, &viewport);
+        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        if (m_indexCount > 0) {
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_mesh.handle());
+            pushFrame(cmd, m_mesh, frame);
+            Descriptors().buffer(0, m_vertices).push(m_ctx, cmd, m_mesh);
+            vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+            vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
+        }
+        vkCmdEndRendering(cmd);
+        for (const Image* image : {&base, &distance})
+            transitionImage(cmd, image->handle(), VK_IMAGE_ASPECT_COLOR_BIT, kAttachment, kGeneral,
+                            kColorOut, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute | kTransfer,
+                            kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT);
+        if (capture) {
+            VkBufferImageCopy region{};
+            region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+            region.imageExtent = {width, height, 1};
+            vkCmdCopyImageToBuffer(cmd, base.handle(), kGeneral, baseCopy.handle(), 1, &region);
+            vkCmdCopyImageToBuffer(cmd, distance.handle(), kGeneral, distanceCopy.handle(), 1,
+                                   &region);
+        }
+        m_binTimes.write(cmd, 3, kAll);
+        memoryBarrier(cmd, kCompute | kTransfer,
+                      VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                      kHostStage, VK_ACCESS_2_HOST_READ_BIT);
+    });
+
+    // On the host: check the impulse order, build each shell cell's neighbourhood ranges, bound
+    // the march's loops.
+    const auto hostStart = std::chrono::steady_clock::now();
+    const auto* bin = static_cast<const std::uint32_t*>(bins.mapped());
+    const std::uint32_t* binFirst = bin;
+    const std::uint32_t* binEnd = bin + records;
+    const std::uint32_t* binCount = bin + 2 * std::uint64_t(records);
+    if (const std::uint32_t outside = bin[3 * std::uint64_t(records)]; outside > 0)
+        throw InputError(cat("raymarch: ", outside, " of ", count,
+                             " impulses lie outside the given surface cells (cell size ",
+                             cells.cellSize,
+                             "); render impulses with the cells that generated them"));
+    std::uint32_t expected = 0;
+    for (std::uint32_t r = 0; r < records; ++r) {
+        if (binCount[r] == 0)
+            continue;
+        if (!shell.surface[r])
+            throw InputError(cat("raymarch: ", binCount[r], " impulses lie in cell ",
+                                 shell.cells[r].x, " ", shell.cells[r].y, " ", shell.cells[r].z,
+                                 ", which is not one of the given surface cells (cell size ",
+                                 cells.cellSize,
+                                 "); render impulses with the cells that "
+                                 "generated them"));
+        if (binFirst[r] != expected || binEnd[r] - binFirst[r] != binCount[r])
+            throw InputError(cat("raymarch: the impulses are not in cell order (cell ",
+                                 shell.cells[r].x, " ", shell.cells[r].y, " ", shell.cells[r].z,
+                                 " holds ", binCount[r], " impulses spread over [", binFirst[r],
+                                 ", ", binEnd[r], "), expected from ", expected,
+                                 "); the generators give them in cell order"));
+        expected = binEnd[r];
+    }
+    SPOT_CHECK_EQ(expected, count);
+    std::vector<SpotMarchCell> neighbourhoods(records);
+    std::uint32_t mostImpulses = 0;
+    {
+        MarchTwin find(MarchTwin::Arrays{&params, shell.table.data(), nullptr, nullptr});
+        for (std::uint32_t r = 0; r < records; ++r) {
+            SpotMarchCell& cell = neighbourhoods[r];
+            cell = SpotMarchCell{};
+            std::uint32_t ranges = 0, total = 0;
+            for (int di = -1; di <= 1; ++di)
+                for (int dj = -1; dj <= 1; ++dj) {
+                    // The column's (up to three) cells are consecutive records, so their
+                    // impulses are one range.
+                    std::uint32_t first = ~0u, end = 0;
+                    for (int dk = -1; dk <= 1; ++dk) {
+                        std::uint32_t loops = 0;
+                        const int n =
+                            find.marchFind(shell.cells[r] + glm::ivec3(di, dj, dk), loops);
+                        if (n >= 0 && binCount[n] > 0) {
+                            first = std::min(first, binFirst[n]);
+                            end = std::max(end, binEnd[n]);
+                        }
+                    }
+                    if (end == 0)
+                        continue;
+                    cell.range[ranges / 2][2 * (ranges % 2)] = first;
+                    cell.range[ranges / 2][2 * (ranges % 2) + 1] = end - first;
+                    ++ranges;
+                    total += end - first;
+                }
+            cell.head = glm::uvec4(ranges, total, 0u, 0u);
+            mostImpulses = std::max(mostImpulses, total);
+        }
+    }
+    // The guard: refuse a march that could run past lavapipe's loop limit.
+    const std::uint32_t walk = shell.walkCells();
+    const std::uint64_t lobesPerStep = std::uint64_t(mostImpulses) * m_lobeCount;
+    const std::uint64_t bound = raymarchLoopBound(std::uint64_t(settings.steps), walk,
+                                                  std::uint64_t(shell.longestProbe), lobesPerStep);
+    const std::uint64_t fixed =
+        raymarchLoopBound(0, walk, std::uint64_t(shell.longestProbe), lobesPerStep);
+    const std::uint64_t perStep =
+        raymarchLoopBound(1, walk, std::uint64_t(shell.longestProbe), lobesPerStep) - fixed;
+    const std::uint64_t maxSteps =
+        settings.loopBudget > fixed ? (settings.loopBudget - fixed) / perStep : 0;
+    if (bound > settings.loopBudget) {
+        const std::string why = cat(
+            " loop iterations in one shader invocation (", withCommas(lobesPerStep),
+            " lobes summed at each step in the densest neighbourhood, ", withCommas(fixed),
+            " to walk the shell's ", shell.hi.x - shell.lo.x + 1, "x", shell.hi.y - shell.lo.y + 1,
+            "x", shell.hi.z - shell.lo.z + 1, " cells); lavapipe stops at ",
+            withCommas(gpu_march::kMarchLavapipeLoopLimit), " without an error");
+        if (maxSteps == 0)
+            throw InputError(
+                cat("raymarch: even --steps 1 would need up to ", withCommas(fixed + perStep), why,
+                    "; no step count fits: lower the kernel density or the cell count"));
+        throw InputError(cat("raymarch: --steps ", settings.steps, " would need up to ",
+                             withCommas(bound), why, "; at most ", withCommas(maxSteps),
+                             " steps fit"));
+    }
+    if (records > 0)
+        recordBuffer.upload(std::span<const SpotMarchCell>(neighbourhoods));
+    const double hostMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - hostStart)
+            .count();
+
+    // Submit 2: the march.
+    m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
+        m_marchTimes.reset(cmd);
+        m_marchTimes.write(cmd, 0, kAll);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_march.handle());
+        pushFrame(cmd, m_march, frame);
+        Descriptors()
+            .buffer(0, paramBuffer)
+            .buffer(1, shell.tableBuffer)
+            .buffer(2, recordBuffer)
+            .buffer(3, worldLobes)
+            .image(4, base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(5, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(6, result)
+            .buffer(7, loopCounts)
+            .push(m_ctx, cmd, m_march);
+        vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kHostStage,
+                      VK_ACCESS_2_HOST_READ_BIT);
+        m_marchTimes.write(cmd, 1, kAll);
+    });
+
+    noise::Image image(camera.width, camera.height);
+    const auto* rgba = static_cast<const glm::vec4*>(result.mapped());
+    for (std::size_t i = 0; i < image.pixels.size(); ++i)
+        image.pixels[i] = glm::vec3(rgba[i]);
+    const auto* counted = static_cast<const std::uint32_t*>(loopCounts.mapped());
+    if (stats) {
+        const std::vector<double> first = m_binTimes.milliseconds();
+        const std::vector<double> second = m_marchTimes.milliseconds();
+        stats->passMs = {{"prepare", first[1] - first[0]},
+                         {"bin", first[2] - first[1]},
+                         {"mesh", first[3] - first[2]},
+                         {"march", second[1] - second[0]}};
+        stats->totalMs = first[3] + second[1];
+        stats->hostMs = hostMs;
+        stats->loopBound = std::uint32_t(bound);
+        stats->maxLoopIterations = counted[0];
+        stats->maxSteps = std::uint32_t(std::min<std::uint64_t>(maxSteps, 0xffffffffu));
+        stats->shellCells = records;
+        stats->maxNeighbourhoodLobes = std::uint32_t(lobesPerStep);
+        stats->longestProbe = std::uint32_t(shell.longestProbe);
+        stats->walkCells = walk;
+        stats->frameBytes = m_ctx.allocatedBytes() - allocatedBefore;
+        stats->gpuMemoryBytes = m_ctx.peakAllocatedBytes();
+    }
+    if (capture) {
+        capture->camera = camera;
+        capture->params = params;
+        capture->table = shell.table;
+        capture->cells = std::move(neighbourhoods);
+        const auto* lobes = static_cast<const gpu::SpotWorldLobe*>(worldLobes.mapped());
+        capture->lobes.assign(lobes, lobes + std::uint64_t(count) * m_lobeCount);
+        const auto* b = static_cast<const glm::vec4*>(baseCopy.mapped());
+        capture->base.assign(b, b + pixels);
+        const auto* dist = static_cast<const float*>(distanceCopy.mapped());
+        capture->meshDistance.assign(dist, dist + pixels);
+        capture->gpuLoops.assign(counted + 1, counted + 1 + pixels);
+    }
+    return image;
+}
+
+noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint32_t>* loops) {
+    const noise::Camera& camera = capture.camera;
+    const SpotSplatFrame frame = makeFrame(camera, noise::Shading{}, glm::vec3(0.0f), 0, 0, 0.0f);
+    const std::uint64_t pixels = std::uint64_t(camera.width) * std::uint64_t(camera.height);
+    SPOT_CHECK_EQ(capture.base.size(), pixels);
+    SPOT_CHECK_EQ(capture.meshDistance.size(), pixels);
+    noise::Image image(camera.width, camera.height);
+    if (loops)
+        loops->assign(pixels, 0u);
+    const MarchTwin::Arrays arrays{&capture.params, capture.table.data(), capture.cells.data(),
+                                   capture.lobes.data()};
+    const auto rows = [&](int y0, int y1) {
+        MarchTwin twin(arrays);
+        for (int y = y0; y < y1; ++y)
+            for (int x = 0; x < camera.width; ++x) {
+                // splatPixelRay's arithmetic, in float.
+                const float px = float(x) + 0.5f, py = float(y) + 0.5f;
+                const float sx = 2.0f * px / frame.size.x - 1.0f;
+                const float sy = 1.0f - 2.0f * py / frame.size.y;
+                glm::vec3 o, d;
+                shared::f32::spotCameraRay(glm::vec3(frame.eye), glm::vec3(frame.forward),
+                                           glm::vec3(frame.right) * frame.right.w,
+                                           glm::vec3(frame.up) * frame.up.w, frame.eye.w > 0.5f, sx,
+                                           sy, o, d);
+                const std::size_t i = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
+                std::uint32_t count = 0;
+                const glm::vec4 march = twin.marchRay(o, d, capture.meshDistance[i], count);
+                image.pixels[i] = glm::vec3(march) + march.w * glm::vec3(capture.base[i]);
+                if (loops)
+                    (*loops)[i] = count;
+            }
+    };
+    const int threads = int(std::clamp(std::thread::hardware_concurrency(), 1u, 16u));
+    std::vector<std::thread> workers;
+    for (int t = 0; t < threads; ++t)
+        workers.emplace_back(rows, camera.height * t / threads, camera.height * (t + 1) / threads);
+    for (std::thread& w : workers)
+        w.join();
+    return image;
+}
+
+} // namespace spot::splat
