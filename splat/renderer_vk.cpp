@@ -1,5 +1,6 @@
 #include "renderer_vk.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -18,6 +19,8 @@
 #include "splat_prepare.comp.h"
 #include "splat_quad.vert.h"
 #include "splat_resolve.comp.h"
+#include "splat_sorted.frag.h"
+#include "splat_sorted_keys.comp.h"
 
 namespace spot::splat {
 
@@ -45,9 +48,11 @@ constexpr float kNearPlane = 1e-4f;
 /// Bytes per pixel of a frame: base colour, accumulation (RGBA32F), t, optical depth, depth
 /// (32-bit), closest kernel (64-bit), result (RGBA32F).
 constexpr std::uint64_t kBytesPerPixel = 16 + 16 + 4 + 4 + 4 + 8 + 16;
-/// Timestamp slots: frame start, then the end of each pass.
-constexpr const char* kPassNames[] = {"prepare", "mesh", "splat", "resolve"};
-constexpr std::uint32_t kTimestampCount = 5;
+/// Timestamp slots: frame start, then the end of each pass. Every method writes every slot (the
+/// sort's end right after the prepare's when there is no sort) and reports its own passes.
+constexpr const char* kPassNames[] = {"prepare", "sort", "mesh", "splat", "resolve"};
+constexpr std::uint32_t kSortPass = 1;
+constexpr std::uint32_t kTimestampCount = 6;
 /// prepare.comp runs 64 impulses per workgroup and a dispatch has at most 65,535 workgroups.
 constexpr std::uint32_t kMaxImpulses = 65535u * 64u;
 
@@ -81,6 +86,19 @@ VkPipelineColorBlendAttachmentState additiveBlend() {
     b.colorBlendOp = VK_BLEND_OP_ADD;
     b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
     b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.alphaBlendOp = VK_BLEND_OP_ADD;
+    return b;
+}
+
+/// Premultiplied "over": dst = src + (1 - src.a) dst (the sorted method, back to front).
+VkPipelineColorBlendAttachmentState overBlend() {
+    VkPipelineColorBlendAttachmentState b = opaqueBlend();
+    b.blendEnable = VK_TRUE;
+    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+    b.colorBlendOp = VK_BLEND_OP_ADD;
+    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
     b.alphaBlendOp = VK_BLEND_OP_ADD;
     return b;
 }
@@ -143,12 +161,14 @@ const char* methodName(Method method) {
         return "oit";
     case Method::Hybrid:
         return "hybrid";
+    case Method::Sorted:
+        return "sorted";
     }
     return "?";
 }
 
 SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
-    : m_ctx(ctx), m_timestamps(ctx, kTimestampCount) {
+    : m_ctx(ctx), m_sort(ctx), m_timestamps(ctx, kTimestampCount) {
     if (kernel.lobes.empty() || kernel.lobes.size() > 8)
         throw InputError(
             cat("splat renderer: a kernel needs 1 to 8 lobes, this one has ", kernel.lobes.size()));
@@ -198,6 +218,9 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     m_compact = makeComputePipeline(ctx, spirv(spv_splat_compact_comp), {kBuf, kBuf, kBuf}, push);
     m_resolve = makeComputePipeline(ctx, spirv(spv_splat_resolve_comp),
                                     {kImg, kImg, kImg, kImg, kBuf, kBuf, kBuf}, push);
+    // Sort keys: 0 bounds, 1 kept kernels, 2 indirect draw, 3 world lobes, 4 keys.
+    m_sortKeys = makeComputePipeline(ctx, spirv(spv_splat_sorted_keys_comp),
+                                     {kBuf, kBuf, kBuf, kBuf, kBuf}, push);
 
     GraphicsPipelineDesc mesh3d;
     mesh3d.vertex = spirv(spv_splat_mesh_vert);
@@ -234,13 +257,26 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     oit.colorFormats = {kColorFormat, kScalarFormat};
     oit.blends = {additiveBlend(), additiveBlend()};
     m_oit = makeGraphicsPipeline(ctx, oit);
+
+    GraphicsPipelineDesc sorted = quads;
+    sorted.fragment = spirv(spv_splat_sorted_frag);
+    sorted.bindings = {kBuf, kBuf, kBuf, kImg};
+    sorted.colorFormats = {kColorFormat};
+    sorted.blends = {overBlend()};
+    m_sorted = makeGraphicsPipeline(ctx, sorted);
 }
 
-std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t count) const {
+std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t count,
+                                        Method method) const {
+    const std::uint64_t sortBytes =
+        method == Method::Sorted
+            ? std::max<std::uint64_t>(std::uint64_t(count) * sizeof(std::uint32_t), 16) +
+                  RadixSortScratch::bytes(count)
+            : 0;
     return std::uint64_t(width) * std::uint64_t(height) * kBytesPerPixel +
            std::uint64_t(count) * (std::uint64_t(m_lobeCount) * sizeof(gpu::SpotWorldLobe) +
                                    sizeof(gpu::SpotKernelBound) + sizeof(std::uint32_t)) +
-           16;
+           16 + sortBytes;
 }
 
 noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Shading& shading,
@@ -261,7 +297,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                              " bytes, ", count, " impulses need ",
                              std::uint64_t(count) * sizeof(gpu::SpotImpulse)));
     const std::uint32_t width = std::uint32_t(camera.width), height = std::uint32_t(camera.height);
-    const std::uint64_t need = frameBytes(camera.width, camera.height, count);
+    const std::uint64_t need = frameBytes(camera.width, camera.height, count, settings.method);
     if (m_ctx.allocatedBytes() + need > m_ctx.memoryBudget())
         throw InputError(cat("splat renderer: a ", width, "x", height, " frame of ", count,
                              " kernels needs ", need >> 20, " MiB of GPU memory; ",
@@ -328,6 +364,21 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                 "splat OIT accumulation");
     Image opticalDepth(m_ctx, width, height, kScalarFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
                        "splat OIT optical depth");
+    // Sorted: the kept kernels' keys, sorted with the kept list itself as the values.
+    const bool sorted = settings.method == Method::Sorted;
+    Buffer sortKeys;
+    RadixSortScratch sortScratch;
+    if (sorted) {
+        sortKeys = Buffer(m_ctx, std::uint64_t(count) * sizeof(std::uint32_t),
+                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::DeviceLocal,
+                          "splat sort keys");
+        sortScratch = RadixSortScratch(m_ctx, count);
+    }
+    // The resolve of `sorted` takes the base colour image as the result, as for `instanced`:
+    // the kernels were blended onto it.
+    SpotSplatFrame resolveFrame = frame;
+    if (sorted)
+        resolveFrame.counts.w |= gpu_splat::kSplatFlagInstanced;
 
     constexpr VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
     constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
@@ -377,6 +428,24 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                       VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | kStorageRW);
         m_timestamps.write(cmd, 1, kAll);
 
+        // 1b. Sorted: the kept kernels back to front (the padding past the kept count last).
+        if (sorted && count > 0) {
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_sortKeys.handle());
+            pushFrame(cmd, m_sortKeys, frame);
+            Descriptors()
+                .buffer(0, bounds)
+                .buffer(1, kept)
+                .buffer(2, draw)
+                .buffer(3, worldLobes)
+                .buffer(4, sortKeys)
+                .push(m_ctx, cmd, m_sortKeys);
+            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+            memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute,
+                          kStorageRW);
+            m_sort.record(cmd, sortKeys, kept, count, sortScratch);
+        }
+        m_timestamps.write(cmd, 2, kAll);
+
         // 2. The base mesh.
         for (const Image* image : {&base, &distance, &accum, &opticalDepth})
             transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED,
@@ -411,15 +480,18 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                         VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                         VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kTests,
                         VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
-        m_timestamps.write(cmd, 2, kAll);
+        m_timestamps.write(cmd, 3, kAll);
 
-        // 3. The kernels: one quad each, drawn in impulse order.
-        const Pipeline& splat = instanced ? m_instanced : m_oit;
+        // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
+        const Pipeline& splat = instanced ? m_instanced : sorted ? m_sorted : m_oit;
         const VkRenderingAttachmentInfo depthInfo =
             depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_LOAD);
         if (instanced)
             beginRendering(cmd, width, height, {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_LOAD)},
                            &depthInfo);
+        else if (sorted)
+            beginRendering(cmd, width, height, {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_LOAD)},
+                           nullptr);
         else
             beginRendering(
                 cmd, width, height,
@@ -428,24 +500,25 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                 nullptr);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, splat.handle());
         pushFrame(cmd, splat, frame);
-        Descriptors()
-            .buffer(0, bounds)
+        Descriptors quadDescriptors;
+        quadDescriptors.buffer(0, bounds)
             .buffer(1, kept)
             .buffer(2, worldLobes)
-            .image(3, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(4, closest)
-            .push(m_ctx, cmd, splat);
+            .image(3, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
+        if (!sorted)
+            quadDescriptors.buffer(4, closest);
+        quadDescriptors.push(m_ctx, cmd, splat);
         vkCmdDrawIndirect(cmd, draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
         vkCmdEndRendering(cmd);
         for (const Image* image : {&base, &accum, &opticalDepth})
             transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                             VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute, kStorageRead);
         memoryBarrier(cmd, kFragment, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRead);
-        m_timestamps.write(cmd, 3, kAll);
+        m_timestamps.write(cmd, 4, kAll);
 
         // 4. Resolve into the readback buffer.
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_resolve.handle());
-        pushFrame(cmd, m_resolve, frame);
+        pushFrame(cmd, m_resolve, resolveFrame);
         Descriptors()
             .image(0, base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(1, accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
@@ -458,7 +531,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
         vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
         memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                       VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
-        m_timestamps.write(cmd, 4, kAll);
+        m_timestamps.write(cmd, 5, kAll);
     });
 
     noise::Image image(camera.width, camera.height);
@@ -468,8 +541,14 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
     if (stats) {
         const std::vector<double> ms = m_timestamps.milliseconds();
         stats->passMs.clear();
-        for (std::uint32_t p = 0; p + 1 < kTimestampCount; ++p)
-            stats->passMs.emplace_back(kPassNames[p], ms[p + 1] - ms[p]);
+        // Pass p runs from slot p to slot p + 1. Without a sort, its empty span counts towards the
+        // prepare, so the passes always sum to the total.
+        for (std::uint32_t p = 0; p + 1 < kTimestampCount; ++p) {
+            if (p == kSortPass && !sorted)
+                continue;
+            const std::uint32_t end = p + 1 == kSortPass && !sorted ? p + 2 : p + 1;
+            stats->passMs.emplace_back(kPassNames[p], ms[end] - ms[p]);
+        }
         stats->totalMs = ms[kTimestampCount - 1];
         VkDrawIndirectCommand command;
         std::memcpy(&command, draw.mapped(), sizeof(command));

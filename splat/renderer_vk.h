@@ -1,13 +1,14 @@
 /// @file renderer_vk.h
 /// @brief The splatting renderers of DESIGN section 4 (paper sec. 4, fig. 4): `instanced`,
-/// `oit` and `hybrid`, over an opaque base mesh, headless on a Context.
+/// `oit`, `hybrid` and `sorted`, over an opaque base mesh, headless on a Context.
 ///
 /// One frame, whatever the method:
 ///  1. prepare (compute): per impulse, its kernel's lobes placed in the world (optionally
 ///     EWA-widened by the pixel footprint, sigma = footprint / sqrt(12): the variance of the box
 ///     pixel filter the reference integrates) and the kernel's pixel rectangle; a deterministic
 ///     compaction lists the kernels whose rectangle is not empty, in impulse order, and writes the
-///     indirect draw.
+///     indirect draw. `sorted` then sorts the kept kernels back to front by the view depth of
+///     their centre of mass (splat_sorted_keys.comp, then the radix sort of sort_vk.h).
 ///  2. mesh (raster): base colour (or the background), ray distance t to the mesh (R32F) and a
 ///     reversed float depth.
 ///  3. splat (raster): one quad per kept kernel; per pixel the kernel's colour and alpha along the
@@ -15,10 +16,14 @@
 ///     paper eq. 10). `instanced` draws the kernel opaque where alpha >= 0.5 with the depth test;
 ///     `oit` blends w x (premultiplied colour, alpha) additively and alpha into a revealage target
 ///     (McGuire and Bavoil 2013; paper eq. 11-12); `hybrid` also finds each pixel's closest
-///     kernel with a 64-bit atomicMin.
+///     kernel with a 64-bit atomicMin; `sorted` blends each kernel, back to front, over the base
+///     colour with premultiplied "over" (C = C_k + (1 - alpha_k) C): exact compositing wherever
+///     kernels do not interpenetrate along a ray (the accuracy ceiling of splatting, to show what
+///     OIT gives up).
 ///  4. resolve (compute): the final image (paper eq. 12 or 13), read back as linear float RGB.
 ///
-/// Results are deterministic: additive blending in a fixed primitive order, integer atomics only.
+/// Results are deterministic: blending in a fixed primitive order, integer atomics only, a sort
+/// without atomics.
 /// Units: world units; pixel (x, y) of the image is pixel (x, y) of noise::CameraRays (top-left
 /// origin), sampled at its centre (no supersampling: EWA does the filtering).
 #pragma once
@@ -35,6 +40,7 @@
 #include "noise/kernel.h"
 #include "noise/reference.h"
 #include "splat/context_vk.h"
+#include "splat/sort_vk.h"
 
 namespace spot::noise {
 struct Mesh;
@@ -42,13 +48,13 @@ struct Mesh;
 
 namespace spot::splat {
 
-enum class Method { Instanced, Oit, Hybrid };
+enum class Method { Instanced, Oit, Hybrid, Sorted };
 enum class OitWeight {
     Constant,     ///< w = 1: a plain unordered blend ("no OIT", paper fig. 3.3)
     McGuireBavoil ///< MB13 eq. 7 with z = view depth in world units (see spotOitWeight)
 };
 
-/// "instanced", "oit", "hybrid".
+/// "instanced", "oit", "hybrid", "sorted".
 const char* methodName(Method method);
 
 struct SplatSettings {
@@ -59,8 +65,10 @@ struct SplatSettings {
 };
 
 struct FrameStats {
-    std::vector<std::pair<std::string, double>> passMs; ///< GPU time per pass, milliseconds
-    double totalMs = 0.0;                               ///< GPU time of the frame, milliseconds
+    /// GPU time per pass, milliseconds: prepare (with the compaction), sort (`sorted` only), mesh,
+    /// splat, resolve.
+    std::vector<std::pair<std::string, double>> passMs;
+    double totalMs = 0.0;             ///< GPU time of the frame, milliseconds
     std::uint32_t kernelsDrawn = 0;   ///< kernels with a non-empty pixel rectangle
     std::uint64_t gpuMemoryBytes = 0; ///< the context's peak allocation so far
 };
@@ -80,8 +88,10 @@ public:
                         std::uint32_t count, const SplatSettings& settings,
                         FrameStats* stats = nullptr);
 
-    /// Device memory one frame allocates (bytes), for `count` impulses at width x height.
-    std::uint64_t frameBytes(int width, int height, std::uint32_t count) const;
+    /// Device memory one frame allocates (bytes), for `count` impulses at width x height with
+    /// `method` (`sorted` adds its sort keys and the sort's scratch).
+    std::uint64_t frameBytes(int width, int height, std::uint32_t count,
+                             Method method = Method::Hybrid) const;
 
 private:
     Context& m_ctx;
@@ -90,6 +100,8 @@ private:
     std::uint32_t m_indexCount = 0;
     Buffer m_lobes, m_vertices, m_indices;
     Pipeline m_prepare, m_compact, m_mesh, m_instanced, m_oit, m_resolve;
+    Pipeline m_sortKeys, m_sorted;
+    RadixSort m_sort;
     Timestamps m_timestamps;
 };
 
