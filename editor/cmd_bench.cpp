@@ -83,11 +83,12 @@ std::vector<Variant> variants(bool full) {
         {"oit", "ewa mb analytic", splatSettings(M::Oit, true, W::McGuireBavoil, 0)},
         {"oit", "ewa constant analytic", splatSettings(M::Oit, true, W::Constant, 0)},
         {"hybrid", "ewa mb analytic", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0)},
+        {"sorted", "ewa analytic", splatSettings(M::Sorted, true, W::McGuireBavoil, 0)},
     };
     if (full) {
         v.push_back({"oit", "no-ewa mb analytic", splatSettings(M::Oit, false, W::McGuireBavoil, 0)});
         v.push_back({"oit", "ewa mb N16", splatSettings(M::Oit, true, W::McGuireBavoil, 16)});
-        v.push_back({"hybrid", "no-ewa mb analytic", splatSettings(M::Hybrid, false, W::McGuireBavoil, 0)});
+        v.push_back({"sorted", "no-ewa analytic", splatSettings(M::Sorted, false, W::McGuireBavoil, 0)});
         v.push_back({"hybrid", "ewa mb N16", splatSettings(M::Hybrid, true, W::McGuireBavoil, 16)});
         v.push_back({"hybrid", "lod 2px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 2.0});
         v.push_back({"hybrid", "lod 4px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 4.0});
@@ -215,6 +216,7 @@ struct Bench {
     struct Frame {
         noise::Image image;
         double gpuMs = 0.0, wallMs = 0.0;
+        double splatMs = 0.0; ///< the splat pass alone (splatting methods)
         std::uint32_t generated = 0, drawn = 0;
     };
 
@@ -247,6 +249,9 @@ struct Bench {
                                       impulses.impulses, impulses.count, settings, &stats);
             f.gpuMs = impulses.milliseconds + stats.totalMs;
             f.drawn = stats.kernelsDrawn;
+            for (const auto& [pass, ms] : stats.passMs)
+                if (pass == "splat")
+                    f.splatMs = ms;
         }
         f.wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
         f.generated = impulses.count;
@@ -255,20 +260,28 @@ struct Bench {
 
     json runVariant(const SceneEntry& entry, cli::SceneJob& job, splat::GpuGenerator& gen,
                     splat::SplatRenderer& renderer, const Variant& v, const noise::Image& ref,
-                    const std::vector<noise::Image>& refOrbit, double refFlicker) {
+                    double refFlicker, double rooflineMs) {
         json row = {{"scene", job.scene.name}, {"scenario", entry.scenario}, {"method", v.method},
                     {"setting", v.setting}, {"width", job.scene.camera.width},
                     {"height", job.scene.camera.height}};
         try {
             ctx.resetPeak();
-            std::vector<double> gpu, wall;
+            std::vector<double> gpu, wall, splatPass;
             Frame last;
             for (int f = 0; f <= suite.frames; ++f) {
                 last = renderGpu(job, gen, renderer, job.scene.camera, v.splat, v.lod, v.steps);
                 if (f > 0) { // the first frame is not warm
                     gpu.push_back(last.gpuMs);
                     wall.push_back(last.wallMs);
+                    splatPass.push_back(last.splatMs);
                 }
+            }
+            if (v.steps == 0) {
+                // The splat pass against the rasterizer's own cost for the same primitives.
+                const double splatMs = percentile(splatPass, 0.5);
+                row["splat_ms_median"] = splatMs;
+                row["roofline_splat_ms"] = rooflineMs;
+                row["roofline_fraction"] = splatMs > 0.0 ? rooflineMs / splatMs : 0.0;
             }
             const splat::ImageMetrics m = splat::compareImages(ref, last.image);
             std::vector<noise::Image> frames;
@@ -317,14 +330,25 @@ struct Bench {
         cli::SceneJob job = cli::loadSceneJob(file, suite.size, suite.size, false);
         const noise::Image ref = reference(file, job, job.scene.camera);
         std::vector<noise::Image> refOrbit;
+        refOrbit.reserve(std::size_t(suite.orbitFrames));
         for (int k = 0; k < suite.orbitFrames; ++k)
             refOrbit.push_back(reference(file, job, orbit(job.scene.camera, k, suite.orbitDeg)));
         const double refFlicker = flicker(refOrbit);
         splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
         splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
         marcher.reset();
+        // The roofline: the same quads over the same pixels with trivial shaders.
+        splat::SplatSettings roofline = splatSettings(splat::Method::Oit, true, splat::OitWeight::McGuireBavoil, 0);
+        roofline.roofline = true;
+        std::vector<double> rooflineMs;
+        for (int f = 0; f <= suite.frames; ++f) {
+            const Frame fr = renderGpu(job, gen, renderer, job.scene.camera, roofline);
+            if (f > 0)
+                rooflineMs.push_back(fr.splatMs);
+        }
+        const double rooflineMedian = percentile(rooflineMs, 0.5);
         for (const Variant& v : suite.variants) {
-            json row = runVariant(entry, job, gen, renderer, v, ref, refOrbit, refFlicker);
+            json row = runVariant(entry, job, gen, renderer, v, ref, refFlicker, rooflineMedian);
             row["reference_flicker"] = refFlicker;
             rows.push_back(row);
             bar.update(++done, total);
@@ -458,6 +482,7 @@ std::string stabilityMarkdown(const json& rows, const Suite& suite) {
 void writeCsv(const fs::path& file, const json& rows) {
     const char* cols[] = {"scene", "scenario", "method", "setting", "width", "height",
                           "kernels_generated", "kernels_drawn", "ms_median", "ms_p90",
+                          "splat_ms_median", "roofline_splat_ms", "roofline_fraction",
                           "wall_ms_median", "psnr", "ssim", "flip", "flicker", "reference_flicker",
                           "gpu_memory_bytes", "host_memory_bytes", "status", "reason"};
     writeFileAtomic(file, [&](std::ostream& o) {

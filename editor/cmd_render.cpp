@@ -159,7 +159,7 @@ Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
 int render(int argc, char** argv) {
     std::vector<cli::OptionSpec> specs = cli::sceneOptions();
     specs.insert(specs.end(),
-                 {{"method", "NAME", "reference (converged CPU ground truth), instanced, oit, hybrid or raymarch", true},
+                 {{"method", "NAME", "reference (converged CPU ground truth), instanced, oit, hybrid, sorted or raymarch", true},
                   {"spp", "N", "reference: samples per pixel (default: the scene's)", false},
                   {"step-scale", "X", "reference: quadrature step multiplier (default 1)", false},
                   {"kernel-samples", "N", "oit/hybrid: march N samples per kernel (paper eq. 10) "
@@ -188,9 +188,11 @@ int render(int argc, char** argv) {
         gpuMethod = splat::Method::Oit;
     else if (method == "hybrid")
         gpuMethod = splat::Method::Hybrid;
+    else if (method == "sorted")
+        gpuMethod = splat::Method::Sorted;
     else if (method != "reference" && method != "raymarch")
         throw InputError(cat("spotshell render: unknown method '", method,
-                             "' (reference, instanced, oit, hybrid, raymarch)"));
+                             "' (reference, instanced, oit, hybrid, sorted, raymarch)"));
     const auto threads = args.integer("threads", 0, 0, 1024);
     std::optional<tbb::global_control> threadLimit;
     if (threads > 0)

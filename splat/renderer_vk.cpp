@@ -20,6 +20,7 @@
 #include "splat_quad.vert.h"
 #include "splat_resolve.comp.h"
 #include "splat_sorted.frag.h"
+#include "splat_roofline.frag.h"
 #include "splat_sorted_keys.comp.h"
 
 namespace spot::splat {
@@ -264,6 +265,10 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     sorted.colorFormats = {kColorFormat};
     sorted.blends = {overBlend()};
     m_sorted = makeGraphicsPipeline(ctx, sorted);
+
+    GraphicsPipelineDesc roofline = oit;
+    roofline.fragment = spirv(spv_splat_roofline_frag);
+    m_roofline = makeGraphicsPipeline(ctx, roofline);
 }
 
 std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t count,
@@ -365,7 +370,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
     Image opticalDepth(m_ctx, width, height, kScalarFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
                        "splat OIT optical depth");
     // Sorted: the kept kernels' keys, sorted with the kept list itself as the values.
-    const bool sorted = settings.method == Method::Sorted;
+    const bool sorted = settings.method == Method::Sorted && !settings.roofline;
     Buffer sortKeys;
     RadixSortScratch sortScratch;
     if (sorted) {
@@ -397,7 +402,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
     constexpr VkImageLayout kAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
     constexpr VkImageLayout kGeneral = VK_IMAGE_LAYOUT_GENERAL;
 
-    const bool instanced = settings.method == Method::Instanced;
+    const bool instanced = settings.method == Method::Instanced && !settings.roofline;
     m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
         m_timestamps.reset(cmd);
         m_timestamps.write(cmd, 0, kAll);
@@ -483,7 +488,10 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
         m_timestamps.write(cmd, 3, kAll);
 
         // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
-        const Pipeline& splat = instanced ? m_instanced : sorted ? m_sorted : m_oit;
+        const Pipeline& splat = settings.roofline ? m_roofline
+                                : instanced        ? m_instanced
+                                : sorted           ? m_sorted
+                                                   : m_oit;
         const VkRenderingAttachmentInfo depthInfo =
             depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_LOAD);
         if (instanced)

@@ -61,6 +61,10 @@ struct SplatSettings {
     Method method = Method::Hybrid;
     bool ewa = true;       ///< widen lobes by the pixel footprint (anti-aliasing)
     int kernelSamples = 0; ///< 0: analytic optical depths; N in [1, 2048]: paper eq. 10's N_s
+    /// The roofline instead of the method's splat pass: the same quads over the same pixels into
+    /// the `oit` targets with a fragment shader that does nothing (the image is meaningless; the
+    /// "splat" pass time is what lavapipe's rasterizer itself costs for this frame).
+    bool roofline = false;
     OitWeight weight = OitWeight::McGuireBavoil;
 };
 
@@ -99,7 +103,7 @@ private:
     float m_support = 3.0f;
     std::uint32_t m_indexCount = 0;
     Buffer m_lobes, m_vertices, m_indices;
-    Pipeline m_prepare, m_compact, m_mesh, m_instanced, m_oit, m_resolve;
+    Pipeline m_prepare, m_compact, m_mesh, m_instanced, m_oit, m_resolve, m_roofline;
     Pipeline m_sortKeys, m_sorted;
     RadixSort m_sort;
     Timestamps m_timestamps;

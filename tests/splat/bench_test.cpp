@@ -53,6 +53,11 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
                                 "ssim", "flip", "flicker", "gpu_memory_bytes", "host_memory_bytes"})
             EXPECT_TRUE(r.contains(key)) << key << " in " << r.dump();
         EXPECT_LE(double(r["ms_median"]), double(r["ms_p90"]) + 1e-9);
+        // Splatting rows carry their splat pass and the roofline of the same primitives.
+        if (r["method"] != "raymarch") {
+            EXPECT_GT(double(r["roofline_splat_ms"]), 0.0) << r.dump();
+            EXPECT_GT(double(r["roofline_fraction"]), 0.0) << r.dump();
+        }
         // Every splatting method is ok on the whole furry bunny. The ray-march runs (never
         // failed), but is not held to "ok": at the step counts lavapipe's loop limit lets it take
         // (39 at most on fur) its samples, spread over each ray's shell segments, shift as the
