@@ -13,6 +13,7 @@
 #include "noise/system.h"
 #include "shaders/spot_shared.hpp"
 #include "splat/layout.h"
+#include "splat/frame_vk.h"
 
 #include "raymarch_bin.comp.h"
 #include "raymarch_march.comp.h"
@@ -22,17 +23,6 @@
 
 namespace spot::splat {
 
-/// The splat renderer's frame (push constants of the prepare and mesh passes, which the march
-/// reuses, and of the march itself: its camera rays).
-namespace march_frame {
-using glm::uvec4;
-using glm::vec4;
-#define SPOT_CONST inline constexpr
-#include "shaders/spot_splat.h"
-#undef SPOT_CONST
-static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
-static_assert(sizeof(SpotMeshVertex) == 32);
-} // namespace march_frame
 
 } // namespace spot::splat
 
@@ -85,15 +75,10 @@ namespace {
 
 using gpu_march::SpotMarchCell;
 using gpu_march::SpotMarchParams;
-using march_frame::SpotMeshVertex;
-using march_frame::SpotSplatFrame;
+using gpu_splat::SpotMeshVertex;
+using gpu_splat::SpotSplatFrame;
 using shared::f32::MarchTwin;
 
-constexpr VkFormat kColorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
-constexpr VkFormat kScalarFormat = VK_FORMAT_R32_SFLOAT;
-constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
-/// Near plane of the reversed depth mapping (world units), as the splat renderer's.
-constexpr float kNearPlane = 1e-4f;
 /// prepare.comp and raymarch_bin.comp run 64 impulses per workgroup; a dispatch has at most
 /// 65,535 workgroups.
 constexpr std::uint32_t kMaxImpulses = 65535u * 64u;
@@ -101,67 +86,6 @@ constexpr std::uint32_t kMaxImpulses = 65535u * 64u;
 /// per lookup, so a short probe matters more than memory).
 constexpr std::int32_t kWantedProbe = 8;
 constexpr int kTableGrowths = 4;
-
-template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
-    return {code, N};
-}
-
-// ---- Small Vulkan helpers (the splat renderer's, which keeps them private) --------------------
-
-VkPipelineColorBlendAttachmentState opaqueBlend() {
-    VkPipelineColorBlendAttachmentState b{};
-    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                       VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-    return b;
-}
-
-VkRenderingAttachmentInfo colorAttachment(const Image& image, glm::vec4 clear) {
-    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    a.imageView = image.view();
-    a.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    a.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    a.clearValue.color = {{clear.r, clear.g, clear.b, clear.a}};
-    return a;
-}
-
-void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const SpotSplatFrame& frame) {
-    const VkShaderStageFlags stages =
-        pipeline.bindPoint() == VK_PIPELINE_BIND_POINT_COMPUTE
-            ? VK_SHADER_STAGE_COMPUTE_BIT
-            : VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
-    vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
-}
-
-/// The frame constants, the camera basis exactly as noise::CameraRays builds it (and as the
-/// splat renderer fills them): the march's rays are the splat renderers' rays.
-SpotSplatFrame makeFrame(const noise::Camera& camera, const noise::Shading& shading,
-                         glm::vec3 baseColor, std::uint32_t count, std::uint32_t lobes,
-                         float support) {
-    const noise::CameraRays rays(camera);
-    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
-    const glm::dvec3 up = glm::cross(right, forward);
-    const bool ortho = camera.projection == noise::Projection::Orthographic;
-    const double halfHeight =
-        ortho ? 0.5 * camera.orthoHeight : std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
-    const double halfWidth = halfHeight * double(camera.width) / double(camera.height);
-    // No EWA: the march samples the density itself; lobes widened by the pixel footprint could
-    // also reach past the 27 cells it searches.
-    const std::uint32_t flags =
-        shading.mode == noise::Shading::Mode::Lambert ? march_frame::kSplatFlagLambert : 0u;
-    SpotSplatFrame frame{};
-    frame.eye = glm::vec4(glm::vec3(camera.eye), ortho ? 1.0f : 0.0f);
-    frame.forward = glm::vec4(glm::vec3(forward), kNearPlane);
-    frame.right = glm::vec4(glm::vec3(right), float(halfWidth));
-    frame.up = glm::vec4(glm::vec3(up), float(halfHeight));
-    frame.size = glm::vec4(float(camera.width), float(camera.height),
-                           float(rays.pixelFootprint(1.0)), support);
-    frame.counts = glm::uvec4(count, lobes, 0u, flags);
-    frame.light = glm::vec4(shading.lightDir, shading.ambient);
-    frame.base = glm::vec4(baseColor, 0.0f);
-    return frame;
-}
 
 /// 91234 -> "91,234".
 std::string withCommas(std::uint64_t n) {
@@ -310,37 +234,13 @@ const RaymarchRenderer::Shell& RaymarchRenderer::shellFor(const noise::SurfaceCe
 RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
                                    const noise::Kernel& kernel)
     : m_ctx(ctx), m_binTimes(ctx, 4), m_marchTimes(ctx, 2) {
-    if (kernel.lobes.empty() || kernel.lobes.size() > 8)
-        throw InputError(cat("raymarch renderer: a kernel needs 1 to 8 lobes, this one has ",
-                             kernel.lobes.size()));
-    if (!(kernel.supportSigma > 0.0f) || !std::isfinite(kernel.supportSigma))
-        throw InputError(
-            cat("raymarch renderer: support ", kernel.supportSigma, " sigmas must be positive"));
+    m_lobes = uploadKernelLobes(ctx, kernel, "raymarch renderer");
     m_lobeCount = std::uint32_t(kernel.lobes.size());
     m_support = kernel.supportSigma;
-
-    const std::vector<gpu::SpotLobe> lobes = gpu::toGpu(kernel);
-    m_lobes = Buffer(ctx, lobes.size() * sizeof(gpu::SpotLobe), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                     Buffer::Memory::HostVisible, "raymarch kernel lobes");
-    m_lobes.upload(std::span<const gpu::SpotLobe>(lobes));
-
-    std::vector<SpotMeshVertex> vertices(mesh.positions.size());
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-        vertices[i].position = glm::vec4(mesh.positions[i], 1.0f);
-        vertices[i].normal =
-            glm::vec4(i < mesh.normals.size() ? mesh.normals[i] : glm::vec3(0.0f), 0.0f);
-    }
-    m_vertices =
-        Buffer(ctx, vertices.size() * sizeof(SpotMeshVertex), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-               Buffer::Memory::HostVisible, cat("raymarch mesh vertices (", mesh.name, ")"));
-    if (!vertices.empty())
-        m_vertices.upload(std::span<const SpotMeshVertex>(vertices));
-    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
-    m_indices =
-        Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
-               Buffer::Memory::HostVisible, cat("raymarch mesh indices (", mesh.name, ")"));
-    if (!mesh.triangles.empty())
-        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
+    MeshBuffers meshBuffers = uploadMesh(ctx, mesh, "raymarch");
+    m_vertices = std::move(meshBuffers.vertices);
+    m_indices = std::move(meshBuffers.indices);
+    m_indexCount = meshBuffers.indexCount;
 
     constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     constexpr VkDescriptorType kImg = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
@@ -371,7 +271,9 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
                                       std::uint32_t count, const RaymarchSettings& settings,
                                       RaymarchStats* stats, RaymarchCapture* capture) {
     const SpotSplatFrame frame =
-        makeFrame(camera, shading, baseColor, count, m_lobeCount, m_support); // checks the camera
+        // No EWA flag: the march samples the density itself, and lobes widened by the pixel
+        // footprint could reach past the 27 cells it searches. (Also validates the camera.)
+        makeSplatFrame(camera, shading, baseColor, count, m_lobeCount, m_support, 0, 0);
     if (settings.steps < 1)
         throw InputError(cat("raymarch: --steps ", settings.steps, " must be at least 1"));
     if (count > kMaxImpulses)
@@ -508,8 +410,8 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
                         VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
                         kTests, kDepthRW);
         const VkRenderingAttachmentInfo colors[2] = {
-            colorAttachment(base, glm::vec4(background, 1.0f)),
-            colorAttachment(distance, glm::vec4(march_frame::kSplatNoMesh))};
+            colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
+            colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(gpu_splat::kSplatNoMesh))};
         VkRenderingAttachmentInfo depthInfo{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
         depthInfo.imageView = depth.view();
         depthInfo.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
@@ -714,7 +616,7 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
 
 noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint32_t>* loops) {
     const noise::Camera& camera = capture.camera;
-    const SpotSplatFrame frame = makeFrame(camera, noise::Shading{}, glm::vec3(0.0f), 0, 0, 0.0f);
+    const SpotSplatFrame frame = makeSplatFrame(camera, noise::Shading{}, glm::vec3(0.0f), 0, 0, 0.0f, 0, 0);
     const std::uint64_t pixels = std::uint64_t(camera.width) * std::uint64_t(camera.height);
     SPOT_CHECK_EQ(capture.base.size(), pixels);
     SPOT_CHECK_EQ(capture.meshDistance.size(), pixels);

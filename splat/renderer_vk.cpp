@@ -10,6 +10,7 @@
 #include "noise/error.h"
 #include "noise/mesh.h"
 #include "splat/layout.h"
+#include "splat/frame_vk.h"
 
 #include "splat_compact.comp.h"
 #include "splat_instanced.frag.h"
@@ -25,27 +26,15 @@
 
 namespace spot::splat {
 
-namespace gpu_splat {
-using glm::uvec4;
-using glm::vec4;
-#define SPOT_CONST inline constexpr
-#include "shaders/spot_splat.h"
-#undef SPOT_CONST
-static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
-static_assert(sizeof(SpotMeshVertex) == 32);
-} // namespace gpu_splat
 
 namespace {
+
+constexpr VkImageUsageFlags kTargetUsage =
+    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
 
 using gpu_splat::SpotMeshVertex;
 using gpu_splat::SpotSplatFrame;
 
-constexpr VkFormat kColorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
-constexpr VkFormat kScalarFormat = VK_FORMAT_R32_SFLOAT;
-constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
-/// Near plane of the reversed depth mapping (world units): float depth near / z keeps its
-/// relative precision at every distance, so the near plane can sit this close to the eye.
-constexpr float kNearPlane = 1e-4f;
 /// Bytes per pixel of a frame: base colour, accumulation (RGBA32F), t, optical depth, depth
 /// (32-bit), closest kernel (64-bit), result (RGBA32F).
 constexpr std::uint64_t kBytesPerPixel = 16 + 16 + 4 + 4 + 4 + 8 + 16;
@@ -56,101 +45,6 @@ constexpr std::uint32_t kSortPass = 1;
 constexpr std::uint32_t kTimestampCount = 6;
 /// prepare.comp runs 64 impulses per workgroup and a dispatch has at most 65,535 workgroups.
 constexpr std::uint32_t kMaxImpulses = 65535u * 64u;
-
-template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
-    return {code, N};
-}
-
-void requireFormat(Context& ctx, VkFormat format, VkFormatFeatureFlags features, const char* what) {
-    VkFormatProperties props;
-    vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), format, &props);
-    if ((props.optimalTilingFeatures & features) != features)
-        throw std::runtime_error(cat("Vulkan: device ", ctx.deviceName(), " cannot use format ",
-                                     int(format), " for ", what));
-}
-
-VkPipelineColorBlendAttachmentState opaqueBlend() {
-    VkPipelineColorBlendAttachmentState b{};
-    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                       VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-    return b;
-}
-
-/// dst = src + dst: MB13's weighted sums, and the optical-depth sum that stands for its revealage
-/// (exp(-sum tau) = prod (1 - alpha); see splat_oit.frag). One blend state for both targets:
-/// the context does not enable independentBlend.
-VkPipelineColorBlendAttachmentState additiveBlend() {
-    VkPipelineColorBlendAttachmentState b = opaqueBlend();
-    b.blendEnable = VK_TRUE;
-    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.colorBlendOp = VK_BLEND_OP_ADD;
-    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.alphaBlendOp = VK_BLEND_OP_ADD;
-    return b;
-}
-
-/// Premultiplied "over": dst = src + (1 - src.a) dst (the sorted method, back to front).
-VkPipelineColorBlendAttachmentState overBlend() {
-    VkPipelineColorBlendAttachmentState b = opaqueBlend();
-    b.blendEnable = VK_TRUE;
-    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-    b.colorBlendOp = VK_BLEND_OP_ADD;
-    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-    b.alphaBlendOp = VK_BLEND_OP_ADD;
-    return b;
-}
-
-VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp load,
-                                          glm::vec4 clear = glm::vec4(0.0f)) {
-    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    a.imageView = image.view();
-    a.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    a.loadOp = load;
-    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    a.clearValue.color = {{clear.r, clear.g, clear.b, clear.a}};
-    return a;
-}
-
-VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load) {
-    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    a.imageView = image.view();
-    a.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
-    a.loadOp = load;
-    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    a.clearValue.depthStencil = {0.0f, 0}; // reversed depth: 0 is infinitely far
-    return a;
-}
-
-void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
-                    const std::vector<VkRenderingAttachmentInfo>& colors,
-                    const VkRenderingAttachmentInfo* depth) {
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {width, height}};
-    info.layerCount = 1;
-    info.colorAttachmentCount = std::uint32_t(colors.size());
-    info.pColorAttachments = colors.data();
-    info.pDepthAttachment = depth;
-    vkCmdBeginRendering(cmd, &info);
-    const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
-    const VkRect2D scissor{{0, 0}, {width, height}};
-    vkCmdSetViewport(cmd, 0, 1, &viewport);
-    vkCmdSetScissor(cmd, 0, 1, &scissor);
-}
-
-void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const SpotSplatFrame& frame) {
-    const VkShaderStageFlags stages =
-        pipeline.bindPoint() == VK_PIPELINE_BIND_POINT_COMPUTE
-            ? VK_SHADER_STAGE_COMPUTE_BIT
-            : VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
-    vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
-}
-
-constexpr VkImageUsageFlags kTargetUsage =
-    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
 
 } // namespace
 
@@ -170,12 +64,7 @@ const char* methodName(Method method) {
 
 SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
     : m_ctx(ctx), m_sort(ctx), m_timestamps(ctx, kTimestampCount) {
-    if (kernel.lobes.empty() || kernel.lobes.size() > 8)
-        throw InputError(
-            cat("splat renderer: a kernel needs 1 to 8 lobes, this one has ", kernel.lobes.size()));
-    if (!(kernel.supportSigma > 0.0f) || !std::isfinite(kernel.supportSigma))
-        throw InputError(
-            cat("splat renderer: support ", kernel.supportSigma, " sigmas must be positive"));
+    m_lobes = uploadKernelLobes(ctx, kernel, "splat renderer");
     requireFormat(ctx, kColorFormat,
                   VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT |
                       VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
@@ -187,29 +76,10 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     requireFormat(ctx, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth");
     m_lobeCount = std::uint32_t(kernel.lobes.size());
     m_support = kernel.supportSigma;
-
-    const std::vector<gpu::SpotLobe> lobes = gpu::toGpu(kernel);
-    m_lobes = Buffer(ctx, lobes.size() * sizeof(gpu::SpotLobe), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                     Buffer::Memory::HostVisible, "splat kernel lobes");
-    m_lobes.upload(std::span<const gpu::SpotLobe>(lobes));
-
-    std::vector<SpotMeshVertex> vertices(mesh.positions.size());
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-        vertices[i].position = glm::vec4(mesh.positions[i], 1.0f);
-        vertices[i].normal =
-            glm::vec4(i < mesh.normals.size() ? mesh.normals[i] : glm::vec3(0.0f), 0.0f);
-    }
-    m_vertices =
-        Buffer(ctx, vertices.size() * sizeof(SpotMeshVertex), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-               Buffer::Memory::HostVisible, cat("splat mesh vertices (", mesh.name, ")"));
-    if (!vertices.empty())
-        m_vertices.upload(std::span<const SpotMeshVertex>(vertices));
-    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
-    m_indices =
-        Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
-               Buffer::Memory::HostVisible, cat("splat mesh indices (", mesh.name, ")"));
-    if (!mesh.triangles.empty())
-        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
+    MeshBuffers meshBuffers = uploadMesh(ctx, mesh, "splat");
+    m_vertices = std::move(meshBuffers.vertices);
+    m_indices = std::move(meshBuffers.indices);
+    m_indexCount = meshBuffers.indexCount;
 
     const std::uint32_t push = sizeof(SpotSplatFrame);
     constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -288,7 +158,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                                    glm::vec3 background, glm::vec3 baseColor,
                                    const Buffer& impulses, std::uint32_t count,
                                    const SplatSettings& settings, FrameStats* stats) {
-    const noise::CameraRays rays(camera); // validates the camera (InputError)
+    static_cast<void>(noise::CameraRays(camera)); // validates the camera first (InputError)
     if (settings.kernelSamples < 0 ||
         settings.kernelSamples > int(gpu_splat::kSplatMaxKernelSamples))
         throw InputError(cat("splat renderer: kernel samples ", settings.kernelSamples,
@@ -310,34 +180,19 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                              m_ctx.memoryBudget() >> 20,
                              " MiB; reduce the image size or the kernel count"));
 
-    // The frame's constants: the camera basis exactly as noise::CameraRays builds it.
-    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
-    const glm::dvec3 up = glm::cross(right, forward);
-    const bool ortho = camera.projection == noise::Projection::Orthographic;
-    const double halfHeight =
-        ortho ? 0.5 * camera.orthoHeight : std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
-    const double halfWidth = halfHeight * double(camera.width) / double(camera.height);
+    // The frame's constants (the camera basis exactly as noise::CameraRays builds it).
     std::uint32_t flags = 0;
     if (settings.ewa)
         flags |= gpu_splat::kSplatFlagEwa;
-    if (shading.mode == noise::Shading::Mode::Lambert)
-        flags |= gpu_splat::kSplatFlagLambert;
     if (settings.weight == OitWeight::McGuireBavoil)
         flags |= gpu_splat::kSplatFlagMcGuireBavoil;
     if (settings.method == Method::Hybrid)
         flags |= gpu_splat::kSplatFlagHybrid;
     if (settings.method == Method::Instanced)
         flags |= gpu_splat::kSplatFlagInstanced;
-    SpotSplatFrame frame{};
-    frame.eye = glm::vec4(glm::vec3(camera.eye), ortho ? 1.0f : 0.0f);
-    frame.forward = glm::vec4(glm::vec3(forward), kNearPlane);
-    frame.right = glm::vec4(glm::vec3(right), float(halfWidth));
-    frame.up = glm::vec4(glm::vec3(up), float(halfHeight));
-    frame.size = glm::vec4(float(width), float(height), float(rays.pixelFootprint(1.0)), m_support);
-    frame.counts = glm::uvec4(count, m_lobeCount, std::uint32_t(settings.kernelSamples), flags);
-    frame.light = glm::vec4(shading.lightDir, shading.ambient);
-    frame.base = glm::vec4(baseColor, 0.0f);
+    const SpotSplatFrame frame =
+        makeSplatFrame(camera, shading, baseColor, count, m_lobeCount, m_support,
+                       std::uint32_t(settings.kernelSamples), flags);
 
     // Per-frame resources (the budget was checked above; each allocation checks again).
     const std::uint64_t lobeCount = std::uint64_t(count) * m_lobeCount;

@@ -1,0 +1,77 @@
+/// @file frame_vk.h
+/// @brief What the splat renderer and the ray-march share: the frame constants (the camera
+/// basis exactly as noise::CameraRays builds it, so every method's rays are the reference's),
+/// the base mesh and kernel lobes on the GPU, and the small Vulkan helpers of their passes.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "context_vk.h"
+#include "noise/camera.h"
+#include "noise/kernel.h"
+#include "noise/reference.h"
+
+namespace spot::noise {
+struct Mesh;
+}
+
+namespace spot::splat {
+
+namespace gpu_splat {
+using glm::uvec4;
+using glm::vec4;
+#define SPOT_CONST inline constexpr
+#include "shaders/spot_splat.h"
+#undef SPOT_CONST
+static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
+static_assert(sizeof(SpotMeshVertex) == 32);
+} // namespace gpu_splat
+
+inline constexpr VkFormat kColorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+inline constexpr VkFormat kScalarFormat = VK_FORMAT_R32_SFLOAT;
+inline constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+/// Near plane of the reversed depth mapping (world units): float depth near / z keeps its
+/// relative precision at every distance, so the near plane can sit this close to the eye.
+inline constexpr float kNearPlane = 1e-4f;
+
+template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
+    return {code, N};
+}
+
+/// The frame constants for a camera (units: world; image size in pixels). `flags` are the
+/// method's kSplatFlag* bits (Lambert is added from `shading`).
+gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
+                                         glm::vec3 baseColor, std::uint32_t count,
+                                         std::uint32_t lobes, float support,
+                                         std::uint32_t kernelSamples, std::uint32_t flags);
+
+/// The base mesh for the mesh pass (vertex pulling) and its index buffer.
+struct MeshBuffers {
+    Buffer vertices, indices;
+    std::uint32_t indexCount = 0;
+};
+MeshBuffers uploadMesh(Context& ctx, const noise::Mesh& mesh, const char* who);
+/// The kernel's lobes (gpu::SpotLobe[]); InputError for 0 or more than 8 lobes or a bad support.
+Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who);
+
+void requireFormat(Context& ctx, VkFormat format, VkFormatFeatureFlags features, const char* what);
+VkPipelineColorBlendAttachmentState opaqueBlend();
+/// dst = src + dst.
+VkPipelineColorBlendAttachmentState additiveBlend();
+/// Premultiplied "over": dst = src + (1 - src.a) dst.
+VkPipelineColorBlendAttachmentState overBlend();
+VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp load,
+                                          glm::vec4 clear = glm::vec4(0.0f));
+/// Reversed depth: cleared to 0, infinitely far.
+VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load);
+/// vkCmdBeginRendering over the whole image, with viewport and scissor set.
+void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    const std::vector<VkRenderingAttachmentInfo>& colors,
+                    const VkRenderingAttachmentInfo* depth);
+void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame);
+
+} // namespace spot::splat
