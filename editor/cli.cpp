@@ -112,20 +112,6 @@ double Args::number(const std::string& name, double fallback, double lo, double 
     return v;
 }
 
-noise::Mesh loadMeshArg(const std::string& spec) {
-    const std::string prefix = "generated:";
-    if (spec.rfind(prefix, 0) != 0)
-        return noise::loadMesh(spec);
-    const std::string shape = spec.substr(prefix.size());
-    if (shape == "sphere")
-        return noise::makeSphere(1.0f, 96, 192);
-    if (shape == "torus")
-        return noise::makeTorus(1.0f, 0.35f, 192, 64);
-    if (shape == "plane")
-        return noise::makePlane(2.0f, 32);
-    throw InputError(cat("unknown generated mesh '", shape, "' (sphere, torus or plane)"));
-}
-
 OptionSpec threadsOption() {
     return {"threads", "N", "worker threads (0 = all cores; results do not depend on it)", false};
 }

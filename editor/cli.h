@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "noise/mesh.h"
 
 namespace spot::cli {
 
@@ -48,10 +47,6 @@ private:
     std::map<std::string, std::string> m_values;
     bool m_help = false;
 };
-
-/// Load a mesh file, or make a generated one: `generated:sphere` (radius 1), `generated:torus`
-/// (radii 1 and 0.35), `generated:plane` (2 x 2 in xz).
-noise::Mesh loadMeshArg(const std::string& spec);
 
 /// The `--threads N` option every subcommand accepts (0 = all cores).
 OptionSpec threadsOption();

@@ -35,7 +35,7 @@ int impulses(int argc, char** argv) {
         threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
 
     const auto start = std::chrono::steady_clock::now();
-    const noise::Mesh mesh = cli::loadMeshArg(args.str("mesh"));
+    const noise::Mesh mesh = noise::loadMeshOrGenerated(args.str("mesh"));
     const noise::PresetDesc preset = noise::loadPreset(args.str("preset"));
     noise::GeneratorOptions options;
     options.seed = std::uint32_t(args.integer("seed", 0, 0, 0xffffffffll));

@@ -26,7 +26,7 @@ namespace {
 /// The part after the scene description is settled.
 void finishJob(SceneJob& job, bool cpuImpulses) {
     job.rays = std::make_unique<noise::CameraRays>(job.scene.camera);
-    job.mesh = loadMeshArg(job.scene.mesh);
+    job.mesh = noise::loadMeshOrGenerated(job.scene.mesh);
     job.preset = noise::loadPreset(job.scene.preset);
     noise::GeneratorOptions options;
     options.seed = job.scene.seed;

@@ -54,6 +54,10 @@ struct MeshLimits {
 /// file name and the reason on anything malformed.
 Mesh loadMesh(const std::filesystem::path& file, const MeshLimits& limits = {});
 
+/// A mesh file, or a generated shape named `generated:sphere` (radius 1), `generated:torus`
+/// (radii 1 and 0.35) or `generated:plane` (2 x 2 in xz): what scenes and the command line take.
+Mesh loadMeshOrGenerated(const std::string& spec);
+
 /// Parse from memory; `name` is used in messages. These are what the fuzz targets drive.
 Mesh parseObj(std::string_view text, const std::string& name, const MeshLimits& limits = {});
 Mesh parsePly(std::string_view bytes, const std::string& name, const MeshLimits& limits = {});

@@ -1232,4 +1232,18 @@ Mesh loadMesh(const std::filesystem::path& file, const MeshLimits& limits) {
     return ext == ".obj" ? parseObj(bytes, name, limits) : parsePly(bytes, name, limits);
 }
 
+Mesh loadMeshOrGenerated(const std::string& spec) {
+    const std::string prefix = "generated:";
+    if (spec.rfind(prefix, 0) != 0)
+        return loadMesh(spec);
+    const std::string shape = spec.substr(prefix.size());
+    if (shape == "sphere")
+        return makeSphere(1.0f, 96, 192);
+    if (shape == "torus")
+        return makeTorus(1.0f, 0.35f, 192, 64);
+    if (shape == "plane")
+        return makePlane(2.0f, 32);
+    throw InputError(cat("unknown generated mesh '", shape, "' (sphere, torus or plane)"));
+}
+
 } // namespace spot::noise

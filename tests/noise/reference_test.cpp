@@ -12,40 +12,13 @@
 #include "noise/reference.h"
 #include "noise/scene.h"
 #include "shaders/spot_shared.hpp"
+#include "test_support.h"
 #include "splat/image_compare.h"
 
 namespace {
 
 using namespace spot;
-
-noise::Kernel oneLobeKernel(glm::vec3 sigma, glm::vec3 rotationDeg, float extinction,
-                            glm::vec3 color, float support) {
-    noise::KernelDesc desc;
-    noise::LobeDesc lobe;
-    lobe.sigma = sigma;
-    lobe.rotationDeg = rotationDeg;
-    lobe.extinction = extinction;
-    lobe.color = color;
-    desc.lobes = {lobe};
-    desc.supportSigma = support;
-    return noise::buildKernel(desc);
-}
-
-noise::Impulse impulseAt(glm::vec3 position) {
-    noise::Impulse imp;
-    imp.position = position;
-    imp.frame = glm::mat3(1.0f);
-    imp.scale = glm::vec3(1.0f);
-    return imp;
-}
-
-/// DESIGN's closed form for a lobe's optical depth along a whole line, written independently.
-double closedFormDepth(const noise::WorldLobe& lobe, glm::dvec3 o, glm::dvec3 d) {
-    const glm::dvec3 op = lobe.toLobe * (o - lobe.centre), dp = lobe.toLobe * d;
-    const double dd = glm::dot(dp, dp), od = glm::dot(op, dp);
-    return lobe.extinction * std::sqrt(2.0 * M_PI) / std::sqrt(dd) *
-           std::exp(-0.5 * (glm::dot(op, op) - od * od / dd));
-}
+using namespace spot::test;
 
 noise::Camera orthoCamera(int size) {
     noise::Camera cam;
@@ -215,15 +188,7 @@ struct Rendered {
 Rendered renderScene(const std::string& name, int size, int spp, double stepScale) {
     const noise::SceneDesc scene =
         noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
-    noise::Mesh mesh;
-    if (scene.mesh == "generated:sphere")
-        mesh = noise::makeSphere(1.0f, 96, 192);
-    else if (scene.mesh == "generated:torus")
-        mesh = noise::makeTorus(1.0f, 0.35f, 192, 64);
-    else if (scene.mesh == "generated:plane")
-        mesh = noise::makePlane(2.0f, 32);
-    else
-        mesh = noise::loadMesh(scene.mesh);
+    const noise::Mesh mesh = noise::loadMeshOrGenerated(scene.mesh);
     const noise::PresetDesc preset = noise::loadPreset(scene.preset);
     noise::GeneratorOptions options;
     options.seed = scene.seed;

@@ -7,6 +7,8 @@
 #include <boost/math/special_functions/gamma.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "noise/impulses.h"
+#include "noise/kernel.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
 
@@ -80,6 +82,38 @@ inline noise::Mesh mixedPlane() {
     grid(1.0f, 2);
     noise::finalizeMesh(m);
     return m;
+}
+
+/// A kernel of one lobe (kernel units; extinction 1 / world unit).
+inline noise::Kernel oneLobeKernel(glm::vec3 sigma, glm::vec3 rotationDeg, float extinction,
+                                   glm::vec3 color, float support) {
+    noise::KernelDesc desc;
+    noise::LobeDesc lobe;
+    lobe.sigma = sigma;
+    lobe.rotationDeg = rotationDeg;
+    lobe.extinction = extinction;
+    lobe.color = color;
+    desc.lobes = {lobe};
+    desc.supportSigma = support;
+    return noise::buildKernel(desc);
+}
+
+/// An impulse at `position` with the identity frame and unit scale.
+inline noise::Impulse impulseAt(glm::vec3 position) {
+    noise::Impulse imp;
+    imp.position = position;
+    imp.frame = glm::mat3(1.0f);
+    imp.scale = glm::vec3(1.0f);
+    return imp;
+}
+
+/// Optical depth of a world lobe along a whole line: DESIGN section 1's closed form, written
+/// independently of the shared header's.
+inline double closedFormDepth(const noise::WorldLobe& lobe, glm::dvec3 o, glm::dvec3 d) {
+    const glm::dvec3 op = lobe.toLobe * (o - lobe.centre), dp = lobe.toLobe * d;
+    const double dd = glm::dot(dp, dp), od = glm::dot(op, dp);
+    return lobe.extinction * std::sqrt(2.0 * M_PI) / std::sqrt(dd) *
+           std::exp(-0.5 * (glm::dot(op, op) - od * od / dd));
 }
 
 /// Upper-tail p-value of a chi-square statistic with `dof` degrees of freedom.

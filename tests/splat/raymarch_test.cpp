@@ -22,45 +22,15 @@
 #include "noise/scene.h"
 #include "splat/image_compare.h"
 #include "splat/layout.h"
+#include "splat_test_support.h"
 #include "splat/raymarch_vk.h"
 
 namespace {
 
 using namespace spot;
-
-splat::ContextOptions validated() {
-    splat::ContextOptions o;
-    o.validation = true;
-    return o;
-}
-
-void expectNoValidationErrors(const splat::Context& ctx) {
-    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
-}
-
-splat::Buffer upload(splat::Context& ctx, const std::vector<noise::Impulse>& impulses) {
-    const std::vector<gpu::SpotImpulse> g = gpu::toGpu(impulses);
-    splat::Buffer b(ctx, g.size() * sizeof(gpu::SpotImpulse), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                    splat::Buffer::Memory::HostVisible, "test impulses");
-    if (!g.empty())
-        b.upload(std::span<const gpu::SpotImpulse>(g));
-    return b;
-}
+using namespace spot::test;
 
 // ---- Hand-made input: one lobe, its cell --------------------------------------------------------
-
-noise::Kernel oneLobeKernel(glm::vec3 sigma, glm::vec3 rotationDeg, float extinction,
-                            glm::vec3 color, float support) {
-    noise::KernelDesc desc;
-    noise::LobeDesc lobe;
-    lobe.sigma = sigma;
-    lobe.rotationDeg = rotationDeg;
-    lobe.extinction = extinction;
-    lobe.color = color;
-    desc.lobes = {lobe};
-    desc.supportSigma = support;
-    return noise::buildKernel(desc);
-}
 
 /// Surface cells of size h holding exactly the cells of the given impulses (set in each).
 noise::SurfaceCells cellsFor(std::vector<noise::Impulse>& impulses, float h) {
@@ -75,33 +45,6 @@ noise::SurfaceCells cellsFor(std::vector<noise::Impulse>& impulses, float h) {
         }
     }
     return cells;
-}
-
-noise::Impulse impulseAt(glm::vec3 position) {
-    noise::Impulse imp;
-    imp.position = position;
-    imp.frame = glm::mat3(1.0f);
-    imp.scale = glm::vec3(1.0f);
-    return imp;
-}
-
-/// Optical depth of a world lobe along a whole line (DESIGN section 1), written independently.
-double closedFormDepth(const noise::WorldLobe& lobe, glm::dvec3 o, glm::dvec3 d) {
-    const glm::dvec3 op = lobe.toLobe * (o - lobe.centre), dp = lobe.toLobe * d;
-    const double dd = glm::dot(dp, dp), od = glm::dot(op, dp);
-    return lobe.extinction * std::sqrt(2.0 * M_PI) / std::sqrt(dd) *
-           std::exp(-0.5 * (glm::dot(op, op) - od * od / dd));
-}
-
-noise::Camera lobeCamera(noise::Projection projection, int size) {
-    noise::Camera cam;
-    cam.projection = projection;
-    cam.eye = glm::dvec3(0.3, 0.4, 5.0);
-    cam.target = glm::dvec3(0.0);
-    cam.orthoHeight = 2.0;
-    cam.fovYDeg = 22.0;
-    cam.width = cam.height = size;
-    return cam;
 }
 
 TEST(Raymarch, IsolatedLobeConvergesToTheClosedForm) {
@@ -196,38 +139,6 @@ TEST(Raymarch, MeshEndsTheRayAndOccludesIt) {
 
 // ---- The shipped scenes -------------------------------------------------------------------------
 
-struct SceneSetup {
-    noise::SceneDesc scene;
-    noise::Mesh mesh;
-    noise::Kernel kernel;
-    noise::SurfaceCells cells;
-    std::vector<noise::Impulse> impulses;
-};
-
-noise::Mesh sceneMesh(const noise::SceneDesc& scene) {
-    if (scene.mesh == "generated:sphere")
-        return noise::makeSphere(1.0f, 96, 192);
-    if (scene.mesh == "generated:torus")
-        return noise::makeTorus(1.0f, 0.35f, 192, 64);
-    if (scene.mesh == "generated:plane")
-        return noise::makePlane(2.0f, 32);
-    return noise::loadMesh(scene.mesh);
-}
-
-SceneSetup loadSetup(const std::string& name, int size) {
-    SceneSetup s;
-    s.scene = noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
-    s.scene.camera.width = s.scene.camera.height = size;
-    s.mesh = sceneMesh(s.scene);
-    noise::GeneratorOptions options;
-    options.seed = s.scene.seed;
-    const noise::ImpulseGenerator generator(s.mesh, noise::loadPreset(s.scene.preset), options);
-    s.kernel = generator.kernel();
-    s.cells = generator.cells();
-    s.impulses = generator.generate();
-    return s;
-}
-
 noise::Image renderScene(splat::Context& ctx, const SceneSetup& s, const splat::Buffer& impulses,
                          const splat::RaymarchSettings& settings, splat::RaymarchStats* stats,
                          splat::RaymarchCapture* capture = nullptr) {
@@ -242,18 +153,7 @@ constexpr int kReferenceSpp = 64;
 
 /// Reference renders at kSceneSize, computed once per test process.
 const noise::Image& referenceImage(const std::string& name) {
-    static std::map<std::string, noise::Image> cache;
-    auto it = cache.find(name);
-    if (it == cache.end()) {
-        const SceneSetup s = loadSetup(name, kSceneSize);
-        const noise::ReferenceRenderer reference(s.mesh, s.kernel, s.impulses, s.scene.shading,
-                                                 s.scene.background, s.scene.baseColor);
-        noise::ReferenceSettings settings;
-        settings.spp = kReferenceSpp;
-        settings.seed = 3;
-        it = cache.emplace(name, reference.render(s.scene.camera, settings)).first;
-    }
-    return it->second;
+    return test::referenceImage(name, kSceneSize, kReferenceSpp);
 }
 
 /// The render, the reference and the FLIP map, into the test's temporary folder.

@@ -1,0 +1,95 @@
+// Helpers shared by the GPU renderer tests: validated contexts, uploads, scenes and their
+// references (rendered once per test process).
+#pragma once
+
+#include <map>
+#include <span>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "../noise/test_support.h"
+#include "noise/camera.h"
+#include "noise/impulses.h"
+#include "noise/reference.h"
+#include "noise/scene.h"
+#include "splat/context_vk.h"
+#include "splat/layout.h"
+
+namespace spot::test {
+
+inline splat::ContextOptions validated() {
+    splat::ContextOptions o;
+    o.validation = true;
+    return o;
+}
+
+inline void expectNoValidationErrors(const splat::Context& ctx) {
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+/// CPU impulses in a host-visible storage buffer, in the GPU layout.
+inline splat::Buffer upload(splat::Context& ctx, const std::vector<noise::Impulse>& impulses) {
+    const std::vector<gpu::SpotImpulse> g = gpu::toGpu(impulses);
+    splat::Buffer b(ctx, g.size() * sizeof(gpu::SpotImpulse), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                    splat::Buffer::Memory::HostVisible, "test impulses");
+    if (!g.empty())
+        b.upload(std::span<const gpu::SpotImpulse>(g));
+    return b;
+}
+
+/// A camera looking at the origin from +z (slightly off axis), for single-lobe tests.
+inline noise::Camera lobeCamera(noise::Projection projection, int size) {
+    noise::Camera cam;
+    cam.projection = projection;
+    cam.eye = glm::dvec3(0.3, 0.4, 5.0);
+    cam.target = glm::dvec3(0.0);
+    cam.orthoHeight = 2.0;
+    cam.fovYDeg = 22.0;
+    cam.width = cam.height = size;
+    return cam;
+}
+
+/// A shipped scene at a square size, with its impulses generated on the CPU.
+struct SceneSetup {
+    noise::SceneDesc scene;
+    noise::Mesh mesh;
+    noise::Kernel kernel;
+    noise::SurfaceCells cells;
+    std::vector<noise::Impulse> impulses;
+};
+
+inline SceneSetup loadSetup(const std::string& name, int size) {
+    SceneSetup s;
+    s.scene = noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    s.scene.camera.width = s.scene.camera.height = size;
+    s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
+    noise::GeneratorOptions options;
+    options.seed = s.scene.seed;
+    const noise::ImpulseGenerator generator(s.mesh, noise::loadPreset(s.scene.preset), options);
+    s.kernel = generator.kernel();
+    s.cells = generator.cells();
+    s.impulses = generator.generate();
+    return s;
+}
+
+/// The reference of a shipped scene (sample pattern seed 3), rendered once per test process.
+inline const noise::Image& referenceImage(const std::string& name, int size, int spp) {
+    static std::map<std::tuple<std::string, int, int>, noise::Image> cache;
+    const auto key = std::make_tuple(name, size, spp);
+    auto it = cache.find(key);
+    if (it == cache.end()) {
+        const SceneSetup s = loadSetup(name, size);
+        const noise::ReferenceRenderer reference(s.mesh, s.kernel, s.impulses, s.scene.shading,
+                                                 s.scene.background, s.scene.baseColor);
+        noise::ReferenceSettings settings;
+        settings.spp = spp;
+        settings.seed = 3;
+        it = cache.emplace(key, reference.render(s.scene.camera, settings)).first;
+    }
+    return it->second;
+}
+
+} // namespace spot::test
