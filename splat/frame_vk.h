@@ -38,6 +38,28 @@ inline constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 /// relative precision at every distance, so the near plane can sit this close to the eye.
 inline constexpr float kNearPlane = 1e-4f;
 
+/// Short names for the stages, accesses and layouts the splat and march passes synchronize.
+namespace passes {
+inline constexpr VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+inline constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+inline constexpr VkPipelineStageFlags2 kColorOut = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+inline constexpr VkPipelineStageFlags2 kTests =
+    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+inline constexpr VkPipelineStageFlags2 kFragment = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
+inline constexpr VkPipelineStageFlags2 kTransfer = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
+inline constexpr VkPipelineStageFlags2 kHostStage = VK_PIPELINE_STAGE_2_HOST_BIT;
+inline constexpr VkAccessFlags2 kColorRW =
+    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
+inline constexpr VkAccessFlags2 kDepthRW =
+    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+inline constexpr VkAccessFlags2 kStorageRead = VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
+inline constexpr VkAccessFlags2 kStorageRW =
+    VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+inline constexpr VkImageAspectFlags kColorAspect = VK_IMAGE_ASPECT_COLOR_BIT;
+inline constexpr VkImageLayout kAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+inline constexpr VkImageLayout kGeneral = VK_IMAGE_LAYOUT_GENERAL;
+} // namespace passes
+
 template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
     return {code, N};
 }

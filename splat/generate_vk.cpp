@@ -89,7 +89,7 @@ GpuImpulses GpuGenerator::generate(const std::function<bool(const noise::Surface
     if (cells.empty())
         return result;
     Buffer cellBuffer = upload(m_ctx, cells, "visible cells");
-    Buffer none(m_ctx, 16, kStorage, Buffer::Memory::HostVisible, "placeholder");
+    Buffer none(m_ctx, 16, kStorage, Buffer::Memory::HostVisible, "unused binding"); // a pass's unused bindings
     Timestamps time(m_ctx, 2);
     auto run = [&](std::uint32_t mode, std::uint32_t n, const Buffer& scratch, const Buffer& flags,
                    const Buffer& out) {

@@ -347,22 +347,7 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
                               kHost, "ray march capture: mesh distance");
     }
 
-    constexpr VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-    constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-    constexpr VkPipelineStageFlags2 kColorOut = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
-    constexpr VkPipelineStageFlags2 kTests =
-        VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
-    constexpr VkPipelineStageFlags2 kTransfer = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-    constexpr VkPipelineStageFlags2 kHostStage = VK_PIPELINE_STAGE_2_HOST_BIT;
-    constexpr VkAccessFlags2 kColorRW =
-        VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
-    constexpr VkAccessFlags2 kDepthRW = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT |
-                                        VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-    constexpr VkAccessFlags2 kStorageRead = VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
-    constexpr VkAccessFlags2 kStorageRW =
-        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
-    constexpr VkImageLayout kAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    constexpr VkImageLayout kGeneral = VK_IMAGE_LAYOUT_GENERAL;
+    using namespace passes;
 
     // Submit 1: world lobes, bins, the mesh (what the march needs besides the neighbourhoods).
     m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
