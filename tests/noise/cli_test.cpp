@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -28,7 +29,9 @@ std::string slurp(const std::string& file) {
 
 Result run(const std::string& args) {
     static int counter = 0;
-    const std::string errFile = tmp("stderr" + std::to_string(counter++) + ".txt");
+    // Per process and call: ctest runs these tests in parallel processes.
+    const std::string errFile =
+        tmp("stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
     // Validation on for every GPU method the command runs: any error fails the command (exit 1).
     const std::string cmd = "SPOT_VALIDATION=1 " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
     Result r;

@@ -1,6 +1,7 @@
 // Fields: exact values of each kind on hand-made meshes, the noise's statistics and smoothness,
 // image lookups (texel centres, bilinear, wrap modes, v flip), and refusal of bad images.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -353,7 +354,10 @@ protected:
                     pixels.push_back(texelValue(col, row, c));
         writeImage(file(), kW, kH, kC, pixels, OIIO::TypeDesc::FLOAT);
     }
-    static std::filesystem::path file() { return kTmp / "grid.tif"; }
+    /// One file per test process: ctest runs the cases of this suite in parallel processes.
+    static std::filesystem::path file() {
+        return kTmp / ("grid-" + std::to_string(::getpid()) + ".tif");
+    }
 
     /// uv at the centre of texel (col, row): v is flipped, row 0 is the top of the image.
     static glm::vec2 centre(int col, int row) {
@@ -426,7 +430,7 @@ TEST_F(FieldImage, ChannelSelectionAndRangeMapping) {
 
     // Channels 1..3 of a 3-channel image do not exist.
     const std::string message = bindError(image(file(), 3, 1, true), m_mesh, "ctx");
-    EXPECT_NE(message.find("grid.tif"), std::string::npos) << message;
+    EXPECT_NE(message.find(file().filename().string()), std::string::npos) << message;
     EXPECT_NE(message.find("channels"), std::string::npos) << message;
 }
 
@@ -442,7 +446,7 @@ TEST_F(FieldImage, RangeContainsEverySample) {
 }
 
 TEST_F(FieldImage, RelativePathsResolveAgainstBaseDir) {
-    const auto f = makeField(image("grid.tif", 1, 0, true), m_mesh, kTmp, "img");
+    const auto f = makeField(image(file().filename().string(), 1, 0, true), m_mesh, kTmp, "img");
     const glm::vec2 uv = centre(2, 2);
     EXPECT_NEAR(f->eval(atUv(uv.x, uv.y)).x, texelValue(2, 2, 0), 1e-6);
 }
@@ -450,7 +454,7 @@ TEST_F(FieldImage, RelativePathsResolveAgainstBaseDir) {
 TEST_F(FieldImage, MeshWithoutUvIsAnInputError) {
     const std::string message = bindError(image(file(), 1, 0, true), triangleMesh(false), "ctx");
     EXPECT_NE(message.find("uv"), std::string::npos) << message;
-    EXPECT_NE(message.find("grid.tif"), std::string::npos) << message;
+    EXPECT_NE(message.find(file().filename().string()), std::string::npos) << message;
 }
 
 void expectImageRefused(const std::filesystem::path& file, const std::string& alsoExpected = "") {

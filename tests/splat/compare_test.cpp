@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -126,7 +127,7 @@ struct Result {
 std::string tmp(const std::string& name) { return std::string(SPOT_TEST_TMP_DIR) + "/" + name; }
 
 Result run(const std::string& args) {
-    const std::string errFile = tmp("compare_stderr.txt");
+    const std::string errFile = tmp("compare-stderr-" + std::to_string(::getpid()) + ".txt");
     FILE* pipe = popen((std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile).c_str(), "r");
     Result r;
     std::array<char, 4096> buf{};
