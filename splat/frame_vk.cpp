@@ -157,4 +157,21 @@ void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::S
     vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
 }
 
+void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
+                   const gpu_splat::SpotSplatFrame& frame, const Buffer& impulses,
+                   const Buffer& lobes, const Buffer& worldLobes, const Buffer& bounds,
+                   std::uint32_t count) {
+    if (count == 0)
+        return;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, prepare.handle());
+    pushFrame(cmd, prepare, frame);
+    Descriptors()
+        .buffer(0, impulses)
+        .buffer(1, lobes)
+        .buffer(2, worldLobes)
+        .buffer(3, bounds)
+        .push(ctx, cmd, prepare);
+    vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+}
+
 } // namespace spot::splat

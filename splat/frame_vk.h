@@ -96,4 +96,11 @@ void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t heig
                     const VkRenderingAttachmentInfo* depth);
 void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame);
 
+/// Record the prepare pass (splat_prepare.comp): for `count` impulses, the world lobes and each
+/// kernel's screen bound. Records nothing for no impulses.
+void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
+                   const gpu_splat::SpotSplatFrame& frame, const Buffer& impulses,
+                   const Buffer& lobes, const Buffer& worldLobes, const Buffer& bounds,
+                   std::uint32_t count);
+
 } // namespace spot::splat

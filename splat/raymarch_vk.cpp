@@ -354,15 +354,7 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
         m_binTimes.reset(cmd);
         m_binTimes.write(cmd, 0, kAll);
         if (count > 0) {
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_prepare.handle());
-            pushFrame(cmd, m_prepare, frame);
-            Descriptors()
-                .buffer(0, impulses)
-                .buffer(1, m_lobes)
-                .buffer(2, worldLobes)
-                .buffer(3, bounds)
-                .push(m_ctx, cmd, m_prepare);
-            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+            recordPrepare(m_ctx, cmd, m_prepare, frame, impulses, m_lobes, worldLobes, bounds, count);
         }
         m_binTimes.write(cmd, 1, kAll);
         const std::uint64_t firstBytes = std::uint64_t(records) * sizeof(std::uint32_t);

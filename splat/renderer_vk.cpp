@@ -249,15 +249,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
 
         // 1. Prepare: world lobes and bounds, then the kept kernels in order and the draw.
         if (count > 0) {
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_prepare.handle());
-            pushFrame(cmd, m_prepare, frame);
-            Descriptors()
-                .buffer(0, impulses)
-                .buffer(1, m_lobes)
-                .buffer(2, worldLobes)
-                .buffer(3, bounds)
-                .push(m_ctx, cmd, m_prepare);
-            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+            recordPrepare(m_ctx, cmd, m_prepare, frame, impulses, m_lobes, worldLobes, bounds, count);
             memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute,
                           kStorageRead);
         }
