@@ -117,7 +117,8 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method meth
 
 Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
     splat::RaymarchSettings settings;
-    settings.steps = int(args.integer("steps", 32, 1, 4096));
+    settings.steps = int(args.integer("steps", 32, 1, splat::kRaymarchMaxSteps));
+    settings.supersample = int(args.integer("supersample", 1, 1, splat::kRaymarchMaxSupersample));
     splat::Context ctx;
     splat::GpuGenerator generator(ctx, job.mesh, *job.generator);
     const splat::GpuImpulses impulses =
@@ -139,18 +140,22 @@ Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
     r.seconds = (impulses.milliseconds + stats.totalMs) * 1e-3;
     r.stats = {{"device", ctx.deviceName()},
                {"steps", settings.steps},
+               {"supersample", settings.supersample},
                {"kernels_generated", impulses.count},
                {"kernels_drawn", impulses.count},
                {"gpu_ms", passes},
                {"gpu_total_ms", impulses.milliseconds + stats.totalMs},
                {"loop_bound", stats.loopBound},
                {"max_loop_iterations", stats.maxLoopIterations},
-               {"max_steps", stats.maxSteps},
+               {"steps_per_dispatch", stats.stepsPerDispatch},
+               {"dispatches", stats.dispatches},
                {"shell_cells", stats.shellCells},
                {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
                {"validation_errors", v.errors}};
-    r.summary = cat(impulses.count, " kernels, ", settings.steps, " steps (", stats.maxSteps,
-                    " fit), ", impulses.milliseconds + stats.totalMs, " ms GPU on ", ctx.deviceName());
+    r.summary = cat(impulses.count, " kernels, ", settings.steps, " steps in ", stats.dispatches,
+                    stats.dispatches == 1 ? " dispatch, " : " dispatches, ", settings.supersample,
+                    "x", settings.supersample, " rays per pixel, ",
+                    impulses.milliseconds + stats.totalMs, " ms GPU on ", ctx.deviceName());
     return r;
 }
 
@@ -166,8 +171,11 @@ int render(int argc, char** argv) {
                                           "instead of the analytic integral (default 0)", false},
                   {"ewa", "on|off", "GPU methods: EWA filtering by the pixel footprint (default on)", false},
                   {"weight", "W", "oit/hybrid: constant or mcguire-bavoil (default)", false},
-                  {"steps", "N", "raymarch: samples per pixel through the shell (default 32; "
-                                 "refused when a shader invocation would loop too long)", false},
+                  {"steps", "N", "raymarch: samples along each ray through the shell (default 32, "
+                                 "at most 4096; split over dispatches so that no shader "
+                                 "invocation loops too long)", false},
+                  {"supersample", "N", "raymarch: N x N rays per pixel, box-filtered (default 1, "
+                                       "at most 8)", false},
                   {"lod", "PIXELS", "GPU methods: thin the kernels of cells smaller than PIXELS on "
                                     "screen, conserving mass (default 0: off)", false},
                   {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},

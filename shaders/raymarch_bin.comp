@@ -3,7 +3,8 @@
 // record (the shared hash lookup), then first index, end index and count per record with integer
 // atomics (order independent, so deterministic). The host reads them back, checks the impulses
 // are in cell order (each cell's impulses contiguous, cells in the shell's sorted order) and
-// builds every record's 27-neighbour ranges.
+// builds every record's 27-neighbour ranges. Also each impulse's box (SpotMarchBox), from its
+// world lobes.
 #extension GL_GOOGLE_include_directive : require
 #include "spot_shared.h"
 #include "spot_layout.h"
@@ -17,6 +18,8 @@ layout(std430, binding = 2) readonly buffer Impulses { SpotImpulse impulses[]; }
 // [0, n): first impulse (0xffffffff: none); [n, 2n): one past the last; [2n, 3n): count;
 // [3n]: impulses whose cell is not in the shell (n = records).
 layout(std430, binding = 3) buffer Bins { uint bins[]; };
+layout(std430, binding = 4) readonly buffer Lobes { SpotWorldLobe lobes[]; };
+layout(std430, binding = 5) writeonly buffer Boxes { SpotMarchBox boxes[]; };
 
 layout(push_constant) uniform Push {
     uint count;   // impulses
@@ -33,6 +36,30 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.count)
         return;
+    uint lobeCount = params.counts.y;
+    float k = params.grid.z;
+    vec3 lo = vec3(kMarchFar);
+    vec3 hi = vec3(-kMarchFar);
+    for (uint l = 0u; l < lobeCount; ++l) {
+        SpotWorldLobe w = lobes[i * lobeCount + l];
+        if (!(w.color.w > 0.0))
+            continue; // no density anywhere
+        mat3 inv = inverse(mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz));
+        vec3 c = vec3(w.a0.w, w.a1.w, w.a2.w);
+        vec3 e = k * vec3(length(vec3(inv[0][0], inv[1][0], inv[2][0])),
+                          length(vec3(inv[0][1], inv[1][1], inv[2][1])),
+                          length(vec3(inv[0][2], inv[1][2], inv[2][2])));
+        e = 1.01 * e + 1e-5 * (abs(c) + 1.0);
+        if (!(max(e.x, max(e.y, e.z)) < kMarchFar)) { // not finite: never cull
+            lo = vec3(-kMarchFar);
+            hi = vec3(kMarchFar);
+        } else {
+            lo = min(lo, c - e);
+            hi = max(hi, c + e);
+        }
+    }
+    boxes[i] = SpotMarchBox(vec4(lo, 0.0), vec4(hi, 0.0));
+
     uint loops = 0u;
     int record = marchFind(impulses[i].cell.xyz, loops);
     if (record < 0) {

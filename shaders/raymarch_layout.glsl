@@ -24,6 +24,9 @@ struct SpotMarchParams {
     uvec4 counts; /* x: steps N per pixel; y: lobes per impulse; z: walk cap (cells a ray can cross
                      in the shell's bounding box); w: kMarchFlag* bits */
     vec4 light;   /* xyz: unit direction towards the light (world); w: ambient in [0, 1] */
+    uvec4 range;  /* x: first step this dispatch takes; y: one past its last step (a march is
+                     split over dispatches so that no invocation loops past lavapipe's limit);
+                     z: supersampling n (n x n rays per output pixel); w: unused */
 };
 
 /* One shell cell: the impulses of its 27 neighbour cells as ranges of the impulse array (impulses
@@ -35,8 +38,18 @@ struct SpotMarchCell {
                        2 (r % 2) and 2 (r % 2) + 1 */
 };
 
+/* The world box outside which every lobe of one impulse has zero density (each lobe's support
+ * ellipsoid |A (x - c)| < k bounded per axis by k |row i of A^-1|, padded by 1% for rounding;
+ * the whole space for a lobe whose inverse is not finite). The march skips an impulse whose box
+ * does not hold the sample: exact, since the lobes it skips add exactly zero. 32 bytes. */
+struct SpotMarchBox {
+    vec4 lo; /* xyz: smallest corner; w: unused */
+    vec4 hi; /* xyz: largest corner; w: unused */
+};
+
 /* SpotMarchParams.counts.w bits. */
-SPOT_CONST uint kMarchFlagLambert = 1u; /* Lambert + ambient shading, else unlit */
+SPOT_CONST uint kMarchFlagLambert = 1u;   /* Lambert + ambient shading, else unlit */
+SPOT_CONST uint kMarchFlagNoCulling = 2u; /* evaluate every impulse's lobes, box or not (tests) */
 
 /* Shell segments kept per ray: entering and leaving the shell more often than this merges the
  * rest into the last segment (its gaps are sampled too, and find no density there). */

@@ -1,9 +1,12 @@
 #version 450
-// Ray march, step 2 (paper eq. 7-9): one invocation per pixel. The pixel's ray (through its
-// centre, as the splat renderers' and noise::CameraRays), marched through the shell up to the
-// base mesh (raymarch_shared.glsl), composited over the mesh pass's colour. Each invocation's
-// loop count goes to loops[1 + pixel] and its maximum to loops[0] (integer atomicMax), so tests
-// can hold the host's bound against what the shader really ran.
+// Ray march, step 2 (paper eq. 7-9): one invocation per march pixel (the output image
+// supersampled n x n: march pixel (x, y) is the ray through the centre of sub-pixel (x mod n,
+// y mod n) of output pixel (x / n, y / n)). The ray is marched through the shell up to the base
+// mesh (raymarch_shared.glsl), steps params.range.x to params.range.y of it in this dispatch,
+// continuing from the state the previous dispatch left (state[], radiance and transmittance).
+// Each invocation's loop count goes to loops[1 + pixel] (the largest over the dispatches) and the
+// maximum over all to loops[0] (integer atomicMax), so tests can hold the host's bound against
+// what the shader really ran.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "raymarch_layout.glsl"
@@ -14,15 +17,16 @@ layout(std430, binding = 0) readonly buffer Params { SpotMarchParams params; };
 layout(std430, binding = 1) readonly buffer Table { ivec4 table[]; };
 layout(std430, binding = 2) readonly buffer Cells { SpotMarchCell cells[]; };
 layout(std430, binding = 3) readonly buffer Lobes { SpotWorldLobe lobes[]; };
-layout(binding = 4, rgba32f) uniform readonly image2D baseColor;
 layout(binding = 5, r32f) uniform readonly image2D meshDistance;
-layout(std430, binding = 6) writeonly buffer Result { vec4 result[]; };
+layout(std430, binding = 6) buffer State { vec4 state[]; };
 layout(std430, binding = 7) buffer Loops { uint loopCounts[]; };
+layout(std430, binding = 9) readonly buffer Boxes { SpotMarchBox boxes[]; };
 
 SpotMarchParams marchParams() { return params; }
 ivec4 marchSlot(uint i) { return table[i]; }
 SpotMarchCell marchCell(uint record) { return cells[record]; }
 SpotWorldLobe marchLobe(uint i) { return lobes[i]; }
+SpotMarchBox marchBox(uint impulse) { return boxes[impulse]; }
 
 #include "raymarch_shared.glsl"
 
@@ -31,15 +35,14 @@ void main() {
     uint width = uint(frame.size.x);
     if (p.x >= width || p.y >= uint(frame.size.y))
         return;
-    ivec2 pixel = ivec2(p);
     vec3 o;
     vec3 d;
     splatPixelRay(vec2(p) + 0.5, o, d);
-    uint loops = 0u;
-    vec4 march = marchRay(o, d, imageLoad(meshDistance, pixel).r, loops);
-    vec3 behind = imageLoad(baseColor, pixel).rgb;
     uint index = p.y * width + p.x;
-    result[index] = vec4(march.rgb + march.a * behind, 1.0);
-    loopCounts[1u + index] = loops;
+    vec4 before = params.range.x == 0u ? vec4(0.0, 0.0, 0.0, 1.0) : state[index];
+    uint loops = 0u;
+    state[index] = marchRay(o, d, imageLoad(meshDistance, ivec2(p)).r, params.range.x,
+                            params.range.y, before, loops);
+    loopCounts[1u + index] = max(loopCounts[1u + index], loops);
     atomicMax(loopCounts[0], loops);
 }

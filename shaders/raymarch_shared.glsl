@@ -6,7 +6,8 @@
  * raymarch_layout.glsl; the includer provides the data accessors
  *   SpotMarchParams marchParams(); ivec4 marchSlot(uint i);
  * and, unless RAYMARCH_LOOKUP_ONLY is defined,
- *   SpotMarchCell marchCell(uint record); SpotWorldLobe marchLobe(uint i).
+ *   SpotMarchCell marchCell(uint record); SpotWorldLobe marchLobe(uint i);
+ *   SpotMarchBox marchBox(uint impulse).
  *
  * Loop accounting. lavapipe stops an invocation after 65,535 loop iterations in total, counted
  * per SIMD vector of invocations: a loop runs while any lane of the vector is still in it, and
@@ -153,18 +154,27 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
 /* Paper eq. 7-9 along the ray o + t d (unit d) up to tEnd (the opaque mesh, or kMarchFar): N
  * samples evenly spaced over the ray's shell segments (midpoints of N equal steps of the segments
  * laid end to end); at each, the density (extinction) and extinction-weighted colour of every
- * lobe of the 27 neighbour cells' impulses, composited front to back with the 0-order attenuation
+ * lobe of the 27 neighbour cells' impulses (those whose box holds the sample: the others add
+ * exactly zero), composited front to back with the 0-order attenuation
  * alpha = 1 - exp(-sigma dt). With Lambert shading the normal is the normalized negative gradient
- * of the summed density (the reference's). Returns (radiance, transmittance). Costs at most
- * marchShell's loops + 1 + N (1 + segments + longest probe + 2 + 1 + neighbourhood lobes). */
-SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) loops) {
+ * of the summed density (the reference's).
+ *
+ * This call takes steps [first, end) of the N, continuing from `state` (radiance, transmittance:
+ * (0, 0, 0, 1) before step 0) and returning the state after them, so a march can be split over
+ * several invocations: the arithmetic, and so the result, is the same however it is split. Costs
+ * at most marchShell's loops + 1 + (end - first) (1 + segments + longest probe + 2 + 1 +
+ * neighbourhood impulses (lobes per impulse + 2)). */
+SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, vec4 state,
+                      SPOT_INOUT(uint) loops) {
     SpotMarchParams p = marchParams();
-    MarchSegments s = marchShell(o, d, tEnd, loops);
-    vec3 radiance = vec3(0.0f);
-    float transmittance = 1.0f;
+    vec3 radiance = vec3(state.x, state.y, state.z);
+    float transmittance = state.w;
     uint steps = p.counts.x;
-    if (s.count == 0u || !(s.span > 0.0f) || steps == 0u)
-        return vec4(radiance, transmittance);
+    if (!(transmittance > kMarchOpaque) || first >= end || steps == 0u)
+        return state;
+    MarchSegments s = marchShell(o, d, tEnd, loops);
+    if (s.count == 0u || !(s.span > 0.0f))
+        return state;
     float dt = s.span / float(steps);
     float k = p.grid.z;
     uint lobes = p.counts.y;
@@ -172,7 +182,7 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) loops) {
     uint seg = 0u;
     float segStart = 0.0f; // shell length before segment `seg`
     loops += 1u;
-    for (uint j = 0u; j < steps && transmittance > kMarchOpaque; ++j) {
+    for (uint j = first; j < min(end, steps) && transmittance > kMarchOpaque; ++j) {
         loops += 1u;
         float sj = (float(j) + 0.5f) * dt;
         loops += 1u;
@@ -187,12 +197,13 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) loops) {
         if (record < 0)
             continue;
         SpotMarchCell cell = marchCell(uint(record));
-        // All lobes of the neighbourhood in one flat loop (its cost is the lobe count, whatever
-        // the ranges); ranges are never empty, so one advance reaches the next.
-        uint total = cell.head.y * lobes;
+        // The impulses of the neighbourhood in one flat loop (its cost is the impulse count,
+        // whatever the ranges); ranges are never empty, so one advance reaches the next.
+        uint total = cell.head.y;
         uint r = 0u;
-        uint next = cell.range[0].x * lobes;
-        uint left = cell.range[0].y * lobes;
+        uint next = cell.range[0].x;
+        uint left = cell.range[0].y;
+        bool cull = (p.counts.w & kMarchFlagNoCulling) == 0u;
         float sigma = 0.0f;
         vec3 emitted = vec3(0.0f);
         vec3 gradient = vec3(0.0f); // of -density: points out of the strands
@@ -203,23 +214,34 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) loops) {
                 r += 1u;
                 uvec4 pair = cell.range[r >> 1u];
                 bool odd = (r & 1u) != 0u;
-                next = (odd ? pair.z : pair.x) * lobes;
-                left = (odd ? pair.w : pair.y) * lobes;
+                next = odd ? pair.z : pair.x;
+                left = odd ? pair.w : pair.y;
             }
-            SpotWorldLobe w = marchLobe(next);
+            uint impulse = next;
             next += 1u;
             left -= 1u;
-            if (!(w.color.w > 0.0f))
-                continue;
-            mat3 A = mat3(vec3(w.a0), vec3(w.a1), vec3(w.a2));
-            vec3 u = A * (x - vec3(w.a0.w, w.a1.w, w.a2.w));
-            float rho = w.color.w * spotLobeDensity(u, k);
-            if (!(rho > 0.0f))
-                continue;
-            sigma += rho;
-            emitted += rho * vec3(w.color);
-            if (lit)
-                gradient += rho * (transpose(A) * u);
+            if (cull) {
+                SpotMarchBox box = marchBox(impulse);
+                if (x.x < box.lo.x || x.y < box.lo.y || x.z < box.lo.z || x.x > box.hi.x ||
+                    x.y > box.hi.y || x.z > box.hi.z)
+                    continue;
+            }
+            loops += 1u;
+            for (uint l = 0u; l < lobes; ++l) {
+                loops += 1u;
+                SpotWorldLobe w = marchLobe(impulse * lobes + l);
+                if (!(w.color.w > 0.0f))
+                    continue;
+                mat3 A = mat3(vec3(w.a0), vec3(w.a1), vec3(w.a2));
+                vec3 u = A * (x - vec3(w.a0.w, w.a1.w, w.a2.w));
+                float rho = w.color.w * spotLobeDensity(u, k);
+                if (!(rho > 0.0f))
+                    continue;
+                sigma += rho;
+                emitted += rho * vec3(w.color);
+                if (lit)
+                    gradient += rho * (transpose(A) * u);
+            }
         }
         if (!(sigma > 0.0f && sigma < kMarchFar))
             continue;

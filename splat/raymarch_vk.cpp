@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <memory>
 #include <span>
@@ -17,6 +18,7 @@
 
 #include "raymarch_bin.comp.h"
 #include "raymarch_march.comp.h"
+#include "raymarch_resolve.comp.h"
 #include "splat_mesh.frag.h"
 #include "splat_mesh.vert.h"
 #include "splat_prepare.comp.h"
@@ -31,6 +33,8 @@ namespace spot::shared::f32 {
 using gpu::SpotWorldLobe;
 using splat::gpu_march::kMarchFar;
 using splat::gpu_march::kMarchFlagLambert;
+using splat::gpu_march::kMarchFlagNoCulling;
+using splat::gpu_march::SpotMarchBox;
 using splat::gpu_march::kMarchMaxSegments;
 using splat::gpu_march::kMarchOpaque;
 using splat::gpu_march::SpotMarchCell;
@@ -45,6 +49,7 @@ public:
         const glm::ivec4* table = nullptr;
         const SpotMarchCell* cells = nullptr;
         const SpotWorldLobe* lobes = nullptr;
+        const SpotMarchBox* boxes = nullptr;
     };
     explicit MarchTwin(const Arrays& arrays) : m_a(arrays) {}
 
@@ -54,6 +59,7 @@ private:
     glm::ivec4 marchSlot(uint i) const { return m_a.table[i]; }
     const SpotMarchCell& marchCell(uint record) const { return m_a.cells[record]; }
     const SpotWorldLobe& marchLobe(uint i) const { return m_a.lobes[i]; }
+    const SpotMarchBox& marchBox(uint impulse) const { return m_a.boxes[impulse]; }
 
 public:
 #define SPOT_FN
@@ -73,6 +79,7 @@ namespace spot::splat {
 
 namespace {
 
+using gpu_march::SpotMarchBox;
 using gpu_march::SpotMarchCell;
 using gpu_march::SpotMarchParams;
 using gpu_splat::SpotMeshVertex;
@@ -125,12 +132,14 @@ std::uint64_t fingerprint(const noise::SurfaceCells& cells) {
 } // namespace
 
 std::uint64_t raymarchLoopBound(std::uint64_t steps, std::uint64_t walkCells,
-                                std::uint64_t longestProbe, std::uint64_t neighbourhoodLobes) {
+                                std::uint64_t longestProbe, std::uint64_t neighbourhoodImpulses,
+                                std::uint64_t lobesPerImpulse) {
     // raymarch_shared.glsl: marchShell costs 1 + W (1 + marchFind), marchFind at most P + 2;
-    // marchRay adds 1 + N (1 + (1 + S - 1) + marchFind + 1 + L T).
+    // marchRay adds 1 + N (1 + (1 + S - 1) + marchFind + 1 + T (1 + 1 + L)).
     const std::uint64_t find = longestProbe + 2;
     const std::uint64_t walk = 1 + walkCells * (1 + find);
-    const std::uint64_t perStep = 1 + gpu_march::kMarchMaxSegments + find + 1 + neighbourhoodLobes;
+    const std::uint64_t perStep = 1 + gpu_march::kMarchMaxSegments + find + 1 +
+                                  neighbourhoodImpulses * (2 + lobesPerImpulse);
     return walk + 1 + steps * perStep;
 }
 
@@ -233,7 +242,7 @@ const RaymarchRenderer::Shell& RaymarchRenderer::shellFor(const noise::SurfaceCe
 
 RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
                                    const noise::Kernel& kernel)
-    : m_ctx(ctx), m_binTimes(ctx, 4), m_marchTimes(ctx, 2) {
+    : m_ctx(ctx), m_binTimes(ctx, 4), m_marchTimes(ctx, 3) {
     m_lobes = uploadKernelLobes(ctx, kernel, "raymarch renderer");
     m_lobeCount = std::uint32_t(kernel.lobes.size());
     m_support = kernel.supportSigma;
@@ -247,10 +256,15 @@ RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
     const std::uint32_t push = sizeof(SpotSplatFrame);
     m_prepare =
         makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), {kBuf, kBuf, kBuf, kBuf}, push);
-    m_bin = makeComputePipeline(ctx, spirv(spv_raymarch_bin_comp), {kBuf, kBuf, kBuf, kBuf},
-                                2 * sizeof(std::uint32_t));
-    m_march = makeComputePipeline(ctx, spirv(spv_raymarch_march_comp),
-                                  {kBuf, kBuf, kBuf, kBuf, kImg, kImg, kBuf, kBuf}, push);
+    m_bin = makeComputePipeline(ctx, spirv(spv_raymarch_bin_comp),
+                                {kBuf, kBuf, kBuf, kBuf, kBuf, kBuf}, 2 * sizeof(std::uint32_t));
+    // One layout for the march and its resolve (each pushes the bindings it reads): 0 params,
+    // 1 hash table, 2 neighbourhoods, 3 world lobes, 4 base colour, 5 mesh distance, 6 march
+    // state, 7 loop counts, 8 result, 9 impulse boxes.
+    const std::vector<VkDescriptorType> marchBindings = {kBuf, kBuf, kBuf, kBuf, kImg,
+                                                         kImg, kBuf, kBuf, kBuf, kBuf};
+    m_march = makeComputePipeline(ctx, spirv(spv_raymarch_march_comp), marchBindings, push);
+    m_resolve = makeComputePipeline(ctx, spirv(spv_raymarch_resolve_comp), marchBindings, push);
     GraphicsPipelineDesc mesh3d;
     mesh3d.vertex = spirv(spv_splat_mesh_vert);
     mesh3d.fragment = spirv(spv_splat_mesh_frag);
@@ -270,12 +284,21 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
                                       const noise::SurfaceCells& cells, const Buffer& impulses,
                                       std::uint32_t count, const RaymarchSettings& settings,
                                       RaymarchStats* stats, RaymarchCapture* capture) {
+    if (settings.steps < 1 || settings.steps > kRaymarchMaxSteps)
+        throw InputError(cat("raymarch: --steps ", settings.steps, " is outside [1, ",
+                             kRaymarchMaxSteps, "]"));
+    if (settings.supersample < 1 || settings.supersample > kRaymarchMaxSupersample)
+        throw InputError(cat("raymarch: --supersample ", settings.supersample, " is outside [1, ",
+                             kRaymarchMaxSupersample, "]"));
+    const std::uint32_t n = std::uint32_t(settings.supersample);
+    // The march renders the n x n supersampled image: the same view, n times the pixels a side.
+    noise::Camera marchCamera = camera;
+    marchCamera.width = int(std::min<std::int64_t>(std::int64_t(camera.width) * n, 1 << 30));
+    marchCamera.height = int(std::min<std::int64_t>(std::int64_t(camera.height) * n, 1 << 30));
     const SpotSplatFrame frame =
         // No EWA flag: the march samples the density itself, and lobes widened by the pixel
         // footprint could reach past the 27 cells it searches. (Also validates the camera.)
-        makeSplatFrame(camera, shading, baseColor, count, m_lobeCount, m_support, 0, 0);
-    if (settings.steps < 1)
-        throw InputError(cat("raymarch: --steps ", settings.steps, " must be at least 1"));
+        makeSplatFrame(marchCamera, shading, baseColor, count, m_lobeCount, m_support, 0, 0);
     if (count > kMaxImpulses)
         throw InputError(cat("raymarch: ", count, " impulses, more than the ", kMaxImpulses,
                              " one frame can place"));
@@ -287,17 +310,24 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
         throw InputError(cat("raymarch: cell size ", cells.cellSize, " must be positive"));
     const Shell& shell = shellFor(cells);
     const std::uint32_t records = std::uint32_t(shell.cells.size());
-    const std::uint32_t width = std::uint32_t(camera.width), height = std::uint32_t(camera.height);
-    const std::uint64_t pixels = std::uint64_t(width) * height;
+    const std::uint32_t outWidth = std::uint32_t(camera.width);
+    const std::uint32_t outHeight = std::uint32_t(camera.height);
+    const std::uint32_t width = std::uint32_t(marchCamera.width);
+    const std::uint32_t height = std::uint32_t(marchCamera.height);
+    const std::uint64_t pixels = std::uint64_t(width) * height; // march pixels
+    const std::uint64_t outPixels = std::uint64_t(outWidth) * outHeight;
 
-    // Memory: world lobes and kernel bounds (prepare), bins, records, images, result, loop counts.
+    // Memory: world lobes and kernel bounds (prepare), bins, records; per march pixel the base
+    // colour, mesh distance, depth, state and loop count; per output pixel the result.
     const std::uint64_t need =
         std::uint64_t(count) *
-            (m_lobeCount * sizeof(gpu::SpotWorldLobe) + sizeof(gpu::SpotKernelBound)) +
+            (m_lobeCount * sizeof(gpu::SpotWorldLobe) + sizeof(gpu::SpotKernelBound) +
+             sizeof(SpotMarchBox)) +
         std::uint64_t(records) * (3 * 4 + sizeof(SpotMarchCell)) + 4 + sizeof(SpotMarchParams) +
-        pixels * (16 + 4 + 4 + 16 + 4) + 4 + (capture ? pixels * 20 : 0);
+        pixels * (16 + 4 + 4 + 16 + 4) + outPixels * 16 + 4 + (capture ? pixels * 20 : 0);
     if (m_ctx.allocatedBytes() + need > m_ctx.memoryBudget())
-        throw InputError(cat("raymarch: a ", width, "x", height, " frame of ", count,
+        throw InputError(cat("raymarch: a ", outWidth, "x", outHeight, " frame (", n, "x", n,
+                             " rays per pixel) of ", count,
                              " kernels over ", records, " shell cells needs ", need >> 20,
                              " MiB of GPU memory; ", m_ctx.allocatedBytes() >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
@@ -309,25 +339,32 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
     params.counts.x = std::uint32_t(settings.steps);
     params.counts.y = m_lobeCount;
     params.counts.w =
-        shading.mode == noise::Shading::Mode::Lambert ? gpu_march::kMarchFlagLambert : 0u;
+        (shading.mode == noise::Shading::Mode::Lambert ? gpu_march::kMarchFlagLambert : 0u) |
+        (settings.cullImpulses ? 0u : gpu_march::kMarchFlagNoCulling);
     params.light = glm::vec4(shading.lightDir, shading.ambient);
+    params.range = glm::uvec4(0u, 0u, n, 0u);
 
     constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
     constexpr VkBufferUsageFlags kFilled = kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
     constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
-    Buffer paramBuffer(m_ctx, sizeof(SpotMarchParams), kStorage, kHost, "ray march parameters");
+    // Each dispatch of the march rewrites params.range (vkCmdUpdateBuffer).
+    Buffer paramBuffer(m_ctx, sizeof(SpotMarchParams), kFilled, kHost, "ray march parameters");
     paramBuffer.upload(&params, sizeof(params));
     Buffer worldLobes(m_ctx, std::uint64_t(count) * m_lobeCount * sizeof(gpu::SpotWorldLobe),
                       kStorage, capture ? kHost : kDevice,
                       cat("ray march world lobes (", count, " kernels)"));
+    Buffer boxes(m_ctx, std::uint64_t(count) * sizeof(SpotMarchBox), kStorage,
+                 capture ? kHost : kDevice, cat("ray march impulse boxes (", count, " kernels)"));
     Buffer bounds(m_ctx, std::uint64_t(count) * sizeof(gpu::SpotKernelBound), kStorage, kDevice,
                   "ray march kernel bounds (unused)");
     Buffer bins(m_ctx, (3 * std::uint64_t(records) + 1) * sizeof(std::uint32_t), kFilled, kHost,
                 "ray march cell bins");
     Buffer recordBuffer(m_ctx, std::uint64_t(records) * sizeof(SpotMarchCell), kStorage, kHost,
                         cat("ray march neighbourhoods (", records, " shell cells)"));
-    Buffer result(m_ctx, pixels * sizeof(glm::vec4), kStorage, kHost, "ray march result");
+    Buffer state(m_ctx, pixels * sizeof(glm::vec4), kStorage, kDevice,
+                 "ray march state (radiance, transmittance)");
+    Buffer result(m_ctx, outPixels * sizeof(glm::vec4), kStorage, kHost, "ray march result");
     Buffer loopCounts(m_ctx, (pixels + 1) * sizeof(std::uint32_t), kFilled, kHost,
                       "ray march loop counts");
     constexpr VkImageUsageFlags kTarget = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
@@ -362,8 +399,10 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
             vkCmdFillBuffer(cmd, bins.handle(), 0, firstBytes, 0xffffffffu);
         vkCmdFillBuffer(cmd, bins.handle(), firstBytes, VK_WHOLE_SIZE, 0u);
         vkCmdFillBuffer(cmd, loopCounts.handle(), 0, VK_WHOLE_SIZE, 0u);
-        memoryBarrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
-                      kStorageRW);
+        // The bins are cleared and the world lobes (prepare) written before the bin pass.
+        memoryBarrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT | kCompute,
+                      VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      kCompute, kStorageRW);
         if (count > 0) {
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_bin.handle());
             const std::uint32_t push[2] = {count, records};
@@ -374,6 +413,8 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
                 .buffer(1, shell.tableBuffer)
                 .buffer(2, impulses)
                 .buffer(3, bins)
+                .buffer(4, worldLobes)
+                .buffer(5, boxes)
                 .push(m_ctx, cmd, m_bin);
             vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
         }
@@ -467,7 +508,7 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
     std::vector<SpotMarchCell> neighbourhoods(records);
     std::uint32_t mostImpulses = 0;
     {
-        MarchTwin find(MarchTwin::Arrays{&params, shell.table.data(), nullptr, nullptr});
+        MarchTwin find(MarchTwin::Arrays{&params, shell.table.data(), nullptr, nullptr, nullptr});
         for (std::uint32_t r = 0; r < records; ++r) {
             SpotMarchCell& cell = neighbourhoods[r];
             cell = SpotMarchCell{};
@@ -497,39 +538,41 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
             mostImpulses = std::max(mostImpulses, total);
         }
     }
-    // The guard: refuse a march that could run past lavapipe's loop limit.
+    // The guard: split the march over dispatches of at most `perDispatch` steps, each within the
+    // loop budget; refuse a frame where not even one step fits.
     const std::uint32_t walk = shell.walkCells();
     const std::uint64_t lobesPerStep = std::uint64_t(mostImpulses) * m_lobeCount;
-    const std::uint64_t bound = raymarchLoopBound(std::uint64_t(settings.steps), walk,
-                                                  std::uint64_t(shell.longestProbe), lobesPerStep);
-    const std::uint64_t fixed =
-        raymarchLoopBound(0, walk, std::uint64_t(shell.longestProbe), lobesPerStep);
-    const std::uint64_t perStep =
-        raymarchLoopBound(1, walk, std::uint64_t(shell.longestProbe), lobesPerStep) - fixed;
-    const std::uint64_t maxSteps =
+    const auto loopBound = [&](std::uint64_t n) {
+        return raymarchLoopBound(n, walk, std::uint64_t(shell.longestProbe), mostImpulses,
+                                 m_lobeCount);
+    };
+    const std::uint64_t fixed = loopBound(0);
+    const std::uint64_t perStep = loopBound(1) - fixed;
+    const std::uint64_t fits =
         settings.loopBudget > fixed ? (settings.loopBudget - fixed) / perStep : 0;
-    if (bound > settings.loopBudget) {
-        const std::string why = cat(
+    if (fits == 0)
+        throw InputError(cat(
+            "raymarch: even one step would need up to ", withCommas(fixed + perStep),
             " loop iterations in one shader invocation (", withCommas(lobesPerStep),
             " lobes summed at each step in the densest neighbourhood, ", withCommas(fixed),
             " to walk the shell's ", shell.hi.x - shell.lo.x + 1, "x", shell.hi.y - shell.lo.y + 1,
-            "x", shell.hi.z - shell.lo.z + 1, " cells); lavapipe stops at ",
-            withCommas(gpu_march::kMarchLavapipeLoopLimit), " without an error");
-        if (maxSteps == 0)
-            throw InputError(
-                cat("raymarch: even --steps 1 would need up to ", withCommas(fixed + perStep), why,
-                    "; no step count fits: lower the kernel density or the cell count"));
-        throw InputError(cat("raymarch: --steps ", settings.steps, " would need up to ",
-                             withCommas(bound), why, "; at most ", withCommas(maxSteps),
-                             " steps fit"));
-    }
+            "x", shell.hi.z - shell.lo.z + 1, " cells) and the budget is ",
+            withCommas(settings.loopBudget), " (lavapipe stops at ",
+            withCommas(gpu_march::kMarchLavapipeLoopLimit),
+            " without an error); lower the kernel density or the cell count"));
+    // As few dispatches as fit, with the steps spread evenly over them.
+    const std::uint32_t steps = std::uint32_t(settings.steps);
+    const std::uint32_t dispatches = std::uint32_t((steps + fits - 1) / fits);
+    const std::uint32_t perDispatch = (steps + dispatches - 1) / dispatches;
+    const std::uint64_t bound = loopBound(perDispatch);
     if (records > 0)
         recordBuffer.upload(std::span<const SpotMarchCell>(neighbourhoods));
     const double hostMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - hostStart)
             .count();
 
-    // Submit 2: the march.
+    // Submit 2: the march, in `dispatches` dispatches of at most `perDispatch` steps each (params
+    // .range names them), then the resolve: each output pixel the mean of its n x n rays.
     m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
         m_marchTimes.reset(cmd);
         m_marchTimes.write(cmd, 0, kAll);
@@ -540,15 +583,35 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
             .buffer(1, shell.tableBuffer)
             .buffer(2, recordBuffer)
             .buffer(3, worldLobes)
-            .image(4, base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(5, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(6, result)
+            .buffer(6, state)
             .buffer(7, loopCounts)
+            .buffer(9, boxes)
             .push(m_ctx, cmd, m_march);
-        vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+        for (std::uint32_t k = 0; k < dispatches; ++k) {
+            const glm::uvec4 range(k * perDispatch, std::min(steps, (k + 1) * perDispatch), n, 0u);
+            if (k > 0) // the previous dispatch read the params and wrote the state
+                memoryBarrier(cmd, kCompute, kStorageRW, kTransfer | kCompute,
+                              VK_ACCESS_2_TRANSFER_WRITE_BIT | kStorageRW);
+            vkCmdUpdateBuffer(cmd, paramBuffer.handle(), offsetof(SpotMarchParams, range),
+                              sizeof(range), &range);
+            memoryBarrier(cmd, kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute, kStorageRead);
+            vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+        }
+        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRead);
+        m_marchTimes.write(cmd, 1, kAll);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_resolve.handle());
+        pushFrame(cmd, m_resolve, frame);
+        Descriptors()
+            .buffer(0, paramBuffer)
+            .image(4, base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(6, state)
+            .buffer(8, result)
+            .push(m_ctx, cmd, m_resolve);
+        vkCmdDispatch(cmd, (outWidth + 7) / 8, (outHeight + 7) / 8, 1);
         memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kHostStage,
                       VK_ACCESS_2_HOST_READ_BIT);
-        m_marchTimes.write(cmd, 1, kAll);
+        m_marchTimes.write(cmd, 2, kAll);
     });
 
     noise::Image image(camera.width, camera.height);
@@ -562,14 +625,20 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
         stats->passMs = {{"prepare", first[1] - first[0]},
                          {"bin", first[2] - first[1]},
                          {"mesh", first[3] - first[2]},
-                         {"march", second[1] - second[0]}};
-        stats->totalMs = first[3] + second[1];
+                         {"march", second[1] - second[0]},
+                         {"resolve", second[2] - second[1]}};
+        stats->totalMs = first[3] + second[2];
         stats->hostMs = hostMs;
         stats->loopBound = std::uint32_t(bound);
         stats->maxLoopIterations = counted[0];
-        stats->maxSteps = std::uint32_t(std::min<std::uint64_t>(maxSteps, 0xffffffffu));
+        stats->stepsPerDispatch = perDispatch;
+        stats->maxStepsPerDispatch = std::uint32_t(std::min<std::uint64_t>(fits, 0xffffffffu));
+        stats->dispatches = dispatches;
+        stats->supersample = n;
         stats->shellCells = records;
         stats->maxNeighbourhoodLobes = std::uint32_t(lobesPerStep);
+        stats->maxNeighbourhoodImpulses = mostImpulses;
+        stats->lobesPerImpulse = m_lobeCount;
         stats->longestProbe = std::uint32_t(shell.longestProbe);
         stats->walkCells = walk;
         stats->frameBytes = m_ctx.allocatedBytes() - allocatedBefore;
@@ -578,10 +647,13 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
     if (capture) {
         capture->camera = camera;
         capture->params = params;
+        capture->stepsPerDispatch = perDispatch;
         capture->table = shell.table;
         capture->cells = std::move(neighbourhoods);
         const auto* lobes = static_cast<const gpu::SpotWorldLobe*>(worldLobes.mapped());
         capture->lobes.assign(lobes, lobes + std::uint64_t(count) * m_lobeCount);
+        const auto* box = static_cast<const SpotMarchBox*>(boxes.mapped());
+        capture->boxes.assign(box, box + count);
         const auto* b = static_cast<const glm::vec4*>(baseCopy.mapped());
         capture->base.assign(b, b + pixels);
         const auto* dist = static_cast<const float*>(distanceCopy.mapped());
@@ -592,20 +664,29 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
 }
 
 noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint32_t>* loops) {
-    const noise::Camera& camera = capture.camera;
-    const SpotSplatFrame frame = makeSplatFrame(camera, noise::Shading{}, glm::vec3(0.0f), 0, 0, 0.0f, 0, 0);
-    const std::uint64_t pixels = std::uint64_t(camera.width) * std::uint64_t(camera.height);
+    const std::uint32_t n = capture.params.range.z;
+    const std::uint32_t steps = capture.params.counts.x;
+    const std::uint32_t perDispatch = capture.stepsPerDispatch;
+    SPOT_CHECK(n >= 1 && perDispatch >= 1);
+    noise::Camera marchCamera = capture.camera;
+    marchCamera.width *= int(n);
+    marchCamera.height *= int(n);
+    const SpotSplatFrame frame =
+        makeSplatFrame(marchCamera, noise::Shading{}, glm::vec3(0.0f), 0, 0, 0.0f, 0, 0);
+    const std::size_t width = std::size_t(marchCamera.width);
+    const std::uint64_t pixels = std::uint64_t(width) * std::uint64_t(marchCamera.height);
     SPOT_CHECK_EQ(capture.base.size(), pixels);
     SPOT_CHECK_EQ(capture.meshDistance.size(), pixels);
-    noise::Image image(camera.width, camera.height);
+    std::vector<glm::vec4> state(pixels);
     if (loops)
         loops->assign(pixels, 0u);
     const MarchTwin::Arrays arrays{&capture.params, capture.table.data(), capture.cells.data(),
-                                   capture.lobes.data()};
+                                   capture.lobes.data(), capture.boxes.data()};
+    // raymarch_march.comp, every dispatch of it, one row band per thread.
     const auto rows = [&](int y0, int y1) {
         MarchTwin twin(arrays);
         for (int y = y0; y < y1; ++y)
-            for (int x = 0; x < camera.width; ++x) {
+            for (int x = 0; x < marchCamera.width; ++x) {
                 // splatPixelRay's arithmetic, in float.
                 const float px = float(x) + 0.5f, py = float(y) + 0.5f;
                 const float sx = 2.0f * px / frame.size.x - 1.0f;
@@ -615,20 +696,41 @@ noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint
                                            glm::vec3(frame.right) * frame.right.w,
                                            glm::vec3(frame.up) * frame.up.w, frame.eye.w > 0.5f, sx,
                                            sy, o, d);
-                const std::size_t i = std::size_t(y) * std::size_t(camera.width) + std::size_t(x);
-                std::uint32_t count = 0;
-                const glm::vec4 march = twin.marchRay(o, d, capture.meshDistance[i], count);
-                image.pixels[i] = glm::vec3(march) + march.w * glm::vec3(capture.base[i]);
+                const std::size_t i = std::size_t(y) * width + std::size_t(x);
+                glm::vec4 s(0.0f, 0.0f, 0.0f, 1.0f);
+                std::uint32_t most = 0;
+                for (std::uint32_t first = 0; first < steps; first += perDispatch) {
+                    std::uint32_t count = 0;
+                    s = twin.marchRay(o, d, capture.meshDistance[i], first,
+                                      std::min(steps, first + perDispatch), s, count);
+                    most = std::max(most, count);
+                }
+                state[i] = s;
                 if (loops)
-                    (*loops)[i] = count;
+                    (*loops)[i] = most;
             }
     };
     const int threads = int(std::clamp(std::thread::hardware_concurrency(), 1u, 16u));
     std::vector<std::thread> workers;
     for (int t = 0; t < threads; ++t)
-        workers.emplace_back(rows, camera.height * t / threads, camera.height * (t + 1) / threads);
+        workers.emplace_back(rows, marchCamera.height * t / threads,
+                             marchCamera.height * (t + 1) / threads);
     for (std::thread& w : workers)
         w.join();
+    // raymarch_resolve.comp.
+    noise::Image image(capture.camera.width, capture.camera.height);
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) {
+            glm::vec3 sum(0.0f);
+            for (std::uint32_t sy = 0; sy < n; ++sy)
+                for (std::uint32_t sx = 0; sx < n; ++sx) {
+                    const std::size_t i =
+                        (std::size_t(y) * n + sy) * width + std::size_t(x) * n + sx;
+                    sum += glm::vec3(state[i]) + state[i].w * glm::vec3(capture.base[i]);
+                }
+            image.pixels[std::size_t(y) * std::size_t(image.width) + std::size_t(x)] =
+                sum / float(n * n);
+        }
     return image;
 }
 

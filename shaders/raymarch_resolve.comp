@@ -1,0 +1,31 @@
+#version 450
+// Ray march, step 3: each output pixel is the mean of its n x n march pixels (a box filter, the
+// reference's), each the marched radiance over the mesh colour behind it:
+// radiance + transmittance * base. Summed in row order, so the image is deterministic.
+#extension GL_GOOGLE_include_directive : require
+#include "splat_common.glsl"
+#include "raymarch_layout.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(std430, binding = 0) readonly buffer Params { SpotMarchParams params; };
+layout(binding = 4, rgba32f) uniform readonly image2D baseColor;
+layout(std430, binding = 6) readonly buffer State { vec4 state[]; };
+layout(std430, binding = 8) writeonly buffer Result { vec4 result[]; };
+
+void main() {
+    uint n = params.range.z;
+    uint marchWidth = uint(frame.size.x);
+    uint width = marchWidth / n;
+    uvec2 p = gl_GlobalInvocationID.xy;
+    if (p.x >= width || p.y >= uint(frame.size.y) / n)
+        return;
+    vec3 sum = vec3(0.0);
+    for (uint sy = 0u; sy < n; ++sy)
+        for (uint sx = 0u; sx < n; ++sx) {
+            uvec2 q = p * n + uvec2(sx, sy);
+            vec4 s = state[q.y * marchWidth + q.x];
+            sum += s.rgb + s.a * imageLoad(baseColor, ivec2(q)).rgb;
+        }
+    result[p.y * width + p.x] = vec4(sum / float(n * n), 1.0);
+}
