@@ -46,7 +46,8 @@ struct Variant {
     std::string setting; ///< human-readable settings, unique per method
     splat::SplatSettings splat;
     double lod = 0.0;    ///< level-of-detail size in pixels (0 = off)
-    int steps = 0;       ///< raymarch: samples per pixel
+    int steps = 0;       ///< raymarch: samples along each ray
+    int supersample = 1; ///< raymarch: n x n rays per pixel
 };
 
 struct SceneEntry {
@@ -57,9 +58,9 @@ struct SceneEntry {
 struct Suite {
     std::string name;
     int size = 64;
-    int frames = 5;        ///< warm frames timed (one more, the first, is not)
+    int frames = 5;        ///< warm frames timed for the roofline (one more, the first, is not)
     int referenceSpp = 16;
-    int orbitFrames = 8;
+    int orbitFrames = 8;   ///< frames of the orbit: every row's timed warm frames and its flicker
     double orbitDeg = 0.5; ///< camera step per orbit frame, degrees about the target's up axis
     std::vector<SceneEntry> scenes;
     std::vector<Variant> variants;
@@ -93,10 +94,15 @@ std::vector<Variant> variants(bool full) {
         v.push_back({"hybrid", "lod 2px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 2.0});
         v.push_back({"hybrid", "lod 4px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 4.0});
     }
-    // The ray-march baseline at rising step counts (refused, as a failed row, where a shader
-    // invocation would loop past lavapipe's limit).
-    for (int steps : full ? std::vector<int>{8, 16, 32, 64, 128} : std::vector<int>{8, 16, 32})
-        v.push_back({"raymarch", cat(steps, " steps"), splat::SplatSettings{}, 0.0, steps});
+    // The ray-march baseline at rising step counts, with one ray per pixel and with 2 x 2 (the
+    // pixel filter: one ray per pixel aliases sub-pixel strands, which flicker as the camera moves).
+    const std::vector<std::pair<int, int>> marches =
+        full ? std::vector<std::pair<int, int>>{{8, 1}, {16, 1}, {32, 1}, {64, 1}, {128, 1},
+                                                {16, 2}, {32, 2}, {64, 2}}
+             : std::vector<std::pair<int, int>>{{16, 2}, {32, 2}, {64, 2}};
+    for (const auto& [steps, n] : marches)
+        v.push_back({"raymarch", n == 1 ? cat(steps, " steps") : cat(steps, " steps ", n, "x", n),
+                     splat::SplatSettings{}, 0.0, steps, n});
     return v;
 }
 
@@ -225,7 +231,7 @@ struct Bench {
 
     Frame renderGpu(cli::SceneJob& job, splat::GpuGenerator& gen, splat::SplatRenderer& renderer,
                     const noise::Camera& cam, const splat::SplatSettings& settings, double lod = 0.0,
-                    int steps = 0) {
+                    int steps = 0, int supersample = 1) {
         const auto start = std::chrono::steady_clock::now();
         const noise::CameraRays rays(cam);
         const double h = job.generator->cellSize();
@@ -238,6 +244,7 @@ struct Bench {
                 marcher = std::make_unique<splat::RaymarchRenderer>(ctx, job.mesh, job.generator->kernel());
             splat::RaymarchSettings rs;
             rs.steps = steps;
+            rs.supersample = supersample;
             splat::RaymarchStats stats;
             f.image = marcher->render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
                                       job.generator->cells(), impulses.impulses, impulses.count, rs, &stats);
@@ -266,15 +273,22 @@ struct Bench {
                     {"height", job.scene.camera.height}};
         try {
             ctx.resetPeak();
+            // One cold frame, then the slow orbit: its frames are the warm frames timed (the view
+            // turns 0.5 degrees a frame, the work stays the same), frame 0 is the scene's own
+            // camera and gives the error, and the orbit gives the flicker.
+            renderGpu(job, gen, renderer, job.scene.camera, v.splat, v.lod, v.steps, v.supersample);
             std::vector<double> gpu, wall, splatPass;
+            std::vector<noise::Image> frames;
             Frame last;
-            for (int f = 0; f <= suite.frames; ++f) {
-                last = renderGpu(job, gen, renderer, job.scene.camera, v.splat, v.lod, v.steps);
-                if (f > 0) { // the first frame is not warm
-                    gpu.push_back(last.gpuMs);
-                    wall.push_back(last.wallMs);
-                    splatPass.push_back(last.splatMs);
-                }
+            for (int k = 0; k < suite.orbitFrames; ++k) {
+                Frame f = renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg),
+                                    v.splat, v.lod, v.steps, v.supersample);
+                gpu.push_back(f.gpuMs);
+                wall.push_back(f.wallMs);
+                splatPass.push_back(f.splatMs);
+                frames.push_back(f.image);
+                if (k == 0)
+                    last = std::move(f);
             }
             if (v.steps == 0) {
                 // The splat pass against the rasterizer's own cost for the same primitives.
@@ -284,10 +298,6 @@ struct Bench {
                 row["roofline_fraction"] = splatMs > 0.0 ? rooflineMs / splatMs : 0.0;
             }
             const splat::ImageMetrics m = splat::compareImages(ref, last.image);
-            std::vector<noise::Image> frames;
-            for (int k = 0; k < suite.orbitFrames; ++k)
-                frames.push_back(
-                    renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg), v.splat, v.lod, v.steps).image);
             const double flick = flicker(frames) - refFlicker;
             std::size_t nonFinite = 0;
             for (const glm::vec3& p : last.image.pixels)

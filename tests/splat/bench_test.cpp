@@ -58,12 +58,10 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
             EXPECT_GT(double(r["roofline_splat_ms"]), 0.0) << r.dump();
             EXPECT_GT(double(r["roofline_fraction"]), 0.0) << r.dump();
         }
-        // Every splatting method is ok on the whole furry bunny. The ray-march runs (never
-        // failed), but is not held to "ok": at the step counts lavapipe's loop limit lets it take
-        // (39 at most on fur) its samples, spread over each ray's shell segments, shift as the
-        // camera moves, and its flicker measures about +0.012 over the reference's (threshold
-        // 0.01); the stability matrix reports it as degraded.
-        if (r["scene"] == "fur-bunny" && r["method"] != "raymarch")
+        // Every method is ok on the whole furry bunny, at every quick setting (the ray-march's
+        // with 2 x 2 rays per pixel: with one ray per pixel it aliases sub-pixel strands and its
+        // flicker fails, which the full suite's stability matrix shows).
+        if (r["scene"] == "fur-bunny")
             EXPECT_EQ(r["status"], "ok") << r.dump();
         EXPECT_NE(r["status"], "failed") << r.dump(); // every quick setting runs
     }
@@ -73,17 +71,22 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
     EXPECT_GE(double(hybrid["psnr"]), double(oit["psnr"]));
     EXPECT_LE(double(hybrid["flip"]), double(oit["flip"]));
     // At matched error, splatting beats the ray-march: every raymarch setting at least as
-    // accurate as oit/hybrid is slower.
+    // accurate as oit/hybrid is slower. (The quick suite's longest march is more accurate than
+    // both on fur-bunny, so the comparison is made.)
+    int compared = 0;
     for (const json& r : rows) {
         if (r["method"] != "raymarch" || r["status"] == "failed")
             continue;
         for (const char* method : {"oit", "hybrid"}) {
             const json& s = row(rows, r["scene"], method, "ewa mb analytic");
-            if (double(r["flip"]) <= double(s["flip"]))
+            if (double(r["flip"]) <= double(s["flip"])) {
+                ++compared;
                 EXPECT_GT(double(r["ms_median"]), double(s["ms_median"]))
                     << "raymarch " << r["setting"] << " on " << r["scene"] << " vs " << method;
+            }
         }
     }
+    EXPECT_GE(compared, 2);
 }
 
 } // namespace
