@@ -30,7 +30,8 @@ void main() {
     SplatKernelSample s = splatKernel(vKernel, o, d, tMesh);
     if (!(s.alpha > 0.0))
         discard;
-    if (splatFlag(kSplatFlagHybrid) && s.alpha > kSplatHybridMinAlpha) {
+    if (splatFlag(kSplatFlagHybrid) && !splatFlag(kSplatFlagClosestPass) &&
+        s.alpha > kSplatHybridMinAlpha) {
         uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
         atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);
     }

@@ -25,6 +25,8 @@ layout(binding = 2, r32f) uniform readonly image2D opticalDepth;
 layout(binding = 3, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = 4) readonly buffer Closest { uint64_t closest[]; };
 layout(std430, binding = 6) writeonly buffer Result { vec4 result[]; };
+// The closest kernel from the depth pass (kSplatFlagClosestPass; 1x1 and unread otherwise).
+layout(binding = 7, r32ui) uniform readonly uimage2D closestKernel;
 
 vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
 
@@ -45,6 +47,10 @@ void main() {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
         uint64_t key = closest[p.y * width + p.x];
+        if (splatFlag(kSplatFlagClosestPass)) {
+            uint id = imageLoad(closestKernel, pixel).r;
+            key = id == 0xffffffffu ? ~uint64_t(0) : uint64_t(id);
+        }
         if (splatFlag(kSplatFlagHybrid) && key != ~uint64_t(0)) {
             uint kernel = uint(key & 0xffffffffUL);
             vec3 o;

@@ -38,6 +38,8 @@ SPOT_CONST uint kSplatFlagLambert = 2u;     /* Lambert + ambient shading, else u
 SPOT_CONST uint kSplatFlagMcGuireBavoil = 4u; /* OIT weight: MB13 eq. 7, else constant */
 SPOT_CONST uint kSplatFlagHybrid = 8u;      /* hybrid: find and composite the closest kernel */
 SPOT_CONST uint kSplatFlagInstanced = 16u;  /* instanced: the base colour image is the result */
+SPOT_CONST uint kSplatFlagClosestPass = 32u; /* hybrid: the closest kernel comes from a separate
+                                                depth pass (splat_closest.frag), not atomicMin */
 
 /* Kernel samples (paper eq. 10's N_s) at most. Every shader invocation stays far below lavapipe's
  * 65,535 loop iterations: a march costs N x (lobes + 1) <= 2048 x 9 = 18,432 iterations, the
@@ -51,6 +53,12 @@ SPOT_CONST uint kSplatShadingSamples = 4u;
 /* Hybrid: a kernel competes for "closest" at a pixel only where its alpha exceeds this (one 8-bit
  * step): fainter kernels would claim the front while hiding nothing. */
 SPOT_CONST float kSplatHybridMinAlpha = 1.0 / 255.0;
+
+/* Hybrid with a closest-kernel depth pass: the depth written is the kernel's ray distance times
+ * this power of two, so it orders exactly as the distances do (the atomicMin key's order) for
+ * every distance up to 2^20 world units (farther ones all tie at 1, then the first kernel wins,
+ * as atomicMin's kernel index does on equal distances). */
+SPOT_CONST float kSplatClosestDepthScale = 1.0 / 1048576.0;
 
 /* Instanced: a kernel covers a pixel (opaque proxy) where its alpha reaches this. */
 SPOT_CONST float kSplatInstancedMinAlpha = 0.5;

@@ -12,6 +12,7 @@
 #include "splat/layout.h"
 #include "splat/frame_vk.h"
 
+#include "splat_closest.frag.h"
 #include "splat_compact.comp.h"
 #include "splat_instanced.frag.h"
 #include "splat_mesh.frag.h"
@@ -38,6 +39,9 @@ using gpu_splat::SpotSplatFrame;
 /// Bytes per pixel of a frame: base colour, accumulation (RGBA32F), t, optical depth, depth
 /// (32-bit), closest kernel (64-bit), result (RGBA32F).
 constexpr std::uint64_t kBytesPerPixel = 16 + 16 + 4 + 4 + 4 + 8 + 16;
+/// ... and with the hybrid's closest-kernel depth pass: its kernel index and depth (32-bit each).
+constexpr std::uint64_t kClosestPassBytesPerPixel = 4 + 4;
+constexpr VkFormat kKernelIndexFormat = VK_FORMAT_R32_UINT;
 /// Timestamp slots: frame start, then the end of each pass. Every method writes every slot (the
 /// sort's end right after the prepare's when there is no sort) and reports its own passes.
 constexpr const char* kPassNames[] = {"prepare", "sort", "mesh", "splat", "resolve"};
@@ -74,6 +78,9 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
                       VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
                   "blended, stored R32F targets");
     requireFormat(ctx, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth");
+    requireFormat(ctx, kKernelIndexFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "stored R32_UINT kernel index targets");
     m_lobeCount = std::uint32_t(kernel.lobes.size());
     m_support = kernel.supportSigma;
     MeshBuffers meshBuffers = uploadMesh(ctx, mesh, "splat");
@@ -88,7 +95,7 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
         makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), {kBuf, kBuf, kBuf, kBuf}, push);
     m_compact = makeComputePipeline(ctx, spirv(spv_splat_compact_comp), {kBuf, kBuf, kBuf}, push);
     m_resolve = makeComputePipeline(ctx, spirv(spv_splat_resolve_comp),
-                                    {kImg, kImg, kImg, kImg, kBuf, kBuf, kBuf}, push);
+                                    {kImg, kImg, kImg, kImg, kBuf, kBuf, kBuf, kImg}, push);
     // Sort keys: 0 bounds, 1 kept kernels, 2 indirect draw, 3 world lobes, 4 keys.
     m_sortKeys = makeComputePipeline(ctx, spirv(spv_splat_sorted_keys_comp),
                                      {kBuf, kBuf, kBuf, kBuf, kBuf}, push);
@@ -136,13 +143,29 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     sorted.blends = {overBlend()};
     m_sorted = makeGraphicsPipeline(ctx, sorted);
 
+    // The hybrid's closest kernel by a depth pass: nearest distance wins, the first on a tie.
+    GraphicsPipelineDesc closest = quads;
+    closest.fragment = spirv(spv_splat_closest_frag);
+    closest.bindings = {kBuf, kBuf, kBuf, kImg};
+    closest.colorFormats = {kKernelIndexFormat};
+    closest.blends = {opaqueBlend()};
+    closest.depthFormat = kDepthFormat;
+    closest.depthTest = true;
+    closest.depthWrite = true;
+    closest.depthCompare = VK_COMPARE_OP_LESS;
+    m_closest = makeGraphicsPipeline(ctx, closest);
+
     GraphicsPipelineDesc roofline = oit;
     roofline.fragment = spirv(spv_splat_roofline_frag);
     m_roofline = makeGraphicsPipeline(ctx, roofline);
 }
 
 std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t count,
-                                        Method method) const {
+                                        Method method, ClosestKernel closest) const {
+    const std::uint64_t closestBytes =
+        method == Method::Hybrid && closest == ClosestKernel::DepthPass
+            ? std::uint64_t(width) * std::uint64_t(height) * kClosestPassBytesPerPixel
+            : 8;
     const std::uint64_t sortBytes =
         method == Method::Sorted
             ? std::max<std::uint64_t>(std::uint64_t(count) * sizeof(std::uint32_t), 16) +
@@ -151,7 +174,7 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cou
     return std::uint64_t(width) * std::uint64_t(height) * kBytesPerPixel +
            std::uint64_t(count) * (std::uint64_t(m_lobeCount) * sizeof(gpu::SpotWorldLobe) +
                                    sizeof(gpu::SpotKernelBound) + sizeof(std::uint32_t)) +
-           16 + sortBytes;
+           16 + sortBytes + closestBytes;
 }
 
 noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Shading& shading,
@@ -172,7 +195,8 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                              " bytes, ", count, " impulses need ",
                              std::uint64_t(count) * sizeof(gpu::SpotImpulse)));
     const std::uint32_t width = std::uint32_t(camera.width), height = std::uint32_t(camera.height);
-    const std::uint64_t need = frameBytes(camera.width, camera.height, count, settings.method);
+    const std::uint64_t need =
+        frameBytes(camera.width, camera.height, count, settings.method, settings.closest);
     if (m_ctx.allocatedBytes() + need > m_ctx.memoryBudget())
         throw InputError(cat("splat renderer: a ", width, "x", height, " frame of ", count,
                              " kernels needs ", need >> 20, " MiB of GPU memory; ",
@@ -190,6 +214,10 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
         flags |= gpu_splat::kSplatFlagHybrid;
     if (settings.method == Method::Instanced)
         flags |= gpu_splat::kSplatFlagInstanced;
+    const bool closestPass = settings.method == Method::Hybrid &&
+                             settings.closest == ClosestKernel::DepthPass && !settings.roofline;
+    if (closestPass)
+        flags |= gpu_splat::kSplatFlagClosestPass;
     const SpotSplatFrame frame =
         makeSplatFrame(camera, shading, baseColor, count, m_lobeCount, m_support,
                        std::uint32_t(settings.kernelSamples), flags);
@@ -224,6 +252,14 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                 "splat OIT accumulation");
     Image opticalDepth(m_ctx, width, height, kScalarFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
                        "splat OIT optical depth");
+    // The depth pass's kernel index and depth (1x1 placeholders, never read, without it).
+    const std::uint32_t closestWidth = closestPass ? width : 1;
+    const std::uint32_t closestHeight = closestPass ? height : 1;
+    Image closestKernel(m_ctx, closestWidth, closestHeight, kKernelIndexFormat, kTargetUsage,
+                        VK_IMAGE_ASPECT_COLOR_BIT, "splat closest kernel index");
+    Image closestDepth(m_ctx, closestWidth, closestHeight, kDepthFormat,
+                       VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
+                       "splat closest kernel depth");
     // Sorted: the kept kernels' keys, sorted with the kept list itself as the values.
     const bool sorted = settings.method == Method::Sorted && !settings.roofline;
     Buffer sortKeys;
@@ -319,6 +355,33 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                         VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
         m_timestamps.write(cmd, 3, kAll);
 
+        // 3a. Hybrid with a depth pass: each pixel's closest kernel (index, depth test LESS).
+        transitionImage(cmd, closestKernel.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED,
+                        kAttachment, VK_PIPELINE_STAGE_2_NONE, 0, kColorOut, kColorRW);
+        if (closestPass) {
+            transitionImage(cmd, closestDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
+                            VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                            VK_PIPELINE_STAGE_2_NONE, 0, kTests, kDepthRW);
+            VkRenderingAttachmentInfo index = colorAttachment(closestKernel, VK_ATTACHMENT_LOAD_OP_CLEAR);
+            index.clearValue.color.uint32[0] = 0xffffffffu; // no kernel
+            VkRenderingAttachmentInfo nearest = depthAttachment(closestDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+            nearest.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+            nearest.clearValue.depthStencil = {1.0f, 0};
+            beginRendering(cmd, width, height, {index}, &nearest);
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_closest.handle());
+            pushFrame(cmd, m_closest, frame);
+            Descriptors()
+                .buffer(0, bounds)
+                .buffer(1, kept)
+                .buffer(2, worldLobes)
+                .image(3, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+                .push(m_ctx, cmd, m_closest);
+            vkCmdDrawIndirect(cmd, draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+            vkCmdEndRendering(cmd);
+        }
+        transitionImage(cmd, closestKernel.handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
+                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute, kStorageRead);
+
         // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
         const Pipeline& splat = settings.roofline ? m_roofline
                                 : instanced        ? m_instanced
@@ -367,6 +430,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
             .buffer(4, closest)
             .buffer(5, worldLobes)
             .buffer(6, result)
+            .image(7, closestKernel, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .push(m_ctx, cmd, m_resolve);
         vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
         memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,

@@ -16,7 +16,8 @@
 ///     paper eq. 10). `instanced` draws the kernel opaque where alpha >= 0.5 with the depth test;
 ///     `oit` blends w x (premultiplied colour, alpha) additively and alpha into a revealage target
 ///     (McGuire and Bavoil 2013; paper eq. 11-12); `hybrid` also finds each pixel's closest
-///     kernel with a 64-bit atomicMin; `sorted` blends each kernel, back to front, over the base
+///     kernel with a 64-bit atomicMin (or, with ClosestKernel::DepthPass, in a pass of its own
+///     over the same quads with a depth test before it); `sorted` blends each kernel, back to front, over the base
 ///     colour with premultiplied "over" (C = C_k + (1 - alpha_k) C): exact compositing wherever
 ///     kernels do not interpenetrate along a ray (the accuracy ceiling of splatting, to show what
 ///     OIT gives up).
@@ -49,6 +50,12 @@ struct Mesh;
 namespace spot::splat {
 
 enum class Method { Instanced, Oit, Hybrid, Sorted };
+/// How `hybrid` finds each pixel's closest kernel (DESIGN section 4: "measure both ways"). Both
+/// find the same kernel, so the images are identical; only the cost differs.
+enum class ClosestKernel {
+    Atomic,   ///< in the OIT pass itself: a 64-bit atomicMin of (distance bits, kernel index)
+    DepthPass ///< a separate pass over the same quads with a depth test (splat_closest.frag)
+};
 enum class OitWeight {
     Constant,     ///< w = 1: a plain unordered blend ("no OIT", paper fig. 3.3)
     McGuireBavoil ///< MB13 eq. 7 with z = view depth in world units (see spotOitWeight)
@@ -66,11 +73,13 @@ struct SplatSettings {
     /// "splat" pass time is what lavapipe's rasterizer itself costs for this frame).
     bool roofline = false;
     OitWeight weight = OitWeight::McGuireBavoil;
+    ClosestKernel closest = ClosestKernel::Atomic; ///< hybrid only
 };
 
 struct FrameStats {
     /// GPU time per pass, milliseconds: prepare (with the compaction), sort (`sorted` only), mesh,
-    /// splat, resolve.
+    /// splat (every pass over the kernels' quads: the hybrid's closest-kernel depth pass too),
+    /// resolve.
     std::vector<std::pair<std::string, double>> passMs;
     double totalMs = 0.0;             ///< GPU time of the frame, milliseconds
     std::uint32_t kernelsDrawn = 0;   ///< kernels with a non-empty pixel rectangle
@@ -93,9 +102,11 @@ public:
                         FrameStats* stats = nullptr);
 
     /// Device memory one frame allocates (bytes), for `count` impulses at width x height with
-    /// `method` (`sorted` adds its sort keys and the sort's scratch).
+    /// `method` (`sorted` adds its sort keys and the sort's scratch; the hybrid's depth pass its
+    /// kernel index and depth targets).
     std::uint64_t frameBytes(int width, int height, std::uint32_t count,
-                             Method method = Method::Hybrid) const;
+                             Method method = Method::Hybrid,
+                             ClosestKernel closest = ClosestKernel::Atomic) const;
 
 private:
     Context& m_ctx;
@@ -103,7 +114,7 @@ private:
     float m_support = 3.0f;
     std::uint32_t m_indexCount = 0;
     Buffer m_lobes, m_vertices, m_indices;
-    Pipeline m_prepare, m_compact, m_mesh, m_instanced, m_oit, m_resolve, m_roofline;
+    Pipeline m_prepare, m_compact, m_mesh, m_instanced, m_oit, m_resolve, m_roofline, m_closest;
     Pipeline m_sortKeys, m_sorted;
     RadixSort m_sort;
     Timestamps m_timestamps;
