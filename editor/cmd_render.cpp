@@ -76,6 +76,14 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method meth
     else
         throw InputError(cat("spotshell render: --weight must be constant or mcguire-bavoil, not '",
                              weight, "'"));
+    const std::string closest = args.str("closest", "atomic");
+    if (closest == "atomic")
+        settings.closest = splat::ClosestKernel::Atomic;
+    else if (closest == "depth-pass")
+        settings.closest = splat::ClosestKernel::DepthPass;
+    else
+        throw InputError(cat("spotshell render: --closest must be atomic or depth-pass, not '",
+                             closest, "'"));
 
     splat::Context ctx;
     splat::GpuGenerator generator(ctx, job.mesh, *job.generator);
@@ -102,6 +110,7 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method meth
                {"ewa", settings.ewa},
                {"kernel_samples", settings.kernelSamples},
                {"weight", weight},
+               {"closest", closest},
                {"lod_pixels", lod},
                {"kernels_generated", impulses.count},
                {"kernel_candidates", impulses.candidates},
@@ -171,6 +180,9 @@ int render(int argc, char** argv) {
                                           "instead of the analytic integral (default 0)", false},
                   {"ewa", "on|off", "GPU methods: EWA filtering by the pixel footprint (default on)", false},
                   {"weight", "W", "oit/hybrid: constant or mcguire-bavoil (default)", false},
+                  {"closest", "HOW", "hybrid: find each pixel's closest kernel with an atomicMin in "
+                                     "the OIT pass (atomic, default) or in a depth pass of its own "
+                                     "(depth-pass); the same image either way", false},
                   {"steps", "N", "raymarch: samples along each ray through the shell (default 32, "
                                  "at most 4096; split over dispatches so that no shader "
                                  "invocation loops too long)", false},

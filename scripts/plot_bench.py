@@ -85,16 +85,21 @@ fig.savefig(out + "/pareto.png", dpi=110)
 plt.close(fig)
 
 # ---- stability.png: scenarios x methods, the best setting of each, coloured by verdict --------
+def column(r):
+    # The ray-march without a pixel filter is a column of its own (as in stability.md).
+    return r["method"] + (" (1 ray/pixel)" if r.get("rays_per_pixel") == 1 else "")
+
+
 scenarios, methods = [], []
 for r in stability:
     if r["scenario"] not in scenarios:
         scenarios.append(r["scenario"])
-    if r["method"] not in methods:
-        methods.append(r["method"])
+    if column(r) not in methods:
+        methods.append(column(r))
 
 
 def best(scenario, method):
-    cands = [r for r in stability if r["scenario"] == scenario and r["method"] == method]
+    cands = [r for r in stability if r["scenario"] == scenario and column(r) == method]
     good = [r for r in cands if r["status"] != "failed"]
     if good:
         return min(good, key=lambda r: r["flip"])
@@ -102,7 +107,7 @@ def best(scenario, method):
 
 
 VERDICT = {"ok": "#a6dba0", "degraded": "#fdd49e", "failed": "#f4a6a6"}
-fig, ax = plt.subplots(figsize=(2.3 * len(methods) + 3.2, 0.62 * len(scenarios) + 1.6))
+fig, ax = plt.subplots(figsize=(2.3 * len(methods) + 3.2, 0.8 * len(scenarios) + 1.6))
 for y, scenario in enumerate(scenarios):
     for x, method in enumerate(methods):
         r = best(scenario, method)
@@ -113,12 +118,12 @@ for y, scenario in enumerate(scenarios):
         elif r["status"] == "failed":
             text = "failed"
         else:
-            text = "FLIP %.3f\nflicker %+.4f" % (r["flip"], r["flicker"])
+            text = "FLIP %.3f\nflicker %+.4f\n%s" % (r["flip"], r["flicker"], r["setting"])
         ax.text(x + 0.5, y + 0.5, text, ha="center", va="center", fontsize=8)
 ax.set_xlim(0, len(methods))
 ax.set_ylim(len(scenarios), 0)
 ax.set_xticks([x + 0.5 for x in range(len(methods))])
-ax.set_xticklabels(methods)
+ax.set_xticklabels([m.replace(" (", "\n(") for m in methods])
 ax.xaxis.tick_top()
 ax.set_yticks([y + 0.5 for y in range(len(scenarios))])
 ax.set_yticklabels(scenarios)

@@ -15,7 +15,10 @@
  * Every loop here adds 1 to `loops` on entry and 1 per iteration, so `loops` counts what one lane
  * would cost alone; the host's bound (RaymarchRenderer) multiplies the largest iteration count
  * any lane can reach in each loop, which bounds the vector's count too: each pass of an outer
- * loop runs an inner loop at most as often as its largest per-lane count allows.
+ * loop runs an inner loop at most as often as its largest per-lane count allows. (Where lanes
+ * skip different impulses by their boxes, the vector runs the lobe loop of every impulse some lane
+ * enters, more than any one lane counts; the bound charges the lobe loop of every impulse, so it
+ * holds all the same.)
  */
 
 /* Home slot of cell q in the hash table (before the mask). */

@@ -231,6 +231,29 @@ TEST(Cli, RenderGpuRejectsBadSettings) {
     expectInputError("render --scene " + scene + " --method oit --weight heavy --out " + tmp("x.png"), "--weight");
     expectInputError("render --scene " + scene + " --method oit --kernel-samples 100000 --out " + tmp("x.png"),
                      "--kernel-samples");
+    expectInputError("render --scene " + scene + " --method hybrid --closest nearest --out " + tmp("x.png"),
+                     "--closest");
+    expectInputError("render --scene " + scene + " --method raymarch --supersample 9 --out " + tmp("x.png"),
+                     "--supersample");
+    expectInputError("render --scene " + scene + " --method raymarch --steps 5000 --out " + tmp("x.png"),
+                     "--steps");
+}
+
+TEST(Cli, RenderRaymarchSplitsAndSupersamples) {
+    // 100 steps do not fit one dispatch on fur (the loop guard splits them); 2 x 2 rays per pixel.
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+    const std::string out = tmp("gpu-raymarch.png"), stats = tmp("gpu-raymarch.json");
+    const Result r = run("render --scene " + scene + " --method raymarch --steps 100 --supersample 2 "
+                         "--size 48x36 --out " + out + " --stats " + stats);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("wrote " + out), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("2x2 rays per pixel"), std::string::npos) << r.out;
+    const std::string json = slurp(stats);
+    for (const char* key : {"\"steps\": 100", "\"supersample\": 2", "\"dispatches\"",
+                            "\"steps_per_dispatch\"", "\"loop_bound\"", "\"validation_errors\": 0",
+                            "\"width\": 48"})
+        EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+    EXPECT_EQ(json.find("\"dispatches\": 1,"), std::string::npos) << json;
 }
 
 } // namespace
