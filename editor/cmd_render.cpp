@@ -1,6 +1,9 @@
 #include <cstdio>
 #include <map>
 #include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
@@ -60,6 +63,37 @@ Rendered renderReference(const cli::Args& args, cli::SceneJob& job) {
     return r;
 }
 
+/// What both GPU paths report: the image, device, kernel counts, GPU time per pass (generation
+/// first) and in all, memory, validation errors (any fails the run), plus the method's own
+/// `settings`. The summary line ends with the time and the device.
+Rendered gpuRendered(splat::Context& ctx, noise::Image image, const splat::GpuImpulses& impulses,
+                     std::uint32_t drawn, const std::vector<std::pair<std::string, double>>& passMs,
+                     double frameMs, const nlohmann::json& settings) {
+    const splat::ValidationCounts v = ctx.validation();
+    if (v.errors > 0)
+        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
+    nlohmann::json passes = nlohmann::json::object();
+    passes["generate"] = impulses.milliseconds;
+    for (const auto& [name, ms] : passMs)
+        passes[name] = ms;
+    const double totalMs = impulses.milliseconds + frameMs;
+    Rendered r;
+    r.image = std::move(image);
+    r.kernels = impulses.count;
+    r.seconds = totalMs * 1e-3;
+    r.stats = settings;
+    r.stats.update({{"device", ctx.deviceName()},
+                    {"kernels_generated", impulses.count},
+                    {"kernel_candidates", impulses.candidates},
+                    {"kernels_drawn", drawn},
+                    {"gpu_ms", passes},
+                    {"gpu_total_ms", totalMs},
+                    {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
+                    {"validation_errors", v.errors}});
+    r.summary = cat(totalMs, " ms GPU on ", ctx.deviceName());
+    return r;
+}
+
 Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method method) {
     splat::SplatSettings settings;
     settings.method = method;
@@ -93,34 +127,17 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method meth
                            splat::lodParameters(job.scene.camera, lod));
     splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
     splat::FrameStats frame;
-    Rendered r;
-    r.image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
-                              job.scene.baseColor, impulses.impulses, impulses.count, settings,
-                              &frame);
-    const splat::ValidationCounts v = ctx.validation();
-    if (v.errors > 0)
-        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
-    nlohmann::json passes = nlohmann::json::object();
-    passes["generate"] = impulses.milliseconds;
-    for (const auto& [name, ms] : frame.passMs)
-        passes[name] = ms;
-    r.kernels = impulses.count;
-    r.seconds = (impulses.milliseconds + frame.totalMs) * 1e-3;
-    r.stats = {{"device", ctx.deviceName()},
-               {"ewa", settings.ewa},
-               {"kernel_samples", settings.kernelSamples},
-               {"weight", weight},
-               {"closest", closest},
-               {"lod_pixels", lod},
-               {"kernels_generated", impulses.count},
-               {"kernel_candidates", impulses.candidates},
-               {"kernels_drawn", frame.kernelsDrawn},
-               {"gpu_ms", passes},
-               {"gpu_total_ms", impulses.milliseconds + frame.totalMs},
-               {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
-               {"validation_errors", v.errors}};
-    r.summary = cat(impulses.count, " kernels, ", frame.kernelsDrawn, " drawn, ",
-                    impulses.milliseconds + frame.totalMs, " ms GPU on ", ctx.deviceName());
+    noise::Image image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
+                                         job.scene.baseColor, impulses.impulses, impulses.count,
+                                         settings, &frame);
+    Rendered r = gpuRendered(ctx, std::move(image), impulses, frame.kernelsDrawn, frame.passMs,
+                             frame.totalMs,
+                             {{"ewa", settings.ewa},
+                              {"kernel_samples", settings.kernelSamples},
+                              {"weight", weight},
+                              {"closest", closest},
+                              {"lod_pixels", lod}});
+    r.summary = cat(impulses.count, " kernels, ", frame.kernelsDrawn, " drawn, ", r.summary);
     return r;
 }
 
@@ -134,37 +151,21 @@ Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
         generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
     splat::RaymarchRenderer renderer(ctx, job.mesh, job.generator->kernel());
     splat::RaymarchStats stats;
-    Rendered r;
-    r.image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
-                              job.scene.baseColor, job.generator->cells(), impulses.impulses,
-                              impulses.count, settings, &stats);
-    const splat::ValidationCounts v = ctx.validation();
-    if (v.errors > 0)
-        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
-    nlohmann::json passes = nlohmann::json::object();
-    passes["generate"] = impulses.milliseconds;
-    for (const auto& [name, ms] : stats.passMs)
-        passes[name] = ms;
-    r.kernels = impulses.count;
-    r.seconds = (impulses.milliseconds + stats.totalMs) * 1e-3;
-    r.stats = {{"device", ctx.deviceName()},
-               {"steps", settings.steps},
-               {"supersample", settings.supersample},
-               {"kernels_generated", impulses.count},
-               {"kernels_drawn", impulses.count},
-               {"gpu_ms", passes},
-               {"gpu_total_ms", impulses.milliseconds + stats.totalMs},
-               {"loop_bound", stats.loopBound},
-               {"max_loop_iterations", stats.maxLoopIterations},
-               {"steps_per_dispatch", stats.stepsPerDispatch},
-               {"dispatches", stats.dispatches},
-               {"shell_cells", stats.shellCells},
-               {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
-               {"validation_errors", v.errors}};
+    noise::Image image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
+                                         job.scene.baseColor, job.generator->cells(),
+                                         impulses.impulses, impulses.count, settings, &stats);
+    Rendered r = gpuRendered(ctx, std::move(image), impulses, impulses.count, stats.passMs,
+                             stats.totalMs,
+                             {{"steps", settings.steps},
+                              {"supersample", settings.supersample},
+                              {"loop_bound", stats.loopBound},
+                              {"max_loop_iterations", stats.maxLoopIterations},
+                              {"steps_per_dispatch", stats.stepsPerDispatch},
+                              {"dispatches", stats.dispatches},
+                              {"shell_cells", stats.shellCells}});
     r.summary = cat(impulses.count, " kernels, ", settings.steps, " steps in ", stats.dispatches,
                     stats.dispatches == 1 ? " dispatch, " : " dispatches, ", settings.supersample,
-                    "x", settings.supersample, " rays per pixel, ",
-                    impulses.milliseconds + stats.totalMs, " ms GPU on ", ctx.deviceName());
+                    "x", settings.supersample, " rays per pixel, ", r.summary);
     return r;
 }
 
