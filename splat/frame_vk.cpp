@@ -7,6 +7,9 @@
 #include "noise/mesh.h"
 #include "splat/layout.h"
 
+#include "splat_mesh.frag.h"
+#include "splat_mesh.vert.h"
+
 namespace spot::splat {
 
 gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
@@ -36,25 +39,54 @@ gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const nois
     return frame;
 }
 
-MeshBuffers uploadMesh(Context& ctx, const noise::Mesh& mesh, const char* who) {
+MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_ctx(&ctx) {
     std::vector<gpu_splat::SpotMeshVertex> vertices(mesh.positions.size());
     for (std::size_t i = 0; i < vertices.size(); ++i) {
         vertices[i].position = glm::vec4(mesh.positions[i], 1.0f);
         vertices[i].normal =
             glm::vec4(i < mesh.normals.size() ? mesh.normals[i] : glm::vec3(0.0f), 0.0f);
     }
-    MeshBuffers m;
-    m.vertices = Buffer(ctx, vertices.size() * sizeof(gpu_splat::SpotMeshVertex),
+    m_vertices = Buffer(ctx, vertices.size() * sizeof(gpu_splat::SpotMeshVertex),
                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::HostVisible,
                         cat(who, " mesh vertices (", mesh.name, ")"));
     if (!vertices.empty())
-        m.vertices.upload(std::span<const gpu_splat::SpotMeshVertex>(vertices));
-    m.indexCount = std::uint32_t(mesh.triangles.size() * 3);
-    m.indices = Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+        m_vertices.upload(std::span<const gpu_splat::SpotMeshVertex>(vertices));
+    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
+    m_indices = Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
                        Buffer::Memory::HostVisible, cat(who, " mesh indices (", mesh.name, ")"));
     if (!mesh.triangles.empty())
-        m.indices.upload(std::span<const glm::uvec3>(mesh.triangles));
-    return m;
+        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
+
+    GraphicsPipelineDesc desc;
+    desc.vertex = spirv(spv_splat_mesh_vert);
+    desc.fragment = spirv(spv_splat_mesh_frag);
+    desc.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    desc.pushBytes = sizeof(gpu_splat::SpotSplatFrame);
+    desc.colorFormats = {kColorFormat, kScalarFormat};
+    desc.blends = {opaqueBlend(), opaqueBlend()};
+    desc.depthFormat = kDepthFormat;
+    desc.depthTest = true;
+    desc.depthWrite = true;
+    desc.depthCompare = VK_COMPARE_OP_GREATER;
+    m_pipeline = makeGraphicsPipeline(ctx, desc);
+}
+
+void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
+                      const Image& distance, const Image& depth, glm::vec3 background) const {
+    const VkRenderingAttachmentInfo depthInfo = depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+    beginRendering(cmd, base.width(), base.height(),
+                   {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
+                    colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR,
+                                    glm::vec4(gpu_splat::kSplatNoMesh))},
+                   &depthInfo);
+    if (m_indexCount > 0) {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipeline.handle());
+        pushFrame(cmd, m_pipeline, frame);
+        Descriptors().buffer(0, m_vertices).push(*m_ctx, cmd, m_pipeline);
+        vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
+    }
+    vkCmdEndRendering(cmd);
 }
 
 Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who) {

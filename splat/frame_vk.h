@@ -71,12 +71,24 @@ gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const nois
                                          std::uint32_t lobes, float support,
                                          std::uint32_t kernelSamples, std::uint32_t flags);
 
-/// The base mesh for the mesh pass (vertex pulling) and its index buffer.
-struct MeshBuffers {
-    Buffer vertices, indices;
-    std::uint32_t indexCount = 0;
+/// The opaque base mesh on the GPU (vertex pulling) and the pass that draws it first in every
+/// method: its colour (lit as the frame says) over the background, the ray distance t to it
+/// (kSplatNoMesh where none) and a reversed float depth.
+class MeshPass {
+public:
+    /// Uploads the mesh (may be empty) and builds the pipeline; `who` names the buffers.
+    MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who);
+    /// Records the pass into `base` (kColorFormat), `distance` (kScalarFormat) and `depth`
+    /// (kDepthFormat), all in attachment layouts, cleared first. Nothing else changes layout.
+    void record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
+                const Image& distance, const Image& depth, glm::vec3 background) const;
+
+private:
+    Context* m_ctx;
+    Buffer m_vertices, m_indices;
+    std::uint32_t m_indexCount = 0;
+    Pipeline m_pipeline;
 };
-MeshBuffers uploadMesh(Context& ctx, const noise::Mesh& mesh, const char* who);
 /// The kernel's lobes (gpu::SpotLobe[]); InputError for 0 or more than 8 lobes or a bad support.
 Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who);
 

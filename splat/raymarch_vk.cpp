@@ -19,8 +19,6 @@
 #include "raymarch_bin.comp.h"
 #include "raymarch_march.comp.h"
 #include "raymarch_resolve.comp.h"
-#include "splat_mesh.frag.h"
-#include "splat_mesh.vert.h"
 #include "splat_prepare.comp.h"
 
 namespace spot::splat {
@@ -242,14 +240,10 @@ const RaymarchRenderer::Shell& RaymarchRenderer::shellFor(const noise::SurfaceCe
 
 RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
                                    const noise::Kernel& kernel)
-    : m_ctx(ctx), m_binTimes(ctx, 4), m_marchTimes(ctx, 3) {
+    : m_ctx(ctx), m_meshPass(ctx, mesh, "raymarch"), m_binTimes(ctx, 4), m_marchTimes(ctx, 3) {
     m_lobes = uploadKernelLobes(ctx, kernel, "raymarch renderer");
     m_lobeCount = std::uint32_t(kernel.lobes.size());
     m_support = kernel.supportSigma;
-    MeshBuffers meshBuffers = uploadMesh(ctx, mesh, "raymarch");
-    m_vertices = std::move(meshBuffers.vertices);
-    m_indices = std::move(meshBuffers.indices);
-    m_indexCount = meshBuffers.indexCount;
 
     constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     constexpr VkDescriptorType kImg = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
@@ -265,18 +259,6 @@ RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
                                                          kImg, kBuf, kBuf, kBuf, kBuf};
     m_march = makeComputePipeline(ctx, spirv(spv_raymarch_march_comp), marchBindings, push);
     m_resolve = makeComputePipeline(ctx, spirv(spv_raymarch_resolve_comp), marchBindings, push);
-    GraphicsPipelineDesc mesh3d;
-    mesh3d.vertex = spirv(spv_splat_mesh_vert);
-    mesh3d.fragment = spirv(spv_splat_mesh_frag);
-    mesh3d.bindings = {kBuf};
-    mesh3d.pushBytes = push;
-    mesh3d.colorFormats = {kColorFormat, kScalarFormat};
-    mesh3d.blends = {opaqueBlend(), opaqueBlend()};
-    mesh3d.depthFormat = kDepthFormat;
-    mesh3d.depthTest = true;
-    mesh3d.depthWrite = true;
-    mesh3d.depthCompare = VK_COMPARE_OP_GREATER;
-    m_mesh = makeGraphicsPipeline(ctx, mesh3d);
 }
 
 noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::Shading& shading,
@@ -427,34 +409,7 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
         transitionImage(cmd, depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                         VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
                         kTests, kDepthRW);
-        const VkRenderingAttachmentInfo colors[2] = {
-            colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
-            colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(gpu_splat::kSplatNoMesh))};
-        VkRenderingAttachmentInfo depthInfo{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-        depthInfo.imageView = depth.view();
-        depthInfo.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
-        depthInfo.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-        depthInfo.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-        depthInfo.clearValue.depthStencil = {0.0f, 0}; // reversed depth: 0 is infinitely far
-        VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-        info.renderArea = {{0, 0}, {width, height}};
-        info.layerCount = 1;
-        info.colorAttachmentCount = 2;
-        info.pColorAttachments = colors;
-        info.pDepthAttachment = &depthInfo;
-        vkCmdBeginRendering(cmd, &info);
-        const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
-        const VkRect2D scissor{{0, 0}, {width, height}};
-        vkCmdSetViewport(cmd, 0, 1, &viewport);
-        vkCmdSetScissor(cmd, 0, 1, &scissor);
-        if (m_indexCount > 0) {
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_mesh.handle());
-            pushFrame(cmd, m_mesh, frame);
-            Descriptors().buffer(0, m_vertices).push(m_ctx, cmd, m_mesh);
-            vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
-            vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
-        }
-        vkCmdEndRendering(cmd);
+        m_meshPass.record(cmd, frame, base, distance, depth, background);
         for (const Image* image : {&base, &distance})
             transitionImage(cmd, image->handle(), VK_IMAGE_ASPECT_COLOR_BIT, kAttachment, kGeneral,
                             kColorOut, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute | kTransfer,

@@ -72,6 +72,7 @@
 #include "noise/reference.h"
 #include "shaders/spot_layout.hpp"
 #include "splat/context_vk.h"
+#include "splat/frame_vk.h"
 
 namespace spot::noise {
 struct Mesh;
@@ -176,9 +177,9 @@ private:
     Context& m_ctx;
     std::uint32_t m_lobeCount = 0;
     float m_support = 3.0f;
-    std::uint32_t m_indexCount = 0;
-    Buffer m_lobes, m_vertices, m_indices;
-    Pipeline m_prepare, m_bin, m_mesh, m_march, m_resolve;
+    MeshPass m_meshPass;
+    Buffer m_lobes;
+    Pipeline m_prepare, m_bin, m_march, m_resolve;
     Timestamps m_binTimes, m_marchTimes;
     std::shared_ptr<Shell> m_shell;
 };

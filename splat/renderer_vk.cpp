@@ -15,8 +15,6 @@
 #include "splat_closest.frag.h"
 #include "splat_compact.comp.h"
 #include "splat_instanced.frag.h"
-#include "splat_mesh.frag.h"
-#include "splat_mesh.vert.h"
 #include "splat_oit.frag.h"
 #include "splat_prepare.comp.h"
 #include "splat_quad.vert.h"
@@ -67,7 +65,7 @@ const char* methodName(Method method) {
 }
 
 SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
-    : m_ctx(ctx), m_sort(ctx), m_timestamps(ctx, kTimestampCount) {
+    : m_ctx(ctx), m_meshPass(ctx, mesh, "splat"), m_sort(ctx), m_timestamps(ctx, kTimestampCount) {
     m_lobes = uploadKernelLobes(ctx, kernel, "splat renderer");
     requireFormat(ctx, kColorFormat,
                   VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT |
@@ -83,10 +81,6 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
                   "stored R32_UINT kernel index targets");
     m_lobeCount = std::uint32_t(kernel.lobes.size());
     m_support = kernel.supportSigma;
-    MeshBuffers meshBuffers = uploadMesh(ctx, mesh, "splat");
-    m_vertices = std::move(meshBuffers.vertices);
-    m_indices = std::move(meshBuffers.indices);
-    m_indexCount = meshBuffers.indexCount;
 
     const std::uint32_t push = sizeof(SpotSplatFrame);
     constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -99,19 +93,6 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     // Sort keys: 0 bounds, 1 kept kernels, 2 indirect draw, 3 world lobes, 4 keys.
     m_sortKeys = makeComputePipeline(ctx, spirv(spv_splat_sorted_keys_comp),
                                      {kBuf, kBuf, kBuf, kBuf, kBuf}, push);
-
-    GraphicsPipelineDesc mesh3d;
-    mesh3d.vertex = spirv(spv_splat_mesh_vert);
-    mesh3d.fragment = spirv(spv_splat_mesh_frag);
-    mesh3d.bindings = {kBuf};
-    mesh3d.pushBytes = push;
-    mesh3d.colorFormats = {kColorFormat, kScalarFormat};
-    mesh3d.blends = {opaqueBlend(), opaqueBlend()};
-    mesh3d.depthFormat = kDepthFormat;
-    mesh3d.depthTest = true;
-    mesh3d.depthWrite = true;
-    mesh3d.depthCompare = VK_COMPARE_OP_GREATER;
-    m_mesh = makeGraphicsPipeline(ctx, mesh3d);
 
     // Splat pipelines: 0 bounds, 1 kept kernels, 2 world lobes, 3 mesh distance, 4 closest.
     GraphicsPipelineDesc quads;
@@ -252,7 +233,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
                 "splat OIT accumulation");
     Image opticalDepth(m_ctx, width, height, kScalarFormat, kTargetUsage, VK_IMAGE_ASPECT_COLOR_BIT,
                        "splat OIT optical depth");
-    // The depth pass's kernel index and depth (1x1 placeholders, never read, without it).
+    // The depth pass's kernel index and depth (1x1, never read, without the depth pass).
     const std::uint32_t closestWidth = closestPass ? width : 1;
     const std::uint32_t closestHeight = closestPass ? height : 1;
     Image closestKernel(m_ctx, closestWidth, closestHeight, kKernelIndexFormat, kTargetUsage,
@@ -326,24 +307,7 @@ noise::Image SplatRenderer::render(const noise::Camera& camera, const noise::Sha
         transitionImage(cmd, depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                         VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
                         kTests, kDepthRW);
-        {
-            const VkRenderingAttachmentInfo depthInfo =
-                depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
-            beginRendering(
-                cmd, width, height,
-                {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
-                 colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR,
-                                 glm::vec4(gpu_splat::kSplatNoMesh))},
-                &depthInfo);
-            if (m_indexCount > 0) {
-                vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_mesh.handle());
-                pushFrame(cmd, m_mesh, frame);
-                Descriptors().buffer(0, m_vertices).push(m_ctx, cmd, m_mesh);
-                vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
-                vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
-            }
-            vkCmdEndRendering(cmd);
-        }
+        m_meshPass.record(cmd, frame, base, distance, depth, background);
         transitionImage(cmd, distance.handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kFragment | kCompute, kStorageRead);
         // Base colour and depth stay attachments: the instanced pass draws over them.

@@ -41,6 +41,7 @@
 #include "noise/kernel.h"
 #include "noise/reference.h"
 #include "splat/context_vk.h"
+#include "splat/frame_vk.h"
 #include "splat/sort_vk.h"
 
 namespace spot::noise {
@@ -112,9 +113,9 @@ private:
     Context& m_ctx;
     std::uint32_t m_lobeCount = 0;
     float m_support = 3.0f;
-    std::uint32_t m_indexCount = 0;
-    Buffer m_lobes, m_vertices, m_indices;
-    Pipeline m_prepare, m_compact, m_mesh, m_instanced, m_oit, m_resolve, m_roofline, m_closest;
+    MeshPass m_meshPass;
+    Buffer m_lobes;
+    Pipeline m_prepare, m_compact, m_instanced, m_oit, m_resolve, m_roofline, m_closest;
     Pipeline m_sortKeys, m_sorted;
     RadixSort m_sort;
     Timestamps m_timestamps;
