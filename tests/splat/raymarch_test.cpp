@@ -185,13 +185,7 @@ TEST(Raymarch, MeshEndsTheRayAndOccludesIt) {
     splat::Context ctx(validated());
     splat::RaymarchRenderer renderer(ctx, plane, kernel);
     const splat::Buffer impulses = upload(ctx, imps);
-    noise::Camera cam;
-    cam.projection = noise::Projection::Orthographic;
-    cam.eye = glm::dvec3(0.0, 3.0, 0.0);
-    cam.target = glm::dvec3(0.0);
-    cam.up = glm::dvec3(0.0, 0.0, -1.0);
-    cam.orthoHeight = 4.0;
-    cam.width = cam.height = 32;
+    const noise::Camera cam = topDownCamera();
     const glm::vec3 base(0.2f, 0.5f, 0.1f), background(1.0f, 0.0f, 1.0f);
     const noise::WorldLobe w = noise::placeLobe(kernel, 0, imps[0]);
     const noise::CameraRays rays(cam);

@@ -40,6 +40,19 @@ inline splat::Buffer upload(splat::Context& ctx, const std::vector<noise::Impuls
     return b;
 }
 
+/// 32x32 orthographic camera looking straight down (-y) at the origin over 4 world units: the
+/// occlusion tests' view of a lobe centred on the plane y = 0.
+inline noise::Camera topDownCamera() {
+    noise::Camera cam;
+    cam.projection = noise::Projection::Orthographic;
+    cam.eye = glm::dvec3(0.0, 3.0, 0.0);
+    cam.target = glm::dvec3(0.0);
+    cam.up = glm::dvec3(0.0, 0.0, -1.0);
+    cam.orthoHeight = 4.0;
+    cam.width = cam.height = 32;
+    return cam;
+}
+
 /// A camera looking at the origin from +z (slightly off axis), for single-lobe tests.
 inline noise::Camera lobeCamera(noise::Projection projection, int size) {
     noise::Camera cam;
