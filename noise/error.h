@@ -52,6 +52,7 @@ template <typename T> std::string show(const T& v) {
 #define SPOT_CHECK_EQ(a, b) SPOT_CHECK_OP(a, ==, b)
 #define SPOT_CHECK_LE(a, b) SPOT_CHECK_OP(a, <=, b)
 #define SPOT_CHECK_LT(a, b) SPOT_CHECK_OP(a, <, b)
+#define SPOT_CHECK_NE(a, b) SPOT_CHECK_OP(a, !=, b)
 #define SPOT_CHECK(cond)                                                                           \
     do {                                                                                           \
         if (!(cond))                                                                               \

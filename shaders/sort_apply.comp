@@ -10,8 +10,8 @@
 layout(local_size_x = kSortGroup) in;
 layout(push_constant) uniform Push { SpotSortPush sortPush; };
 
-layout(std430, binding = 0) buffer Histogram { uint hist[]; };
-layout(std430, binding = 1) readonly buffer BlockSums { uint blockSums[]; };
+layout(std430, binding = kSortBindHistogram) buffer Histogram { uint hist[]; };
+layout(std430, binding = kSortBindBlockSums) readonly buffer BlockSums { uint blockSums[]; };
 
 void main() {
     uint b = gl_GlobalInvocationID.x;

@@ -8,8 +8,8 @@
 layout(local_size_x = kSortGroup) in;
 layout(push_constant) uniform Push { SpotSortPush sortPush; };
 
-layout(std430, binding = 0) readonly buffer Keys { uint keys[]; };
-layout(std430, binding = 1) writeonly buffer Histogram { uint hist[]; };
+layout(std430, binding = kSortBindKeys) readonly buffer Keys { uint keys[]; };
+layout(std430, binding = kSortBindHistogram) writeonly buffer Histogram { uint hist[]; };
 
 void main() {
     uint c = gl_GlobalInvocationID.x;

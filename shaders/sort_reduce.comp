@@ -7,8 +7,8 @@
 layout(local_size_x = kSortGroup) in;
 layout(push_constant) uniform Push { SpotSortPush sortPush; };
 
-layout(std430, binding = 0) readonly buffer Histogram { uint hist[]; };
-layout(std430, binding = 1) writeonly buffer BlockSums { uint blockSums[]; };
+layout(std430, binding = kSortBindHistogram) readonly buffer Histogram { uint hist[]; };
+layout(std430, binding = kSortBindBlockSums) writeonly buffer BlockSums { uint blockSums[]; };
 
 void main() {
     uint b = gl_GlobalInvocationID.x;

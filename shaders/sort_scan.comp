@@ -10,7 +10,7 @@
 layout(local_size_x = kSortScanThreads) in;
 layout(push_constant) uniform Push { SpotSortPush sortPush; };
 
-layout(std430, binding = 0) buffer BlockSums { uint blockSums[]; };
+layout(std430, binding = kSortBindBlockSums) buffer BlockSums { uint blockSums[]; };
 
 shared uint sums[kSortScanThreads];
 

@@ -9,11 +9,11 @@
 layout(local_size_x = kSortGroup) in;
 layout(push_constant) uniform Push { SpotSortPush sortPush; };
 
-layout(std430, binding = 0) readonly buffer KeysIn { uint keysIn[]; };
-layout(std430, binding = 1) readonly buffer ValuesIn { uint valuesIn[]; };
-layout(std430, binding = 2) writeonly buffer KeysOut { uint keysOut[]; };
-layout(std430, binding = 3) writeonly buffer ValuesOut { uint valuesOut[]; };
-layout(std430, binding = 4) buffer Histogram { uint hist[]; };
+layout(std430, binding = kSortBindKeys) readonly buffer KeysIn { uint keysIn[]; };
+layout(std430, binding = kSortBindValues) readonly buffer ValuesIn { uint valuesIn[]; };
+layout(std430, binding = kSortBindKeysOut) writeonly buffer KeysOut { uint keysOut[]; };
+layout(std430, binding = kSortBindValuesOut) writeonly buffer ValuesOut { uint valuesOut[]; };
+layout(std430, binding = kSortBindHistogram) buffer Histogram { uint hist[]; };
 
 void main() {
     uint c = gl_GlobalInvocationID.x;

@@ -36,6 +36,14 @@ struct SpotSortPush {
                      entries; z, w: unused */
 };
 
+/* Descriptor bindings of the sort passes (C++ and GLSL use these names, never numbers). */
+SPOT_CONST uint kSortBindKeys = 0u;      /* histogram: keys; scatter: keys in */
+SPOT_CONST uint kSortBindValues = 1u;    /* scatter: values in */
+SPOT_CONST uint kSortBindKeysOut = 2u;   /* scatter */
+SPOT_CONST uint kSortBindValuesOut = 3u; /* scatter */
+SPOT_CONST uint kSortBindHistogram = 4u; /* histogram, reduce, apply, scatter */
+SPOT_CONST uint kSortBindBlockSums = 5u; /* reduce, scan, apply */
+
 SPOT_CONST uint kSortRadix = 256u;       /* 8-bit digits */
 SPOT_CONST uint kSortPasses = 4u;        /* 32-bit keys */
 SPOT_CONST uint kSortMinChunk = 256u;    /* pairs per chunk, at least ... */

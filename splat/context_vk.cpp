@@ -1,6 +1,7 @@
 #include "context_vk.h"
 
 #include <algorithm>
+#include <bit>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -498,12 +499,15 @@ VkShaderModule makeModule(Context& ctx, std::span<const std::uint32_t> spirv) {
     return m;
 }
 
-void makeLayout(Context& ctx, const std::vector<VkDescriptorType>& bindings, std::uint32_t pushBytes,
+void makeLayout(Context& ctx, const Bindings& bindings, std::uint32_t pushBytes,
                 VkShaderStageFlags stages, VkDescriptorSetLayout& setLayout, VkPipelineLayout& layout) {
     SPOT_CHECK_LE(pushBytes, 128u);
     std::vector<VkDescriptorSetLayoutBinding> b(bindings.size());
-    for (std::size_t i = 0; i < bindings.size(); ++i)
-        b[i] = {std::uint32_t(i), bindings[i], 1, stages, nullptr};
+    for (std::size_t i = 0; i < bindings.size(); ++i) {
+        for (std::size_t j = 0; j < i; ++j)
+            SPOT_CHECK_NE(bindings[i].binding, bindings[j].binding);
+        b[i] = {bindings[i].binding, bindings[i].type, 1, stages, nullptr};
+    }
     VkDescriptorSetLayoutCreateInfo dci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     dci.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
     dci.bindingCount = std::uint32_t(b.size());
@@ -521,8 +525,38 @@ void makeLayout(Context& ctx, const std::vector<VkDescriptorType>& bindings, std
 
 } // namespace
 
+Specialization& Specialization::set(std::uint32_t id, std::uint32_t value) {
+    for (const VkSpecializationMapEntry& e : m_entries)
+        SPOT_CHECK_NE(e.constantID, id);
+    m_entries.push_back({id, std::uint32_t(m_data.size() * sizeof(std::uint32_t)), sizeof(std::uint32_t)});
+    m_data.push_back(value);
+    return *this;
+}
+
+Specialization& Specialization::set(std::uint32_t id, std::int32_t value) {
+    return set(id, std::bit_cast<std::uint32_t>(value));
+}
+
+Specialization& Specialization::set(std::uint32_t id, float value) {
+    return set(id, std::bit_cast<std::uint32_t>(value));
+}
+
+Specialization& Specialization::set(std::uint32_t id, bool value) {
+    return set(id, std::uint32_t(value ? 1 : 0));
+}
+
+VkSpecializationInfo Specialization::info() const {
+    VkSpecializationInfo i{};
+    i.mapEntryCount = std::uint32_t(m_entries.size());
+    i.pMapEntries = m_entries.data();
+    i.dataSize = m_data.size() * sizeof(std::uint32_t);
+    i.pData = m_data.data();
+    return i;
+}
+
 Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
-                             const std::vector<VkDescriptorType>& bindings, std::uint32_t pushBytes) {
+                             const Bindings& bindings, std::uint32_t pushBytes,
+                             const Specialization& spec) {
     Pipeline p;
     p.m_ctx = &ctx;
     p.m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
@@ -533,6 +567,8 @@ Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
     ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     ci.stage.module = module;
     ci.stage.pName = "main";
+    const VkSpecializationInfo specInfo = spec.info();
+    ci.stage.pSpecializationInfo = spec.empty() ? nullptr : &specInfo;
     ci.layout = p.m_layout;
     const VkResult r = vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &p.m_pipeline);
     vkDestroyShaderModule(ctx.device(), module, nullptr);
@@ -550,6 +586,7 @@ Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc) {
 
     std::vector<VkShaderModule> modules;
     std::vector<VkPipelineShaderStageCreateInfo> shaderStages;
+    const VkSpecializationInfo specInfo = desc.spec.info();
     auto addStage = [&](std::span<const std::uint32_t> code, VkShaderStageFlagBits stage) {
         if (code.empty())
             return;
@@ -558,6 +595,7 @@ Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc) {
         s.stage = stage;
         s.module = modules.back();
         s.pName = "main";
+        s.pSpecializationInfo = desc.spec.empty() ? nullptr : &specInfo;
         shaderStages.push_back(s);
     };
     addStage(desc.vertex, VK_SHADER_STAGE_VERTEX_BIT);

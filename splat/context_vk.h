@@ -161,6 +161,39 @@ void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspe
 void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
                    VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess);
 
+/// One descriptor of set 0: its binding number (a constant of the header shared with the shader,
+/// so the number is written once) and its type. Visible to every stage of the pipeline.
+struct Binding {
+    std::uint32_t binding;
+    VkDescriptorType type;
+};
+using Bindings = std::vector<Binding>;
+inline Binding storageBuffer(std::uint32_t binding) {
+    return {binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+}
+inline Binding storageImage(std::uint32_t binding) {
+    return {binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE};
+}
+
+/// Specialization constants (32-bit each) for every stage of a pipeline: shaders are compiled
+/// for one setting instead of carrying every path (lavapipe compiles each shader at its first
+/// use and pays for every branch any of its 8 lanes takes). Ids are constants of the shared
+/// headers; an id a stage does not declare is ignored by that stage.
+class Specialization {
+public:
+    Specialization& set(std::uint32_t id, std::uint32_t value);
+    Specialization& set(std::uint32_t id, std::int32_t value);
+    Specialization& set(std::uint32_t id, float value);
+    Specialization& set(std::uint32_t id, bool value); ///< a GLSL bool constant (32-bit)
+    bool empty() const { return m_entries.empty(); }
+    /// Valid while this object lives and is not changed.
+    VkSpecializationInfo info() const;
+
+private:
+    std::vector<VkSpecializationMapEntry> m_entries;
+    std::vector<std::uint32_t> m_data;
+};
+
 /// A pipeline with its layout and its push-descriptor set layout (set 0).
 class Pipeline {
 public:
@@ -174,8 +207,8 @@ public:
     VkPipelineBindPoint bindPoint() const { return m_bindPoint; }
 
 private:
-    friend Pipeline makeComputePipeline(Context&, std::span<const std::uint32_t>,
-                                        const std::vector<VkDescriptorType>&, std::uint32_t);
+    friend Pipeline makeComputePipeline(Context&, std::span<const std::uint32_t>, const Bindings&,
+                                        std::uint32_t, const Specialization&);
     friend struct GraphicsPipelineDesc;
     friend Pipeline makeGraphicsPipeline(Context&, const struct GraphicsPipelineDesc&);
     void destroy();
@@ -186,14 +219,16 @@ private:
     VkPipelineBindPoint m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
 };
 
-/// Compute pipeline: one SPIR-V module (entry "main"), bindings 0..n-1 of the given types,
-/// push constants of `pushBytes` (<= 128).
+/// Compute pipeline: one SPIR-V module (entry "main"), the given bindings, push constants of
+/// `pushBytes` (<= 128), specialized by `spec`.
 Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
-                             const std::vector<VkDescriptorType>& bindings, std::uint32_t pushBytes);
+                             const Bindings& bindings, std::uint32_t pushBytes,
+                             const Specialization& spec = {});
 
 struct GraphicsPipelineDesc {
     std::span<const std::uint32_t> vertex, fragment, geometry; ///< geometry optional
-    std::vector<VkDescriptorType> bindings;                    ///< visible to all stages
+    Bindings bindings;                                         ///< visible to all stages
+    Specialization spec;                                       ///< for every stage
     std::uint32_t pushBytes = 0;
     std::vector<VkFormat> colorFormats;
     std::vector<VkPipelineColorBlendAttachmentState> blends;   ///< one per colour attachment

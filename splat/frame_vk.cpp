@@ -60,7 +60,7 @@ MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_c
     GraphicsPipelineDesc desc;
     desc.vertex = spirv(spv_splat_mesh_vert);
     desc.fragment = spirv(spv_splat_mesh_frag);
-    desc.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    desc.bindings = {storageBuffer(0)};
     desc.pushBytes = sizeof(gpu_splat::SpotSplatFrame);
     desc.colorFormats = {kColorFormat, kScalarFormat};
     desc.blends = {opaqueBlend(), opaqueBlend()};

@@ -59,9 +59,10 @@ glm::vec4 lodParameters(const noise::Camera& camera, double pixels) {
 GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
                            const noise::ImpulseGenerator& generator)
     : m_ctx(ctx), m_generator(generator) {
-    m_pipeline = makeComputePipeline(ctx, spv_generate_comp,
-                                     std::vector<VkDescriptorType>(12, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
-                                     sizeof(Push));
+    Bindings bindings; // TODO(binding names): the shader's bindings by position
+    for (std::uint32_t i = 0; i < 12; ++i)
+        bindings.push_back(storageBuffer(i));
+    m_pipeline = makeComputePipeline(ctx, spv_generate_comp, bindings, sizeof(Push));
     m_params = upload(ctx, std::vector<gpu::SpotGenParams>{generator.sharedParams()}, "generator parameters");
     m_pieces = upload(ctx, generator.sharedPieces(), "surface pieces");
     std::vector<std::uint32_t> tris;

@@ -245,18 +245,22 @@ RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
     m_lobeCount = std::uint32_t(kernel.lobes.size());
     m_support = kernel.supportSigma;
 
-    constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    constexpr VkDescriptorType kImg = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
     const std::uint32_t push = sizeof(SpotSplatFrame);
-    m_prepare =
-        makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), {kBuf, kBuf, kBuf, kBuf}, push);
-    m_bin = makeComputePipeline(ctx, spirv(spv_raymarch_bin_comp),
-                                {kBuf, kBuf, kBuf, kBuf, kBuf, kBuf}, 2 * sizeof(std::uint32_t));
+    // TODO(binding names): these numbers are the shaders' bindings by position.
+    auto buffers = [](std::uint32_t n) {
+        Bindings b;
+        for (std::uint32_t i = 0; i < n; ++i)
+            b.push_back(storageBuffer(i));
+        return b;
+    };
+    m_prepare = makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), buffers(4), push);
+    m_bin = makeComputePipeline(ctx, spirv(spv_raymarch_bin_comp), buffers(6), 2 * sizeof(std::uint32_t));
     // One layout for the march and its resolve (each pushes the bindings it reads): 0 params,
     // 1 hash table, 2 neighbourhoods, 3 world lobes, 4 base colour, 5 mesh distance, 6 march
     // state, 7 loop counts, 8 result, 9 impulse boxes.
-    const std::vector<VkDescriptorType> marchBindings = {kBuf, kBuf, kBuf, kBuf, kImg,
-                                                         kImg, kBuf, kBuf, kBuf, kBuf};
+    Bindings marchBindings = buffers(10);
+    marchBindings[4] = storageImage(4);
+    marchBindings[5] = storageImage(5);
     m_march = makeComputePipeline(ctx, spirv(spv_raymarch_march_comp), marchBindings, push);
     m_resolve = makeComputePipeline(ctx, spirv(spv_raymarch_resolve_comp), marchBindings, push);
 }

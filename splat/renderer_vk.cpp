@@ -83,21 +83,27 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     m_support = kernel.supportSigma;
 
     const std::uint32_t push = sizeof(SpotSplatFrame);
+    auto L = [](std::initializer_list<VkDescriptorType> types) {
+        Bindings b;
+        for (VkDescriptorType t : types)
+            b.push_back({std::uint32_t(b.size()), t});
+        return b;
+    };
     constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     constexpr VkDescriptorType kImg = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
     m_prepare =
-        makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), {kBuf, kBuf, kBuf, kBuf}, push);
-    m_compact = makeComputePipeline(ctx, spirv(spv_splat_compact_comp), {kBuf, kBuf, kBuf}, push);
+        makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), L({kBuf, kBuf, kBuf, kBuf}), push);
+    m_compact = makeComputePipeline(ctx, spirv(spv_splat_compact_comp), L({kBuf, kBuf, kBuf}), push);
     m_resolve = makeComputePipeline(ctx, spirv(spv_splat_resolve_comp),
-                                    {kImg, kImg, kImg, kImg, kBuf, kBuf, kBuf, kImg}, push);
+                                    L({kImg, kImg, kImg, kImg, kBuf, kBuf, kBuf, kImg}), push);
     // Sort keys: 0 bounds, 1 kept kernels, 2 indirect draw, 3 world lobes, 4 keys.
     m_sortKeys = makeComputePipeline(ctx, spirv(spv_splat_sorted_keys_comp),
-                                     {kBuf, kBuf, kBuf, kBuf, kBuf}, push);
+                                     L({kBuf, kBuf, kBuf, kBuf, kBuf}), push);
 
     // Splat pipelines: 0 bounds, 1 kept kernels, 2 world lobes, 3 mesh distance, 4 closest.
     GraphicsPipelineDesc quads;
     quads.vertex = spirv(spv_splat_quad_vert);
-    quads.bindings = {kBuf, kBuf, kBuf, kImg, kBuf};
+    quads.bindings = L({kBuf, kBuf, kBuf, kImg, kBuf});
     quads.pushBytes = push;
     quads.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
 
@@ -119,7 +125,7 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
 
     GraphicsPipelineDesc sorted = quads;
     sorted.fragment = spirv(spv_splat_sorted_frag);
-    sorted.bindings = {kBuf, kBuf, kBuf, kImg};
+    sorted.bindings = L({kBuf, kBuf, kBuf, kImg});
     sorted.colorFormats = {kColorFormat};
     sorted.blends = {overBlend()};
     m_sorted = makeGraphicsPipeline(ctx, sorted);
@@ -127,7 +133,7 @@ SplatRenderer::SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise:
     // The hybrid's closest kernel by a depth pass: nearest distance wins, the first on a tie.
     GraphicsPipelineDesc closest = quads;
     closest.fragment = spirv(spv_splat_closest_frag);
-    closest.bindings = {kBuf, kBuf, kBuf, kImg};
+    closest.bindings = L({kBuf, kBuf, kBuf, kImg});
     closest.colorFormats = {kKernelIndexFormat};
     closest.blends = {opaqueBlend()};
     closest.depthFormat = kDepthFormat;

@@ -93,14 +93,19 @@ RadixSortScratch::RadixSortScratch(Context& ctx, std::uint32_t capacity) : m_cap
 }
 
 RadixSort::RadixSort(Context& ctx) : m_ctx(ctx), m_timestamps(ctx, 2) {
-    constexpr VkDescriptorType kBuf = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    using namespace gpu_sort;
     const std::uint32_t push = sizeof(SpotSortPush);
-    m_histogram = makeComputePipeline(ctx, spirv(spv_sort_histogram_comp), {kBuf, kBuf}, push);
-    m_reduce = makeComputePipeline(ctx, spirv(spv_sort_reduce_comp), {kBuf, kBuf}, push);
-    m_scan = makeComputePipeline(ctx, spirv(spv_sort_scan_comp), {kBuf}, push);
-    m_apply = makeComputePipeline(ctx, spirv(spv_sort_apply_comp), {kBuf, kBuf}, push);
+    const Binding keys = storageBuffer(kSortBindKeys), hist = storageBuffer(kSortBindHistogram),
+                  sums = storageBuffer(kSortBindBlockSums);
+    m_histogram = makeComputePipeline(ctx, spirv(spv_sort_histogram_comp), {keys, hist}, push);
+    m_reduce = makeComputePipeline(ctx, spirv(spv_sort_reduce_comp), {hist, sums}, push);
+    m_scan = makeComputePipeline(ctx, spirv(spv_sort_scan_comp), {sums}, push);
+    m_apply = makeComputePipeline(ctx, spirv(spv_sort_apply_comp), {hist, sums}, push);
     m_scatter = makeComputePipeline(ctx, spirv(spv_sort_scatter_comp),
-                                    {kBuf, kBuf, kBuf, kBuf, kBuf}, push);
+                                    {keys, storageBuffer(kSortBindValues),
+                                     storageBuffer(kSortBindKeysOut),
+                                     storageBuffer(kSortBindValuesOut), hist},
+                                    push);
 }
 
 void RadixSort::record(VkCommandBuffer cmd, const Buffer& keys, const Buffer& values,
@@ -135,40 +140,40 @@ void RadixSort::record(VkCommandBuffer cmd, const Buffer& keys, const Buffer& va
 
         bind(m_histogram, push);
         Descriptors()
-            .buffer(0, *from[0])
-            .buffer(1, scratch.m_histogram)
+            .buffer(gpu_sort::kSortBindKeys, *from[0])
+            .buffer(gpu_sort::kSortBindHistogram, scratch.m_histogram)
             .push(m_ctx, cmd, m_histogram);
         vkCmdDispatch(cmd, divUp(chunks, gpu_sort::kSortGroup), 1, 1);
         computeToCompute(cmd);
 
         bind(m_reduce, push);
         Descriptors()
-            .buffer(0, scratch.m_histogram)
-            .buffer(1, scratch.m_blockSums)
+            .buffer(gpu_sort::kSortBindHistogram, scratch.m_histogram)
+            .buffer(gpu_sort::kSortBindBlockSums, scratch.m_blockSums)
             .push(m_ctx, cmd, m_reduce);
         vkCmdDispatch(cmd, divUp(blocks, gpu_sort::kSortGroup), 1, 1);
         computeToCompute(cmd);
 
         bind(m_scan, push);
-        Descriptors().buffer(0, scratch.m_blockSums).push(m_ctx, cmd, m_scan);
+        Descriptors().buffer(gpu_sort::kSortBindBlockSums, scratch.m_blockSums).push(m_ctx, cmd, m_scan);
         vkCmdDispatch(cmd, 1, 1, 1);
         computeToCompute(cmd);
 
         bind(m_apply, push);
         Descriptors()
-            .buffer(0, scratch.m_histogram)
-            .buffer(1, scratch.m_blockSums)
+            .buffer(gpu_sort::kSortBindHistogram, scratch.m_histogram)
+            .buffer(gpu_sort::kSortBindBlockSums, scratch.m_blockSums)
             .push(m_ctx, cmd, m_apply);
         vkCmdDispatch(cmd, divUp(blocks, gpu_sort::kSortGroup), 1, 1);
         computeToCompute(cmd);
 
         bind(m_scatter, push);
         Descriptors()
-            .buffer(0, *from[0])
-            .buffer(1, *from[1])
-            .buffer(2, *to[0])
-            .buffer(3, *to[1])
-            .buffer(4, scratch.m_histogram)
+            .buffer(gpu_sort::kSortBindKeys, *from[0])
+            .buffer(gpu_sort::kSortBindValues, *from[1])
+            .buffer(gpu_sort::kSortBindKeysOut, *to[0])
+            .buffer(gpu_sort::kSortBindValuesOut, *to[1])
+            .buffer(gpu_sort::kSortBindHistogram, scratch.m_histogram)
             .push(m_ctx, cmd, m_scatter);
         vkCmdDispatch(cmd, divUp(chunks, gpu_sort::kSortGroup), 1, 1);
         // An even number of passes: the result ends in the caller's buffers.
