@@ -22,6 +22,7 @@
 #include "progress.h"
 #include "scene_job.h"
 #include "splat/context_vk.h"
+#include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/image_compare.h"
 #include "splat/raymarch_vk.h"
@@ -42,12 +43,9 @@ constexpr double kDegradedFlip = 0.15;
 constexpr double kDegradedFlicker = 0.01;
 
 struct Variant {
-    std::string method;  ///< instanced, oit, hybrid
+    std::string method;  ///< a GPU method of the registry (splat::gpuMethods())
     std::string setting; ///< human-readable settings, unique per method
-    splat::SplatSettings splat;
-    double lod = 0.0;    ///< level-of-detail size in pixels (0 = off)
-    int steps = 0;       ///< raymarch: samples along each ray
-    int supersample = 1; ///< raymarch: n x n rays per pixel
+    splat::RenderSettings settings;
 };
 
 struct SceneEntry {
@@ -67,37 +65,36 @@ struct Suite {
     bool scaling = false;
 };
 
-splat::SplatSettings splatSettings(splat::Method m, bool ewa, splat::OitWeight w, int samples) {
-    splat::SplatSettings s;
-    s.method = m;
+splat::RenderSettings splatSettings(bool ewa, splat::OitWeight w, int samples, double lod = 0.0) {
+    splat::RenderSettings s;
     s.ewa = ewa;
     s.weight = w;
     s.kernelSamples = samples;
+    s.lodPixels = lod;
     return s;
 }
 
 std::vector<Variant> variants(bool full) {
-    using M = splat::Method;
     using W = splat::OitWeight;
     std::vector<Variant> v = {
-        {"instanced", "default", splatSettings(M::Instanced, true, W::McGuireBavoil, 0)},
-        {"oit", "ewa mb analytic", splatSettings(M::Oit, true, W::McGuireBavoil, 0)},
-        {"oit", "ewa constant analytic", splatSettings(M::Oit, true, W::Constant, 0)},
-        {"hybrid", "ewa mb analytic", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0)},
-        {"sorted", "ewa analytic", splatSettings(M::Sorted, true, W::McGuireBavoil, 0)},
+        {"instanced", "default", splatSettings(true, W::McGuireBavoil, 0)},
+        {"oit", "ewa mb analytic", splatSettings(true, W::McGuireBavoil, 0)},
+        {"oit", "ewa constant analytic", splatSettings(true, W::Constant, 0)},
+        {"hybrid", "ewa mb analytic", splatSettings(true, W::McGuireBavoil, 0)},
+        {"sorted", "ewa analytic", splatSettings(true, W::McGuireBavoil, 0)},
     };
     // The hybrid's closest kernel by a depth pass of its own instead of the atomicMin in the OIT
-    // pass (DESIGN: "measure both ways"): the same image, another cost.
-    splat::SplatSettings depthPass = splatSettings(M::Hybrid, true, W::McGuireBavoil, 0);
+    // pass (docs/design.md: "measure both ways"): the same image, another cost.
+    splat::RenderSettings depthPass = splatSettings(true, W::McGuireBavoil, 0);
     depthPass.closest = splat::ClosestKernel::DepthPass;
     v.push_back({"hybrid", "depth pass ewa mb analytic", depthPass});
     if (full) {
-        v.push_back({"oit", "no-ewa mb analytic", splatSettings(M::Oit, false, W::McGuireBavoil, 0)});
-        v.push_back({"oit", "ewa mb N16", splatSettings(M::Oit, true, W::McGuireBavoil, 16)});
-        v.push_back({"sorted", "no-ewa analytic", splatSettings(M::Sorted, false, W::McGuireBavoil, 0)});
-        v.push_back({"hybrid", "ewa mb N16", splatSettings(M::Hybrid, true, W::McGuireBavoil, 16)});
-        v.push_back({"hybrid", "lod 2px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 2.0});
-        v.push_back({"hybrid", "lod 4px", splatSettings(M::Hybrid, true, W::McGuireBavoil, 0), 4.0});
+        v.push_back({"oit", "no-ewa mb analytic", splatSettings(false, W::McGuireBavoil, 0)});
+        v.push_back({"oit", "ewa mb N16", splatSettings(true, W::McGuireBavoil, 16)});
+        v.push_back({"sorted", "no-ewa analytic", splatSettings(false, W::McGuireBavoil, 0)});
+        v.push_back({"hybrid", "ewa mb N16", splatSettings(true, W::McGuireBavoil, 16)});
+        v.push_back({"hybrid", "lod 2px", splatSettings(true, W::McGuireBavoil, 0, 2.0)});
+        v.push_back({"hybrid", "lod 4px", splatSettings(true, W::McGuireBavoil, 0, 4.0)});
     }
     // The ray-march baseline at rising step counts, with one ray per pixel and with 2 x 2 (the
     // pixel filter: one ray per pixel aliases sub-pixel strands, which flicker as the camera moves).
@@ -105,9 +102,12 @@ std::vector<Variant> variants(bool full) {
         full ? std::vector<std::pair<int, int>>{{8, 1}, {16, 1}, {32, 1}, {64, 1}, {128, 1},
                                                 {16, 2}, {32, 2}, {64, 2}}
              : std::vector<std::pair<int, int>>{{16, 2}, {32, 2}, {64, 2}};
-    for (const auto& [steps, n] : marches)
-        v.push_back({"raymarch", n == 1 ? cat(steps, " steps") : cat(steps, " steps ", n, "x", n),
-                     splat::SplatSettings{}, 0.0, steps, n});
+    for (const auto& [steps, n] : marches) {
+        splat::RenderSettings s;
+        s.steps = steps;
+        s.supersample = n;
+        v.push_back({"raymarch", n == 1 ? cat(steps, " steps") : cat(steps, " steps ", n, "x", n), s});
+    }
     return v;
 }
 
@@ -234,61 +234,61 @@ struct Bench {
     /// The ray-march renderer of the current scene (made on first use).
     std::unique_ptr<splat::RaymarchRenderer> marcher;
 
-    Frame renderGpu(cli::SceneJob& job, splat::GpuGenerator& gen, splat::SplatRenderer& renderer,
-                    const noise::Camera& cam, const splat::SplatSettings& settings, double lod = 0.0,
-                    int steps = 0, int supersample = 1) {
-        const auto start = std::chrono::steady_clock::now();
-        const noise::CameraRays rays(cam);
-        const double h = job.generator->cellSize();
-        const splat::GpuImpulses impulses = gen.generate([&](const noise::SurfaceCell& c) {
-            return rays.boxMayBeVisible(glm::dvec3(c.ijk) * h - h, glm::dvec3(c.ijk + 1) * h + h);
-        }, splat::lodParameters(cam, lod));
+    /// One frame of the scene's persistent frame (impulses regenerated only when the visible cells
+    /// or the level of detail change, as in an interactive view).
+    Frame render(cli::SceneJob& job, splat::Frame& frame, const noise::Camera& cam,
+                 const Variant& v, bool image = true) {
         Frame f;
-        if (steps > 0) {
+        const splat::View view{cam, job.scene.shading, job.scene.background, job.scene.baseColor};
+        if (v.method == "raymarch") { // TODO: the ray-march through splat::Frame (registry)
+            const auto start = std::chrono::steady_clock::now();
+            const noise::CameraRays rays(cam);
+            const double h = job.generator->cellSize();
+            const splat::GpuImpulses impulses = frame.generator().generate([&](const noise::SurfaceCell& c) {
+                return rays.boxMayBeVisible(glm::dvec3(c.ijk) * h - h, glm::dvec3(c.ijk + 1) * h + h);
+            });
             if (!marcher)
                 marcher = std::make_unique<splat::RaymarchRenderer>(ctx, job.mesh, job.generator->kernel());
             splat::RaymarchSettings rs;
-            rs.steps = steps;
-            rs.supersample = supersample;
+            rs.steps = v.settings.steps;
+            rs.supersample = v.settings.supersample;
             splat::RaymarchStats stats;
             f.image = marcher->render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
                                       job.generator->cells(), impulses.impulses, impulses.count, rs, &stats);
             f.gpuMs = impulses.milliseconds + stats.totalMs;
-            f.drawn = impulses.count;
-        } else {
-            splat::FrameStats stats;
-            f.image = renderer.render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
-                                      impulses.impulses, impulses.count, settings, &stats);
-            f.gpuMs = impulses.milliseconds + stats.totalMs;
-            f.drawn = stats.kernelsDrawn;
-            for (const auto& [pass, ms] : stats.passMs)
-                if (pass == "splat")
-                    f.splatMs = ms;
+            f.drawn = f.generated = impulses.count;
+            f.wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+            return f;
         }
-        f.wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        f.generated = impulses.count;
+        const splat::FrameStats stats = frame.render(v.method, view, v.settings, image ? &f.image : nullptr);
+        f.gpuMs = stats.gpuMs;
+        f.wallMs = stats.wallMs;
+        f.drawn = stats.counters.kernelsDrawn;
+        f.generated = stats.kernelsGenerated;
+        for (const auto& [pass, ms] : stats.passMs)
+            if (pass == "splat")
+                f.splatMs = ms;
         return f;
     }
 
-    json runVariant(const SceneEntry& entry, cli::SceneJob& job, splat::GpuGenerator& gen,
-                    splat::SplatRenderer& renderer, const Variant& v, const noise::Image& ref,
-                    double refFlicker, double rooflineMs) {
+    json runVariant(const SceneEntry& entry, cli::SceneJob& job, splat::Frame& frame,
+                    const Variant& v, const noise::Image& ref, double refFlicker,
+                    double rooflineMs) {
         json row = {{"scene", job.scene.name}, {"scenario", entry.scenario}, {"method", v.method},
                     {"setting", v.setting}, {"width", job.scene.camera.width},
-                    {"rays_per_pixel", v.steps > 0 ? v.supersample * v.supersample : 0},
+                    {"rays_per_pixel", v.method == "raymarch" ? v.settings.supersample * v.settings.supersample : 0},
                     {"height", job.scene.camera.height}};
         try {
             ctx.resetPeak();
             // One cold frame, then the slow orbit: its frames are the warm frames timed (the view
             // turns 0.5 degrees a frame, the work stays the same), frame 0 is the scene's own
             // camera and gives the error, and the orbit gives the flicker.
-            renderGpu(job, gen, renderer, job.scene.camera, v.splat, v.lod, v.steps, v.supersample);
+            render(job, frame, job.scene.camera, v);
             std::vector<double> gpu, wall, splatPass;
             std::vector<noise::Image> frames;
             Frame last;
             for (int k = 0; k < suite.orbitFrames; ++k) {
-                Frame f = renderGpu(job, gen, renderer, orbit(job.scene.camera, k, suite.orbitDeg),
-                                    v.splat, v.lod, v.steps, v.supersample);
+                Frame f = render(job, frame, orbit(job.scene.camera, k, suite.orbitDeg), v);
                 gpu.push_back(f.gpuMs);
                 wall.push_back(f.wallMs);
                 splatPass.push_back(f.splatMs);
@@ -296,7 +296,7 @@ struct Bench {
                 if (k == 0)
                     last = std::move(f);
             }
-            if (v.steps == 0) {
+            if (v.method != "raymarch") {
                 // The splat pass against the rasterizer's own cost for the same primitives.
                 const double splatMs = percentile(splatPass, 0.5);
                 row["splat_ms_median"] = splatMs;
@@ -350,21 +350,20 @@ struct Bench {
         for (int k = 0; k < suite.orbitFrames; ++k)
             refOrbit.push_back(reference(file, job, orbit(job.scene.camera, k, suite.orbitDeg)));
         const double refFlicker = flicker(refOrbit);
-        splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
-        splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
+        splat::Frame frame(ctx, job.mesh, *job.generator);
         marcher.reset();
         // The roofline: the same quads over the same pixels with trivial shaders.
-        splat::SplatSettings roofline = splatSettings(splat::Method::Oit, true, splat::OitWeight::McGuireBavoil, 0);
-        roofline.roofline = true;
+        Variant roofline{"oit", "roofline", splatSettings(true, splat::OitWeight::McGuireBavoil, 0)};
+        roofline.settings.roofline = true;
         std::vector<double> rooflineMs;
         for (int f = 0; f <= suite.frames; ++f) {
-            const Frame fr = renderGpu(job, gen, renderer, job.scene.camera, roofline);
+            const Frame fr = render(job, frame, job.scene.camera, roofline, false);
             if (f > 0)
                 rooflineMs.push_back(fr.splatMs);
         }
         const double rooflineMedian = percentile(rooflineMs, 0.5);
         for (const Variant& v : suite.variants) {
-            json row = runVariant(entry, job, gen, renderer, v, ref, refFlicker, rooflineMedian);
+            json row = runVariant(entry, job, frame, v, ref, refFlicker, rooflineMedian);
             row["reference_flicker"] = refFlicker;
             rows.push_back(row);
             bar.update(++done, total);
@@ -388,16 +387,13 @@ struct Bench {
                     noise::GeneratorOptions options;
                     options.seed = job.scene.seed;
                     job.generator = std::make_unique<noise::ImpulseGenerator>(job.mesh, job.preset, options);
-                    splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
-                    splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
-                    const splat::SplatSettings s = splatSettings(
-                        std::string(method) == "oit" ? splat::Method::Oit : splat::Method::Hybrid, true,
-                        splat::OitWeight::McGuireBavoil, 0);
+                    splat::Frame frame(ctx, job.mesh, *job.generator);
+                    const Variant v{method, "scaling", splatSettings(true, splat::OitWeight::McGuireBavoil, 0)};
                     ctx.resetPeak();
                     std::vector<double> gpu;
                     Frame f;
                     for (int k = 0; k <= 3; ++k) {
-                        f = renderGpu(job, gen, renderer, job.scene.camera, s);
+                        f = render(job, frame, job.scene.camera, v, false);
                         if (k > 0)
                             gpu.push_back(f.gpuMs);
                     }
@@ -415,17 +411,16 @@ struct Bench {
         }
         for (int size : {64, 128, 256, 512}) {
             cli::SceneJob job = cli::loadSceneJob(scenesDir / "fur-bunny.json", size, size, false);
-            splat::GpuGenerator gen(ctx, job.mesh, *job.generator);
-            splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
+            splat::Frame frame(ctx, job.mesh, *job.generator);
             json row = {{"scene", "fur-bunny"}, {"scenario", "scaling-resolution"},
                         {"method", "hybrid"}, {"setting", cat(size, "x", size)},
                         {"width", size}, {"height", size}};
             ctx.resetPeak();
             std::vector<double> gpu;
             Frame f;
+            const Variant v{"hybrid", "scaling", splatSettings(true, splat::OitWeight::McGuireBavoil, 0)};
             for (int k = 0; k <= 3; ++k) {
-                f = renderGpu(job, gen, renderer, job.scene.camera,
-                              splatSettings(splat::Method::Hybrid, true, splat::OitWeight::McGuireBavoil, 0));
+                f = render(job, frame, job.scene.camera, v, false);
                 if (k > 0)
                     gpu.push_back(f.gpuMs);
             }

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -15,8 +16,10 @@
 #include "noise/reference.h"
 #include "noise/system.h"
 #include "progress.h"
+#include "render_options.h"
 #include "scene_job.h"
 #include "splat/context_vk.h"
+#include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/raymarch_vk.h"
 #include "splat/renderer_vk.h"
@@ -63,81 +66,81 @@ Rendered renderReference(const cli::Args& args, cli::SceneJob& job) {
     return r;
 }
 
-/// What both GPU paths report: the image, device, kernel counts, GPU time per pass (generation
-/// first) and in all, memory, validation errors (any fails the run), plus the method's own
-/// `settings`. The summary line ends with the time and the device.
-Rendered gpuRendered(splat::Context& ctx, noise::Image image, const splat::GpuImpulses& impulses,
-                     std::uint32_t drawn, const std::vector<std::pair<std::string, double>>& passMs,
-                     double frameMs, const nlohmann::json& settings) {
+/// Median, 90th percentile and minimum of `values` (empty: zeros), as JSON.
+nlohmann::json summary(std::vector<double> values) {
+    nlohmann::json j = {{"median", 0.0}, {"p90", 0.0}, {"min", 0.0}};
+    if (values.empty())
+        return j;
+    std::sort(values.begin(), values.end());
+    auto at = [&](double p) {
+        const double x = p * double(values.size() - 1);
+        const std::size_t lo = std::size_t(x), hi = std::min(lo + 1, values.size() - 1);
+        return values[lo] + (values[hi] - values[lo]) * (x - double(lo));
+    };
+    j["median"] = at(0.5);
+    j["p90"] = at(0.9);
+    j["min"] = values.front();
+    return j;
+}
+
+/// A GPU method through the persistent frame: one frame (read back), then `--repeat N` warm
+/// frames (not read back), timed.
+Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::MethodInfo& method) {
+    const splat::RenderSettings settings = cli::renderSettings(args);
+    const int repeat = int(args.integer("repeat", 0, 0, 100000));
+    splat::Context ctx;
+    splat::Frame frame(ctx, job.mesh, *job.generator);
+    const splat::View view{job.scene.camera, job.scene.shading, job.scene.background,
+                           job.scene.baseColor};
+    Rendered r;
+    const splat::FrameStats first = frame.render(method.name, view, settings, &r.image);
+    splat::FrameStats last = first;
+    std::vector<double> gpu, wall;
+    for (int i = 0; i < repeat; ++i) {
+        last = frame.render(method.name, view, settings);
+        gpu.push_back(last.gpuMs);
+        wall.push_back(last.wallMs);
+    }
+    if (repeat == 0) {
+        gpu.push_back(first.gpuMs);
+        wall.push_back(first.wallMs);
+    }
     const splat::ValidationCounts v = ctx.validation();
     if (v.errors > 0)
         throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
     nlohmann::json passes = nlohmann::json::object();
-    passes["generate"] = impulses.milliseconds;
-    for (const auto& [name, ms] : passMs)
+    for (const auto& [name, ms] : last.passMs)
         passes[name] = ms;
-    const double totalMs = impulses.milliseconds + frameMs;
-    Rendered r;
-    r.image = std::move(image);
-    r.kernels = impulses.count;
-    r.seconds = totalMs * 1e-3;
-    r.stats = settings;
+    r.kernels = first.kernelsGenerated;
+    r.seconds = first.gpuMs * 1e-3;
+    r.stats = cli::describe(method, settings);
     r.stats.update({{"device", ctx.deviceName()},
-                    {"kernels_generated", impulses.count},
-                    {"kernel_candidates", impulses.candidates},
-                    {"kernels_drawn", drawn},
+                    {"kernels_generated", first.kernelsGenerated},
+                    {"kernel_candidates", first.candidates},
+                    {"kernels_drawn", last.counters.kernelsDrawn},
                     {"gpu_ms", passes},
-                    {"gpu_total_ms", totalMs},
+                    {"gpu_total_ms", last.gpuMs},
+                    {"warm_frames", repeat},
+                    {"frame_ms", summary(gpu)},
+                    {"wall_ms", summary(wall)},
+                    {"first_frame", {{"gpu_ms", first.gpuMs}, {"wall_ms", first.wallMs}}},
                     {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
                     {"validation_errors", v.errors}});
-    r.summary = cat(totalMs, " ms GPU on ", ctx.deviceName());
-    return r;
-}
-
-Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Method method) {
-    splat::SplatSettings settings;
-    settings.method = method;
-    settings.kernelSamples = int(args.integer("kernel-samples", 0, 0, 2048));
-    const std::string ewa = args.str("ewa", "on");
-    if (ewa != "on" && ewa != "off")
-        throw InputError(cat("spotshell render: --ewa must be on or off, not '", ewa, "'"));
-    settings.ewa = ewa == "on";
-    const std::string weight = args.str("weight", "mcguire-bavoil");
-    if (weight == "constant")
-        settings.weight = splat::OitWeight::Constant;
-    else if (weight == "mcguire-bavoil")
-        settings.weight = splat::OitWeight::McGuireBavoil;
-    else
-        throw InputError(cat("spotshell render: --weight must be constant or mcguire-bavoil, not '",
-                             weight, "'"));
-    const std::string closest = args.str("closest", "atomic");
-    if (closest == "atomic")
-        settings.closest = splat::ClosestKernel::Atomic;
-    else if (closest == "depth-pass")
-        settings.closest = splat::ClosestKernel::DepthPass;
-    else
-        throw InputError(cat("spotshell render: --closest must be atomic or depth-pass, not '",
-                             closest, "'"));
-
-    splat::Context ctx;
-    splat::GpuGenerator generator(ctx, job.mesh, *job.generator);
-    const double lod = args.number("lod", 0.0, 0.0, 64.0);
-    const splat::GpuImpulses impulses =
-        generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); },
-                           splat::lodParameters(job.scene.camera, lod));
-    splat::SplatRenderer renderer(ctx, job.mesh, job.generator->kernel());
-    splat::FrameStats frame;
-    noise::Image image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
-                                         job.scene.baseColor, impulses.impulses, impulses.count,
-                                         settings, &frame);
-    Rendered r = gpuRendered(ctx, std::move(image), impulses, frame.kernelsDrawn, frame.passMs,
-                             frame.totalMs,
-                             {{"ewa", settings.ewa},
-                              {"kernel_samples", settings.kernelSamples},
-                              {"weight", weight},
-                              {"closest", closest},
-                              {"lod_pixels", lod}});
-    r.summary = cat(impulses.count, " kernels, ", frame.kernelsDrawn, " drawn, ", r.summary);
+    for (const auto& [name, value] : last.counters.extra)
+        r.stats[name] = value;
+    if (settings.countFragments && method.splatting) {
+        const auto& c = last.counters;
+        r.stats["fragments_shaded"] = c.fragmentsShaded;
+        r.stats["pixels_covered"] = c.pixelsCovered;
+        r.stats["fragment_efficiency"] =
+            c.pixelsCovered > 0 ? double(c.fragmentsShaded) / double(c.pixelsCovered) : 0.0;
+    }
+    r.summary = cat(first.kernelsGenerated, " kernels, ", last.counters.kernelsDrawn, " drawn, ",
+                    first.gpuMs, " ms GPU");
+    if (repeat > 0)
+        r.summary += cat(" (", repeat, " warm frames: median ", double(summary(gpu)["median"]),
+                         " ms GPU, ", double(summary(wall)["median"]), " ms wall)");
+    r.summary += cat(" on ", ctx.deviceName());
     return r;
 }
 
@@ -151,21 +154,39 @@ Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
         generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
     splat::RaymarchRenderer renderer(ctx, job.mesh, job.generator->kernel());
     splat::RaymarchStats stats;
-    noise::Image image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
-                                         job.scene.baseColor, job.generator->cells(),
-                                         impulses.impulses, impulses.count, settings, &stats);
-    Rendered r = gpuRendered(ctx, std::move(image), impulses, impulses.count, stats.passMs,
-                             stats.totalMs,
-                             {{"steps", settings.steps},
-                              {"supersample", settings.supersample},
-                              {"loop_bound", stats.loopBound},
-                              {"max_loop_iterations", stats.maxLoopIterations},
-                              {"steps_per_dispatch", stats.stepsPerDispatch},
-                              {"dispatches", stats.dispatches},
-                              {"shell_cells", stats.shellCells}});
+    Rendered r;
+    r.image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
+                              job.scene.baseColor, job.generator->cells(), impulses.impulses,
+                              impulses.count, settings, &stats);
+    nlohmann::json passes = nlohmann::json::object();
+    passes["generate"] = impulses.milliseconds;
+    for (const auto& [name, ms] : stats.passMs)
+        passes[name] = ms;
+    const double totalMs = impulses.milliseconds + stats.totalMs;
+    r.kernels = impulses.count;
+    r.seconds = totalMs * 1e-3;
+    r.stats = {{"steps", settings.steps},
+               {"supersample", settings.supersample},
+               {"loop_bound", stats.loopBound},
+               {"max_loop_iterations", stats.maxLoopIterations},
+               {"steps_per_dispatch", stats.stepsPerDispatch},
+               {"dispatches", stats.dispatches},
+               {"shell_cells", stats.shellCells},
+               {"device", ctx.deviceName()},
+               {"kernels_generated", impulses.count},
+               {"kernel_candidates", impulses.candidates},
+               {"kernels_drawn", impulses.count},
+               {"gpu_ms", passes},
+               {"gpu_total_ms", totalMs},
+               {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
+               {"validation_errors", ctx.validation().errors}};
+    if (ctx.validation().errors > 0)
+        throw std::runtime_error(cat(ctx.validation().errors, " Vulkan validation errors, first: ",
+                                     ctx.validation().firstError));
     r.summary = cat(impulses.count, " kernels, ", settings.steps, " steps in ", stats.dispatches,
                     stats.dispatches == 1 ? " dispatch, " : " dispatches, ", settings.supersample,
-                    "x", settings.supersample, " rays per pixel, ", r.summary);
+                    "x", settings.supersample, " rays per pixel, ", totalMs, " ms GPU on ",
+                    ctx.deviceName());
     return r;
 }
 
@@ -173,24 +194,17 @@ Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
 
 int render(int argc, char** argv) {
     std::vector<cli::OptionSpec> specs = cli::sceneOptions();
+    specs.push_back({"method", "NAME",
+                     "reference (converged CPU ground truth), " + splat::gpuMethodNames() +
+                         ", raymarch",
+                     true});
+    specs.push_back({"spp", "N", "reference: samples per pixel (default: the scene's)", false});
+    specs.push_back({"step-scale", "X", "reference: quadrature step multiplier (default 1)", false});
+    for (const cli::OptionSpec& o : cli::renderOptions())
+        specs.push_back(o);
     specs.insert(specs.end(),
-                 {{"method", "NAME", "reference (converged CPU ground truth), instanced, oit, hybrid, sorted or raymarch", true},
-                  {"spp", "N", "reference: samples per pixel (default: the scene's)", false},
-                  {"step-scale", "X", "reference: quadrature step multiplier (default 1)", false},
-                  {"kernel-samples", "N", "oit/hybrid: march N samples per kernel (paper eq. 10) "
-                                          "instead of the analytic integral (default 0)", false},
-                  {"ewa", "on|off", "GPU methods: EWA filtering by the pixel footprint (default on)", false},
-                  {"weight", "W", "oit/hybrid: constant or mcguire-bavoil (default)", false},
-                  {"closest", "HOW", "hybrid: find each pixel's closest kernel with an atomicMin in "
-                                     "the OIT pass (atomic, default) or in a depth pass of its own "
-                                     "(depth-pass); the same image either way", false},
-                  {"steps", "N", "raymarch: samples along each ray through the shell (default 32, "
-                                 "at most 4096; split over dispatches so that no shader "
-                                 "invocation loops too long)", false},
-                  {"supersample", "N", "raymarch: N x N rays per pixel, box-filtered (default 1, "
-                                       "at most 8)", false},
-                  {"lod", "PIXELS", "GPU methods: thin the kernels of cells smaller than PIXELS on "
-                                    "screen, conserving mass (default 0: off)", false},
+                 {{"repeat", "N", "GPU methods: render N warm frames after the first and report "
+                                  "their times (frame_ms, wall_ms in --stats; default 0)", false},
                   {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},
                   {"stats", "FILE", "also write timings and counts as JSON", false},
                   cli::threadsOption()});
@@ -202,18 +216,10 @@ int render(int argc, char** argv) {
         return 0;
     }
     const std::string method = args.str("method");
-    std::optional<splat::Method> gpuMethod;
-    if (method == "instanced")
-        gpuMethod = splat::Method::Instanced;
-    else if (method == "oit")
-        gpuMethod = splat::Method::Oit;
-    else if (method == "hybrid")
-        gpuMethod = splat::Method::Hybrid;
-    else if (method == "sorted")
-        gpuMethod = splat::Method::Sorted;
-    else if (method != "reference" && method != "raymarch")
-        throw InputError(cat("spotshell render: unknown method '", method,
-                             "' (reference, instanced, oit, hybrid, sorted, raymarch)"));
+    const splat::MethodInfo* gpuMethod = splat::findGpuMethod(method);
+    if (!gpuMethod && method != "reference" && method != "raymarch")
+        throw InputError(cat("spotshell render: unknown method '", method, "' (reference, ",
+                             splat::gpuMethodNames(), ", raymarch)"));
     const auto threads = args.integer("threads", 0, 0, 1024);
     std::optional<tbb::global_control> threadLimit;
     if (threads > 0)
@@ -224,7 +230,7 @@ int render(int argc, char** argv) {
     const std::string out = args.str("out");
     Rendered r = gpuMethod   ? renderGpu(args, job, *gpuMethod)
                  : reference ? renderReference(args, job)
-                             : renderRaymarch(args, job);
+                             : renderRaymarch(args, job); // TODO: raymarch into the registry
 
     std::map<std::string, std::string> metadata = {{"method", method},
                                                    {"scene", job.scene.name},

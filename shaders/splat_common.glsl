@@ -1,8 +1,10 @@
-// splat_common.glsl: what every splatting shader shares: the frame's push constants, the pixel's
-// ray, and (when SPLAT_LOBES_BINDING is defined before inclusion) one kernel's colour and alpha
-// along a ray from its world lobes. All the math comes from spot_shared.h; this file only loops.
+// splat_common.glsl: what every splatting shader shares: the frame's push constants, the
+// specialization constants, the pixel's ray, and (when SPLAT_READS_LOBES is defined before
+// inclusion) one kernel's colour and alpha along a pixel's ray. All the math comes from
+// spot_shared.h; this file only loops.
 //
-// A kernel's world lobes are worldLobes[kernel * lobes + l] (SpotWorldLobe, prepare.comp).
+// A kernel's lobes are worldLobes[kernel * kLobes + l] (SpotWorldLobe) and
+// screenLobes[kernel * kLobes + l] (SpotScreenLobe), both written by splat_prepare.comp.
 #extension GL_GOOGLE_include_directive : require
 #include "spot_shared.h"
 #include "spot_layout.h"
@@ -10,46 +12,70 @@
 
 layout(push_constant) uniform Push { SpotSplatFrame frame; };
 
-bool splatOrthographic() { return frame.eye.w > 0.5; }
-bool splatFlag(uint bit) { return (frame.counts.w & bit) != 0u; }
+// Each pipeline is compiled for one setting (splat/renderer_vk.cpp sets these); the defaults
+// below are never used as such.
+layout(constant_id = kSplatSpecLobes) const uint kLobes = 1u;
+layout(constant_id = kSplatSpecSamples) const uint kSamples = 0u;
+layout(constant_id = kSplatSpecLambert) const bool kLambert = false;
+layout(constant_id = kSplatSpecOrthographic) const bool kOrthographic = false;
+layout(constant_id = kSplatSpecEwa) const bool kEwa = true;
+layout(constant_id = kSplatSpecWeight) const uint kWeight = kSpotWeightMcGuireBavoil;
+layout(constant_id = kSplatSpecHybridAtomic) const bool kHybridAtomic = false;
+layout(constant_id = kSplatSpecCount) const bool kCount = false;
+layout(constant_id = kSplatSpecResolve) const uint kResolve = kSplatResolveOit;
+layout(constant_id = kSplatSpecScreen) const bool kScreen = true;
 
-// The ray through continuous pixel position p (pixels, (0,0) top-left), as noise::CameraRays.
+// The ray through continuous pixel position p (pixels, (0,0) top-left), as noise::CameraRays:
+// world origin and unit direction. (The projection is also read from the frame: the ray-march's
+// shaders are not specialized for it.)
 void splatPixelRay(vec2 p, out vec3 origin, out vec3 dir) {
     float sx = 2.0 * p.x / frame.size.x - 1.0;
     float sy = 1.0 - 2.0 * p.y / frame.size.y;
     spotCameraRay(frame.eye.xyz, frame.forward.xyz, frame.right.xyz * frame.right.w,
-                  frame.up.xyz * frame.up.w, splatOrthographic(), sx, sy, origin, dir);
+                  frame.up.xyz * frame.up.w, kOrthographic || frame.eye.w > 0.5, sx, sy, origin, dir);
+}
+
+// World length of the pixel's ray direction scaled to unit view depth (1 for orthographic): a
+// view depth t along the ray is the world distance t x splatRayScale(p).
+float splatRayScale(vec2 p) {
+    if (kOrthographic)
+        return 1.0;
+    float sx = 2.0 * p.x / frame.size.x - 1.0;
+    float sy = 1.0 - 2.0 * p.y / frame.size.y;
+    return length(frame.forward.xyz + sx * frame.right.w * frame.right.xyz +
+                  sy * frame.up.w * frame.up.xyz);
 }
 
 // View depth (world units along the view direction) of a world point.
 float splatViewDepth(vec3 x) { return dot(x - frame.eye.xyz, frame.forward.xyz); }
 
-#ifdef SPLAT_LOBES_BINDING
-layout(std430, binding = SPLAT_LOBES_BINDING) readonly buffer WorldLobes { SpotWorldLobe worldLobes[]; };
+#ifdef SPLAT_READS_LOBES
+layout(std430, binding = kSplatBindWorldLobes) readonly buffer WorldLobes { SpotWorldLobe worldLobes[]; };
+layout(std430, binding = kSplatBindScreenLobes) readonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
 
 // One kernel seen along one pixel's ray.
 struct SplatKernelSample {
     vec3 premul;  // premultiplied colour
     float alpha;  // 1 - transmittance through the kernel
     float tau;    // optical depth through the kernel: alpha = 1 - exp(-tau)
-    float depth;  // ray parameter t (world distance) of the kernel at this pixel: the mean of the
-                  // lobe peaks (or samples) weighted by what each contributes to alpha
+    float depth;  // view depth of the kernel along this pixel's ray: the mean of the lobe peaks
+                  // (or samples) weighted by what each contributes to alpha
 };
 
 mat3 splatLobeMatrix(SpotWorldLobe w) { return mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz); }
 vec3 splatLobeCentre(SpotWorldLobe w) { return vec3(w.a0.w, w.a1.w, w.a2.w); }
 
 vec3 splatShade(vec3 color, vec3 normal) {
-    if (!splatFlag(kSplatFlagLambert))
+    if (!kLambert)
         return color;
     return color * spotLambertFactor(normal, frame.light.xyz, frame.light.w);
 }
 
 // Shading normal at world point x: the normalized negative gradient of the kernel's density
 // sum a g(x) (the reference's formula); -dir where the gradient vanishes.
-vec3 splatKernelNormal(uint first, uint lobes, vec3 x, vec3 dir) {
+vec3 splatKernelNormal(uint first, vec3 x, vec3 dir) {
     vec3 g = vec3(0.0);
-    for (uint l = 0u; l < lobes; ++l) {
+    for (uint l = 0u; l < kLobes; ++l) {
         SpotWorldLobe w = worldLobes[first + l];
         if (!(w.color.w > 0.0))
             continue;
@@ -61,13 +87,13 @@ vec3 splatKernelNormal(uint first, uint lobes, vec3 x, vec3 dir) {
     return len > 0.0 && !isinf(len) ? g / len : -dir;
 }
 
-// Lambert factor of one lobe along the ray (optical depth tau over [0, tMesh]): the mean of the
-// factor with the kernel's normal at kSplatShadingSamples points splitting what the lobe emits
-// towards the camera into equal shares. One point at the lobe's density peak would not do: the
-// gradient there is perpendicular to the ray, whatever the lobe's orientation; the shares put
-// the points on the lobe's front for an opaque lobe and across it for a thin one, like the
+// Lambert factor of one lobe along the ray (optical depth tau over [0, tMesh], world units): the
+// mean of the factor with the kernel's normal at kSplatShadingSamples points splitting what the
+// lobe emits towards the camera into equal shares. One point at the lobe's density peak would not
+// do: the gradient there is perpendicular to the ray, whatever the lobe's orientation; the shares
+// put the points on the lobe's front for an opaque lobe and across it for a thin one, like the
 // reference's quadrature.
-float splatLobeShading(uint first, uint lobes, SpotWorldLobe w, vec3 o, vec3 d, float tMesh, float tau) {
+float splatLobeShading(uint first, SpotWorldLobe w, vec3 o, vec3 d, float tMesh, float tau) {
     mat3 A = splatLobeMatrix(w);
     vec3 ol = A * (o - splatLobeCentre(w));
     vec3 dl = A * d;
@@ -75,59 +101,70 @@ float splatLobeShading(uint first, uint lobes, SpotWorldLobe w, vec3 o, vec3 d, 
     for (uint j = 0u; j < kSplatShadingSamples; ++j) {
         float q = (float(j) + 0.5) / float(kSplatShadingSamples);
         float t = spotLobeDepthQuantile(ol, dl, 0.0, tMesh, frame.size.w, spotEmissionQuantileFraction(tau, q));
-        vec3 normal = splatKernelNormal(first, lobes, o + t * d, d);
+        vec3 normal = splatKernelNormal(first, o + t * d, d);
         sum += spotLambertFactor(normal, frame.light.xyz, frame.light.w);
     }
     return sum / float(kSplatShadingSamples);
 }
 
-// Analytic: each lobe's exact optical depth over [0, tMesh] (spotLobeDepth), lobes composited
-// front to back in the order of their density peaks along the ray.
-SplatKernelSample splatKernelAnalytic(uint kernel, vec3 o, vec3 d, float tMesh) {
-    uint lobes = frame.counts.y;
-    uint first = kernel * lobes;
+// Analytic: each lobe's exact optical depth up to the mesh (spotScreenLobeDepth on the lobe's
+// screen form: no matrix product per pixel), lobes composited front to back in the order of their
+// density peaks along the ray. kLobes is a specialization constant, so the loops unroll and the
+// per-lobe arrays stay in registers (llvmpipe keeps dynamically indexed arrays in memory); the
+// order is a stable compare-and-swap network on constant indices.
+// p: pixel position; o, d: its world ray (Lambert only); tMesh: world distance to the mesh;
+// scale: splatRayScale(p).
+SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float tMesh, float scale) {
+    uint first = kernel * kLobes;
     float k = frame.size.w;
-    float peaks[8];
-    float depths[8];
-    uint ids[8];
-    uint n = 0u;
-    for (uint l = 0u; l < lobes; ++l) {
-        SpotWorldLobe w = worldLobes[first + l];
-        if (!(w.color.w > 0.0))
-            continue;
-        mat3 A = splatLobeMatrix(w);
+    float tEnd = tMesh / scale;
+    float peaks[kLobes];
+    float depths[kLobes];
+    uint ids[kLobes];
+    for (uint l = 0u; l < kLobes; ++l) {
+        SpotScreenLobe s = screenLobes[first + l];
+        vec2 delta = p - vec2(s.k0.w, s.kx.w);
+        vec3 w = s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz;
+        vec3 v = s.v0.xyz + delta.x * s.vx.xyz + delta.y * s.vy.xyz;
+        float on = s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w;
         float tPeak;
-        float tau = w.color.w * spotLobeDepth(A * (o - splatLobeCentre(w)), A * d, 0.0, tMesh, k, tPeak);
-        if (!(tau > 0.0) || isinf(tau))
-            continue;
-        // Insertion sort by peak (at most 8 lobes, in registers).
-        uint j = n;
-        while (j > 0u && peaks[j - 1u] > tPeak) {
-            peaks[j] = peaks[j - 1u];
-            depths[j] = depths[j - 1u];
-            ids[j] = ids[j - 1u];
-            --j;
+        float tau = s.ky.w * scale * spotScreenLobeDepth(w, v, on, tEnd, k, tPeak);
+        depths[l] = tau > 0.0 && !isinf(tau) ? tau : 0.0;
+        peaks[l] = tPeak;
+        ids[l] = l;
+    }
+    for (uint i = 1u; i < kLobes; ++i) {
+        for (uint j = 0u; j + i < kLobes; ++j) {
+            if (peaks[j] > peaks[j + 1u]) {
+                float tp = peaks[j];
+                peaks[j] = peaks[j + 1u];
+                peaks[j + 1u] = tp;
+                float td = depths[j];
+                depths[j] = depths[j + 1u];
+                depths[j + 1u] = td;
+                uint ti = ids[j];
+                ids[j] = ids[j + 1u];
+                ids[j + 1u] = ti;
+            }
         }
-        peaks[j] = tPeak;
-        depths[j] = tau;
-        ids[j] = l;
-        ++n;
     }
     SplatKernelSample s;
     s.premul = vec3(0.0);
-    s.depth = 0.0;
     s.tau = 0.0;
     float transmittance = 1.0;
     float depthSum = 0.0;
     float weightSum = 0.0;
-    bool lit = splatFlag(kSplatFlagLambert);
-    for (uint i = 0u; i < n; ++i) {
+    for (uint i = 0u; i < kLobes; ++i) {
+        if (!(depths[i] > 0.0))
+            continue;
         s.tau += depths[i];
         float a = spotOneMinusExp(depths[i]);
-        float t = clamp(peaks[i], 0.0, tMesh);
-        SpotWorldLobe w = worldLobes[first + ids[i]];
-        float shade = lit ? splatLobeShading(first, lobes, w, o, d, tMesh, depths[i]) : 1.0;
-        s.premul += transmittance * a * shade * w.color.rgb;
+        float t = clamp(peaks[i], 0.0, tEnd);
+        vec3 color = screenLobes[first + ids[i]].color.rgb;
+        float shade = 1.0;
+        if (kLambert)
+            shade = splatLobeShading(first, worldLobes[first + ids[i]], o, d, tMesh, depths[i]);
+        s.premul += transmittance * a * shade * color;
         depthSum += transmittance * a * t;
         weightSum += transmittance * a;
         transmittance *= 1.0 - a;
@@ -139,14 +176,13 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec3 o, vec3 d, float tMesh) 
 
 // Paper eq. 10: N midpoint samples over the kernel's extent along the ray (the union of its lobe
 // chords) clipped to [0, tMesh], each sample's opacity 1 - exp(-density x step), front to back,
-// stopping once opaque.
-SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, uint samples) {
-    uint lobes = frame.counts.y;
-    uint first = kernel * lobes;
+// stopping once opaque. World lobes, world distances; the depth returned is a view depth.
+SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, float scale) {
+    uint first = kernel * kLobes;
     float k = frame.size.w;
     float ta = kSplatNoMesh;
     float tb = -kSplatNoMesh;
-    for (uint l = 0u; l < lobes; ++l) {
+    for (uint l = 0u; l < kLobes; ++l) {
         SpotWorldLobe w = worldLobes[first + l];
         if (!(w.color.w > 0.0))
             continue;
@@ -167,18 +203,17 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, uin
     s.tau = 0.0;
     if (!(tb > ta))
         return s;
-    float dt = (tb - ta) / float(samples);
+    float dt = (tb - ta) / float(kSamples);
     float transmittance = 1.0;
     float depthSum = 0.0;
     float weightSum = 0.0;
-    bool lit = splatFlag(kSplatFlagLambert);
-    for (uint i = 0u; i < samples && transmittance > 1e-6; ++i) {
+    for (uint i = 0u; i < kSamples && transmittance > 1e-6; ++i) {
         float t = ta + (float(i) + 0.5) * dt;
         vec3 x = o + t * d;
         float sigma = 0.0;
         vec3 emitted = vec3(0.0);
         vec3 g = vec3(0.0);
-        for (uint l = 0u; l < lobes; ++l) {
+        for (uint l = 0u; l < kLobes; ++l) {
             SpotWorldLobe w = worldLobes[first + l];
             if (!(w.color.w > 0.0))
                 continue;
@@ -187,12 +222,13 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, uin
             float density = w.color.w * spotLobeDensity(u, k);
             sigma += density;
             emitted += density * w.color.rgb;
-            g += density * (transpose(A) * u);
+            if (kLambert)
+                g += density * (transpose(A) * u);
         }
         if (!(sigma > 0.0) || isinf(sigma))
             continue;
         float gLen = length(g);
-        vec3 normal = lit && gLen > 0.0 && !isinf(gLen) ? g / gLen : -d;
+        vec3 normal = gLen > 0.0 && !isinf(gLen) ? g / gLen : -d;
         s.tau += sigma * dt;
         float a = spotOneMinusExp(sigma * dt);
         s.premul += transmittance * a * splatShade(emitted / sigma, normal);
@@ -201,14 +237,37 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, uin
         transmittance *= 1.0 - a;
     }
     s.alpha = spotOneMinusExp(s.tau);
-    s.depth = weightSum > 0.0 ? depthSum / weightSum : ta;
+    s.depth = (weightSum > 0.0 ? depthSum / weightSum : ta) / scale;
     return s;
 }
 
-// The kernel at a pixel with the frame's setting (analytic, or N samples).
-SplatKernelSample splatKernel(uint kernel, vec3 o, vec3 d, float tMesh) {
-    uint samples = min(frame.counts.z, kSplatMaxKernelSamples);
-    return samples == 0u ? splatKernelAnalytic(kernel, o, d, tMesh)
-                         : splatKernelMarch(kernel, o, d, tMesh, samples);
+// The kernel at pixel position p (its centre) with the pipeline's setting (analytic, or N
+// samples), up to the mesh at world distance tMesh.
+SplatKernelSample splatKernel(uint kernel, vec2 p, float tMesh) {
+    vec3 o = vec3(0.0);
+    vec3 d = vec3(0.0);
+    if (kLambert || kSamples > 0u)
+        splatPixelRay(p, o, d);
+    float scale = splatRayScale(p);
+    if (kSamples > 0u)
+        return splatKernelMarch(kernel, o, d, tMesh, scale);
+    return splatKernelAnalytic(kernel, p, o, d, tMesh, scale);
+}
+
+// The OIT weight of a kernel sample (view depth z), as the pipeline is specialized.
+float splatOitWeight(SplatKernelSample s) { return spotOitWeight(s.depth, s.alpha, kWeight); }
+#endif
+
+#ifdef SPLAT_COUNTS
+// Fragment efficiency (RenderSettings::countFragments): fragments shaded, and those where the
+// kernel's alpha reaches kSplatHybridMinAlpha. 64-bit counts from two 32-bit atomics each.
+layout(std430, binding = kSplatBindCounters) buffer Counters { SpotSplatCounters counters; };
+void splatCount(float alpha) {
+    if (!kCount)
+        return;
+    if (atomicAdd(counters.fragments.x, 1u) == 0xffffffffu)
+        atomicAdd(counters.fragments.y, 1u);
+    if (alpha >= kSplatHybridMinAlpha && atomicAdd(counters.fragments.z, 1u) == 0xffffffffu)
+        atomicAdd(counters.fragments.w, 1u);
 }
 #endif

@@ -1,5 +1,5 @@
 #version 450
-// Deterministic stream compaction of the kernels prepare.comp kept (non-empty rectangle): their
+// Deterministic stream compaction of the kernels prepare.comp kept (non-empty quad): their
 // indices in increasing order, and the indirect draw of one 4-vertex strip per kept kernel. One
 // workgroup: each thread counts a contiguous chunk, a shared-memory scan gives the chunk's output
 // offset, then each thread writes its chunk in order. No atomics, so the draw order (and with it
@@ -10,19 +10,17 @@
 
 layout(local_size_x = 256) in;
 
-layout(std430, binding = 0) readonly buffer Bounds { SpotKernelBound bounds[]; };
-layout(std430, binding = 1) writeonly buffer Visible { uint visible[]; };
-layout(std430, binding = 2) writeonly buffer Indirect { uint draw[4]; }; // VkDrawIndirectCommand
+layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
+layout(std430, binding = kSplatBindVisible) writeonly buffer Visible { uint visible[]; };
+layout(std430, binding = kSplatBindDraw) writeonly buffer Indirect { uint draw[4]; }; // VkDrawIndirectCommand
+layout(std430, binding = kSplatBindCount) readonly buffer Count { uint impulseCount; };
 
 shared uint sums[kSplatCompactThreads];
 
-bool kept(uint i) {
-    vec4 r = bounds[i].rect;
-    return r.z > r.x && r.w > r.y;
-}
+bool kept(uint i) { return bounds[i].quad.z > 0.0; }
 
 void main() {
-    uint n = frame.counts.x;
+    uint n = min(impulseCount, frame.counts.x);
     uint t = gl_LocalInvocationID.x;
     uint chunk = (n + kSplatCompactThreads - 1u) / kSplatCompactThreads;
     uint begin = min(t * chunk, n);

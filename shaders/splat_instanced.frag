@@ -3,24 +3,21 @@
 // kSplatInstancedMinAlpha it is drawn opaque with its mean colour at its depth, tested against
 // the mesh and the other kernels; elsewhere the fragment is discarded.
 #extension GL_GOOGLE_include_directive : require
-#define SPLAT_LOBES_BINDING 2
+#define SPLAT_READS_LOBES
+#define SPLAT_COUNTS
 #include "splat_common.glsl"
 
-layout(binding = 3, r32f) uniform readonly image2D meshDistance;
+layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 
 layout(location = 0) flat in uint vKernel;
 
 layout(location = 0) out vec4 outColor;
 
 void main() {
-    ivec2 pixel = ivec2(gl_FragCoord.xy);
-    float tMesh = imageLoad(meshDistance, pixel).r;
-    vec3 o;
-    vec3 d;
-    splatPixelRay(gl_FragCoord.xy, o, d);
-    SplatKernelSample s = splatKernel(vKernel, o, d, tMesh);
+    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, ivec2(gl_FragCoord.xy)).r);
+    splatCount(s.alpha);
     if (!(s.alpha >= kSplatInstancedMinAlpha))
         discard;
     outColor = vec4(s.premul / s.alpha, 1.0);
-    gl_FragDepth = spotReversedDepth(splatViewDepth(o + s.depth * d), frame.forward.w);
+    gl_FragDepth = spotReversedDepth(s.depth, frame.forward.w);
 }

@@ -16,12 +16,12 @@ void main() {
     if (!(z > 0.0))
         discard; // behind the orthographic camera's plane: rays start at t = 0
     vec3 color = frame.base.rgb;
-    if (splatFlag(kSplatFlagLambert)) {
+    if ((frame.counts.w & kSplatFlagLambert) != 0u) {
         float len = length(vNormal);
         vec3 n = len > 0.0 ? vNormal / len : -frame.forward.xyz;
         color *= spotLambertFactor(n, frame.light.xyz, frame.light.w);
     }
     outColor = vec4(color, 1.0);
-    outT = splatOrthographic() ? z : length(rel);
+    outT = frame.eye.w > 0.5 ? z : length(rel);
     gl_FragDepth = spotReversedDepth(z, frame.forward.w);
 }

@@ -4,7 +4,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 
-layout(std430, binding = 0) readonly buffer Vertices { SpotMeshVertex vertices[]; };
+layout(std430, binding = kSplatBindVertices) readonly buffer Vertices { SpotMeshVertex vertices[]; };
 
 layout(location = 0) out vec3 vWorld;
 layout(location = 1) out vec3 vNormal;
@@ -17,7 +17,7 @@ void main() {
     float x = dot(rel, frame.right.xyz) / frame.right.w;
     float y = -dot(rel, frame.up.xyz) / frame.up.w; // image rows grow downwards (Vulkan NDC)
     float z = dot(rel, frame.forward.xyz);
-    if (splatOrthographic())
+    if (frame.eye.w > 0.5) // orthographic (a run-time flag: one mesh pipeline for every view)
         gl_Position = vec4(x, y, 0.5, 1.0);
     else
         gl_Position = vec4(x, y, frame.forward.w, z); // clipped where z < near

@@ -4,17 +4,19 @@
 // prod (1 - alpha) is kept as its logarithm, the sum of the kernels' optical depths
 // (-ln(1 - alpha) = tau), with the same additive blend: the same value, one blend state for both
 // targets (the context does not enable independentBlend), no precision lost for opaque kernels,
-// and the hybrid's resolve can take one kernel out exactly. Hybrid (eq. 13): the kernel also competes for the pixel's
-// closest kernel with a 64-bit atomicMin of (depth bits << 32 | kernel index); depth is >= 0, so
-// its float bits order as the floats do, and the kernel index breaks ties the same way every run.
+// and the hybrid's resolve can take one kernel out exactly. Hybrid (eq. 13, kHybridAtomic): the
+// kernel also competes for the pixel's closest kernel with a 64-bit atomicMin of
+// (depth bits << 32 | kernel index); depth is >= 0, so its float bits order as the floats do,
+// and the kernel index breaks ties the same way every run.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
-#define SPLAT_LOBES_BINDING 2
+#define SPLAT_READS_LOBES
+#define SPLAT_COUNTS
 #include "splat_common.glsl"
 
-layout(binding = 3, r32f) uniform readonly image2D meshDistance;
-layout(std430, binding = 4) buffer Closest { uint64_t closest[]; };
+layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
+layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };
 
 layout(location = 0) flat in uint vKernel;
 
@@ -23,21 +25,14 @@ layout(location = 1) out float outOpticalDepth;
 
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
-    float tMesh = imageLoad(meshDistance, pixel).r;
-    vec3 o;
-    vec3 d;
-    splatPixelRay(gl_FragCoord.xy, o, d);
-    SplatKernelSample s = splatKernel(vKernel, o, d, tMesh);
+    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, pixel).r);
+    splatCount(s.alpha);
     if (!(s.alpha > 0.0))
         discard;
-    if (splatFlag(kSplatFlagHybrid) && !splatFlag(kSplatFlagClosestPass) &&
-        s.alpha > kSplatHybridMinAlpha) {
+    if (kHybridAtomic && s.alpha > kSplatHybridMinAlpha) {
         uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
         atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);
     }
-    float z = splatViewDepth(o + s.depth * d);
-    float w = spotOitWeight(z, s.alpha, splatFlag(kSplatFlagMcGuireBavoil) ? kSpotWeightMcGuireBavoil
-                                                                            : kSpotWeightConstant);
-    outAccum = vec4(s.premul, s.alpha) * w;
+    outAccum = vec4(s.premul, s.alpha) * splatOitWeight(s);
     outOpticalDepth = s.tau;
 }

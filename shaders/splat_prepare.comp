@@ -1,36 +1,134 @@
 #version 450
 // Per impulse: its kernel's lobes placed in the world (spotPlaceLobe), optionally EWA-widened by
-// the pixel footprint at the lobe's depth (spotWidenLobe), and the kernel's screen rectangle and
-// depth range (SpotKernelBound). An empty rectangle culls the kernel (off screen, behind the
+// the pixel footprint at the lobe's depth (spotWidenLobe). With kScreen (the splatting methods),
+// also each lobe's screen form (SpotScreenLobe, what the fragment shaders evaluate) and the
+// kernel's screen bound (SpotKernelBound): each lobe's k-sigma ellipsoid projects to an ellipse
+// (the conic |w(p)|^2 = k^2 |v(p)|^2 in pixel coordinates, exact), and the kernel's quad is the
+// rectangle around their union along the union's principal axis, so a thin tilted strand is not
+// shaded over its axis-aligned box. An empty quad culls the kernel (off screen, behind the
 // camera, zero weight or no lobe with extinction).
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Impulses { SpotImpulse impulses[]; };
-layout(std430, binding = 1) readonly buffer Lobes { SpotLobe lobes[]; };
-layout(std430, binding = 2) writeonly buffer WorldLobes { SpotWorldLobe worldLobes[]; };
-layout(std430, binding = 3) writeonly buffer Bounds { SpotKernelBound bounds[]; };
+layout(std430, binding = kSplatBindImpulses) readonly buffer Impulses { SpotImpulse impulses[]; };
+layout(std430, binding = kSplatBindLobes) readonly buffer Lobes { SpotLobe lobes[]; };
+layout(std430, binding = kSplatBindWorldLobes) writeonly buffer WorldLobes { SpotWorldLobe worldLobes[]; };
+layout(std430, binding = kSplatBindScreenLobes) writeonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
+layout(std430, binding = kSplatBindBounds) writeonly buffer Bounds { SpotKernelBound bounds[]; };
+layout(std430, binding = kSplatBindCount) readonly buffer Count { uint impulseCount; };
 
 bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
 
+// The lobe's screen form for the world-to-lobe map A and centre c (spot_splat.h). ref: the pixel
+// the affine forms are written around (the centre's projection when it has one).
+SpotScreenLobe screenLobe(mat3 A, vec3 c, vec3 color, float amplitude, out vec2 ref) {
+    vec3 R = frame.right.xyz * frame.right.w;
+    vec3 U = frame.up.xyz * frame.up.w;
+    vec3 F = frame.forward.xyz;
+    // A pixel step moves the ray direction (perspective) or origin (orthographic) by ex, ey.
+    vec3 ex = R * (2.0 / frame.size.x);
+    vec3 ey = -U * (2.0 / frame.size.y);
+    vec3 rel = c - frame.eye.xyz;
+    float z = dot(rel, F);
+    ref = 0.5 * frame.size.xy;
+    if (kOrthographic) {
+        ref = vec2(0.5 * (dot(rel, frame.right.xyz) / frame.right.w + 1.0) * frame.size.x,
+                   0.5 * (1.0 - dot(rel, frame.up.xyz) / frame.up.w) * frame.size.y);
+    } else if (z > 0.0) {
+        ref = vec2(0.5 * (dot(rel, frame.right.xyz) / (z * frame.right.w) + 1.0) * frame.size.x,
+                   0.5 * (1.0 - dot(rel, frame.up.xyz) / (z * frame.up.w)) * frame.size.y);
+    }
+    float sx = 2.0 * ref.x / frame.size.x - 1.0;
+    float sy = 1.0 - 2.0 * ref.y / frame.size.y;
+    vec3 v0;
+    vec3 vx;
+    vec3 vy;
+    vec3 k0;
+    vec3 kx;
+    vec3 ky;
+    vec3 n;
+    if (kOrthographic) {
+        vec3 o0 = A * (frame.eye.xyz + sx * R + sy * U - c);
+        vec3 ox = A * ex;
+        vec3 oy = A * ey;
+        v0 = A * F;
+        vx = vec3(0.0);
+        vy = vec3(0.0);
+        k0 = cross(o0, v0);
+        kx = cross(ox, v0);
+        ky = cross(oy, v0);
+        n = vec3(dot(o0, v0), dot(ox, v0), dot(oy, v0));
+    } else {
+        vec3 o = A * (frame.eye.xyz - c);
+        v0 = A * (F + sx * R + sy * U);
+        vx = A * ex;
+        vy = A * ey;
+        k0 = cross(o, v0);
+        kx = cross(o, vx);
+        ky = cross(o, vy);
+        n = vec3(dot(o, v0), dot(o, vx), dot(o, vy));
+    }
+    SpotScreenLobe s;
+    s.k0 = vec4(k0, ref.x);
+    s.kx = vec4(kx, ref.y);
+    s.ky = vec4(ky, amplitude);
+    s.v0 = vec4(v0, n.x);
+    s.vx = vec4(vx, n.y);
+    s.vy = vec4(vy, n.z);
+    s.color = vec4(color, 0.0);
+    return s;
+}
+
+// The screen ellipse of a lobe: pixels p = ref + d with |w|^2 < k^2 |v|^2, the conic
+// d^T M d + 2 b.d + c < 0. Returns false when it is not a bounded ellipse (the support reaches
+// the eye plane, or is degenerate); else `centre` (pixels) and `shape` S, the ellipse being
+// (x - centre)^T S^-1 (x - centre) <= 1. `seen` is false when no pixel ray meets the support.
+bool screenEllipse(SpotScreenLobe s, float k, out vec2 centre, out mat2 shape, out bool seen) {
+    float k2 = k * k;
+    vec3 k0 = s.k0.xyz;
+    vec3 kx = s.kx.xyz;
+    vec3 ky = s.ky.xyz;
+    float m00 = dot(kx, kx) - k2 * dot(s.vx.xyz, s.vx.xyz);
+    float m01 = dot(kx, ky) - k2 * dot(s.vx.xyz, s.vy.xyz);
+    float m11 = dot(ky, ky) - k2 * dot(s.vy.xyz, s.vy.xyz);
+    float b0 = dot(k0, kx) - k2 * dot(s.v0.xyz, s.vx.xyz);
+    float b1 = dot(k0, ky) - k2 * dot(s.v0.xyz, s.vy.xyz);
+    float c = dot(k0, k0) - k2 * dot(s.v0.xyz, s.v0.xyz);
+    float det = m00 * m11 - m01 * m01;
+    centre = vec2(s.k0.w, s.kx.w);
+    shape = mat2(0.0);
+    seen = true;
+    if (!(det > 0.0) || !(m00 > 0.0) || isinf(det))
+        return false;
+    mat2 inv = mat2(m11, -m01, -m01, m00) / det;
+    vec2 m = -(inv * vec2(b0, b1));
+    float r2 = -dot(vec2(b0, b1), m) - c;
+    if (!(r2 > 0.0)) {
+        seen = !(r2 <= 0.0); // NaN: unknown, so seen (unbounded)
+        return false;
+    }
+    centre += m;
+    shape = r2 * inv;
+    return true;
+}
+
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= frame.counts.x)
+    if (i >= impulseCount)
         return;
     SpotImpulse imp = impulses[i];
-    uint lobeCount = frame.counts.y;
     float k = frame.size.w;
     mat3 kernelFrame = mat3(imp.frameX.xyz, imp.frameY.xyz, imp.frameZ.xyz);
-    bool perspective = !splatOrthographic();
-    // Pixel bounds of the kernel, and the view depth range of its support.
-    vec2 lo = vec2(1e30);
-    vec2 hi = vec2(-1e30);
-    float zMin = 1e30;
-    float zMax = -1e30;
-    uint live = 0u;
-    for (uint l = 0u; l < lobeCount; ++l) {
+    // Per lobe: its screen ellipse (when bounded), and the kernel's state.
+    vec2 centres[kLobes];
+    mat2 shapes[kLobes];
+    bool live[kLobes];
+    bool unbounded = false;
+    float massSum = 0.0;
+    float depthSum = 0.0;
+    for (uint l = 0u; l < kLobes; ++l) {
         SpotLobe lobe = lobes[l];
         mat3 inv = mat3(lobe.inv0.xyz, lobe.inv1.xyz, lobe.inv2.xyz);
         vec3 kernelCentre = vec3(lobe.inv0.w, lobe.inv1.w, lobe.inv2.w);
@@ -38,11 +136,11 @@ void main() {
         mat3 A = spotPlaceLobe(inv, kernelCentre, kernelFrame, imp.scale.xyz, imp.normal.w,
                                imp.position.xyz, centre);
         float amplitude = lobe.color.w * imp.position.w;
-        if (splatFlag(kSplatFlagEwa)) {
+        if (kEwa) {
             // Box pixel filter of one footprint: variance footprint^2 / 12 per image axis.
             float z = max(splatViewDepth(centre), 0.0);
-            float footprint = frame.size.z * (perspective ? z : 1.0);
-            vec3 dir = perspective ? normalize(centre - frame.eye.xyz) : frame.forward.xyz;
+            float footprint = frame.size.z * (kOrthographic ? 1.0 : z);
+            vec3 dir = kOrthographic ? frame.forward.xyz : normalize(centre - frame.eye.xyz);
             float scale;
             A = spotWidenLobe(A, dir, footprint * 0.28867513459481287, scale);
             amplitude *= scale;
@@ -50,57 +148,97 @@ void main() {
         mat3 M = inverse(A);
         bool ok = amplitude > 0.0 && !isinf(amplitude) && finite3(A[0]) && finite3(A[1]) &&
                   finite3(A[2]) && finite3(centre) && finite3(M[0]) && finite3(M[1]) && finite3(M[2]);
+        vec3 color = lobe.color.rgb * imp.color.rgb;
         SpotWorldLobe w;
-        w.a0 = vec4(A[0], centre.x);
-        w.a1 = vec4(A[1], centre.y);
-        w.a2 = vec4(A[2], centre.z);
-        w.color = vec4(lobe.color.rgb * imp.color.rgb, ok ? amplitude : 0.0);
-        if (!ok) {
-            w.a0 = vec4(0.0);
-            w.a1 = vec4(0.0);
-            w.a2 = vec4(0.0);
-        }
-        worldLobes[i * lobeCount + l] = w;
-        if (!ok)
+        w.a0 = ok ? vec4(A[0], centre.x) : vec4(0.0);
+        w.a1 = ok ? vec4(A[1], centre.y) : vec4(0.0);
+        w.a2 = ok ? vec4(A[2], centre.z) : vec4(0.0);
+        w.color = vec4(color, ok ? amplitude : 0.0);
+        worldLobes[i * kLobes + l] = w;
+        live[l] = false;
+        centres[l] = vec2(0.0);
+        shapes[l] = mat2(0.0);
+        if (!kScreen)
             continue;
-        // The support's exact screen extent (tangent planes through the eye).
-        vec3 rel = centre - frame.eye.xyz;
-        float x0;
-        float x1;
-        float y0;
-        float y1;
-        float lobeZMin;
-        float lobeZMax;
-        bool bounded = spotEllipsoidRange(rel, M, k, frame.right.xyz, frame.forward.xyz, !perspective,
-                                          x0, x1, lobeZMin, lobeZMax);
-        spotEllipsoidRange(rel, M, k, frame.up.xyz, frame.forward.xyz, !perspective, y0, y1, lobeZMin,
-                           lobeZMax);
-        if (lobeZMax <= 0.0)
-            continue; // wholly behind the camera: no ray (t >= 0) reaches it
-        vec2 lobeLo = vec2(0.0);
-        vec2 lobeHi = frame.size.xy; // reaches the eye plane: the projection is unbounded
-        if (bounded && !isnan(x0 + x1 + y0 + y1)) {
-            lobeLo = vec2(0.5 * (x0 / frame.right.w + 1.0) * frame.size.x,
-                          0.5 * (1.0 - y1 / frame.up.w) * frame.size.y);
-            lobeHi = vec2(0.5 * (x1 / frame.right.w + 1.0) * frame.size.x,
-                          0.5 * (1.0 - y0 / frame.up.w) * frame.size.y);
+        vec2 ref;
+        SpotScreenLobe s = screenLobe(A, centre, color, ok ? amplitude : 0.0, ref);
+        if (!ok) {
+            s.ky.w = 0.0;
+            screenLobes[i * kLobes + l] = s;
+            continue;
         }
-        lo = min(lo, lobeLo);
-        hi = max(hi, lobeHi);
-        zMin = min(zMin, lobeZMin);
-        zMax = max(zMax, lobeZMax);
-        ++live;
+        screenLobes[i * kLobes + l] = s;
+        // The depth range of the support (tangent planes along the view direction).
+        vec3 rel = centre - frame.eye.xyz;
+        float zc = dot(rel, frame.forward.xyz);
+        float zHalf = k * length(transpose(M) * frame.forward.xyz);
+        if (zc + zHalf <= 0.0)
+            continue; // wholly behind the camera: no ray (t >= 0) reaches it
+        float mass = amplitude / abs(determinant(A));
+        if (mass > 0.0 && !isinf(mass)) {
+            massSum += mass;
+            depthSum += mass * zc;
+        }
+        bool seen;
+        bool bounded = screenEllipse(s, k, centres[l], shapes[l], seen);
+        if (!kOrthographic && zc - zHalf <= 0.0)
+            bounded = false; // reaches the eye plane: the projection is unbounded
+        if (!seen)
+            continue;
+        if (!bounded || any(isnan(centres[l])) || any(isinf(centres[l])))
+            unbounded = true;
+        live[l] = true;
     }
-    // Pixels whose centre lies in [lo, hi]: a pixel whose centre is outside cannot see the kernel.
-    vec4 rect = vec4(0.0);
-    if (live > 0u) {
-        rect.xy = max(floor(lo), vec2(0.0));
-        rect.zw = min(ceil(hi), frame.size.xy);
-        if (!(rect.z > rect.x && rect.w > rect.y))
-            rect = vec4(0.0);
+    if (!kScreen)
+        return;
+
+    // The union's principal axis from its second moments (an ellipse of shape S has S / 4).
+    uint n = 0u;
+    vec2 mean = vec2(0.0);
+    mat2 second = mat2(0.0);
+    for (uint l = 0u; l < kLobes; ++l) {
+        if (!live[l])
+            continue;
+        ++n;
+        mean += centres[l];
+        second += 0.25 * shapes[l] + outerProduct(centres[l], centres[l]);
     }
     SpotKernelBound b;
-    b.rect = rect;
-    b.depth = vec4(zMin, zMax, splatViewDepth(imp.position.xyz), float(lobeCount));
+    b.quad = vec4(0.0);
+    b.axis = vec4(1.0, 0.0, 0.0, 0.0);
+    float z = massSum > 0.0 && !isinf(massSum) ? depthSum / massSum : splatViewDepth(imp.position.xyz);
+    b.axis.z = z > 0.0 ? z : 0.0; // also maps NaN and -0 to +0
+    if (n > 0u && unbounded) {
+        b.quad = vec4(0.5 * frame.size.xy, 0.5 * frame.size.xy + 1.0);
+    } else if (n > 0u) {
+        mean /= float(n);
+        mat2 cov = second / float(n) - outerProduct(mean, mean);
+        float angle = 0.5 * atan(2.0 * cov[0][1], cov[0][0] - cov[1][1]);
+        vec2 u = vec2(cos(angle), sin(angle));
+        if (any(isnan(u)))
+            u = vec2(1.0, 0.0);
+        vec2 v = vec2(-u.y, u.x);
+        vec2 lo = vec2(3e38);
+        vec2 hi = vec2(-3e38);
+        for (uint l = 0u; l < kLobes; ++l) {
+            if (!live[l])
+                continue;
+            vec2 c = vec2(dot(centres[l], u), dot(centres[l], v));
+            vec2 e = sqrt(max(vec2(dot(u, shapes[l] * u), dot(v, shapes[l] * v)), vec2(0.0)));
+            lo = min(lo, c - e);
+            hi = max(hi, c + e);
+        }
+        lo -= kSplatBoundPadding;
+        hi += kSplatBoundPadding;
+        vec2 mid = 0.5 * (lo + hi);
+        vec2 half_ = 0.5 * (hi - lo);
+        vec2 centre = mid.x * u + mid.y * v;
+        // Cull quads wholly off screen (their axis-aligned box misses it).
+        vec2 reach = abs(u) * half_.x + abs(v) * half_.y;
+        bool onScreen = all(greaterThan(centre + reach, vec2(0.0))) && all(lessThan(centre - reach, frame.size.xy));
+        if (onScreen && all(greaterThan(half_, vec2(0.0))) && !any(isinf(reach)))
+            b.quad = vec4(centre, half_);
+        b.axis.xy = u;
+    }
     bounds[i] = b;
 }

@@ -1,6 +1,6 @@
 #version 450
-// The final image, one thread per pixel, into a linear float RGBA buffer for readback.
-// Instanced: the base colour image (mesh, background and opaque kernels).
+// The final image, one thread per pixel, into the linear float RGBA result image.
+// Instanced and sorted (kSplatResolveCopy): the base colour image (kernels were drawn onto it).
 // OIT (eq. 12, MB13): avg = accum.rgb / max(accum.a, eps); avg (1 - revealage) + base revealage,
 // revealage = exp(-sum of the kernels' optical depths) (see splat_oit.frag). MB13 floor accum.a
 // at eps = 1e-5 for their 16-bit float targets; ours are 32-bit, and with w proportional to alpha
@@ -14,19 +14,19 @@
 // would give 0.75 of its colour instead of 0.5.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#define SPLAT_LOBES_BINDING 5
+#define SPLAT_READS_LOBES
 #include "splat_common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0, rgba32f) uniform readonly image2D baseColor;
-layout(binding = 1, rgba32f) uniform readonly image2D accumulation;
-layout(binding = 2, r32f) uniform readonly image2D opticalDepth;
-layout(binding = 3, r32f) uniform readonly image2D meshDistance;
-layout(std430, binding = 4) readonly buffer Closest { uint64_t closest[]; };
-layout(std430, binding = 6) writeonly buffer Result { vec4 result[]; };
-// The closest kernel from the depth pass (kSplatFlagClosestPass; 1x1 and unread otherwise).
-layout(binding = 7, r32ui) uniform readonly uimage2D closestKernel;
+layout(binding = kSplatBindBase, rgba32f) uniform readonly image2D baseColor;
+layout(binding = kSplatBindAccum, rgba32f) uniform readonly image2D accumulation;
+layout(binding = kSplatBindOpticalDepth, r32f) uniform readonly image2D opticalDepth;
+layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
+layout(std430, binding = kSplatBindClosest) readonly buffer Closest { uint64_t closest[]; };
+// The closest kernel from the depth pass (kSplatResolveHybridPass).
+layout(binding = kSplatBindClosestKernel, r32ui) uniform readonly uimage2D closestKernel;
+layout(binding = kSplatBindResult, rgba32f) uniform writeonly image2D result;
 
 vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
 
@@ -43,24 +43,20 @@ void main() {
     ivec2 pixel = ivec2(p);
     vec3 base = imageLoad(baseColor, pixel).rgb;
     vec3 color = base;
-    if (!splatFlag(kSplatFlagInstanced)) {
+    if (kResolve != kSplatResolveCopy) {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
-        uint64_t key = closest[p.y * width + p.x];
-        if (splatFlag(kSplatFlagClosestPass)) {
+        uint64_t key = ~uint64_t(0);
+        if (kResolve == kSplatResolveHybrid)
+            key = closest[p.y * width + p.x];
+        if (kResolve == kSplatResolveHybridPass) {
             uint id = imageLoad(closestKernel, pixel).r;
             key = id == 0xffffffffu ? ~uint64_t(0) : uint64_t(id);
         }
-        if (splatFlag(kSplatFlagHybrid) && key != ~uint64_t(0)) {
+        if (key != ~uint64_t(0)) {
             uint kernel = uint(key & 0xffffffffUL);
-            vec3 o;
-            vec3 d;
-            splatPixelRay(vec2(p) + 0.5, o, d);
-            SplatKernelSample f = splatKernel(kernel, o, d, imageLoad(meshDistance, pixel).r);
-            float w = spotOitWeight(splatViewDepth(o + f.depth * d), f.alpha,
-                                    splatFlag(kSplatFlagMcGuireBavoil) ? kSpotWeightMcGuireBavoil
-                                                                        : kSpotWeightConstant);
-            vec4 rest = accum - w * vec4(f.premul, f.alpha);
+            SplatKernelSample f = splatKernel(kernel, vec2(p) + 0.5, imageLoad(meshDistance, pixel).r);
+            vec4 rest = accum - splatOitWeight(f) * vec4(f.premul, f.alpha);
             // Below about 1e-6 of accum.a the difference is float noise and the others' mean
             // colour cannot be told: take the mean of all (f's, mostly) there.
             vec3 average = rest.a > 1e-5 * accum.a ? max(rest.rgb, vec3(0.0)) / rest.a : oitAverage(accum);
@@ -69,5 +65,5 @@ void main() {
             color = oitComposite(oitAverage(accum), tau, base);
         }
     }
-    result[p.y * width + p.x] = vec4(color, 1.0);
+    imageStore(result, pixel, vec4(color, 1.0));
 }

@@ -6,22 +6,19 @@
 // at this pixel come from the code every method shares (splatKernel: its lobes composited front to
 // back, integrated up to the mesh).
 #extension GL_GOOGLE_include_directive : require
-#define SPLAT_LOBES_BINDING 2
+#define SPLAT_READS_LOBES
+#define SPLAT_COUNTS
 #include "splat_common.glsl"
 
-layout(binding = 3, r32f) uniform readonly image2D meshDistance;
+layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 
 layout(location = 0) flat in uint vKernel;
 
 layout(location = 0) out vec4 outColor;
 
 void main() {
-    ivec2 pixel = ivec2(gl_FragCoord.xy);
-    float tMesh = imageLoad(meshDistance, pixel).r;
-    vec3 o;
-    vec3 d;
-    splatPixelRay(gl_FragCoord.xy, o, d);
-    SplatKernelSample s = splatKernel(vKernel, o, d, tMesh);
+    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, ivec2(gl_FragCoord.xy)).r);
+    splatCount(s.alpha);
     if (!(s.alpha > 0.0))
         discard;
     outColor = vec4(s.premul, s.alpha);

@@ -48,12 +48,6 @@ struct SpotWorldLobe {
     vec4 color; /* rgb: lobe colour x impulse colour; w: extinction x weight x EWA amplitude */
 };
 
-/* Screen-space bound of one kernel for the current view (32 bytes). */
-struct SpotKernelBound {
-    vec4 rect;  /* pixel rectangle (x0, y0, x1, y1); empty when x1 <= x0 */
-    vec4 depth; /* x: nearest view depth of the support; y: farthest; z: depth of the origin; w: lobe count */
-};
-
 /* A bound field in the shared form (144 bytes): what the generator evaluates, on either side. */
 struct SpotField {
     ivec4 kind;    /* x: 0 constant, 1 gradient, 2 noise, 3 vertex, 4 image; y: components (1|3);

@@ -16,7 +16,6 @@ static_assert(sizeof(SpotPiece) == 32);
 static_assert(sizeof(SpotImpulse) == 144);
 static_assert(sizeof(SpotLobe) == 64);
 static_assert(sizeof(SpotWorldLobe) == 64);
-static_assert(sizeof(SpotKernelBound) == 32);
 static_assert(sizeof(SpotField) == 144);
 static_assert(sizeof(SpotGenParams) == 80 + 8 * 144);
 static_assert(alignof(SpotImpulse) <= 16);

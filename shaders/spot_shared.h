@@ -248,6 +248,32 @@ SPOT_FN real spotLobeDepth(rvec3 o, rvec3 d, real t0, real t1, real k, SPOT_OUT(
     return kSqrtTwoPi * invLen * exp(real(-0.5) * perp2) * fraction;
 }
 
+/* The same optical depth from a lobe's screen form (spot_splat.h, SpotScreenLobe): for the ray
+ * origin + t e (t in view depth units), w = o' x v and on = dot(o', v) with o' the ray origin and
+ * v = A e its direction, both in lobe space. The squared distance of the line from the lobe centre
+ * is |w|^2 / |v|^2 (no cancellation, unlike |o'|^2 - on^2 / |v|^2), the density peaks at
+ * t* = -on / |v|^2, and the lobe-space arc length s = (t - t*) |v| runs over the chord
+ * |s| < sqrt(k^2 - |w|^2 / |v|^2) clipped to t in [0, tEnd]. Returns the integral over t (per unit
+ * peak extinction; multiply by |e| for world units), 0 when the ray misses; `tPeak` receives t*. */
+SPOT_FN real spotScreenLobeDepth(rvec3 w, rvec3 v, real on, real tEnd, real k, SPOT_OUT(real) tPeak) {
+    real vv = dot(v, v);
+    real ww = dot(w, w);
+    tPeak = real(0.0);
+    if (!(ww < k * k * vv))
+        return real(0.0);
+    real len = sqrt(vv);
+    real perp2 = ww / vv;
+    real tStar = -on / vv;
+    tPeak = tStar;
+    real h = sqrt(k * k - perp2);
+    real ua = max(-h, -tStar * len);
+    real ub = min(h, (tEnd - tStar) * len);
+    if (!(ub > ua))
+        return real(0.0);
+    real fraction = spotErfDifferenceHalf(ua * kInvSqrtTwo, ub * kInvSqrtTwo);
+    return kSqrtTwoPi / len * exp(real(-0.5) * perp2) * fraction;
+}
+
 /* Density of a lobe at lobe-space point u, per unit peak extinction, truncated at k. */
 SPOT_FN real spotLobeDensity(rvec3 u, real k) {
     real r2 = dot(u, u);

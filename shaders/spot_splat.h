@@ -1,8 +1,8 @@
-/* spot_splat.h: the splatting renderer's structs and constants, shared by C++ and GLSL
- * (splat/renderer_vk.cpp and the splat_*.glsl / *.vert / *.frag / *.comp shaders it runs).
+/* spot_splat.h: the splatting renderer's structs, bindings, specialization constants and constants,
+ * shared by C++ and GLSL (splat/renderer_vk.cpp and the splat_* shaders it runs).
  *
  * Same rules as spot_layout.h: 16-byte members only, so std430 (and push-constant) layout equals
- * the C++ layout; renderer_vk.cpp includes this file inside a namespace with glm types and
+ * the C++ layout; pass_vk.h includes this file inside a namespace with glm types and
  * static_asserts the sizes. Units: world units; pixels with (0, 0) the top-left corner of the
  * top-left pixel (noise/camera.h); colours linear RGB.
  */
@@ -20,8 +20,8 @@ struct SpotSplatFrame {
     vec4 up;       /* xyz: unit up axis (image rows grow downwards); w: half height, likewise */
     vec4 size;     /* x, y: image width, height (pixels); z: pixel footprint per unit view depth
                       (perspective) or in world units (orthographic); w: lobe support k (sigmas) */
-    uvec4 counts;  /* x: impulse count; y: lobes per kernel; z: kernel samples N (0 = analytic);
-                      w: kSplatFlag* bits */
+    uvec4 counts;  /* x: impulse capacity (the count itself is in a buffer); y: lobes per kernel;
+                      z: kernel samples N (0 = analytic); w: kSplatFlag* bits */
     vec4 light;    /* xyz: unit direction towards the light (world); w: ambient in [0, 1] */
     vec4 base;     /* rgb: base mesh colour; w: unused */
 };
@@ -32,14 +32,90 @@ struct SpotMeshVertex {
     vec4 normal;   /* xyz: unit normal; w unused */
 };
 
-/* SpotSplatFrame.counts.w bits. */
-SPOT_CONST uint kSplatFlagEwa = 1u;         /* widen lobes by the pixel footprint (EWA) */
+/* One lobe as the pixels of this frame see it (112 bytes), made by splat_prepare.comp from the
+ * world lobe (A, c) and the camera. For the pixel at p (pixel units, its centre), with
+ * delta = p - ref:
+ *   v(p) = V0 + delta.x VX + delta.y VY   the pixel's ray direction in lobe space, A e(p), where
+ *                                         e(p) is the ray direction scaled to unit view depth
+ *                                         (dot(e, forward) = 1) for perspective, or the unit view
+ *                                         direction for orthographic;
+ *   w(p) = K0 + delta.x KX + delta.y KY   o'(p) x v(p), o'(p) = A (origin(p) - c): the ray's
+ *                                         lobe-space origin crossed with its direction;
+ *   n(p) = n0 + delta.x nx + delta.y ny   dot(o'(p), v(p)).
+ * Both cross and dot are affine in the pixel (for perspective o' is one point and
+ * o' x V0 = 0 at the lobe centre's pixel; for orthographic v is constant), so no pixel pays for
+ * a matrix product, and nothing cancels: the ray's squared distance from the lobe centre in lobe
+ * units is |w|^2 / |v|^2, exactly. Along the ray origin(p) + t e(p) (t = view depth for both
+ * projections), the density peaks at t* = -n / |v|^2. (docs/design.md section 4.) */
+struct SpotScreenLobe {
+    vec4 k0;    /* xyz: K0; w: ref.x (pixels) */
+    vec4 kx;    /* xyz: KX; w: ref.y */
+    vec4 ky;    /* xyz: KY; w: peak extinction x weight (x EWA amplitude); 0: the lobe is off */
+    vec4 v0;    /* xyz: V0; w: n0 */
+    vec4 vx;    /* xyz: VX; w: nx */
+    vec4 vy;    /* xyz: VY; w: ny */
+    vec4 color; /* rgb: lobe colour x impulse colour; w: unused */
+};
+
+/* Screen bound of one kernel for the current view (32 bytes): an oriented rectangle holding every
+ * pixel centre whose ray meets the kernel's support (its lobes' k-sigma ellipsoids project to
+ * ellipses; the rectangle is their union's bound along the union's principal axis). */
+struct SpotKernelBound {
+    vec4 quad; /* xy: centre (pixels); zw: half extents along u and along v = (-u.y, u.x);
+                  empty (culled) when z <= 0 */
+    vec4 axis; /* xy: unit u (pixels); z: view depth of the kernel's centre of mass (sorting);
+                  w: unused */
+};
+
+/* Descriptor bindings of the splat pipelines (one numbering for all; each pipeline declares the
+ * ones it reads). C++ and GLSL use these names, never numbers. */
+SPOT_CONST uint kSplatBindImpulses = 0u;     /* SpotImpulse[] (prepare) */
+SPOT_CONST uint kSplatBindLobes = 1u;        /* SpotLobe[]: the kernel (prepare) */
+SPOT_CONST uint kSplatBindWorldLobes = 2u;   /* SpotWorldLobe[kernel * lobes + l] */
+SPOT_CONST uint kSplatBindScreenLobes = 3u;  /* SpotScreenLobe[kernel * lobes + l] */
+SPOT_CONST uint kSplatBindBounds = 4u;       /* SpotKernelBound[kernel] */
+SPOT_CONST uint kSplatBindCount = 5u;        /* uint: the impulse count */
+SPOT_CONST uint kSplatBindVisible = 6u;      /* uint[]: kept kernels, in draw order */
+SPOT_CONST uint kSplatBindDraw = 7u;         /* VkDrawIndirectCommand of the quads */
+SPOT_CONST uint kSplatBindMeshDistance = 8u; /* r32f image: ray distance to the mesh */
+SPOT_CONST uint kSplatBindClosest = 9u;      /* uint64_t[pixel]: hybrid's closest (depth, kernel) */
+SPOT_CONST uint kSplatBindKeys = 10u;        /* uint[]: sorted's sort keys */
+SPOT_CONST uint kSplatBindBase = 11u;        /* rgba32f image: base colour (resolve) */
+SPOT_CONST uint kSplatBindAccum = 12u;       /* rgba32f image: OIT accumulation (resolve) */
+SPOT_CONST uint kSplatBindOpticalDepth = 13u; /* r32f image: summed optical depth (resolve) */
+SPOT_CONST uint kSplatBindClosestKernel = 14u; /* r32ui image: hybrid depth pass's kernel */
+SPOT_CONST uint kSplatBindResult = 15u;      /* rgba32f image: the frame's result */
+SPOT_CONST uint kSplatBindCounters = 16u;    /* SpotSplatCounters (counted frames) */
+SPOT_CONST uint kSplatBindVertices = 17u;    /* SpotMeshVertex[] (the base mesh pass) */
+
+/* Counters the splat pass writes when counting (RenderSettings::countFragments). */
+struct SpotSplatCounters {
+    uvec4 fragments; /* x, y: fragments shaded (low and high 32 bits); z, w: pixels where a
+                        kernel's alpha >= 1/255 (low, high) */
+};
+
+/* Specialization constant ids: each pipeline is compiled for one setting, not every path. */
+SPOT_CONST uint kSplatSpecLobes = 0u;        /* uint: lobes per kernel, 1..8 */
+SPOT_CONST uint kSplatSpecSamples = 1u;      /* uint: kernel samples N, 0 = analytic */
+SPOT_CONST uint kSplatSpecLambert = 2u;      /* bool: Lambert shading */
+SPOT_CONST uint kSplatSpecOrthographic = 3u; /* bool: orthographic camera */
+SPOT_CONST uint kSplatSpecEwa = 4u;          /* bool: EWA widening (prepare) */
+SPOT_CONST uint kSplatSpecWeight = 5u;       /* uint: kSpotWeight* (oit, hybrid, resolve) */
+SPOT_CONST uint kSplatSpecHybridAtomic = 6u; /* bool: OIT pass finds the closest kernel by atomicMin */
+SPOT_CONST uint kSplatSpecCount = 7u;        /* bool: count fragments and covered pixels */
+SPOT_CONST uint kSplatSpecResolve = 8u;      /* uint: kSplatResolve* (resolve) */
+SPOT_CONST uint kSplatSpecScreen = 9u;       /* bool: prepare writes screen lobes and bounds too
+                                                (the ray-march reads world lobes only) */
+
+/* What the resolve makes of its inputs. */
+SPOT_CONST uint kSplatResolveCopy = 0u;      /* the base colour image is the result (instanced,
+                                                sorted: kernels were drawn onto it) */
+SPOT_CONST uint kSplatResolveOit = 1u;       /* eq. 12 */
+SPOT_CONST uint kSplatResolveHybrid = 2u;    /* eq. 13, closest kernel from the atomicMin buffer */
+SPOT_CONST uint kSplatResolveHybridPass = 3u; /* eq. 13, closest kernel from the depth pass */
+
+/* SpotSplatFrame.counts.w bits (what stays a run-time flag). */
 SPOT_CONST uint kSplatFlagLambert = 2u;     /* Lambert + ambient shading, else unlit */
-SPOT_CONST uint kSplatFlagMcGuireBavoil = 4u; /* OIT weight: MB13 eq. 7, else constant */
-SPOT_CONST uint kSplatFlagHybrid = 8u;      /* hybrid: find and composite the closest kernel */
-SPOT_CONST uint kSplatFlagInstanced = 16u;  /* instanced: the base colour image is the result */
-SPOT_CONST uint kSplatFlagClosestPass = 32u; /* hybrid: the closest kernel comes from a separate
-                                                depth pass (splat_closest.frag), not atomicMin */
 
 /* Kernel samples (paper eq. 10's N_s) at most. Every shader invocation stays far below lavapipe's
  * 65,535 loop iterations: a march costs N x (lobes + 1) <= 2048 x 9 = 18,432 iterations, the
@@ -51,13 +127,14 @@ SPOT_CONST uint kSplatMaxKernelSamples = 2048u;
 SPOT_CONST uint kSplatShadingSamples = 4u;
 
 /* Hybrid: a kernel competes for "closest" at a pixel only where its alpha exceeds this (one 8-bit
- * step): fainter kernels would claim the front while hiding nothing. */
+ * step): fainter kernels would claim the front while hiding nothing. Also the alpha from which a
+ * pixel counts as covered by a kernel (fragment efficiency). */
 SPOT_CONST float kSplatHybridMinAlpha = 1.0 / 255.0;
 
-/* Hybrid with a closest-kernel depth pass: the depth written is the kernel's ray distance times
- * this power of two, so it orders exactly as the distances do (the atomicMin key's order) for
- * every distance up to 2^20 world units (farther ones all tie at 1, then the first kernel wins,
- * as atomicMin's kernel index does on equal distances). */
+/* Hybrid with a closest-kernel depth pass: the depth written is the kernel's view depth along the
+ * pixel's ray times this power of two, so it orders exactly as the depths do (the atomicMin key's
+ * order) for every depth up to 2^20 world units (farther ones all tie at 1, then the first kernel
+ * wins, as atomicMin's kernel index does on equal depths). */
 SPOT_CONST float kSplatClosestDepthScale = 1.0 / 1048576.0;
 
 /* Instanced: a kernel covers a pixel (opaque proxy) where its alpha reaches this. */
@@ -68,3 +145,7 @@ SPOT_CONST float kSplatNoMesh = 3.0e38;
 
 /* Workgroup size of the deterministic stream compaction (one workgroup). */
 SPOT_CONST uint kSplatCompactThreads = 256u;
+
+/* Pixels added around each kernel's exact bound: the bound and the fragment shader round
+ * differently, and a pixel centre on the truncation ellipse sees (almost) nothing anyway. */
+SPOT_CONST float kSplatBoundPadding = 0.01;

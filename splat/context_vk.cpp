@@ -245,6 +245,51 @@ void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record) 
     vkFreeCommandBuffers(m_device, m_pool, 1, &cmd);
 }
 
+CommandBuffer::CommandBuffer(Context& ctx) : m_ctx(ctx) {
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = ctx.commandPool();
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    vkCheck(vkAllocateCommandBuffers(ctx.device(), &ai, &m_cmd), "vkAllocateCommandBuffers");
+    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    const VkResult r = vkCreateFence(ctx.device(), &fci, nullptr, &m_fence);
+    if (r != VK_SUCCESS) {
+        vkFreeCommandBuffers(ctx.device(), ctx.commandPool(), 1, &m_cmd);
+        vkCheck(r, "vkCreateFence");
+    }
+}
+
+CommandBuffer::~CommandBuffer() {
+    vkQueueWaitIdle(m_ctx.queue()); // a submit whose wait threw may still run
+    if (m_recording)
+        vkEndCommandBuffer(m_cmd);
+    vkDestroyFence(m_ctx.device(), m_fence, nullptr);
+    vkFreeCommandBuffers(m_ctx.device(), m_ctx.commandPool(), 1, &m_cmd);
+}
+
+VkCommandBuffer CommandBuffer::begin() {
+    if (m_recording) // an earlier frame threw while recording: start over
+        vkEndCommandBuffer(m_cmd);
+    vkCheck(vkResetCommandBuffer(m_cmd, 0), "vkResetCommandBuffer");
+    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    vkCheck(vkBeginCommandBuffer(m_cmd, &bi), "vkBeginCommandBuffer");
+    m_recording = true;
+    return m_cmd;
+}
+
+void CommandBuffer::submitAndWait() {
+    SPOT_CHECK(m_recording);
+    m_recording = false;
+    vkCheck(vkEndCommandBuffer(m_cmd), "vkEndCommandBuffer");
+    vkCheck(vkResetFences(m_ctx.device(), 1, &m_fence), "vkResetFences");
+    VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.commandBufferCount = 1;
+    si.pCommandBuffers = &m_cmd;
+    vkCheck(vkQueueSubmit(m_ctx.queue(), 1, &si, m_fence), "vkQueueSubmit");
+    vkCheck(vkWaitForFences(m_ctx.device(), 1, &m_fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+}
+
 std::uint32_t Context::findMemoryType(std::uint32_t typeBits, VkMemoryPropertyFlags props) const {
     for (std::uint32_t i = 0; i < m_memory.memoryTypeCount; ++i)
         if ((typeBits & (1u << i)) && (m_memory.memoryTypes[i].propertyFlags & props) == props)
@@ -699,14 +744,15 @@ void Timestamps::write(VkCommandBuffer cmd, std::uint32_t slot, VkPipelineStageF
     vkCmdWriteTimestamp2(cmd, stage, m_pool, slot);
 }
 
-std::vector<double> Timestamps::milliseconds() {
-    std::vector<std::uint64_t> ticks(m_count);
-    vkCheck(vkGetQueryPoolResults(m_ctx.device(), m_pool, 0, m_count, ticks.size() * 8, ticks.data(), 8,
+std::vector<double> Timestamps::milliseconds(std::uint32_t count) const {
+    const std::uint32_t n = count == 0 ? m_count : std::min(count, m_count);
+    std::vector<std::uint64_t> ticks(n);
+    vkCheck(vkGetQueryPoolResults(m_ctx.device(), m_pool, 0, n, ticks.size() * 8, ticks.data(), 8,
                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
             "vkGetQueryPoolResults");
-    std::vector<double> ms(m_count);
+    std::vector<double> ms(n);
     const double period = m_ctx.properties().limits.timestampPeriod;
-    for (std::uint32_t i = 0; i < m_count; ++i)
+    for (std::uint32_t i = 0; i < n; ++i)
         ms[i] = double(ticks[i] - ticks[0]) * period * 1e-6;
     return ms;
 }

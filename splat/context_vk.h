@@ -72,6 +72,7 @@ public:
     /// Start a new peak measurement from what is allocated now.
     void resetPeak() { m_peak.store(m_allocated.load()); }
     std::uint64_t memoryBudget() const { return m_budget; }
+    VkCommandPool commandPool() const { return m_pool; }
 
     struct Messenger; ///< the debug messenger's state (defined in the .cpp)
 
@@ -92,6 +93,26 @@ private:
     std::atomic<std::uint64_t> m_peak{0};
 };
 
+/// A primary command buffer and its fence, allocated once and reused for every frame: begin()
+/// resets and starts recording, submitAndWait() submits and blocks until the GPU is done.
+class CommandBuffer {
+public:
+    explicit CommandBuffer(Context& ctx);
+    ~CommandBuffer();
+    CommandBuffer(const CommandBuffer&) = delete;
+    CommandBuffer& operator=(const CommandBuffer&) = delete;
+
+    VkCommandBuffer begin();
+    void submitAndWait();
+    VkCommandBuffer handle() const { return m_cmd; }
+
+private:
+    Context& m_ctx;
+    VkCommandBuffer m_cmd = VK_NULL_HANDLE;
+    VkFence m_fence = VK_NULL_HANDLE;
+    bool m_recording = false;
+};
+
 /// A buffer with its own memory. Host-visible buffers stay mapped (lavapipe's memory is host
 /// memory either way; on a discrete GPU they are for uploads and readback).
 class Buffer {
@@ -106,6 +127,8 @@ public:
 
     VkBuffer handle() const { return m_buffer; }
     VkDeviceSize size() const { return m_size; }
+    /// Device memory counted against the context's budget for this buffer.
+    VkDeviceSize reservedBytes() const { return m_reserved; }
     void* mapped() const { return m_mapped; }
     /// Copy into a host-visible buffer at byte offset.
     void upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
@@ -136,6 +159,8 @@ public:
 
     VkImage handle() const { return m_image; }
     VkImageView view() const { return m_view; }
+    /// Device memory counted against the context's budget for this image.
+    VkDeviceSize reservedBytes() const { return m_reserved; }
     VkFormat format() const { return m_format; }
     std::uint32_t width() const { return m_width; }
     std::uint32_t height() const { return m_height; }
@@ -266,8 +291,9 @@ public:
     ~Timestamps();
     void reset(VkCommandBuffer cmd);
     void write(VkCommandBuffer cmd, std::uint32_t slot, VkPipelineStageFlags2 stage);
-    /// Milliseconds between two slots.
-    std::vector<double> milliseconds();
+    /// Milliseconds of the first `count` slots (0: all) after slot 0; every one must have been
+    /// written by a submitted command buffer.
+    std::vector<double> milliseconds(std::uint32_t count = 0) const;
 
 private:
     Context& m_ctx;

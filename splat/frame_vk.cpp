@@ -1,209 +1,146 @@
 #include "frame_vk.h"
 
-#include <cmath>
-#include <stdexcept>
+#include <atomic>
 
 #include "noise/error.h"
-#include "noise/mesh.h"
-#include "splat/layout.h"
-
-#include "splat_mesh.frag.h"
-#include "splat_mesh.vert.h"
 
 namespace spot::splat {
 
-gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
-                                         glm::vec3 baseColor, std::uint32_t count,
-                                         std::uint32_t lobes, float support,
-                                         std::uint32_t kernelSamples, std::uint32_t flags) {
-    const noise::CameraRays rays(camera); // validates the camera
-    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
-    const glm::dvec3 up = glm::cross(right, forward);
-    const bool ortho = camera.projection == noise::Projection::Orthographic;
-    const double halfHeight =
-        ortho ? 0.5 * camera.orthoHeight : std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
-    const double halfWidth = halfHeight * double(camera.width) / double(camera.height);
-    if (shading.mode == noise::Shading::Mode::Lambert)
-        flags |= gpu_splat::kSplatFlagLambert;
-    gpu_splat::SpotSplatFrame frame{};
-    frame.eye = glm::vec4(glm::vec3(camera.eye), ortho ? 1.0f : 0.0f);
-    frame.forward = glm::vec4(glm::vec3(forward), kNearPlane);
-    frame.right = glm::vec4(glm::vec3(right), float(halfWidth));
-    frame.up = glm::vec4(glm::vec3(up), float(halfHeight));
-    frame.size = glm::vec4(float(camera.width), float(camera.height),
-                           float(rays.pixelFootprint(1.0)), support);
-    frame.counts = glm::uvec4(count, lobes, kernelSamples, flags);
-    frame.light = glm::vec4(shading.lightDir, shading.ambient);
-    frame.base = glm::vec4(baseColor, 0.0f);
-    return frame;
+void ResultReadback::record(Context& ctx, VkCommandBuffer cmd, const Image& result) {
+    const std::uint64_t bytes = std::uint64_t(result.width()) * result.height() * sizeof(glm::vec4);
+    if (buffer.size() < bytes)
+        buffer = Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::HostVisible,
+                        "frame readback");
+    width = result.width();
+    height = result.height();
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {width, height, 1};
+    vkCmdCopyImageToBuffer(cmd, result.handle(), VK_IMAGE_LAYOUT_GENERAL, buffer.handle(), 1, &region);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
 }
 
-MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_ctx(&ctx) {
-    std::vector<gpu_splat::SpotMeshVertex> vertices(mesh.positions.size());
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-        vertices[i].position = glm::vec4(mesh.positions[i], 1.0f);
-        vertices[i].normal =
-            glm::vec4(i < mesh.normals.size() ? mesh.normals[i] : glm::vec3(0.0f), 0.0f);
+noise::Image ResultReadback::read() const {
+    noise::Image image(static_cast<int>(width), static_cast<int>(height));
+    const auto* rgba = static_cast<const glm::vec4*>(buffer.mapped());
+    for (std::size_t i = 0; i < image.pixels.size(); ++i)
+        image.pixels[i] = glm::vec3(rgba[i]);
+    return image;
+}
+
+namespace {
+
+void fillStats(FrameStats& stats, const PassTimer& timer, const Renderer& renderer, Context& ctx) {
+    for (const auto& pass : timer.passMilliseconds())
+        stats.passMs.push_back(pass);
+    stats.gpuMs = timer.totalMilliseconds();
+    stats.counters = renderer.counters();
+    stats.gpuMemoryBytes = ctx.peakAllocatedBytes();
+}
+
+double since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace
+
+Frame::Frame(Context& ctx, const noise::Mesh& mesh, const noise::ImpulseGenerator& generator)
+    : m_ctx(ctx), m_cpuGenerator(generator), m_scene(ctx, mesh, generator.kernel()),
+      m_generator(ctx, mesh, generator), m_timer(ctx), m_commands(ctx) {}
+
+Frame::~Frame() = default;
+
+Renderer& Frame::renderer(std::string_view method) {
+    if (const auto it = m_renderers.find(method); it != m_renderers.end())
+        return *it->second;
+    const MethodInfo& info = gpuMethod(method);
+    return *m_renderers.emplace(info.name, info.make(m_scene)).first->second;
+}
+
+bool Frame::cellVisible(const noise::CameraRays& rays, const noise::SurfaceCell& cell) const {
+    const double h = m_cpuGenerator.cellSize();
+    return rays.boxMayBeVisible(glm::dvec3(cell.ijk) * h - h, glm::dvec3(cell.ijk + 1) * h + h);
+}
+
+FrameStats Frame::render(std::string_view method, const View& view, const RenderSettings& settings,
+                         noise::Image* image) {
+    const auto start = std::chrono::steady_clock::now();
+    Renderer& r = renderer(method);
+    FrameStats stats;
+    stats.method = std::string(method);
+    const noise::CameraRays rays(view.camera); // validates the camera (InputError)
+    const bool regenerate = m_generator.prepare(
+        [&](const noise::SurfaceCell& cell) {
+            const bool visible = cellVisible(rays, cell);
+            stats.visibleCells += visible;
+            return visible;
+        },
+        lodParameters(view.camera, settings.lodPixels));
+    bool generateInFrame = regenerate;
+    if (regenerate && r.readsImpulsesInPrepare()) {
+        // The renderer reads the new impulses on the host: generate them in a submit of their own.
+        VkCommandBuffer cmd = m_commands.begin();
+        m_timer.begin(cmd);
+        m_generator.record(cmd, m_timer);
+        m_commands.submitAndWait();
+        for (const auto& pass : m_timer.passMilliseconds())
+            stats.passMs.push_back(pass);
+        generateInFrame = false;
     }
-    m_vertices = Buffer(ctx, vertices.size() * sizeof(gpu_splat::SpotMeshVertex),
-                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::HostVisible,
-                        cat(who, " mesh vertices (", mesh.name, ")"));
-    if (!vertices.empty())
-        m_vertices.upload(std::span<const gpu_splat::SpotMeshVertex>(vertices));
-    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
-    m_indices = Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
-                       Buffer::Memory::HostVisible, cat(who, " mesh indices (", mesh.name, ")"));
-    if (!mesh.triangles.empty())
-        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
-
-    GraphicsPipelineDesc desc;
-    desc.vertex = spirv(spv_splat_mesh_vert);
-    desc.fragment = spirv(spv_splat_mesh_frag);
-    desc.bindings = {storageBuffer(0)};
-    desc.pushBytes = sizeof(gpu_splat::SpotSplatFrame);
-    desc.colorFormats = {kColorFormat, kScalarFormat};
-    desc.blends = {opaqueBlend(), opaqueBlend()};
-    desc.depthFormat = kDepthFormat;
-    desc.depthTest = true;
-    desc.depthWrite = true;
-    desc.depthCompare = VK_COMPARE_OP_GREATER;
-    m_pipeline = makeGraphicsPipeline(ctx, desc);
+    r.prepare(view, m_generator.impulses(), settings);
+    VkCommandBuffer cmd = m_commands.begin();
+    m_timer.begin(cmd);
+    if (generateInFrame)
+        m_generator.record(cmd, m_timer);
+    r.record(cmd, m_timer);
+    if (image)
+        m_readback.record(m_ctx, cmd, r.result());
+    m_commands.submitAndWait();
+    const double generateMs = stats.passMs.empty() ? 0.0 : stats.passMs.front().second;
+    fillStats(stats, m_timer, r, m_ctx);
+    stats.gpuMs += generateMs;
+    stats.regenerated = regenerate;
+    stats.kernelsGenerated = m_generator.count();
+    stats.candidates = m_generator.candidates();
+    stats.cellsGenerated = m_generator.cells();
+    if (image)
+        *image = m_readback.read();
+    stats.wallMs = since(start);
+    return stats;
 }
 
-void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
-                      const Image& distance, const Image& depth, glm::vec3 background) const {
-    const VkRenderingAttachmentInfo depthInfo = depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
-    beginRendering(cmd, base.width(), base.height(),
-                   {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
-                    colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR,
-                                    glm::vec4(gpu_splat::kSplatNoMesh))},
-                   &depthInfo);
-    if (m_indexCount > 0) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipeline.handle());
-        pushFrame(cmd, m_pipeline, frame);
-        Descriptors().buffer(0, m_vertices).push(*m_ctx, cmd, m_pipeline);
-        vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
-        vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
+noise::Image renderImpulses(Context& ctx, Renderer& renderer, const View& view,
+                            const Buffer& impulses, std::uint32_t count,
+                            const RenderSettings& settings, FrameStats* stats,
+                            const noise::SurfaceCells* cells) {
+    static std::atomic<std::uint64_t> version{0};
+    const auto start = std::chrono::steady_clock::now();
+    Buffer countBuffer(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::HostVisible,
+                       "impulse count");
+    *static_cast<std::uint32_t*>(countBuffer.mapped()) = count;
+    ImpulseSet set;
+    set.impulses = &impulses;
+    set.count = &countBuffer;
+    set.capacity = count;
+    set.version = ++version;
+    set.cells = cells;
+    renderer.prepare(view, set, settings);
+    PassTimer timer(ctx);
+    CommandBuffer commands(ctx);
+    ResultReadback readback;
+    VkCommandBuffer cmd = commands.begin();
+    timer.begin(cmd);
+    renderer.record(cmd, timer);
+    readback.record(ctx, cmd, renderer.result());
+    commands.submitAndWait();
+    if (stats) {
+        *stats = FrameStats{};
+        fillStats(*stats, timer, renderer, ctx);
+        stats->kernelsGenerated = count;
+        stats->wallMs = since(start);
     }
-    vkCmdEndRendering(cmd);
-}
-
-Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who) {
-    if (kernel.lobes.empty() || kernel.lobes.size() > 8)
-        throw InputError(cat(who, ": a kernel needs 1 to 8 lobes, this one has ", kernel.lobes.size()));
-    if (!(kernel.supportSigma > 0.0f) || !std::isfinite(kernel.supportSigma))
-        throw InputError(cat(who, ": support ", kernel.supportSigma, " sigmas must be positive"));
-    const std::vector<gpu::SpotLobe> lobes = gpu::toGpu(kernel);
-    Buffer b(ctx, lobes.size() * sizeof(gpu::SpotLobe), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-             Buffer::Memory::HostVisible, cat(who, " kernel lobes"));
-    b.upload(std::span<const gpu::SpotLobe>(lobes));
-    return b;
-}
-
-void requireFormat(Context& ctx, VkFormat format, VkFormatFeatureFlags features, const char* what) {
-    VkFormatProperties props;
-    vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), format, &props);
-    if ((props.optimalTilingFeatures & features) != features)
-        throw std::runtime_error(cat("Vulkan: device ", ctx.deviceName(), " cannot use format ",
-                                     int(format), " for ", what));
-}
-
-VkPipelineColorBlendAttachmentState opaqueBlend() {
-    VkPipelineColorBlendAttachmentState b{};
-    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                       VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-    return b;
-}
-
-/// dst = src + dst: MB13's weighted sums, and the optical-depth sum that stands for its revealage
-/// (exp(-sum tau) = prod (1 - alpha); see splat_oit.frag). One blend state for both targets:
-/// the context does not enable independentBlend.
-VkPipelineColorBlendAttachmentState additiveBlend() {
-    VkPipelineColorBlendAttachmentState b = opaqueBlend();
-    b.blendEnable = VK_TRUE;
-    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.colorBlendOp = VK_BLEND_OP_ADD;
-    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.alphaBlendOp = VK_BLEND_OP_ADD;
-    return b;
-}
-
-/// Premultiplied "over": dst = src + (1 - src.a) dst (the sorted method, back to front).
-VkPipelineColorBlendAttachmentState overBlend() {
-    VkPipelineColorBlendAttachmentState b = opaqueBlend();
-    b.blendEnable = VK_TRUE;
-    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-    b.colorBlendOp = VK_BLEND_OP_ADD;
-    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-    b.alphaBlendOp = VK_BLEND_OP_ADD;
-    return b;
-}
-
-VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp load,
-                                          glm::vec4 clear) {
-    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    a.imageView = image.view();
-    a.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    a.loadOp = load;
-    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    a.clearValue.color = {{clear.r, clear.g, clear.b, clear.a}};
-    return a;
-}
-
-VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load) {
-    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    a.imageView = image.view();
-    a.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
-    a.loadOp = load;
-    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    a.clearValue.depthStencil = {0.0f, 0}; // reversed depth: 0 is infinitely far
-    return a;
-}
-
-void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
-                    const std::vector<VkRenderingAttachmentInfo>& colors,
-                    const VkRenderingAttachmentInfo* depth) {
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {width, height}};
-    info.layerCount = 1;
-    info.colorAttachmentCount = std::uint32_t(colors.size());
-    info.pColorAttachments = colors.data();
-    info.pDepthAttachment = depth;
-    vkCmdBeginRendering(cmd, &info);
-    const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
-    const VkRect2D scissor{{0, 0}, {width, height}};
-    vkCmdSetViewport(cmd, 0, 1, &viewport);
-    vkCmdSetScissor(cmd, 0, 1, &scissor);
-}
-
-void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame) {
-    const VkShaderStageFlags stages =
-        pipeline.bindPoint() == VK_PIPELINE_BIND_POINT_COMPUTE
-            ? VK_SHADER_STAGE_COMPUTE_BIT
-            : VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
-    vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
-}
-
-void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
-                   const gpu_splat::SpotSplatFrame& frame, const Buffer& impulses,
-                   const Buffer& lobes, const Buffer& worldLobes, const Buffer& bounds,
-                   std::uint32_t count) {
-    if (count == 0)
-        return;
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, prepare.handle());
-    pushFrame(cmd, prepare, frame);
-    Descriptors()
-        .buffer(0, impulses)
-        .buffer(1, lobes)
-        .buffer(2, worldLobes)
-        .buffer(3, bounds)
-        .push(ctx, cmd, prepare);
-    vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+    return readback.read();
 }
 
 } // namespace spot::splat

@@ -1,118 +1,97 @@
 /// @file frame_vk.h
-/// @brief What the splat renderer and the ray-march share: the frame constants (the camera
-/// basis exactly as noise::CameraRays builds it, so every method's rays are the reference's),
-/// the base mesh and kernel lobes on the GPU, and the small Vulkan helpers of their passes.
+/// @brief The persistent frame: what `render`, `bench` and the editor drive. It owns the scene's
+/// GPU data, the impulse generator, one renderer per method (made on first use, from the
+/// registry of method_vk.h), one command buffer and its fence, and the readback buffer.
+///
+/// One frame: the cells the camera may see are chosen on the host (frustum culling), the
+/// generator regenerates the impulses only when those cells or the level of detail changed
+/// (otherwise the last frame's impulses are drawn again), the renderer prepares, and everything
+/// is recorded into one command buffer: generation, the method's passes and, when the pixels are
+/// wanted, the copy into the readback buffer. One submit, one wait.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
-#include <span>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
-#include <glm/glm.hpp>
-
-#include "context_vk.h"
 #include "noise/camera.h"
-#include "noise/kernel.h"
-#include "noise/reference.h"
-
-namespace spot::noise {
-struct Mesh;
-}
+#include "noise/image.h"
+#include "noise/impulses.h"
+#include "splat/context_vk.h"
+#include "splat/generate_vk.h"
+#include "splat/method_vk.h"
 
 namespace spot::splat {
 
-namespace gpu_splat {
-using glm::uvec4;
-using glm::vec4;
-#define SPOT_CONST inline constexpr
-#include "shaders/spot_splat.h"
-#undef SPOT_CONST
-static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
-static_assert(sizeof(SpotMeshVertex) == 32);
-} // namespace gpu_splat
+struct FrameStats {
+    std::string method;
+    /// GPU milliseconds per pass, in recording order ("generate" first when it ran).
+    std::vector<std::pair<std::string, double>> passMs;
+    double gpuMs = 0.0;  ///< GPU time of the frame, first pass to last
+    double wallMs = 0.0; ///< host time of render(): preparing, recording, submit, wait, readback
+    bool regenerated = false;            ///< the impulses were generated in this frame
+    std::uint32_t kernelsGenerated = 0;  ///< impulses drawn from (this frame's or the last)
+    std::uint32_t candidates = 0;        ///< examined before the density test
+    std::uint32_t cellsGenerated = 0;    ///< cells the impulses came from (after culling)
+    std::uint32_t visibleCells = 0;      ///< cells the camera may see
+    FrameCounters counters;
+    std::uint64_t gpuMemoryBytes = 0; ///< the context's peak allocation so far
+};
 
-inline constexpr VkFormat kColorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
-inline constexpr VkFormat kScalarFormat = VK_FORMAT_R32_SFLOAT;
-inline constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
-/// Near plane of the reversed depth mapping (world units): float depth near / z keeps its
-/// relative precision at every distance, so the near plane can sit this close to the eye.
-inline constexpr float kNearPlane = 1e-4f;
+/// Copy `renderer`'s result into `readback` (grown to fit) and read it back after the submit:
+/// record() before the submit, read() after.
+struct ResultReadback {
+    void record(Context& ctx, VkCommandBuffer cmd, const Image& result);
+    noise::Image read() const;
+    Buffer buffer;
+    std::uint32_t width = 0, height = 0;
+};
 
-/// Short names for the stages, accesses and layouts the splat and march passes synchronize.
-namespace passes {
-inline constexpr VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-inline constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-inline constexpr VkPipelineStageFlags2 kColorOut = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
-inline constexpr VkPipelineStageFlags2 kTests =
-    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
-inline constexpr VkPipelineStageFlags2 kFragment = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
-inline constexpr VkPipelineStageFlags2 kTransfer = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-inline constexpr VkPipelineStageFlags2 kHostStage = VK_PIPELINE_STAGE_2_HOST_BIT;
-inline constexpr VkAccessFlags2 kColorRW =
-    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
-inline constexpr VkAccessFlags2 kDepthRW =
-    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-inline constexpr VkAccessFlags2 kStorageRead = VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
-inline constexpr VkAccessFlags2 kStorageRW =
-    VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
-inline constexpr VkImageAspectFlags kColorAspect = VK_IMAGE_ASPECT_COLOR_BIT;
-inline constexpr VkImageLayout kAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-inline constexpr VkImageLayout kGeneral = VK_IMAGE_LAYOUT_GENERAL;
-} // namespace passes
-
-template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
-    return {code, N};
-}
-
-/// The frame constants for a camera (units: world; image size in pixels). `flags` are the
-/// method's kSplatFlag* bits (Lambert is added from `shading`).
-gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
-                                         glm::vec3 baseColor, std::uint32_t count,
-                                         std::uint32_t lobes, float support,
-                                         std::uint32_t kernelSamples, std::uint32_t flags);
-
-/// The opaque base mesh on the GPU (vertex pulling) and the pass that draws it first in every
-/// method: its colour (lit as the frame says) over the background, the ray distance t to it
-/// (kSplatNoMesh where none) and a reversed float depth.
-class MeshPass {
+class Frame {
 public:
-    /// Uploads the mesh (may be empty) and builds the pipeline; `who` names the buffers.
-    MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who);
-    /// Records the pass into `base` (kColorFormat), `distance` (kScalarFormat) and `depth`
-    /// (kDepthFormat), all in attachment layouts, cleared first. Nothing else changes layout.
-    void record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
-                const Image& distance, const Image& depth, glm::vec3 background) const;
+    /// Uploads the mesh and the generator's data; `generator` (and the mesh it was made for) must
+    /// outlive the frame.
+    Frame(Context& ctx, const noise::Mesh& mesh, const noise::ImpulseGenerator& generator);
+    Frame(const Frame&) = delete;
+    Frame& operator=(const Frame&) = delete;
+    ~Frame();
+
+    /// Render one frame with the registry's method `method` and wait for it. `image`, when given,
+    /// receives the pixels (linear RGB, top-left origin). Throws InputError for an unknown
+    /// method, a bad setting, or a frame beyond the memory budget.
+    FrameStats render(std::string_view method, const View& view, const RenderSettings& settings,
+                      noise::Image* image = nullptr);
+
+    /// The renderer of `method`, made on first use.
+    Renderer& renderer(std::string_view method);
+    const SceneGpu& scene() const { return m_scene; }
+    GpuGenerator& generator() { return m_generator; }
+    /// Whether a cell may be seen by the camera (its box grown by one cell: kernels reach the
+    /// neighbouring cells).
+    bool cellVisible(const noise::CameraRays& rays, const noise::SurfaceCell& cell) const;
 
 private:
-    Context* m_ctx;
-    Buffer m_vertices, m_indices;
-    std::uint32_t m_indexCount = 0;
-    Pipeline m_pipeline;
+    Context& m_ctx;
+    const noise::ImpulseGenerator& m_cpuGenerator;
+    SceneGpu m_scene;
+    GpuGenerator m_generator;
+    std::map<std::string, std::unique_ptr<Renderer>, std::less<>> m_renderers;
+    PassTimer m_timer;
+    CommandBuffer m_commands;
+    ResultReadback m_readback;
 };
-/// The kernel's lobes (gpu::SpotLobe[]); InputError for 0 or more than 8 lobes or a bad support.
-Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who);
 
-void requireFormat(Context& ctx, VkFormat format, VkFormatFeatureFlags features, const char* what);
-VkPipelineColorBlendAttachmentState opaqueBlend();
-/// dst = src + dst.
-VkPipelineColorBlendAttachmentState additiveBlend();
-/// Premultiplied "over": dst = src + (1 - src.a) dst.
-VkPipelineColorBlendAttachmentState overBlend();
-VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp load,
-                                          glm::vec4 clear = glm::vec4(0.0f));
-/// Reversed depth: cleared to 0, infinitely far.
-VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load);
-/// vkCmdBeginRendering over the whole image, with viewport and scissor set.
-void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
-                    const std::vector<VkRenderingAttachmentInfo>& colors,
-                    const VkRenderingAttachmentInfo* depth);
-void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame);
-
-/// Record the prepare pass (splat_prepare.comp): for `count` impulses, the world lobes and each
-/// kernel's screen bound. Records nothing for no impulses.
-void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
-                   const gpu_splat::SpotSplatFrame& frame, const Buffer& impulses,
-                   const Buffer& lobes, const Buffer& worldLobes, const Buffer& bounds,
-                   std::uint32_t count);
+/// One frame of `renderer` from impulses the caller holds (tests and tools): the count uploaded,
+/// the frame recorded, submitted, waited for and read back. Each call counts as a new impulse
+/// set (ImpulseSet::version). `stats`, when given, receives the pass times and counters.
+noise::Image renderImpulses(Context& ctx, Renderer& renderer, const View& view,
+                            const Buffer& impulses, std::uint32_t count,
+                            const RenderSettings& settings, FrameStats* stats = nullptr,
+                            const noise::SurfaceCells* cells = nullptr);
 
 } // namespace spot::splat

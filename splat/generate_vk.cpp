@@ -77,6 +77,41 @@ GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
     m_fieldData = upload(ctx, generator.sharedFieldData(), "field data");
 }
 
+bool GpuGenerator::prepare(const std::function<bool(const noise::SurfaceCell&)>& keep,
+                           glm::vec4 lod) {
+    std::vector<std::uint32_t> key;
+    const auto& all = m_generator.cells().cells;
+    for (std::uint32_t i = 0; i < all.size(); ++i)
+        if (!keep || keep(all[i]))
+            key.push_back(i);
+    if (m_version > 0 && key == m_cellKey && lod == m_lod)
+        return false;
+    m_current = generate(keep, lod);
+    m_cellKey = std::move(key);
+    m_lod = lod;
+    ++m_version;
+    m_candidates = m_current.candidates;
+    m_cellCount = m_current.cells;
+    if (!m_count.handle())
+        m_count = Buffer(m_ctx, 16, kStorage, Buffer::Memory::HostVisible, "impulse count");
+    *static_cast<std::uint32_t*>(m_count.mapped()) = m_current.count;
+    return true;
+}
+
+void GpuGenerator::record(VkCommandBuffer, PassTimer&) {}
+
+ImpulseSet GpuGenerator::impulses() const {
+    ImpulseSet s;
+    s.impulses = &m_current.impulses;
+    s.count = &m_count;
+    s.capacity = m_current.count;
+    s.version = m_version;
+    s.cells = &m_generator.cells();
+    return s;
+}
+
+std::uint32_t GpuGenerator::count() const { return m_current.count; }
+
 GpuImpulses GpuGenerator::generate(const std::function<bool(const noise::SurfaceCell&)>& keep,
                                    glm::vec4 lod) {
     GpuImpulses result;

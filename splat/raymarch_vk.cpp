@@ -14,7 +14,7 @@
 #include "noise/system.h"
 #include "shaders/spot_shared.hpp"
 #include "splat/layout.h"
-#include "splat/frame_vk.h"
+#include "splat/pass_vk.h"
 
 #include "raymarch_bin.comp.h"
 #include "raymarch_march.comp.h"
@@ -253,7 +253,6 @@ RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
             b.push_back(storageBuffer(i));
         return b;
     };
-    m_prepare = makeComputePipeline(ctx, spirv(spv_splat_prepare_comp), buffers(4), push);
     m_bin = makeComputePipeline(ctx, spirv(spv_raymarch_bin_comp), buffers(6), 2 * sizeof(std::uint32_t));
     // One layout for the march and its resolve (each pushes the bindings it reads): 0 params,
     // 1 hash table, 2 neighbourhoods, 3 world lobes, 4 base colour, 5 mesh distance, 6 march
@@ -307,7 +306,7 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
     // colour, mesh distance, depth, state and loop count; per output pixel the result.
     const std::uint64_t need =
         std::uint64_t(count) *
-            (m_lobeCount * sizeof(gpu::SpotWorldLobe) + sizeof(gpu::SpotKernelBound) +
+            (m_lobeCount * sizeof(gpu::SpotWorldLobe) +
              sizeof(SpotMarchBox)) +
         std::uint64_t(records) * (3 * 4 + sizeof(SpotMarchCell)) + 4 + sizeof(SpotMarchParams) +
         pixels * (16 + 4 + 4 + 16 + 4) + outPixels * 16 + 4 + (capture ? pixels * 20 : 0);
@@ -342,8 +341,14 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
                       cat("ray march world lobes (", count, " kernels)"));
     Buffer boxes(m_ctx, std::uint64_t(count) * sizeof(SpotMarchBox), kStorage,
                  capture ? kHost : kDevice, cat("ray march impulse boxes (", count, " kernels)"));
-    Buffer bounds(m_ctx, std::uint64_t(count) * sizeof(gpu::SpotKernelBound), kStorage, kDevice,
-                  "ray march kernel bounds (unused)");
+    // The prepare pass writes world lobes only here; its screen outputs are not written.
+    Buffer unused(m_ctx, 16, kStorage, kDevice, "ray march prepare: unused screen outputs");
+    Buffer countBuffer(m_ctx, 16, kStorage, kHost, "ray march impulse count");
+    *static_cast<std::uint32_t*>(countBuffer.mapped()) = count;
+    if (!m_prepare.handle() || m_prepareOrthographic != (camera.projection == noise::Projection::Orthographic)) {
+        m_prepareOrthographic = camera.projection == noise::Projection::Orthographic;
+        m_prepare = makePreparePipeline(m_ctx, m_lobeCount, false, false, m_prepareOrthographic);
+    }
     Buffer bins(m_ctx, (3 * std::uint64_t(records) + 1) * sizeof(std::uint32_t), kFilled, kHost,
                 "ray march cell bins");
     Buffer recordBuffer(m_ctx, std::uint64_t(records) * sizeof(SpotMarchCell), kStorage, kHost,
@@ -377,7 +382,14 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
         m_binTimes.reset(cmd);
         m_binTimes.write(cmd, 0, kAll);
         if (count > 0) {
-            recordPrepare(m_ctx, cmd, m_prepare, frame, impulses, m_lobes, worldLobes, bounds, count);
+            PrepareBuffers pb;
+            pb.impulses = &impulses;
+            pb.count = &countBuffer;
+            pb.lobes = &m_lobes;
+            pb.worldLobes = &worldLobes;
+            pb.screenLobes = &unused;
+            pb.bounds = &unused;
+            recordPrepare(m_ctx, cmd, m_prepare, frame, pb, count);
         }
         m_binTimes.write(cmd, 1, kAll);
         const std::uint64_t firstBytes = std::uint64_t(records) * sizeof(std::uint32_t);

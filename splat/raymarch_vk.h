@@ -72,7 +72,7 @@
 #include "noise/reference.h"
 #include "shaders/spot_layout.hpp"
 #include "splat/context_vk.h"
-#include "splat/frame_vk.h"
+#include "splat/pass_vk.h"
 
 namespace spot::noise {
 struct Mesh;
@@ -180,6 +180,7 @@ private:
     MeshPass m_meshPass;
     Buffer m_lobes;
     Pipeline m_prepare, m_bin, m_march, m_resolve;
+    bool m_prepareOrthographic = false;
     Timestamps m_binTimes, m_marchTimes;
     std::shared_ptr<Shell> m_shell;
 };

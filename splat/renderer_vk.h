@@ -1,27 +1,35 @@
 /// @file renderer_vk.h
-/// @brief The splatting renderers of DESIGN section 4 (paper sec. 4, fig. 4): `instanced`,
-/// `oit`, `hybrid` and `sorted`, over an opaque base mesh, headless on a Context.
+/// @brief The splatting renderers of docs/design.md section 4 (paper sec. 4, fig. 4):
+/// `instanced`, `oit`, `hybrid` and `sorted`, over an opaque base mesh, behind the Renderer
+/// interface of method_vk.h.
 ///
 /// One frame, whatever the method:
-///  1. prepare (compute): per impulse, its kernel's lobes placed in the world (optionally
-///     EWA-widened by the pixel footprint, sigma = footprint / sqrt(12): the variance of the box
-///     pixel filter the reference integrates) and the kernel's pixel rectangle; a deterministic
-///     compaction lists the kernels whose rectangle is not empty, in impulse order, and writes the
-///     indirect draw. `sorted` then sorts the kept kernels back to front by the view depth of
-///     their centre of mass (splat_sorted_keys.comp, then the radix sort of sort_vk.h).
+///  1. prepare (compute, splat_prepare.comp): per impulse, its kernel's lobes placed in the world
+///     (optionally EWA-widened by the pixel footprint, sigma = footprint / sqrt(12): the variance
+///     of the box pixel filter the reference integrates), each lobe's screen form
+///     (SpotScreenLobe: what a pixel needs, affine in the pixel, so no pixel pays for a matrix
+///     product) and the kernel's oriented screen quad (the exact projected ellipses of its lobes,
+///     bounded along their principal axis). A deterministic compaction lists the kernels whose
+///     quad is not empty, in impulse order, and writes the indirect draw. `sorted` then sorts the
+///     kept kernels back to front by the view depth of their centre of mass
+///     (splat_sorted_keys.comp, then the radix sort of sort_vk.h).
 ///  2. mesh (raster): base colour (or the background), ray distance t to the mesh (R32F) and a
 ///     reversed float depth.
 ///  3. splat (raster): one quad per kept kernel; per pixel the kernel's colour and alpha along the
 ///     pixel's ray, through its lobes, up to the mesh (analytic optical depths, or N samples:
 ///     paper eq. 10). `instanced` draws the kernel opaque where alpha >= 0.5 with the depth test;
-///     `oit` blends w x (premultiplied colour, alpha) additively and alpha into a revealage target
-///     (McGuire and Bavoil 2013; paper eq. 11-12); `hybrid` also finds each pixel's closest
-///     kernel with a 64-bit atomicMin (or, with ClosestKernel::DepthPass, in a pass of its own
-///     over the same quads with a depth test before it); `sorted` blends each kernel, back to front, over the base
-///     colour with premultiplied "over" (C = C_k + (1 - alpha_k) C): exact compositing wherever
-///     kernels do not interpenetrate along a ray (the accuracy ceiling of splatting, to show what
-///     OIT gives up).
-///  4. resolve (compute): the final image (paper eq. 12 or 13), read back as linear float RGB.
+///     `oit` blends w x (premultiplied colour, alpha) additively and the optical depth into a
+///     second target (McGuire and Bavoil 2013; paper eq. 11-12); `hybrid` also finds each pixel's
+///     closest kernel with a 64-bit atomicMin (or, with ClosestKernel::DepthPass, in a pass of its
+///     own over the same quads with a depth test before it); `sorted` blends each kernel, back to
+///     front, over the base colour with premultiplied "over" (C = C_k + (1 - alpha_k) C): exact
+///     compositing wherever kernels do not interpenetrate along a ray (the accuracy ceiling of
+///     splatting, to show what OIT gives up).
+///  4. resolve (compute): the final image (paper eq. 12 or 13) into result().
+///
+/// Every pipeline is specialized for its setting (lobes per kernel, analytic or N samples,
+/// Lambert, projection, EWA, OIT weight, hybrid, counting): lavapipe compiles each at its first
+/// use, and a shader carrying every path pays for the branches of all.
 ///
 /// Results are deterministic: blending in a fixed primitive order, integer atomics only, a sort
 /// without atomics.
@@ -30,95 +38,82 @@
 #pragma once
 
 #include <cstdint>
-#include <string>
-#include <utility>
-#include <vector>
+#include <map>
+#include <tuple>
 
-#include <glm/glm.hpp>
-
-#include "noise/camera.h"
-#include "noise/image.h"
-#include "noise/kernel.h"
-#include "noise/reference.h"
 #include "splat/context_vk.h"
-#include "splat/frame_vk.h"
+#include "splat/method_vk.h"
+#include "splat/pass_vk.h"
 #include "splat/sort_vk.h"
-
-namespace spot::noise {
-struct Mesh;
-}
 
 namespace spot::splat {
 
 enum class Method { Instanced, Oit, Hybrid, Sorted };
-/// How `hybrid` finds each pixel's closest kernel (DESIGN section 4: "measure both ways"). Both
-/// find the same kernel, so the images are identical; only the cost differs.
-enum class ClosestKernel {
-    Atomic,   ///< in the OIT pass itself: a 64-bit atomicMin of (distance bits, kernel index)
-    DepthPass ///< a separate pass over the same quads with a depth test (splat_closest.frag)
-};
-enum class OitWeight {
-    Constant,     ///< w = 1: a plain unordered blend ("no OIT", paper fig. 3.3)
-    McGuireBavoil ///< MB13 eq. 7 with z = view depth in world units (see spotOitWeight)
-};
 
 /// "instanced", "oit", "hybrid", "sorted".
 const char* methodName(Method method);
 
-struct SplatSettings {
-    Method method = Method::Hybrid;
-    bool ewa = true;       ///< widen lobes by the pixel footprint (anti-aliasing)
-    int kernelSamples = 0; ///< 0: analytic optical depths; N in [1, 2048]: paper eq. 10's N_s
-    /// The roofline instead of the method's splat pass: the same quads over the same pixels into
-    /// the `oit` targets with a fragment shader that does nothing (the image is meaningless; the
-    /// "splat" pass time is what lavapipe's rasterizer itself costs for this frame).
-    bool roofline = false;
-    OitWeight weight = OitWeight::McGuireBavoil;
-    ClosestKernel closest = ClosestKernel::Atomic; ///< hybrid only
-};
-
-struct FrameStats {
-    /// GPU time per pass, milliseconds: prepare (with the compaction), sort (`sorted` only), mesh,
-    /// splat (every pass over the kernels' quads: the hybrid's closest-kernel depth pass too),
-    /// resolve.
-    std::vector<std::pair<std::string, double>> passMs;
-    double totalMs = 0.0;             ///< GPU time of the frame, milliseconds
-    std::uint32_t kernelsDrawn = 0;   ///< kernels with a non-empty pixel rectangle
-    std::uint64_t gpuMemoryBytes = 0; ///< the context's peak allocation so far
-};
-
-class SplatRenderer {
+class SplatRenderer final : public Renderer {
 public:
-    /// Uploads the mesh (may be empty) and the kernel's lobes, builds the pipelines. Throws
-    /// InputError for a kernel without lobes or with more than 8.
-    SplatRenderer(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel);
+    /// `scene` must outlive the renderer.
+    SplatRenderer(const SceneGpu& scene, Method method);
 
-    /// Render one frame of `count` impulses (`impulses` holds gpu::SpotImpulse[], at least
-    /// `count` of them, storage-buffer usage). `background` shows where no mesh is hit;
-    /// `baseColor` is the mesh's colour. Throws InputError for a bad setting, a too small buffer,
-    /// or a frame that does not fit the context's memory budget.
-    noise::Image render(const noise::Camera& camera, const noise::Shading& shading,
-                        glm::vec3 background, glm::vec3 baseColor, const Buffer& impulses,
-                        std::uint32_t count, const SplatSettings& settings,
-                        FrameStats* stats = nullptr);
+    void prepare(const View& view, const ImpulseSet& impulses,
+                 const RenderSettings& settings) override;
+    void record(VkCommandBuffer cmd, PassTimer& timer) override;
+    const Image& result() const override { return m_result; }
+    FrameCounters counters() const override;
 
-    /// Device memory one frame allocates (bytes), for `count` impulses at width x height with
-    /// `method` (`sorted` adds its sort keys and the sort's scratch; the hybrid's depth pass its
-    /// kernel index and depth targets).
-    std::uint64_t frameBytes(int width, int height, std::uint32_t count,
-                             Method method = Method::Hybrid,
-                             ClosestKernel closest = ClosestKernel::Atomic) const;
+    Method method() const { return m_method; }
+    /// Device memory the targets and buffers of a width x height frame of `capacity` impulses
+    /// take (bytes), with `settings`.
+    std::uint64_t frameBytes(int width, int height, std::uint32_t capacity,
+                             const RenderSettings& settings) const;
 
 private:
+    /// What a pipeline is specialized for.
+    struct Spec {
+        std::uint32_t samples = 0;
+        bool lambert = false, orthographic = false, ewa = true, hybridAtomic = false,
+             count = false;
+        std::uint32_t weight = 0, resolve = 0;
+        auto tie() const {
+            return std::tie(samples, lambert, orthographic, ewa, hybridAtomic, count, weight, resolve);
+        }
+        bool operator<(const Spec& o) const { return tie() < o.tie(); }
+    };
+    struct Pipelines {
+        Pipeline prepare, compact, splat, closest, sortKeys, resolve;
+    };
+    const Pipelines& pipelines(const Spec& spec, bool roofline);
+    void ensureTargets(std::uint32_t width, std::uint32_t height, const RenderSettings& settings);
+    void ensureBuffers(std::uint32_t capacity, const RenderSettings& settings);
+
+    const SceneGpu& m_scene;
     Context& m_ctx;
-    std::uint32_t m_lobeCount = 0;
-    float m_support = 3.0f;
-    MeshPass m_meshPass;
-    Buffer m_lobes;
-    Pipeline m_prepare, m_compact, m_instanced, m_oit, m_resolve, m_roofline, m_closest;
-    Pipeline m_sortKeys, m_sorted;
+    Method m_method;
+    std::map<std::pair<Spec, bool>, Pipelines> m_pipelines;
     RadixSort m_sort;
-    Timestamps m_timestamps;
+
+    // Per image size.
+    std::uint32_t m_width = 0, m_height = 0;
+    Image m_base, m_distance, m_depth, m_accum, m_opticalDepth, m_closestKernel, m_closestDepth,
+        m_result;
+    Buffer m_closest; ///< hybrid (atomic): uint64 per pixel
+    // Per impulse capacity.
+    std::uint32_t m_capacity = 0;
+    Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_draw, m_counters, m_sortKeys;
+    RadixSortScratch m_sortScratch;
+
+    // The frame prepared last.
+    struct Prepared {
+        gpu_splat::SpotSplatFrame frame{};
+        View view;
+        ImpulseSet impulses;
+        RenderSettings settings;
+        const Pipelines* pipelines = nullptr;
+        bool sorted = false, instanced = false, closestPass = false, hybridAtomic = false;
+    } m_frame;
 };
 
 } // namespace spot::splat

@@ -25,6 +25,11 @@ public:
     RadixSortScratch(Context& ctx, std::uint32_t capacity);
 
     std::uint32_t capacity() const { return m_capacity; }
+    /// Device memory its buffers hold against the context's budget.
+    std::uint64_t reservedBytes() const {
+        return m_keys.reservedBytes() + m_values.reservedBytes() + m_histogram.reservedBytes() +
+               m_blockSums.reservedBytes();
+    }
     /// Device memory a scratch for `capacity` pairs allocates (bytes).
     static std::uint64_t bytes(std::uint32_t capacity);
 

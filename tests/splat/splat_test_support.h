@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <span>
 #include <string>
 #include <tuple>
@@ -16,6 +17,8 @@
 #include "noise/reference.h"
 #include "noise/scene.h"
 #include "splat/context_vk.h"
+#include "splat/frame_vk.h"
+#include "splat/renderer_vk.h"
 #include "splat/layout.h"
 
 namespace spot::test {
@@ -104,5 +107,33 @@ inline const noise::Image& referenceImage(const std::string& name, int size, int
     }
     return it->second;
 }
+
+/// A splatting method and its settings, as the tests choose them.
+struct SplatSettings : splat::RenderSettings {
+    splat::Method method = splat::Method::Hybrid;
+};
+
+/// The splatting renderers over one mesh and kernel, rendering impulses the test holds: one frame
+/// per call through splat::renderImpulses (prepare, record, submit, wait, read back).
+class SplatRig {
+public:
+    SplatRig(splat::Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
+        : m_ctx(ctx), m_scene(ctx, mesh, kernel) {}
+    noise::Image render(const noise::Camera& camera, const noise::Shading& shading,
+                        glm::vec3 background, glm::vec3 baseColor, const splat::Buffer& impulses,
+                        std::uint32_t count, const SplatSettings& settings,
+                        splat::FrameStats* stats = nullptr) {
+        auto& r = m_renderers[int(settings.method)];
+        if (!r)
+            r = std::make_unique<splat::SplatRenderer>(m_scene, settings.method);
+        return splat::renderImpulses(m_ctx, *r, splat::View{camera, shading, background, baseColor},
+                                     impulses, count, settings, stats);
+    }
+
+private:
+    splat::Context& m_ctx;
+    splat::SceneGpu m_scene;
+    std::map<int, std::unique_ptr<splat::SplatRenderer>> m_renderers;
+};
 
 } // namespace spot::test

@@ -1,0 +1,228 @@
+#include "pass_vk.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "noise/error.h"
+#include "noise/mesh.h"
+#include "splat/layout.h"
+
+#include "splat_mesh.frag.h"
+#include "splat_prepare.comp.h"
+#include "splat_mesh.vert.h"
+
+namespace spot::splat {
+
+gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
+                                         glm::vec3 baseColor, std::uint32_t count,
+                                         std::uint32_t lobes, float support,
+                                         std::uint32_t kernelSamples, std::uint32_t flags) {
+    const noise::CameraRays rays(camera); // validates the camera
+    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
+    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
+    const glm::dvec3 up = glm::cross(right, forward);
+    const bool ortho = camera.projection == noise::Projection::Orthographic;
+    const double halfHeight =
+        ortho ? 0.5 * camera.orthoHeight : std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
+    const double halfWidth = halfHeight * double(camera.width) / double(camera.height);
+    if (shading.mode == noise::Shading::Mode::Lambert)
+        flags |= gpu_splat::kSplatFlagLambert;
+    gpu_splat::SpotSplatFrame frame{};
+    frame.eye = glm::vec4(glm::vec3(camera.eye), ortho ? 1.0f : 0.0f);
+    frame.forward = glm::vec4(glm::vec3(forward), kNearPlane);
+    frame.right = glm::vec4(glm::vec3(right), float(halfWidth));
+    frame.up = glm::vec4(glm::vec3(up), float(halfHeight));
+    frame.size = glm::vec4(float(camera.width), float(camera.height),
+                           float(rays.pixelFootprint(1.0)), support);
+    frame.counts = glm::uvec4(count, lobes, kernelSamples, flags);
+    frame.light = glm::vec4(shading.lightDir, shading.ambient);
+    frame.base = glm::vec4(baseColor, 0.0f);
+    return frame;
+}
+
+MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_ctx(&ctx) {
+    std::vector<gpu_splat::SpotMeshVertex> vertices(mesh.positions.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+        vertices[i].position = glm::vec4(mesh.positions[i], 1.0f);
+        vertices[i].normal =
+            glm::vec4(i < mesh.normals.size() ? mesh.normals[i] : glm::vec3(0.0f), 0.0f);
+    }
+    m_vertices = Buffer(ctx, vertices.size() * sizeof(gpu_splat::SpotMeshVertex),
+                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, Buffer::Memory::HostVisible,
+                        cat(who, " mesh vertices (", mesh.name, ")"));
+    if (!vertices.empty())
+        m_vertices.upload(std::span<const gpu_splat::SpotMeshVertex>(vertices));
+    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
+    m_indices = Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                       Buffer::Memory::HostVisible, cat(who, " mesh indices (", mesh.name, ")"));
+    if (!mesh.triangles.empty())
+        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
+
+    GraphicsPipelineDesc desc;
+    desc.vertex = spirv(spv_splat_mesh_vert);
+    desc.fragment = spirv(spv_splat_mesh_frag);
+    desc.bindings = {storageBuffer(gpu_splat::kSplatBindVertices)};
+    desc.pushBytes = sizeof(gpu_splat::SpotSplatFrame);
+    desc.colorFormats = {kColorFormat, kScalarFormat};
+    desc.blends = {opaqueBlend(), opaqueBlend()};
+    desc.depthFormat = kDepthFormat;
+    desc.depthTest = true;
+    desc.depthWrite = true;
+    desc.depthCompare = VK_COMPARE_OP_GREATER;
+    m_pipeline = makeGraphicsPipeline(ctx, desc);
+}
+
+void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
+                      const Image& distance, const Image& depth, glm::vec3 background) const {
+    const VkRenderingAttachmentInfo depthInfo = depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+    beginRendering(cmd, base.width(), base.height(),
+                   {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
+                    colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR,
+                                    glm::vec4(gpu_splat::kSplatNoMesh))},
+                   &depthInfo);
+    if (m_indexCount > 0) {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipeline.handle());
+        pushFrame(cmd, m_pipeline, frame);
+        Descriptors().buffer(gpu_splat::kSplatBindVertices, m_vertices).push(*m_ctx, cmd, m_pipeline);
+        vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
+    }
+    vkCmdEndRendering(cmd);
+}
+
+Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who) {
+    if (kernel.lobes.empty() || kernel.lobes.size() > 8)
+        throw InputError(cat(who, ": a kernel needs 1 to 8 lobes, this one has ", kernel.lobes.size()));
+    if (!(kernel.supportSigma > 0.0f) || !std::isfinite(kernel.supportSigma))
+        throw InputError(cat(who, ": support ", kernel.supportSigma, " sigmas must be positive"));
+    const std::vector<gpu::SpotLobe> lobes = gpu::toGpu(kernel);
+    Buffer b(ctx, lobes.size() * sizeof(gpu::SpotLobe), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+             Buffer::Memory::HostVisible, cat(who, " kernel lobes"));
+    b.upload(std::span<const gpu::SpotLobe>(lobes));
+    return b;
+}
+
+void requireFormat(Context& ctx, VkFormat format, VkFormatFeatureFlags features, const char* what) {
+    VkFormatProperties props;
+    vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), format, &props);
+    if ((props.optimalTilingFeatures & features) != features)
+        throw std::runtime_error(cat("Vulkan: device ", ctx.deviceName(), " cannot use format ",
+                                     int(format), " for ", what));
+}
+
+VkPipelineColorBlendAttachmentState opaqueBlend() {
+    VkPipelineColorBlendAttachmentState b{};
+    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                       VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+    return b;
+}
+
+/// dst = src + dst: MB13's weighted sums, and the optical-depth sum that stands for its revealage
+/// (exp(-sum tau) = prod (1 - alpha); see splat_oit.frag). One blend state for both targets:
+/// the context does not enable independentBlend.
+VkPipelineColorBlendAttachmentState additiveBlend() {
+    VkPipelineColorBlendAttachmentState b = opaqueBlend();
+    b.blendEnable = VK_TRUE;
+    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.colorBlendOp = VK_BLEND_OP_ADD;
+    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.alphaBlendOp = VK_BLEND_OP_ADD;
+    return b;
+}
+
+/// Premultiplied "over": dst = src + (1 - src.a) dst (the sorted method, back to front).
+VkPipelineColorBlendAttachmentState overBlend() {
+    VkPipelineColorBlendAttachmentState b = opaqueBlend();
+    b.blendEnable = VK_TRUE;
+    b.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+    b.colorBlendOp = VK_BLEND_OP_ADD;
+    b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+    b.alphaBlendOp = VK_BLEND_OP_ADD;
+    return b;
+}
+
+VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp load,
+                                          glm::vec4 clear) {
+    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    a.imageView = image.view();
+    a.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    a.loadOp = load;
+    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.clearValue.color = {{clear.r, clear.g, clear.b, clear.a}};
+    return a;
+}
+
+VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load) {
+    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    a.imageView = image.view();
+    a.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    a.loadOp = load;
+    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.clearValue.depthStencil = {0.0f, 0}; // reversed depth: 0 is infinitely far
+    return a;
+}
+
+void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    const std::vector<VkRenderingAttachmentInfo>& colors,
+                    const VkRenderingAttachmentInfo* depth) {
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {width, height}};
+    info.layerCount = 1;
+    info.colorAttachmentCount = std::uint32_t(colors.size());
+    info.pColorAttachments = colors.data();
+    info.pDepthAttachment = depth;
+    vkCmdBeginRendering(cmd, &info);
+    const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+    const VkRect2D scissor{{0, 0}, {width, height}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+}
+
+void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame) {
+    const VkShaderStageFlags stages =
+        pipeline.bindPoint() == VK_PIPELINE_BIND_POINT_COMPUTE
+            ? VK_SHADER_STAGE_COMPUTE_BIT
+            : VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+    vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
+}
+
+Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, bool ewa,
+                             bool orthographic) {
+    using namespace gpu_splat;
+    Specialization spec;
+    spec.set(kSplatSpecLobes, lobes)
+        .set(kSplatSpecScreen, screen)
+        .set(kSplatSpecEwa, ewa)
+        .set(kSplatSpecOrthographic, orthographic);
+    return makeComputePipeline(
+        ctx, spirv(spv_splat_prepare_comp),
+        {storageBuffer(kSplatBindImpulses), storageBuffer(kSplatBindLobes),
+         storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes),
+         storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindCount)},
+        sizeof(SpotSplatFrame), spec);
+}
+
+void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
+                   const gpu_splat::SpotSplatFrame& frame, const PrepareBuffers& b,
+                   std::uint32_t capacity) {
+    if (capacity == 0)
+        return;
+    using namespace gpu_splat;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, prepare.handle());
+    pushFrame(cmd, prepare, frame);
+    Descriptors()
+        .buffer(kSplatBindImpulses, *b.impulses)
+        .buffer(kSplatBindCount, *b.count)
+        .buffer(kSplatBindLobes, *b.lobes)
+        .buffer(kSplatBindWorldLobes, *b.worldLobes)
+        .buffer(kSplatBindScreenLobes, *b.screenLobes)
+        .buffer(kSplatBindBounds, *b.bounds)
+        .push(ctx, cmd, prepare);
+    vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
+}
+
+} // namespace spot::splat

@@ -1,0 +1,136 @@
+/// @file pass_vk.h
+/// @brief What the splat renderer and the ray-march share: the frame constants (the camera
+/// basis exactly as noise::CameraRays builds it, so every method's rays are the reference's),
+/// the base mesh and kernel lobes on the GPU, and the small Vulkan helpers of their passes.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "context_vk.h"
+#include "noise/camera.h"
+#include "noise/kernel.h"
+#include "noise/reference.h"
+
+namespace spot::noise {
+struct Mesh;
+}
+
+namespace spot::splat {
+
+namespace gpu_splat {
+using glm::uvec4;
+using glm::vec4;
+#define SPOT_CONST inline constexpr
+#include "shaders/spot_splat.h"
+#undef SPOT_CONST
+static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
+static_assert(sizeof(SpotMeshVertex) == 32);
+static_assert(sizeof(SpotScreenLobe) == 112);
+static_assert(sizeof(SpotKernelBound) == 32);
+static_assert(sizeof(SpotSplatCounters) == 16);
+} // namespace gpu_splat
+
+inline constexpr VkFormat kColorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+inline constexpr VkFormat kScalarFormat = VK_FORMAT_R32_SFLOAT;
+inline constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+/// Near plane of the reversed depth mapping (world units): float depth near / z keeps its
+/// relative precision at every distance, so the near plane can sit this close to the eye.
+inline constexpr float kNearPlane = 1e-4f;
+
+/// Short names for the stages, accesses and layouts the splat and march passes synchronize.
+namespace passes {
+inline constexpr VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+inline constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+inline constexpr VkPipelineStageFlags2 kColorOut = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+inline constexpr VkPipelineStageFlags2 kTests =
+    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+inline constexpr VkPipelineStageFlags2 kFragment = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
+inline constexpr VkPipelineStageFlags2 kTransfer = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
+inline constexpr VkPipelineStageFlags2 kHostStage = VK_PIPELINE_STAGE_2_HOST_BIT;
+inline constexpr VkAccessFlags2 kColorRW =
+    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
+inline constexpr VkAccessFlags2 kDepthRW =
+    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+inline constexpr VkAccessFlags2 kStorageRead = VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
+inline constexpr VkAccessFlags2 kStorageRW =
+    VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+inline constexpr VkImageAspectFlags kColorAspect = VK_IMAGE_ASPECT_COLOR_BIT;
+inline constexpr VkImageLayout kAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+inline constexpr VkImageLayout kGeneral = VK_IMAGE_LAYOUT_GENERAL;
+} // namespace passes
+
+template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_t (&code)[N]) {
+    return {code, N};
+}
+
+/// The frame constants for a camera (units: world; image size in pixels). `flags` are the
+/// method's kSplatFlag* bits (Lambert is added from `shading`).
+gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
+                                         glm::vec3 baseColor, std::uint32_t count,
+                                         std::uint32_t lobes, float support,
+                                         std::uint32_t kernelSamples, std::uint32_t flags);
+
+/// The opaque base mesh on the GPU (vertex pulling) and the pass that draws it first in every
+/// method: its colour (lit as the frame says) over the background, the ray distance t to it
+/// (kSplatNoMesh where none) and a reversed float depth.
+class MeshPass {
+public:
+    /// Uploads the mesh (may be empty) and builds the pipeline; `who` names the buffers.
+    MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who);
+    /// Records the pass into `base` (kColorFormat), `distance` (kScalarFormat) and `depth`
+    /// (kDepthFormat), all in attachment layouts, cleared first. Nothing else changes layout.
+    void record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
+                const Image& distance, const Image& depth, glm::vec3 background) const;
+
+private:
+    Context* m_ctx;
+    Buffer m_vertices, m_indices;
+    std::uint32_t m_indexCount = 0;
+    Pipeline m_pipeline;
+};
+/// The kernel's lobes (gpu::SpotLobe[]); InputError for 0 or more than 8 lobes or a bad support.
+Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who);
+
+void requireFormat(Context& ctx, VkFormat format, VkFormatFeatureFlags features, const char* what);
+VkPipelineColorBlendAttachmentState opaqueBlend();
+/// dst = src + dst.
+VkPipelineColorBlendAttachmentState additiveBlend();
+/// Premultiplied "over": dst = src + (1 - src.a) dst.
+VkPipelineColorBlendAttachmentState overBlend();
+VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp load,
+                                          glm::vec4 clear = glm::vec4(0.0f));
+/// Reversed depth: cleared to 0, infinitely far.
+VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load);
+/// vkCmdBeginRendering over the whole image, with viewport and scissor set.
+void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    const std::vector<VkRenderingAttachmentInfo>& colors,
+                    const VkRenderingAttachmentInfo* depth);
+void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame);
+
+/// The prepare pass (splat_prepare.comp) specialized for a kernel of `lobes` lobes: `screen` for
+/// the splatting methods (screen lobes and kernel bounds too), `ewa` widening, the projection.
+Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, bool ewa,
+                             bool orthographic);
+
+/// What the prepare pass reads and writes. Without `screen`, screenLobes and bounds may be any
+/// storage buffer: nothing is written there.
+struct PrepareBuffers {
+    const Buffer* impulses = nullptr;    ///< gpu::SpotImpulse[capacity]
+    const Buffer* count = nullptr;       ///< uint32: the impulse count
+    const Buffer* lobes = nullptr;       ///< gpu::SpotLobe[lobes]: the kernel
+    const Buffer* worldLobes = nullptr;  ///< gpu::SpotWorldLobe[capacity * lobes]
+    const Buffer* screenLobes = nullptr; ///< gpu_splat::SpotScreenLobe[capacity * lobes]
+    const Buffer* bounds = nullptr;      ///< gpu_splat::SpotKernelBound[capacity]
+};
+
+/// Record the prepare pass over `capacity` impulses (those past the count return at once).
+/// Records nothing for no capacity.
+void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
+                   const gpu_splat::SpotSplatFrame& frame, const PrepareBuffers& buffers,
+                   std::uint32_t capacity);
+
+} // namespace spot::splat
