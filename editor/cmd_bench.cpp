@@ -25,7 +25,6 @@
 #include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/image_compare.h"
-#include "splat/raymarch_vk.h"
 #include "splat/renderer_vk.h"
 
 namespace spot::cmd {
@@ -231,35 +230,12 @@ struct Bench {
         std::uint32_t generated = 0, drawn = 0;
     };
 
-    /// The ray-march renderer of the current scene (made on first use).
-    std::unique_ptr<splat::RaymarchRenderer> marcher;
-
     /// One frame of the scene's persistent frame (impulses regenerated only when the visible cells
     /// or the level of detail change, as in an interactive view).
     Frame render(cli::SceneJob& job, splat::Frame& frame, const noise::Camera& cam,
                  const Variant& v, bool image = true) {
         Frame f;
         const splat::View view{cam, job.scene.shading, job.scene.background, job.scene.baseColor};
-        if (v.method == "raymarch") { // TODO: the ray-march through splat::Frame (registry)
-            const auto start = std::chrono::steady_clock::now();
-            const noise::CameraRays rays(cam);
-            const double h = job.generator->cellSize();
-            const splat::GpuImpulses impulses = frame.generator().generate([&](const noise::SurfaceCell& c) {
-                return rays.boxMayBeVisible(glm::dvec3(c.ijk) * h - h, glm::dvec3(c.ijk + 1) * h + h);
-            });
-            if (!marcher)
-                marcher = std::make_unique<splat::RaymarchRenderer>(ctx, job.mesh, job.generator->kernel());
-            splat::RaymarchSettings rs;
-            rs.steps = v.settings.steps;
-            rs.supersample = v.settings.supersample;
-            splat::RaymarchStats stats;
-            f.image = marcher->render(cam, job.scene.shading, job.scene.background, job.scene.baseColor,
-                                      job.generator->cells(), impulses.impulses, impulses.count, rs, &stats);
-            f.gpuMs = impulses.milliseconds + stats.totalMs;
-            f.drawn = f.generated = impulses.count;
-            f.wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-            return f;
-        }
         const splat::FrameStats stats = frame.render(v.method, view, v.settings, image ? &f.image : nullptr);
         f.gpuMs = stats.gpuMs;
         f.wallMs = stats.wallMs;
@@ -351,7 +327,6 @@ struct Bench {
             refOrbit.push_back(reference(file, job, orbit(job.scene.camera, k, suite.orbitDeg)));
         const double refFlicker = flicker(refOrbit);
         splat::Frame frame(ctx, job.mesh, *job.generator);
-        marcher.reset();
         // The roofline: the same quads over the same pixels with trivial shaders.
         Variant roofline{"oit", "roofline", splatSettings(true, splat::OitWeight::McGuireBavoil, 0)};
         roofline.settings.roofline = true;
@@ -368,7 +343,6 @@ struct Bench {
             rows.push_back(row);
             bar.update(++done, total);
         }
-        marcher.reset(); // it refers to this scene's mesh
     }
 
     /// Milliseconds and memory against visible kernels (the uniform preset on a sphere at rising
@@ -545,7 +519,7 @@ int bench(int argc, char** argv) {
     }
     Bench b{splat::Context(), fs::path(args.str("out")),
             fs::path(args.str("scenes", SPOT_SOURCE_DIR "/presets/scenes")),
-            makeSuite(args.str("suite", "quick")), json::array(), nullptr};
+            makeSuite(args.str("suite", "quick")), json::array()};
     std::error_code ec;
     fs::create_directories(b.out / "cache", ec);
     if (ec)

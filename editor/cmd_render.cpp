@@ -21,7 +21,6 @@
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
-#include "splat/raymarch_vk.h"
 #include "splat/renderer_vk.h"
 
 namespace spot::cmd {
@@ -137,56 +136,13 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
     }
     r.summary = cat(first.kernelsGenerated, " kernels, ", last.counters.kernelsDrawn, " drawn, ",
                     first.gpuMs, " ms GPU");
+    if (method.marching)
+        r.summary += cat(" (", settings.steps, " steps, ", settings.supersample, "x",
+                         settings.supersample, " rays per pixel)");
     if (repeat > 0)
         r.summary += cat(" (", repeat, " warm frames: median ", double(summary(gpu)["median"]),
                          " ms GPU, ", double(summary(wall)["median"]), " ms wall)");
     r.summary += cat(" on ", ctx.deviceName());
-    return r;
-}
-
-Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
-    splat::RaymarchSettings settings;
-    settings.steps = int(args.integer("steps", 32, 1, splat::kRaymarchMaxSteps));
-    settings.supersample = int(args.integer("supersample", 1, 1, splat::kRaymarchMaxSupersample));
-    splat::Context ctx;
-    splat::GpuGenerator generator(ctx, job.mesh, *job.generator);
-    const splat::GpuImpulses impulses =
-        generator.generate([&](const noise::SurfaceCell& cell) { return job.cellVisible(cell); });
-    splat::RaymarchRenderer renderer(ctx, job.mesh, job.generator->kernel());
-    splat::RaymarchStats stats;
-    Rendered r;
-    r.image = renderer.render(job.scene.camera, job.scene.shading, job.scene.background,
-                              job.scene.baseColor, job.generator->cells(), impulses.impulses,
-                              impulses.count, settings, &stats);
-    nlohmann::json passes = nlohmann::json::object();
-    passes["generate"] = impulses.milliseconds;
-    for (const auto& [name, ms] : stats.passMs)
-        passes[name] = ms;
-    const double totalMs = impulses.milliseconds + stats.totalMs;
-    r.kernels = impulses.count;
-    r.seconds = totalMs * 1e-3;
-    r.stats = {{"steps", settings.steps},
-               {"supersample", settings.supersample},
-               {"loop_bound", stats.loopBound},
-               {"max_loop_iterations", stats.maxLoopIterations},
-               {"steps_per_dispatch", stats.stepsPerDispatch},
-               {"dispatches", stats.dispatches},
-               {"shell_cells", stats.shellCells},
-               {"device", ctx.deviceName()},
-               {"kernels_generated", impulses.count},
-               {"kernel_candidates", impulses.candidates},
-               {"kernels_drawn", impulses.count},
-               {"gpu_ms", passes},
-               {"gpu_total_ms", totalMs},
-               {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
-               {"validation_errors", ctx.validation().errors}};
-    if (ctx.validation().errors > 0)
-        throw std::runtime_error(cat(ctx.validation().errors, " Vulkan validation errors, first: ",
-                                     ctx.validation().firstError));
-    r.summary = cat(impulses.count, " kernels, ", settings.steps, " steps in ", stats.dispatches,
-                    stats.dispatches == 1 ? " dispatch, " : " dispatches, ", settings.supersample,
-                    "x", settings.supersample, " rays per pixel, ", totalMs, " ms GPU on ",
-                    ctx.deviceName());
     return r;
 }
 
@@ -195,8 +151,7 @@ Rendered renderRaymarch(const cli::Args& args, cli::SceneJob& job) {
 int render(int argc, char** argv) {
     std::vector<cli::OptionSpec> specs = cli::sceneOptions();
     specs.push_back({"method", "NAME",
-                     "reference (converged CPU ground truth), " + splat::gpuMethodNames() +
-                         ", raymarch",
+                     "reference (converged CPU ground truth), " + splat::gpuMethodNames(),
                      true});
     specs.push_back({"spp", "N", "reference: samples per pixel (default: the scene's)", false});
     specs.push_back({"step-scale", "X", "reference: quadrature step multiplier (default 1)", false});
@@ -217,9 +172,9 @@ int render(int argc, char** argv) {
     }
     const std::string method = args.str("method");
     const splat::MethodInfo* gpuMethod = splat::findGpuMethod(method);
-    if (!gpuMethod && method != "reference" && method != "raymarch")
+    if (!gpuMethod && method != "reference")
         throw InputError(cat("spotshell render: unknown method '", method, "' (reference, ",
-                             splat::gpuMethodNames(), ", raymarch)"));
+                             splat::gpuMethodNames(), ")"));
     const auto threads = args.integer("threads", 0, 0, 1024);
     std::optional<tbb::global_control> threadLimit;
     if (threads > 0)
@@ -228,9 +183,7 @@ int render(int argc, char** argv) {
     const bool reference = method == "reference";
     cli::SceneJob job = cli::prepareScene(args, reference);
     const std::string out = args.str("out");
-    Rendered r = gpuMethod   ? renderGpu(args, job, *gpuMethod)
-                 : reference ? renderReference(args, job)
-                             : renderRaymarch(args, job); // TODO: raymarch into the registry
+    Rendered r = gpuMethod ? renderGpu(args, job, *gpuMethod) : renderReference(args, job);
 
     std::map<std::string, std::string> metadata = {{"method", method},
                                                    {"scene", job.scene.name},

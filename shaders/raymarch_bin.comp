@@ -1,10 +1,10 @@
 #version 450
-// Ray march, step 1: which impulses each shell cell holds. One invocation per impulse: its cell's
-// record (the shared hash lookup), then first index, end index and count per record with integer
-// atomics (order independent, so deterministic). The host reads them back, checks the impulses
-// are in cell order (each cell's impulses contiguous, cells in the shell's sorted order) and
-// builds every record's 27-neighbour ranges. Also each impulse's box (SpotMarchBox), from its
-// world lobes.
+// Ray march, step 1 (run when the impulses change): which impulses each shell cell holds. One
+// invocation per impulse: its cell's record (the shared hash lookup), then first index, end index
+// and count per record with integer atomics (order independent, so deterministic). The host reads
+// them back, checks the impulses are in cell order (each cell's impulses contiguous, cells in the
+// shell's sorted order) and builds every sub-cell's impulse list. Also each impulse's box
+// (SpotMarchBox), from its world lobes, which the host reads for the lists.
 #extension GL_GOOGLE_include_directive : require
 #include "spot_shared.h"
 #include "spot_layout.h"
@@ -12,17 +12,17 @@
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Params { SpotMarchParams params; };
-layout(std430, binding = 1) readonly buffer Table { ivec4 table[]; };
-layout(std430, binding = 2) readonly buffer Impulses { SpotImpulse impulses[]; };
+layout(std430, binding = kMarchBindParams) readonly buffer Params { SpotMarchParams params; };
+layout(std430, binding = kMarchBindTable) readonly buffer Table { ivec4 table[]; };
+layout(std430, binding = kMarchBindImpulses) readonly buffer Impulses { SpotImpulse impulses[]; };
+layout(std430, binding = kMarchBindCount) readonly buffer Count { uint impulseCount; };
 // [0, n): first impulse (0xffffffff: none); [n, 2n): one past the last; [2n, 3n): count;
-// [3n]: impulses whose cell is not in the shell (n = records).
-layout(std430, binding = 3) buffer Bins { uint bins[]; };
-layout(std430, binding = 4) readonly buffer Lobes { SpotWorldLobe lobes[]; };
-layout(std430, binding = 5) writeonly buffer Boxes { SpotMarchBox boxes[]; };
+// [3n]: impulses whose cell is not in the shell; [3n + 1]: the impulse count (n = records).
+layout(std430, binding = kMarchBindBins) buffer Bins { uint bins[]; };
+layout(std430, binding = kMarchBindWorldLobes) readonly buffer Lobes { SpotWorldLobe lobes[]; };
+layout(std430, binding = kMarchBindBoxes) writeonly buffer Boxes { SpotMarchBox boxes[]; };
 
 layout(push_constant) uniform Push {
-    uint count;   // impulses
     uint records; // shell cells
 } pc;
 
@@ -34,7 +34,9 @@ ivec4 marchSlot(uint i) { return table[i]; }
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= pc.count)
+    if (i == 0u)
+        bins[3u * pc.records + 1u] = impulseCount;
+    if (i >= impulseCount)
         return;
     uint lobeCount = params.counts.y;
     float k = params.grid.z;

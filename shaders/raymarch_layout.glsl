@@ -1,41 +1,56 @@
-/* raymarch_layout.glsl: the ray-march renderer's structs and constants, shared by C++ and GLSL
- * (splat/raymarch_vk.h, raymarch_shared.glsl and the raymarch_*.comp shaders).
+/* raymarch_layout.glsl: the ray-march renderer's structs, push constants, bindings,
+ * specialization constants and constants, shared by C++ and GLSL (splat/raymarch_vk.h,
+ * raymarch_shared.glsl and the raymarch_*.comp shaders). C++ and GLSL name bindings and
+ * specialization constants by these constants, never by number.
  *
- * Same rules as spot_layout.h: 16-byte members only, so std430 layout equals the C++ layout;
- * splat/raymarch_vk.h includes this file inside a namespace with glm types and static_asserts the
- * sizes. Units: world units; cell (i, j, k) spans [i h, (i + 1) h) x ... (noise/cells.h).
+ * Same rules as spot_layout.h: 16-byte members only, so std430 (and push-constant) layout equals
+ * the C++ layout; splat/raymarch_vk.h includes this file inside a namespace with glm types and
+ * static_asserts the sizes. Units: world units; cell (i, j, k) spans [i h, (i + 1) h) x ...
+ * (noise/cells.h).
  *
  * The "shell" is the set of cells where any kernel can have density: the surface cells dilated
  * by one cell (a kernel centred in a cell reaches only its 3x3x3 neighbourhood, DESIGN section
- * 2). Every shell cell has a record listing the impulses of its 27 neighbours; an open-addressing
- * hash table maps a cell's ijk to its record.
+ * 2). An open-addressing hash table maps a shell cell's ijk to its record. Each shell cell is cut
+ * into kMarchSub^3 sub-cells, and each sub-cell lists the impulses of the cell's 27 neighbours
+ * that may have density in it (their SpotMarchBox reaches it); the march sums only those, in
+ * impulse order (the list is a subset, in the same order, of the 27 neighbours' impulses, and
+ * each impulse it leaves out has exactly zero density there).
  */
 #ifndef SPOT_CONST
 #define SPOT_CONST const
 #endif
 
-/* Everything the march reads besides the buffers (one storage buffer: the push constants are
- * full with SpotSplatFrame, which the march shares with the mesh pass). */
+/* What every march pass reads besides the frame: depends only on the shell and the kernel, so it
+ * is written when the impulses change (one storage buffer). */
 struct SpotMarchParams {
     vec4 grid;    /* x: cell size h; y: 1 / h; z: lobe support k (sigmas); w: unused */
     ivec4 lo;     /* xyz: smallest shell cell index; w: hash table mask (capacity - 1) */
     ivec4 hi;     /* xyz: largest shell cell index (inclusive); w: longest probe, in slots past a
                      key's home slot (a lookup examines at most hi.w + 1 slots) */
-    uvec4 counts; /* x: steps N per pixel; y: lobes per impulse; z: walk cap (cells a ray can cross
-                     in the shell's bounding box); w: kMarchFlag* bits */
-    vec4 light;   /* xyz: unit direction towards the light (world); w: ambient in [0, 1] */
-    uvec4 range;  /* x: first step this dispatch takes; y: one past its last step (a march is
-                     split over dispatches so that no invocation loops past lavapipe's limit);
-                     z: supersampling n (n x n rays per output pixel); w: unused */
+    uvec4 counts; /* x: unused; y: lobes per impulse; z: walk cap (cells a ray can cross in the
+                     shell's bounding box); w: unused */
 };
 
-/* One shell cell: the impulses of its 27 neighbour cells as ranges of the impulse array (impulses
- * are in cell order, so the three cells (i + di, j + dj, k - 1 .. k + 1) of one column are one
- * contiguous range: at most 9 ranges, none empty). 96 bytes. */
+/* The push constants of the march and its resolve (112 bytes of lavapipe's 128). The camera is
+ * SpotSplatFrame's (spot_splat.h), at the march's resolution: the output image's n times a side. */
+struct SpotMarchPush {
+    vec4 eye;     /* xyz: camera position; w: 1 orthographic, 0 perspective */
+    vec4 forward; /* xyz: unit view direction; w: unused */
+    vec4 right;   /* xyz: unit right axis; w: half width of the view at unit depth (perspective)
+                     or in world units (orthographic) */
+    vec4 up;      /* xyz: unit up axis (image rows grow downwards); w: half height, likewise */
+    vec4 size;    /* x, y: march image width, height (pixels); z, w: unused */
+    vec4 light;   /* xyz: unit direction towards the light (world); w: ambient in [0, 1] */
+    uvec4 range;  /* x: first step this dispatch takes; y: one past its last step (a march is split
+                     over dispatches so that no invocation loops past lavapipe's limit); z: steps N
+                     per ray; w: supersampling n (n x n rays per output pixel) */
+};
+
+/* One shell cell. 16 bytes. */
 struct SpotMarchCell {
-    uvec4 head;     /* x: range count (<= 9); y: impulses in all ranges; z, w: unused */
-    uvec4 range[5]; /* (first impulse, impulse count) pairs: range r is range[r / 2] components
-                       2 (r % 2) and 2 (r % 2) + 1 */
+    uvec4 head; /* x: impulses in the cell's 27 neighbours (0: the march's segments leave the cell
+                   out: no kernel can reach it); y: impulses listed over its sub-cells; z, w:
+                   unused */
 };
 
 /* The world box outside which every lobe of one impulse has zero density (each lobe's support
@@ -47,9 +62,34 @@ struct SpotMarchBox {
     vec4 hi; /* xyz: largest corner; w: unused */
 };
 
-/* SpotMarchParams.counts.w bits. */
-SPOT_CONST uint kMarchFlagLambert = 1u;   /* Lambert + ambient shading, else unlit */
-SPOT_CONST uint kMarchFlagNoCulling = 2u; /* evaluate every impulse's lobes, box or not (tests) */
+/* Descriptor bindings (one numbering for the bin, march and resolve pipelines; each declares the
+ * ones it reads). */
+SPOT_CONST uint kMarchBindParams = 0u;       /* SpotMarchParams */
+SPOT_CONST uint kMarchBindTable = 1u;        /* ivec4[]: hash slots (i, j, k, record or -1) */
+SPOT_CONST uint kMarchBindCells = 2u;        /* SpotMarchCell[record] */
+SPOT_CONST uint kMarchBindSpans = 3u;        /* uvec2[record * kMarchSub^3 + sub-cell]: (first
+                                                list entry, entries) */
+SPOT_CONST uint kMarchBindList = 4u;         /* uint[]: impulse indices, ascending per span */
+SPOT_CONST uint kMarchBindWorldLobes = 5u;   /* SpotWorldLobe[impulse * lobes + l] */
+SPOT_CONST uint kMarchBindBoxes = 6u;        /* SpotMarchBox[impulse] */
+SPOT_CONST uint kMarchBindMeshDistance = 7u; /* r32f image: ray distance to the mesh */
+SPOT_CONST uint kMarchBindBase = 8u;         /* rgba32f image: the mesh colour behind each ray */
+SPOT_CONST uint kMarchBindState = 9u;        /* vec4[march pixel]: radiance, transmittance */
+SPOT_CONST uint kMarchBindLoops = 10u;       /* uint[1 + march pixels]: the most loops of any
+                                                invocation, then per pixel */
+SPOT_CONST uint kMarchBindResult = 11u;      /* rgba32f image: the frame's result */
+SPOT_CONST uint kMarchBindImpulses = 12u;    /* SpotImpulse[] (bin) */
+SPOT_CONST uint kMarchBindCount = 13u;       /* uint: the impulse count (bin) */
+SPOT_CONST uint kMarchBindBins = 14u;        /* uint[]: per record first, end, count (bin) */
+
+/* Specialization constant ids (the march and resolve are compiled per setting). */
+SPOT_CONST uint kMarchSpecLobes = 0u;   /* uint: lobes per kernel, 1..8 */
+SPOT_CONST uint kMarchSpecLambert = 1u; /* bool: Lambert + ambient shading, else unlit */
+SPOT_CONST uint kMarchSpecCull = 2u;    /* bool: skip impulses whose box misses the sample */
+
+/* Sub-cells per cell side: each shell cell's impulse lists are kept per sub-cell. */
+SPOT_CONST uint kMarchSub = 4u;
+SPOT_CONST uint kMarchSubCells = 64u; /* kMarchSub^3 */
 
 /* Shell segments kept per ray: entering and leaving the shell more often than this merges the
  * rest into the last segment (its gaps are sampled too, and find no density there). */
@@ -61,8 +101,8 @@ SPOT_CONST float kMarchOpaque = 1e-6;
 /* "No boundary along this axis" and "no mesh" distances, world units. */
 SPOT_CONST float kMarchFar = 3.0e38;
 
-/* Hash table slot marking an empty slot (SpotMarchParams table entries are ivec4(i, j, k, record),
- * record < 0 when empty). */
+/* Hash table slot marking an empty slot (table entries are ivec4(i, j, k, record), record < 0
+ * when empty). */
 SPOT_CONST int kMarchEmptySlot = -1;
 
 /* lavapipe (Mesa 22.3) stops every shader invocation after this many loop iterations in total,

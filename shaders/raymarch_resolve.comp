@@ -3,22 +3,23 @@
 // reference's), each the marched radiance over the mesh colour behind it:
 // radiance + transmittance * base. Summed in row order, so the image is deterministic.
 #extension GL_GOOGLE_include_directive : require
-#include "splat_common.glsl"
+#include "spot_shared.h"
+#include "spot_layout.h"
 #include "raymarch_layout.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(std430, binding = 0) readonly buffer Params { SpotMarchParams params; };
-layout(binding = 4, rgba32f) uniform readonly image2D baseColor;
-layout(std430, binding = 6) readonly buffer State { vec4 state[]; };
-layout(std430, binding = 8) writeonly buffer Result { vec4 result[]; };
+layout(push_constant) uniform Push { SpotMarchPush push; };
+
+layout(binding = kMarchBindBase, rgba32f) uniform readonly image2D baseColor;
+layout(std430, binding = kMarchBindState) readonly buffer State { vec4 state[]; };
+layout(binding = kMarchBindResult, rgba32f) uniform writeonly image2D result;
 
 void main() {
-    uint n = params.range.z;
-    uint marchWidth = uint(frame.size.x);
-    uint width = marchWidth / n;
+    uint n = push.range.w;
+    uint marchWidth = uint(push.size.x);
     uvec2 p = gl_GlobalInvocationID.xy;
-    if (p.x >= width || p.y >= uint(frame.size.y) / n)
+    if (p.x >= marchWidth / n || p.y >= uint(push.size.y) / n)
         return;
     vec3 sum = vec3(0.0);
     for (uint sy = 0u; sy < n; ++sy)
@@ -27,5 +28,5 @@ void main() {
             vec4 s = state[q.y * marchWidth + q.x];
             sum += s.rgb + s.a * imageLoad(baseColor, ivec2(q)).rgb;
         }
-    result[p.y * width + p.x] = vec4(sum / float(n * n), 1.0);
+    imageStore(result, ivec2(p), vec4(sum / float(n * n), 1.0));
 }

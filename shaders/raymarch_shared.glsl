@@ -6,8 +6,9 @@
  * raymarch_layout.glsl; the includer provides the data accessors
  *   SpotMarchParams marchParams(); ivec4 marchSlot(uint i);
  * and, unless RAYMARCH_LOOKUP_ONLY is defined,
- *   SpotMarchCell marchCell(uint record); SpotWorldLobe marchLobe(uint i);
- *   SpotMarchBox marchBox(uint impulse).
+ *   SpotMarchCell marchCell(uint record); uvec2 marchSpan(uint subCell); uint marchEntry(uint i);
+ *   SpotWorldLobe marchLobe(uint i); SpotMarchBox marchBox(uint impulse); vec4 marchLight()
+ * (SpotMarchPush::light), and the specialization constants kMarchLobes (uint), kMarchLambert and kMarchCull (bool).
  *
  * Loop accounting. lavapipe stops an invocation after 65,535 loop iterations in total, counted
  * per SIMD vector of invocations: a loop runs while any lane of the vector is still in it, and
@@ -17,8 +18,8 @@
  * any lane can reach in each loop, which bounds the vector's count too: each pass of an outer
  * loop runs an inner loop at most as often as its largest per-lane count allows. (Where lanes
  * skip different impulses by their boxes, the vector runs the lobe loop of every impulse some lane
- * enters, more than any one lane counts; the bound charges the lobe loop of every impulse, so it
- * holds all the same.)
+ * enters, more than any one lane counts; the bound charges the lobe loop of every listed impulse,
+ * so it holds all the same.)
  */
 
 /* Home slot of cell q in the hash table (before the mask). */
@@ -51,6 +52,15 @@ SPOT_FN int marchFind(ivec3 q, SPOT_INOUT(uint) loops) {
 }
 
 #ifndef RAYMARCH_LOOKUP_ONLY
+
+/* The ray through continuous pixel position (px, py) of the march image (pixels, (0, 0)
+ * top-left), as noise::CameraRays and splatPixelRay build it: world origin and unit direction. */
+SPOT_FN void marchPixelRay(SpotMarchPush f, float px, float py, SPOT_OUT(vec3) o, SPOT_OUT(vec3) d) {
+    float sx = 2.0f * px / f.size.x - 1.0f;
+    float sy = 1.0f - 2.0f * py / f.size.y;
+    spotCameraRay(vec3(f.eye), vec3(f.forward), vec3(f.right) * f.right.w, vec3(f.up) * f.up.w,
+                  f.eye.w > 0.5f, sx, sy, o, d);
+}
 
 /* The parts of a ray inside the shell, front to back. */
 struct MarchSegments {
@@ -121,7 +131,7 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
         float tb = min(tn, t1);
         if (tb > tc) {
             int record = marchFind(c, loops);
-            if (record >= 0 && marchCell(uint(record)).head.y > 0u) {
+            if (record >= 0 && marchCell(uint(record)).head.x > 0u) {
                 if (s.count > 0u && s.seg[s.count - 1u].y >= tc) {
                     s.span += tb - s.seg[s.count - 1u].y; // adjacent: extend
                     s.seg[s.count - 1u].y = tb;
@@ -157,22 +167,22 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
 /* Paper eq. 7-9 along the ray o + t d (unit d) up to tEnd (the opaque mesh, or kMarchFar): N
  * samples evenly spaced over the ray's shell segments (midpoints of N equal steps of the segments
  * laid end to end); at each, the density (extinction) and extinction-weighted colour of every
- * lobe of the 27 neighbour cells' impulses (those whose box holds the sample: the others add
- * exactly zero), composited front to back with the 0-order attenuation
- * alpha = 1 - exp(-sigma dt). With Lambert shading the normal is the normalized negative gradient
- * of the summed density (the reference's).
+ * lobe of the 27 neighbour cells' impulses, composited front to back with the 0-order
+ * attenuation alpha = 1 - exp(-sigma dt). Only the impulses the sample's sub-cell lists are
+ * visited (with kMarchCull, also only those whose box holds the sample): every other one adds
+ * exactly zero, and the sums run in impulse order either way. With Lambert shading the normal is
+ * the normalized negative gradient of the summed density (the reference's).
  *
  * This call takes steps [first, end) of the N, continuing from `state` (radiance, transmittance:
  * (0, 0, 0, 1) before step 0) and returning the state after them, so a march can be split over
  * several invocations: the arithmetic, and so the result, is the same however it is split. Costs
  * at most marchShell's loops + 1 + (end - first) (1 + segments + longest probe + 2 + 1 +
- * neighbourhood impulses (lobes per impulse + 2)). */
-SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, vec4 state,
+ * listed impulses (lobes per impulse + 2)). */
+SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint steps, vec4 state,
                       SPOT_INOUT(uint) loops) {
     SpotMarchParams p = marchParams();
     vec3 radiance = vec3(state.x, state.y, state.z);
     float transmittance = state.w;
-    uint steps = p.counts.x;
     if (!(transmittance > kMarchOpaque) || first >= end || steps == 0u)
         return state;
     MarchSegments s = marchShell(o, d, tEnd, loops);
@@ -180,10 +190,12 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, vec4 sta
         return state;
     float dt = s.span / float(steps);
     float k = p.grid.z;
-    uint lobes = p.counts.y;
-    bool lit = (p.counts.w & kMarchFlagLambert) != 0u;
+    float subScale = p.grid.y * float(kMarchSub);
     uint seg = 0u;
     float segStart = 0.0f; // shell length before segment `seg`
+    // The last cell looked up (consecutive samples often share one): its index and record.
+    ivec3 lastCell = ivec3(p.hi) + ivec3(1);
+    int record = -1;
     loops += 1u;
     for (uint j = first; j < min(end, steps) && transmittance > kMarchOpaque; ++j) {
         loops += 1u;
@@ -196,43 +208,36 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, vec4 sta
         }
         float t = clamp(s.seg[seg].x + (sj - segStart), s.seg[seg].x, s.seg[seg].y);
         vec3 x = o + t * d;
-        int record = marchFind(ivec3(floor(x * p.grid.y)), loops);
+        ivec3 cell = ivec3(floor(x * p.grid.y));
+        if (cell.x != lastCell.x || cell.y != lastCell.y || cell.z != lastCell.z) {
+            lastCell = cell;
+            record = marchFind(cell, loops);
+        }
         if (record < 0)
             continue;
-        SpotMarchCell cell = marchCell(uint(record));
-        // The impulses of the neighbourhood in one flat loop (its cost is the impulse count,
-        // whatever the ranges); ranges are never empty, so one advance reaches the next.
-        uint total = cell.head.y;
-        uint r = 0u;
-        uint next = cell.range[0].x;
-        uint left = cell.range[0].y;
-        bool cull = (p.counts.w & kMarchFlagNoCulling) == 0u;
+        // The sample's sub-cell (rounding may put it a hair past the cell: the lists were built
+        // with a margin, so the nearest sub-cell of the cell lists every impulse that counts).
+        ivec3 sub = clamp(ivec3(floor(x * subScale)) - cell * int(kMarchSub), ivec3(0),
+                          ivec3(int(kMarchSub) - 1));
+        uvec2 span = marchSpan(uint(record) * kMarchSubCells +
+                               uint((sub.x * int(kMarchSub) + sub.y) * int(kMarchSub) + sub.z));
         float sigma = 0.0f;
         vec3 emitted = vec3(0.0f);
         vec3 gradient = vec3(0.0f); // of -density: points out of the strands
         loops += 1u;
-        for (uint n = 0u; n < total; ++n) {
+        for (uint e = span.x; e < span.x + span.y; ++e) {
             loops += 1u;
-            if (left == 0u) {
-                r += 1u;
-                uvec4 pair = cell.range[r >> 1u];
-                bool odd = (r & 1u) != 0u;
-                next = odd ? pair.z : pair.x;
-                left = odd ? pair.w : pair.y;
-            }
-            uint impulse = next;
-            next += 1u;
-            left -= 1u;
-            if (cull) {
+            uint impulse = marchEntry(e);
+            if (kMarchCull) {
                 SpotMarchBox box = marchBox(impulse);
                 if (x.x < box.lo.x || x.y < box.lo.y || x.z < box.lo.z || x.x > box.hi.x ||
                     x.y > box.hi.y || x.z > box.hi.z)
                     continue;
             }
             loops += 1u;
-            for (uint l = 0u; l < lobes; ++l) {
+            for (uint l = 0u; l < kMarchLobes; ++l) {
                 loops += 1u;
-                SpotWorldLobe w = marchLobe(impulse * lobes + l);
+                SpotWorldLobe w = marchLobe(impulse * kMarchLobes + l);
                 if (!(w.color.w > 0.0f))
                     continue;
                 mat3 A = mat3(vec3(w.a0), vec3(w.a1), vec3(w.a2));
@@ -242,7 +247,7 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, vec4 sta
                     continue;
                 sigma += rho;
                 emitted += rho * vec3(w.color);
-                if (lit)
+                if (kMarchLambert)
                     gradient += rho * (transpose(A) * u);
             }
         }
@@ -250,10 +255,10 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, vec4 sta
             continue;
         float alpha = spotOneMinusExp(sigma * dt);
         vec3 color = emitted / sigma;
-        if (lit) {
+        if (kMarchLambert) {
             float len = length(gradient);
             vec3 normal = len > 0.0f && len < kMarchFar ? gradient / len : -d;
-            color *= spotLambertFactor(normal, vec3(p.light), p.light.w);
+            color *= spotLambertFactor(normal, vec3(marchLight()), marchLight().w);
         }
         radiance += transmittance * alpha * color;
         transmittance *= 1.0f - alpha;

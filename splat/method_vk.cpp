@@ -4,6 +4,7 @@
 
 #include "noise/error.h"
 #include "noise/mesh.h"
+#include "splat/raymarch_vk.h"
 #include "splat/renderer_vk.h"
 
 namespace spot::splat {
@@ -62,6 +63,12 @@ const std::vector<MethodInfo>& gpuMethods() {
         splat(Method::Oit, "weighted blended OIT EWA splatting (paper eq. 10-12)");
         splat(Method::Hybrid, "oit plus the closest kernel composited over it (paper eq. 13)");
         splat(Method::Sorted, "kernels sorted by depth, composited back to front");
+        m.push_back({"raymarch",
+                     "the baseline: each pixel's ray marched through the shell, the neighbouring "
+                     "kernels summed at every step (paper eq. 7-9)",
+                     false, true, [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
+                         return std::make_unique<RaymarchRenderer>(scene);
+                     }});
         return m;
     }();
     return methods;

@@ -10,7 +10,6 @@
 #include <thread>
 
 #include "noise/error.h"
-#include "noise/mesh.h"
 #include "noise/system.h"
 #include "shaders/spot_shared.hpp"
 #include "splat/layout.h"
@@ -19,45 +18,54 @@
 #include "raymarch_bin.comp.h"
 #include "raymarch_march.comp.h"
 #include "raymarch_resolve.comp.h"
-#include "splat_prepare.comp.h"
-
-namespace spot::splat {
-
-
-} // namespace spot::splat
 
 namespace spot::shared::f32 {
 
 using gpu::SpotWorldLobe;
 using splat::gpu_march::kMarchFar;
-using splat::gpu_march::kMarchFlagLambert;
-using splat::gpu_march::kMarchFlagNoCulling;
-using splat::gpu_march::SpotMarchBox;
 using splat::gpu_march::kMarchMaxSegments;
 using splat::gpu_march::kMarchOpaque;
+using splat::gpu_march::kMarchSub;
+using splat::gpu_march::kMarchSubCells;
+using splat::gpu_march::SpotMarchBox;
 using splat::gpu_march::SpotMarchCell;
 using splat::gpu_march::SpotMarchParams;
+using splat::gpu_march::SpotMarchPush;
 
 /// shaders/raymarch_shared.glsl compiled for the CPU: the march the GPU runs, as member functions
-/// reading host arrays (the pattern of noise/generator_shared.h).
+/// reading host arrays (the pattern of noise/generator_shared.h), with the pipeline's
+/// specialization constants as members.
 class MarchTwin {
 public:
     struct Arrays {
         const SpotMarchParams* params = nullptr;
         const glm::ivec4* table = nullptr;
         const SpotMarchCell* cells = nullptr;
+        const glm::uvec2* spans = nullptr;
+        const std::uint32_t* list = nullptr;
         const SpotWorldLobe* lobes = nullptr;
         const SpotMarchBox* boxes = nullptr;
+        glm::vec4 light{0.0f};
+        std::uint32_t lobeCount = 1;
+        bool lambert = false, cull = true;
     };
-    explicit MarchTwin(const Arrays& arrays) : m_a(arrays) {}
+    explicit MarchTwin(const Arrays& arrays)
+        : m_a(arrays), kMarchLobes(arrays.lobeCount), kMarchLambert(arrays.lambert),
+          kMarchCull(arrays.cull) {}
 
 private:
     Arrays m_a;
+    uint kMarchLobes;
+    bool kMarchLambert;
+    bool kMarchCull;
     const SpotMarchParams& marchParams() const { return *m_a.params; }
     glm::ivec4 marchSlot(uint i) const { return m_a.table[i]; }
     const SpotMarchCell& marchCell(uint record) const { return m_a.cells[record]; }
+    glm::uvec2 marchSpan(uint subCell) const { return m_a.spans[subCell]; }
+    uint marchEntry(uint i) const { return m_a.list[i]; }
     const SpotWorldLobe& marchLobe(uint i) const { return m_a.lobes[i]; }
     const SpotMarchBox& marchBox(uint impulse) const { return m_a.boxes[impulse]; }
+    glm::vec4 marchLight() const { return m_a.light; }
 
 public:
 #define SPOT_FN
@@ -77,10 +85,7 @@ namespace spot::splat {
 
 namespace {
 
-using gpu_march::SpotMarchBox;
-using gpu_march::SpotMarchCell;
-using gpu_march::SpotMarchParams;
-using gpu_splat::SpotMeshVertex;
+using namespace gpu_march;
 using gpu_splat::SpotSplatFrame;
 using shared::f32::MarchTwin;
 
@@ -91,6 +96,13 @@ constexpr std::uint32_t kMaxImpulses = 65535u * 64u;
 /// per lookup, so a short probe matters more than memory).
 constexpr std::int32_t kWantedProbe = 8;
 constexpr int kTableGrowths = 4;
+constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
+constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
+/// Bytes per march pixel: base colour, mesh distance, depth, state, loop count; per output pixel:
+/// the result.
+constexpr std::uint64_t kBytesPerMarchPixel = 16 + 4 + 4 + 16 + 4;
+constexpr std::uint64_t kBytesPerPixel = 16;
 
 /// 91234 -> "91,234".
 std::string withCommas(std::uint64_t n) {
@@ -127,17 +139,32 @@ std::uint64_t fingerprint(const noise::SurfaceCells& cells) {
     return h;
 }
 
+double since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+        .count();
+}
+
+/// floor(a / b) for b > 0.
+int floorDiv(int a, int b) {
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+/// Grow-only with a margin, so a size creeping up does not reallocate every frame.
+std::uint64_t grownSize(std::uint64_t need) {
+    return std::max<std::uint64_t>(need + need / 4, 16);
+}
+
 } // namespace
 
 std::uint64_t raymarchLoopBound(std::uint64_t steps, std::uint64_t walkCells,
-                                std::uint64_t longestProbe, std::uint64_t neighbourhoodImpulses,
+                                std::uint64_t longestProbe, std::uint64_t listedImpulses,
                                 std::uint64_t lobesPerImpulse) {
     // raymarch_shared.glsl: marchShell costs 1 + W (1 + marchFind), marchFind at most P + 2;
     // marchRay adds 1 + N (1 + (1 + S - 1) + marchFind + 1 + T (1 + 1 + L)).
     const std::uint64_t find = longestProbe + 2;
     const std::uint64_t walk = 1 + walkCells * (1 + find);
-    const std::uint64_t perStep = 1 + gpu_march::kMarchMaxSegments + find + 1 +
-                                  neighbourhoodImpulses * (2 + lobesPerImpulse);
+    const std::uint64_t perStep =
+        1 + gpu_march::kMarchMaxSegments + find + 1 + listedImpulses * (2 + lobesPerImpulse);
     return walk + 1 + steps * perStep;
 }
 
@@ -210,7 +237,7 @@ const RaymarchRenderer::Shell& RaymarchRenderer::shellFor(const noise::SurfaceCe
     while (capacity < 2 * std::uint64_t(shell->cells.size()))
         capacity *= 2;
     const SpotMarchParams none{};
-    MarchTwin hasher(MarchTwin::Arrays{&none, nullptr, nullptr, nullptr});
+    MarchTwin hasher(MarchTwin::Arrays{&none});
     for (int growth = 0;; ++growth, capacity *= 2) {
         shell->table.assign(capacity, glm::ivec4(0, 0, 0, gpu_march::kMarchEmptySlot));
         shell->mask = std::uint32_t(capacity - 1);
@@ -229,232 +256,228 @@ const RaymarchRenderer::Shell& RaymarchRenderer::shellFor(const noise::SurfaceCe
         if (shell->longestProbe <= kWantedProbe || growth == kTableGrowths)
             break;
     }
+    // The old shell's table is freed only once the new one fits (a refused frame keeps it).
+    const std::uint64_t tableBytes = shell->table.size() * sizeof(glm::ivec4);
+    const std::uint64_t held = m_shell ? m_shell->tableBuffer.reservedBytes() : 0;
+    if (m_ctx.allocatedBytes() - held + tableBytes > m_ctx.memoryBudget())
+        throw InputError(cat("raymarch: the hash table of ", shell->cells.size(),
+                             " shell cells needs ", tableBytes >> 20, " MiB of GPU memory; ",
+                             (m_ctx.allocatedBytes() - held) >> 20,
+                             " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
+                             " MiB; reduce the cell count"));
+    m_shell.reset();
     shell->tableBuffer =
-        Buffer(m_ctx, shell->table.size() * sizeof(glm::ivec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-               Buffer::Memory::HostVisible,
+        Buffer(m_ctx, tableBytes, kStorage, kHost,
                cat("ray march cell table (", shell->cells.size(), " shell cells)"));
     shell->tableBuffer.upload(std::span<const glm::ivec4>(shell->table));
     m_shell = std::move(shell);
     return *m_shell;
 }
 
-RaymarchRenderer::RaymarchRenderer(Context& ctx, const noise::Mesh& mesh,
-                                   const noise::Kernel& kernel)
-    : m_ctx(ctx), m_meshPass(ctx, mesh, "raymarch"), m_binTimes(ctx, 4), m_marchTimes(ctx, 3) {
-    m_lobes = uploadKernelLobes(ctx, kernel, "raymarch renderer");
-    m_lobeCount = std::uint32_t(kernel.lobes.size());
-    m_support = kernel.supportSigma;
-
-    const std::uint32_t push = sizeof(SpotSplatFrame);
-    // TODO(binding names): these numbers are the shaders' bindings by position.
-    auto buffers = [](std::uint32_t n) {
-        Bindings b;
-        for (std::uint32_t i = 0; i < n; ++i)
-            b.push_back(storageBuffer(i));
-        return b;
-    };
-    m_bin = makeComputePipeline(ctx, spirv(spv_raymarch_bin_comp), buffers(6), 2 * sizeof(std::uint32_t));
-    // One layout for the march and its resolve (each pushes the bindings it reads): 0 params,
-    // 1 hash table, 2 neighbourhoods, 3 world lobes, 4 base colour, 5 mesh distance, 6 march
-    // state, 7 loop counts, 8 result, 9 impulse boxes.
-    Bindings marchBindings = buffers(10);
-    marchBindings[4] = storageImage(4);
-    marchBindings[5] = storageImage(5);
-    m_march = makeComputePipeline(ctx, spirv(spv_raymarch_march_comp), marchBindings, push);
-    m_resolve = makeComputePipeline(ctx, spirv(spv_raymarch_resolve_comp), marchBindings, push);
+RaymarchRenderer::RaymarchRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scene.context()) {
+    requireFormat(m_ctx, kColorFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "stored RGBA32F targets");
+    requireFormat(m_ctx, kScalarFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "stored R32F targets");
+    requireFormat(m_ctx, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth");
+    // World lobes only (no screen outputs, no EWA: they depend on the impulses alone).
+    m_prepare = makePreparePipeline(m_ctx, m_scene.lobeCount(), false, false, false);
+    m_bin = makeComputePipeline(m_ctx, spirv(spv_raymarch_bin_comp),
+                                {storageBuffer(kMarchBindParams), storageBuffer(kMarchBindTable),
+                                 storageBuffer(kMarchBindImpulses), storageBuffer(kMarchBindCount),
+                                 storageBuffer(kMarchBindBins), storageBuffer(kMarchBindWorldLobes),
+                                 storageBuffer(kMarchBindBoxes)},
+                                sizeof(std::uint32_t));
+    m_params = Buffer(m_ctx, sizeof(SpotMarchParams), kStorage, kHost, "ray march parameters");
+    m_prepareUnused =
+        Buffer(m_ctx, 16, kStorage, kDevice, "ray march prepare: unused screen outputs");
 }
 
-noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::Shading& shading,
-                                      glm::vec3 background, glm::vec3 baseColor,
-                                      const noise::SurfaceCells& cells, const Buffer& impulses,
-                                      std::uint32_t count, const RaymarchSettings& settings,
-                                      RaymarchStats* stats, RaymarchCapture* capture) {
-    if (settings.steps < 1 || settings.steps > kRaymarchMaxSteps)
-        throw InputError(cat("raymarch: --steps ", settings.steps, " is outside [1, ",
-                             kRaymarchMaxSteps, "]"));
-    if (settings.supersample < 1 || settings.supersample > kRaymarchMaxSupersample)
-        throw InputError(cat("raymarch: --supersample ", settings.supersample, " is outside [1, ",
-                             kRaymarchMaxSupersample, "]"));
-    const std::uint32_t n = std::uint32_t(settings.supersample);
-    // The march renders the n x n supersampled image: the same view, n times the pixels a side.
-    noise::Camera marchCamera = camera;
-    marchCamera.width = int(std::min<std::int64_t>(std::int64_t(camera.width) * n, 1 << 30));
-    marchCamera.height = int(std::min<std::int64_t>(std::int64_t(camera.height) * n, 1 << 30));
-    const SpotSplatFrame frame =
-        // No EWA flag: the march samples the density itself, and lobes widened by the pixel
-        // footprint could reach past the 27 cells it searches. (Also validates the camera.)
-        makeSplatFrame(marchCamera, shading, baseColor, count, m_lobeCount, m_support, 0, 0);
-    if (count > kMaxImpulses)
-        throw InputError(cat("raymarch: ", count, " impulses, more than the ", kMaxImpulses,
-                             " one frame can place"));
-    if (std::uint64_t(count) * sizeof(gpu::SpotImpulse) > impulses.size() || !impulses.handle())
-        throw InputError(cat("raymarch: the impulse buffer holds ", impulses.size(), " bytes, ",
-                             count, " impulses need ",
-                             std::uint64_t(count) * sizeof(gpu::SpotImpulse)));
-    if (!(cells.cellSize > 0.0f) || !std::isfinite(cells.cellSize))
-        throw InputError(cat("raymarch: cell size ", cells.cellSize, " must be positive"));
-    const Shell& shell = shellFor(cells);
-    const std::uint32_t records = std::uint32_t(shell.cells.size());
-    const std::uint32_t outWidth = std::uint32_t(camera.width);
-    const std::uint32_t outHeight = std::uint32_t(camera.height);
-    const std::uint32_t width = std::uint32_t(marchCamera.width);
-    const std::uint32_t height = std::uint32_t(marchCamera.height);
-    const std::uint64_t pixels = std::uint64_t(width) * height; // march pixels
-    const std::uint64_t outPixels = std::uint64_t(outWidth) * outHeight;
+RaymarchRenderer::~RaymarchRenderer() = default;
 
-    // Memory: world lobes and kernel bounds (prepare), bins, records; per march pixel the base
-    // colour, mesh distance, depth, state and loop count; per output pixel the result.
-    const std::uint64_t need =
-        std::uint64_t(count) *
-            (m_lobeCount * sizeof(gpu::SpotWorldLobe) +
-             sizeof(SpotMarchBox)) +
-        std::uint64_t(records) * (3 * 4 + sizeof(SpotMarchCell)) + 4 + sizeof(SpotMarchParams) +
-        pixels * (16 + 4 + 4 + 16 + 4) + outPixels * 16 + 4 + (capture ? pixels * 20 : 0);
-    if (m_ctx.allocatedBytes() + need > m_ctx.memoryBudget())
-        throw InputError(cat("raymarch: a ", outWidth, "x", outHeight, " frame (", n, "x", n,
-                             " rays per pixel) of ", count,
-                             " kernels over ", records, " shell cells needs ", need >> 20,
-                             " MiB of GPU memory; ", m_ctx.allocatedBytes() >> 20,
+const RaymarchRenderer::Pipelines& RaymarchRenderer::pipelines(bool lambert, bool cull) {
+    const auto key = std::make_pair(lambert, cull);
+    if (const auto it = m_pipelines.find(key); it != m_pipelines.end())
+        return it->second;
+    Specialization spec;
+    spec.set(kMarchSpecLobes, m_scene.lobeCount())
+        .set(kMarchSpecLambert, lambert)
+        .set(kMarchSpecCull, cull);
+    const std::uint32_t push = sizeof(SpotMarchPush);
+    Pipelines p;
+    p.march =
+        makeComputePipeline(m_ctx, spirv(spv_raymarch_march_comp),
+                            {storageBuffer(kMarchBindParams), storageBuffer(kMarchBindTable),
+                             storageBuffer(kMarchBindCells), storageBuffer(kMarchBindSpans),
+                             storageBuffer(kMarchBindList), storageBuffer(kMarchBindWorldLobes),
+                             storageBuffer(kMarchBindBoxes), storageImage(kMarchBindMeshDistance),
+                             storageBuffer(kMarchBindState), storageBuffer(kMarchBindLoops)},
+                            push, spec);
+    p.resolve = makeComputePipeline(m_ctx, spirv(spv_raymarch_resolve_comp),
+                                    {storageImage(kMarchBindBase), storageBuffer(kMarchBindState),
+                                     storageImage(kMarchBindResult)},
+                                    push, spec);
+    return m_pipelines.emplace(key, std::move(p)).first->second;
+}
+
+void RaymarchRenderer::ensureImpulseBuffers(std::uint32_t capacity) {
+    if (capacity <= m_capacity && m_worldLobes.handle())
+        return;
+    const std::uint32_t grown = std::max(
+        capacity, std::uint32_t(std::min<std::uint64_t>(kMaxImpulses, capacity + capacity / 4)));
+    const std::uint64_t n = std::max<std::uint32_t>(grown, 1);
+    const std::uint64_t lobeBytes = n * m_scene.lobeCount() * sizeof(gpu::SpotWorldLobe);
+    const std::uint64_t need = lobeBytes + n * sizeof(SpotMarchBox);
+    const std::uint64_t held = m_worldLobes.reservedBytes() + m_boxes.reservedBytes();
+    if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
+        throw InputError(cat("raymarch: ", capacity, " kernels need ", need >> 20,
+                             " MiB of GPU memory; ", (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
-                             " MiB; reduce the image size or the kernel count"));
-    const std::uint64_t allocatedBefore = m_ctx.allocatedBytes();
+                             " MiB; reduce the kernel count"));
+    m_worldLobes = Buffer();
+    m_boxes = Buffer();
+    m_capacity = 0;
+    // The capture copies the world lobes out; the host reads the boxes for the lists.
+    m_worldLobes = Buffer(m_ctx, lobeBytes, kStorage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, kDevice,
+                          cat("ray march world lobes (", grown, " kernels)"));
+    m_boxes = Buffer(m_ctx, n * sizeof(SpotMarchBox), kStorage, kHost,
+                     cat("ray march impulse boxes (", grown, " kernels)"));
+    m_capacity = grown;
+}
 
-    SpotMarchParams params = shell.params();
-    params.grid.z = m_support;
-    params.counts.x = std::uint32_t(settings.steps);
-    params.counts.y = m_lobeCount;
-    params.counts.w =
-        (shading.mode == noise::Shading::Mode::Lambert ? gpu_march::kMarchFlagLambert : 0u) |
-        (settings.cullImpulses ? 0u : gpu_march::kMarchFlagNoCulling);
-    params.light = glm::vec4(shading.lightDir, shading.ambient);
-    params.range = glm::uvec4(0u, 0u, n, 0u);
-
-    constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-    constexpr VkBufferUsageFlags kFilled = kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
-    constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
-    // Each dispatch of the march rewrites params.range (vkCmdUpdateBuffer).
-    Buffer paramBuffer(m_ctx, sizeof(SpotMarchParams), kFilled, kHost, "ray march parameters");
-    paramBuffer.upload(&params, sizeof(params));
-    Buffer worldLobes(m_ctx, std::uint64_t(count) * m_lobeCount * sizeof(gpu::SpotWorldLobe),
-                      kStorage, capture ? kHost : kDevice,
-                      cat("ray march world lobes (", count, " kernels)"));
-    Buffer boxes(m_ctx, std::uint64_t(count) * sizeof(SpotMarchBox), kStorage,
-                 capture ? kHost : kDevice, cat("ray march impulse boxes (", count, " kernels)"));
-    // The prepare pass writes world lobes only here; its screen outputs are not written.
-    Buffer unused(m_ctx, 16, kStorage, kDevice, "ray march prepare: unused screen outputs");
-    Buffer countBuffer(m_ctx, 16, kStorage, kHost, "ray march impulse count");
-    *static_cast<std::uint32_t*>(countBuffer.mapped()) = count;
-    if (!m_prepare.handle() || m_prepareOrthographic != (camera.projection == noise::Projection::Orthographic)) {
-        m_prepareOrthographic = camera.projection == noise::Projection::Orthographic;
-        m_prepare = makePreparePipeline(m_ctx, m_lobeCount, false, false, m_prepareOrthographic);
-    }
-    Buffer bins(m_ctx, (3 * std::uint64_t(records) + 1) * sizeof(std::uint32_t), kFilled, kHost,
-                "ray march cell bins");
-    Buffer recordBuffer(m_ctx, std::uint64_t(records) * sizeof(SpotMarchCell), kStorage, kHost,
-                        cat("ray march neighbourhoods (", records, " shell cells)"));
-    Buffer state(m_ctx, pixels * sizeof(glm::vec4), kStorage, kDevice,
-                 "ray march state (radiance, transmittance)");
-    Buffer result(m_ctx, outPixels * sizeof(glm::vec4), kStorage, kHost, "ray march result");
-    Buffer loopCounts(m_ctx, (pixels + 1) * sizeof(std::uint32_t), kFilled, kHost,
-                      "ray march loop counts");
+void RaymarchRenderer::ensureTargets(std::uint32_t outWidth, std::uint32_t outHeight,
+                                     std::uint32_t n) {
+    if (m_width == outWidth && m_height == outHeight && m_n == n && m_result.handle())
+        return;
+    const std::uint64_t width = std::uint64_t(outWidth) * n, height = std::uint64_t(outHeight) * n;
+    const std::uint64_t need = width * height * kBytesPerMarchPixel + 4 +
+                               std::uint64_t(outWidth) * outHeight * kBytesPerPixel;
+    std::uint64_t held = m_state.reservedBytes() + m_loops.reservedBytes();
+    for (const Image* i : {&m_base, &m_distance, &m_depth, &m_result})
+        held += i->reservedBytes();
+    // Checked as if the old targets were freed; a refused frame keeps them.
+    if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
+        throw InputError(
+            cat("raymarch: a ", outWidth, "x", outHeight, " frame (", n, "x", n,
+                " rays per pixel) needs ", need >> 20, " MiB of GPU memory for its targets; ",
+                (m_ctx.allocatedBytes() - held) >> 20, " MiB are in use and the budget is ",
+                m_ctx.memoryBudget() >> 20, " MiB; reduce the image size or the supersampling"));
+    m_base = Image();
+    m_distance = Image();
+    m_depth = Image();
+    m_result = Image();
+    m_state = Buffer();
+    m_loops = Buffer();
+    m_width = m_height = m_n = 0;
+    const std::uint32_t w = std::uint32_t(width), h = std::uint32_t(height);
+    // The capture copies the base colour and mesh distance out.
     constexpr VkImageUsageFlags kTarget = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
                                           VK_IMAGE_USAGE_STORAGE_BIT |
                                           VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-    Image base(m_ctx, width, height, kColorFormat, kTarget, VK_IMAGE_ASPECT_COLOR_BIT,
-               "ray march base colour");
-    Image distance(m_ctx, width, height, kScalarFormat, kTarget, VK_IMAGE_ASPECT_COLOR_BIT,
-                   "ray march mesh distance");
-    Image depth(m_ctx, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                VK_IMAGE_ASPECT_DEPTH_BIT, "ray march depth");
-    Buffer baseCopy, distanceCopy;
-    if (capture) {
-        baseCopy = Buffer(m_ctx, pixels * sizeof(glm::vec4), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                          kHost, "ray march capture: base colour");
-        distanceCopy = Buffer(m_ctx, pixels * sizeof(float), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                              kHost, "ray march capture: mesh distance");
+    constexpr VkImageAspectFlags kColor = VK_IMAGE_ASPECT_COLOR_BIT;
+    m_base = Image(m_ctx, w, h, kColorFormat, kTarget, kColor, "ray march base colour");
+    m_distance = Image(m_ctx, w, h, kScalarFormat, kTarget, kColor, "ray march mesh distance");
+    m_depth = Image(m_ctx, w, h, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                    VK_IMAGE_ASPECT_DEPTH_BIT, "ray march depth");
+    m_result = Image(m_ctx, outWidth, outHeight, kColorFormat,
+                     VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, kColor,
+                     "ray march result");
+    m_state = Buffer(m_ctx, width * height * sizeof(glm::vec4), kStorage, kDevice,
+                     "ray march state (radiance, transmittance)");
+    m_loops = Buffer(m_ctx, (width * height + 1) * sizeof(std::uint32_t),
+                     kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost, "ray march loop counts");
+    m_width = outWidth;
+    m_height = outHeight;
+    m_n = n;
+}
+
+void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marchCamera,
+                           bool cull) {
+    m_version = 0; // until the lists are done
+    const auto hostStart = std::chrono::steady_clock::now();
+    const noise::SurfaceCells& surface = *impulses.cells;
+    const Shell& shell = shellFor(surface);
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    const std::uint32_t capacity = impulses.capacity;
+    const std::uint32_t lobes = m_scene.lobeCount();
+    ensureImpulseBuffers(capacity);
+    SpotMarchParams params = shell.params();
+    params.grid.z = m_scene.support();
+    params.counts.y = lobes;
+    const std::uint64_t binBytes = (3 * std::uint64_t(records) + 2) * sizeof(std::uint32_t);
+    if (m_bins.size() < binBytes) {
+        const std::uint64_t held = m_bins.reservedBytes();
+        if (m_ctx.allocatedBytes() - held + grownSize(binBytes) > m_ctx.memoryBudget())
+            throw InputError(cat("raymarch: the bins of ", records, " shell cells need ",
+                                 binBytes >> 20, " MiB of GPU memory; the budget is ",
+                                 m_ctx.memoryBudget() >> 20, " MiB"));
+        m_bins = Buffer();
+        m_bins = Buffer(m_ctx, grownSize(binBytes), kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                        kHost, cat("ray march cell bins (", records, " shell cells)"));
     }
+    m_params.upload(&params, sizeof(params));
 
-    using namespace passes;
-
-    // Submit 1: world lobes, bins, the mesh (what the march needs besides the neighbourhoods).
+    // World lobes, boxes and bins on the GPU, waited for.
+    const SpotSplatFrame frame = makeSplatFrame(marchCamera, noise::Shading{}, glm::vec3(0.0f),
+                                                capacity, lobes, m_scene.support(), 0, 0);
+    Timestamps times(m_ctx, 2);
     m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
-        m_binTimes.reset(cmd);
-        m_binTimes.write(cmd, 0, kAll);
-        if (count > 0) {
-            PrepareBuffers pb;
-            pb.impulses = &impulses;
-            pb.count = &countBuffer;
-            pb.lobes = &m_lobes;
-            pb.worldLobes = &worldLobes;
-            pb.screenLobes = &unused;
-            pb.bounds = &unused;
-            recordPrepare(m_ctx, cmd, m_prepare, frame, pb, count);
-        }
-        m_binTimes.write(cmd, 1, kAll);
+        using namespace passes;
+        times.reset(cmd);
+        times.write(cmd, 0, kAll);
+        PrepareBuffers pb;
+        pb.impulses = impulses.impulses;
+        pb.count = impulses.count;
+        pb.lobes = &m_scene.lobes();
+        pb.worldLobes = &m_worldLobes;
+        pb.screenLobes = &m_prepareUnused;
+        pb.bounds = &m_prepareUnused;
+        recordPrepare(m_ctx, cmd, m_prepare, frame, pb, capacity);
         const std::uint64_t firstBytes = std::uint64_t(records) * sizeof(std::uint32_t);
         if (records > 0)
-            vkCmdFillBuffer(cmd, bins.handle(), 0, firstBytes, 0xffffffffu);
-        vkCmdFillBuffer(cmd, bins.handle(), firstBytes, VK_WHOLE_SIZE, 0u);
-        vkCmdFillBuffer(cmd, loopCounts.handle(), 0, VK_WHOLE_SIZE, 0u);
+            vkCmdFillBuffer(cmd, m_bins.handle(), 0, firstBytes, 0xffffffffu);
+        vkCmdFillBuffer(cmd, m_bins.handle(), firstBytes, binBytes - firstBytes, 0u);
         // The bins are cleared and the world lobes (prepare) written before the bin pass.
         memoryBarrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT | kCompute,
                       VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                       kCompute, kStorageRW);
-        if (count > 0) {
+        if (capacity > 0) {
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_bin.handle());
-            const std::uint32_t push[2] = {count, records};
-            vkCmdPushConstants(cmd, m_bin.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push),
-                               push);
+            vkCmdPushConstants(cmd, m_bin.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(records),
+                               &records);
             Descriptors()
-                .buffer(0, paramBuffer)
-                .buffer(1, shell.tableBuffer)
-                .buffer(2, impulses)
-                .buffer(3, bins)
-                .buffer(4, worldLobes)
-                .buffer(5, boxes)
+                .buffer(kMarchBindParams, m_params)
+                .buffer(kMarchBindTable, shell.tableBuffer)
+                .buffer(kMarchBindImpulses, *impulses.impulses)
+                .buffer(kMarchBindCount, *impulses.count)
+                .buffer(kMarchBindBins, m_bins)
+                .buffer(kMarchBindWorldLobes, m_worldLobes)
+                .buffer(kMarchBindBoxes, m_boxes)
                 .push(m_ctx, cmd, m_bin);
-            vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+            vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
         }
-        m_binTimes.write(cmd, 2, kAll);
-
-        for (const Image* image : {&base, &distance})
-            transitionImage(cmd, image->handle(), VK_IMAGE_ASPECT_COLOR_BIT,
-                            VK_IMAGE_LAYOUT_UNDEFINED, kAttachment, VK_PIPELINE_STAGE_2_NONE, 0,
-                            kColorOut, kColorRW);
-        transitionImage(cmd, depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                        VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
-                        kTests, kDepthRW);
-        m_meshPass.record(cmd, frame, base, distance, depth, background);
-        for (const Image* image : {&base, &distance})
-            transitionImage(cmd, image->handle(), VK_IMAGE_ASPECT_COLOR_BIT, kAttachment, kGeneral,
-                            kColorOut, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute | kTransfer,
-                            kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT);
-        if (capture) {
-            VkBufferImageCopy region{};
-            region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-            region.imageExtent = {width, height, 1};
-            vkCmdCopyImageToBuffer(cmd, base.handle(), kGeneral, baseCopy.handle(), 1, &region);
-            vkCmdCopyImageToBuffer(cmd, distance.handle(), kGeneral, distanceCopy.handle(), 1,
-                                   &region);
-        }
-        m_binTimes.write(cmd, 3, kAll);
-        memoryBarrier(cmd, kCompute | kTransfer,
+        memoryBarrier(cmd, kCompute | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
                       kHostStage, VK_ACCESS_2_HOST_READ_BIT);
+        times.write(cmd, 1, kAll);
     });
+    const double binMs = times.milliseconds()[1];
 
-    // On the host: check the impulse order, build each shell cell's neighbourhood ranges, bound
-    // the march's loops.
-    const auto hostStart = std::chrono::steady_clock::now();
-    const auto* bin = static_cast<const std::uint32_t*>(bins.mapped());
+    // On the host: check the impulse order, then list each sub-cell's impulses.
+    const auto* bin = static_cast<const std::uint32_t*>(m_bins.mapped());
     const std::uint32_t* binFirst = bin;
     const std::uint32_t* binEnd = bin + records;
     const std::uint32_t* binCount = bin + 2 * std::uint64_t(records);
+    const std::uint32_t count = bin[3 * std::uint64_t(records) + 1];
+    if (count > capacity)
+        throw InputError(cat("raymarch: the impulse count ", count, " exceeds the capacity ",
+                             capacity, " the impulses came with"));
     if (const std::uint32_t outside = bin[3 * std::uint64_t(records)]; outside > 0)
         throw InputError(cat("raymarch: ", outside, " of ", count,
                              " impulses lie outside the given surface cells (cell size ",
-                             cells.cellSize,
+                             surface.cellSize,
                              "); render impulses with the cells that generated them"));
     std::uint32_t expected = 0;
     for (std::uint32_t r = 0; r < records; ++r) {
@@ -464,7 +487,7 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
             throw InputError(cat("raymarch: ", binCount[r], " impulses lie in cell ",
                                  shell.cells[r].x, " ", shell.cells[r].y, " ", shell.cells[r].z,
                                  ", which is not one of the given surface cells (cell size ",
-                                 cells.cellSize,
+                                 surface.cellSize,
                                  "); render impulses with the cells that "
                                  "generated them"));
         if (binFirst[r] != expected || binEnd[r] - binFirst[r] != binCount[r])
@@ -476,204 +499,449 @@ noise::Image RaymarchRenderer::render(const noise::Camera& camera, const noise::
         expected = binEnd[r];
     }
     SPOT_CHECK_EQ(expected, count);
-    std::vector<SpotMarchCell> neighbourhoods(records);
-    std::uint32_t mostImpulses = 0;
+
+    // Each record's 27 neighbours (-1 outside the shell), in (di, dj, dk) order: cell order, so
+    // their impulses come in impulse order.
+    requireMemory(std::uint64_t(records) * (27 * 4 + 16 + kMarchSubCells * 8),
+                  cat("the ray march's lists of ", records, " shell cells"));
+    std::vector<std::int32_t> neighbours(std::size_t(records) * 27);
+    std::vector<SpotMarchCell> cells(records);
+    std::uint32_t mostAround = 0;
     {
-        MarchTwin find(MarchTwin::Arrays{&params, shell.table.data(), nullptr, nullptr, nullptr});
+        MarchTwin find(MarchTwin::Arrays{&params, shell.table.data()});
         for (std::uint32_t r = 0; r < records; ++r) {
-            SpotMarchCell& cell = neighbourhoods[r];
-            cell = SpotMarchCell{};
-            std::uint32_t ranges = 0, total = 0;
-            for (int di = -1; di <= 1; ++di)
-                for (int dj = -1; dj <= 1; ++dj) {
-                    // The column's (up to three) cells are consecutive records, so their
-                    // impulses are one range.
-                    std::uint32_t first = ~0u, end = 0;
-                    for (int dk = -1; dk <= 1; ++dk) {
-                        std::uint32_t loops = 0;
-                        const int n =
-                            find.marchFind(shell.cells[r] + glm::ivec3(di, dj, dk), loops);
-                        if (n >= 0 && binCount[n] > 0) {
-                            first = std::min(first, binFirst[n]);
-                            end = std::max(end, binEnd[n]);
-                        }
-                    }
-                    if (end == 0)
-                        continue;
-                    cell.range[ranges / 2][2 * (ranges % 2)] = first;
-                    cell.range[ranges / 2][2 * (ranges % 2) + 1] = end - first;
-                    ++ranges;
-                    total += end - first;
-                }
-            cell.head = glm::uvec4(ranges, total, 0u, 0u);
-            mostImpulses = std::max(mostImpulses, total);
+            std::uint32_t around = 0;
+            for (int n = 0; n < 27; ++n) {
+                std::uint32_t loops = 0;
+                const int found = find.marchFind(
+                    shell.cells[r] + glm::ivec3(n / 9 - 1, n / 3 % 3 - 1, n % 3 - 1), loops);
+                neighbours[std::size_t(r) * 27 + std::size_t(n)] = found;
+                if (found >= 0)
+                    around += binCount[found];
+            }
+            cells[r].head = glm::uvec4(around, 0u, 0u, 0u);
+            mostAround = std::max(mostAround, around);
         }
     }
+    std::vector<glm::uvec2> spans(std::size_t(records) * kMarchSubCells, glm::uvec2(0u));
+    std::vector<std::uint32_t> list;
+    if (!cull) {
+        // The paper's baseline: every sub-cell of a cell lists all its 27 neighbours' impulses.
+        std::uint64_t total = 0;
+        for (std::uint32_t r = 0; r < records; ++r)
+            total += cells[r].head.x;
+        requireMemory(total * 4, cat("the ray march's lists (", total, " entries)"));
+        list.reserve(total);
+        for (std::uint32_t r = 0; r < records; ++r) {
+            const std::uint32_t first = std::uint32_t(list.size());
+            for (int n = 0; n < 27; ++n)
+                if (const int nb = neighbours[std::size_t(r) * 27 + std::size_t(n)];
+                    nb >= 0 && binCount[nb] > 0)
+                    for (std::uint32_t i = binFirst[nb]; i < binEnd[nb]; ++i)
+                        list.push_back(i);
+            for (std::uint32_t q = 0; q < kMarchSubCells; ++q)
+                spans[std::size_t(r) * kMarchSubCells + q] =
+                    glm::uvec2(first, std::uint32_t(list.size()) - first);
+            cells[r].head.y = std::uint32_t(list.size()) - first;
+        }
+    } else {
+        // Each impulse goes to the sub-cells its box reaches within its cell's 27 neighbours,
+        // with a margin of 1/1000 of a sub-cell (and the float rounding of large coordinates)
+        // for the shader's floor(x / (h / kMarchSub)), so a sample a hair past a sub-cell's side
+        // still finds every impulse whose box holds it.
+        const auto* boxes = static_cast<const SpotMarchBox*>(m_boxes.mapped());
+        const double scale = double(params.grid.y * float(kMarchSub));
+        const int sub = int(kMarchSub);
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs; // (span, impulse)
+        for (std::uint32_t r = 0; r < records; ++r) {
+            if (binCount[r] == 0)
+                continue;
+            const glm::ivec3 c = shell.cells[r];
+            for (std::uint32_t i = binFirst[r]; i < binEnd[r]; ++i) {
+                glm::ivec3 lo, hi;
+                for (int a = 0; a < 3; ++a) {
+                    const double l = double(boxes[i].lo[a]) * scale;
+                    const double h = double(boxes[i].hi[a]) * scale;
+                    const double first = double((c[a] - 1) * sub);
+                    const double last = double((c[a] + 2) * sub - 1);
+                    lo[a] = int(std::clamp(std::floor(l - 1e-3 - 1e-6 * std::abs(l)), first, last));
+                    hi[a] = int(std::clamp(std::floor(h + 1e-3 + 1e-6 * std::abs(h)), first, last));
+                    if (!(l <= h)) // empty (no lobe with density) or not a number
+                        hi[a] = lo[a] - 1;
+                }
+                for (int x = lo.x; x <= hi.x; ++x)
+                    for (int y = lo.y; y <= hi.y; ++y)
+                        for (int z = lo.z; z <= hi.z; ++z) {
+                            const glm::ivec3 s(x, y, z);
+                            const glm::ivec3 q(floorDiv(x, sub), floorDiv(y, sub),
+                                               floorDiv(z, sub));
+                            const glm::ivec3 d = q - c + 1;
+                            const int nb = neighbours[std::size_t(r) * 27 +
+                                                      std::size_t(d.x * 9 + d.y * 3 + d.z)];
+                            SPOT_CHECK_LE(0, nb);
+                            const glm::ivec3 local = s - q * sub;
+                            pairs.emplace_back(
+                                std::uint32_t(nb) * kMarchSubCells +
+                                    std::uint32_t((local.x * sub + local.y) * sub + local.z),
+                                i);
+                        }
+            }
+        }
+        // Counting sort by sub-cell, stable: each list in impulse order.
+        for (const auto& [span, impulse] : pairs)
+            ++spans[span].y;
+        std::uint32_t first = 0;
+        for (glm::uvec2& s : spans) {
+            s.x = first;
+            first += s.y;
+        }
+        list.resize(pairs.size());
+        std::vector<std::uint32_t> fill(spans.size(), 0u);
+        for (const auto& [span, impulse] : pairs)
+            list[spans[span].x + fill[span]++] = impulse;
+        for (std::uint32_t r = 0; r < records; ++r)
+            for (std::uint32_t q = 0; q < kMarchSubCells; ++q)
+                cells[r].head.y += spans[std::size_t(r) * kMarchSubCells + q].y;
+    }
+    std::uint32_t longest = 0;
+    for (const glm::uvec2& s : spans)
+        longest = std::max(longest, s.y);
+
+    // Upload into the grow-only buffers (each checked against the budget before anything is
+    // freed, so a refused frame leaves the old ones).
+    const std::uint64_t cellBytes = std::uint64_t(records) * sizeof(SpotMarchCell);
+    const std::uint64_t spanBytes = spans.size() * sizeof(glm::uvec2);
+    const std::uint64_t listBytes = list.size() * sizeof(std::uint32_t);
+    std::uint64_t held = 0, need = 0;
+    for (const auto& [buffer, bytes] : {std::pair<Buffer*, std::uint64_t>{&m_cells, cellBytes},
+                                        {&m_spans, spanBytes},
+                                        {&m_list, listBytes}})
+        if (buffer->size() < bytes || !buffer->handle()) {
+            held += buffer->reservedBytes();
+            need += grownSize(bytes);
+        }
+    if (need > 0 && m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
+        throw InputError(cat("raymarch: the impulse lists of ", records, " shell cells (",
+                             list.size(), " entries) need ", need >> 20, " MiB of GPU memory; ",
+                             (m_ctx.allocatedBytes() - held) >> 20,
+                             " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
+                             " MiB; reduce the kernel density or the cell count"));
+    const auto put = [&](Buffer& buffer, const void* data, std::uint64_t bytes, const char* what) {
+        if (buffer.size() < bytes || !buffer.handle()) {
+            buffer = Buffer();
+            buffer = Buffer(m_ctx, grownSize(bytes), kStorage, kHost, what);
+        }
+        if (bytes > 0)
+            buffer.upload(data, bytes);
+    };
+    put(m_cells, cells.data(), cellBytes, "ray march shell cells");
+    put(m_spans, spans.data(), spanBytes, "ray march sub-cell spans");
+    put(m_list, list.data(), listBytes, "ray march impulse lists");
+
+    RaymarchStats& s = m_binStats;
+    s = RaymarchStats{};
+    s.shellCells = records;
+    s.maxNeighbourhoodImpulses = mostAround;
+    s.maxListedImpulses = longest;
+    s.lobesPerImpulse = lobes;
+    s.longestProbe = std::uint32_t(shell.longestProbe);
+    s.walkCells = shell.walkCells();
+    s.listEntries = list.size();
+    s.impulses = count;
+    s.binMs = binMs;
+    s.binHostMs = since(hostStart);
+    m_version = impulses.version;
+    m_listsCulled = cull;
+    m_listedCells = impulses.cells;
+}
+
+void RaymarchRenderer::prepare(const View& view, const ImpulseSet& impulses,
+                               const RenderSettings& settings) {
+    if (settings.steps < 1 || settings.steps > kRaymarchMaxSteps)
+        throw InputError(
+            cat("raymarch: --steps ", settings.steps, " is outside [1, ", kRaymarchMaxSteps, "]"));
+    if (settings.supersample < 1 || settings.supersample > kRaymarchMaxSupersample)
+        throw InputError(cat("raymarch: --supersample ", settings.supersample, " is outside [1, ",
+                             kRaymarchMaxSupersample, "]"));
+    const std::uint32_t n = std::uint32_t(settings.supersample);
+    static_cast<void>(noise::CameraRays(view.camera)); // validates the camera first (InputError)
+    // The march renders the n x n supersampled image: the same view, n times the pixels a side.
+    noise::Camera marchCamera = view.camera;
+    marchCamera.width = int(std::min<std::int64_t>(std::int64_t(view.camera.width) * n, 1 << 30));
+    marchCamera.height = int(std::min<std::int64_t>(std::int64_t(view.camera.height) * n, 1 << 30));
+    if (impulses.capacity > kMaxImpulses)
+        throw InputError(cat("raymarch: ", impulses.capacity, " impulses, more than the ",
+                             kMaxImpulses, " one frame can place"));
+    if (!impulses.impulses || !impulses.count || !impulses.impulses->handle() ||
+        std::uint64_t(impulses.capacity) * sizeof(gpu::SpotImpulse) > impulses.impulses->size())
+        throw InputError(cat("raymarch: the impulse buffer holds ",
+                             impulses.impulses ? impulses.impulses->size() : 0, " bytes, ",
+                             impulses.capacity, " impulses need ",
+                             std::uint64_t(impulses.capacity) * sizeof(gpu::SpotImpulse)));
+    if (!impulses.cells)
+        throw InputError("raymarch: the impulses came without their surface cells (the shell)");
+    if (!(impulses.cells->cellSize > 0.0f) || !std::isfinite(impulses.cells->cellSize))
+        throw InputError(
+            cat("raymarch: cell size ", impulses.cells->cellSize, " must be positive"));
+
+    Prepared& f = m_frame;
+    f.binned = false;
+    const bool cull = settings.cullImpulses;
+    if (impulses.version == 0 || impulses.version != m_version || cull != m_listsCulled ||
+        impulses.cells != m_listedCells) {
+        bin(impulses, marchCamera, cull);
+        f.binned = true;
+    }
+
     // The guard: split the march over dispatches of at most `perDispatch` steps, each within the
     // loop budget; refuse a frame where not even one step fits.
-    const std::uint32_t walk = shell.walkCells();
-    const std::uint64_t lobesPerStep = std::uint64_t(mostImpulses) * m_lobeCount;
-    const auto loopBound = [&](std::uint64_t n) {
-        return raymarchLoopBound(n, walk, std::uint64_t(shell.longestProbe), mostImpulses,
-                                 m_lobeCount);
+    const RaymarchStats& b = m_binStats;
+    const std::uint32_t budget =
+        settings.loopBudget > 0 ? settings.loopBudget : kRaymarchLoopBudget;
+    const auto loopBound = [&](std::uint64_t steps) {
+        return raymarchLoopBound(steps, b.walkCells, b.longestProbe, b.maxListedImpulses,
+                                 b.lobesPerImpulse);
     };
     const std::uint64_t fixed = loopBound(0);
     const std::uint64_t perStep = loopBound(1) - fixed;
-    const std::uint64_t fits =
-        settings.loopBudget > fixed ? (settings.loopBudget - fixed) / perStep : 0;
-    if (fits == 0)
+    const std::uint64_t fits = budget > fixed ? (budget - fixed) / perStep : 0;
+    if (fits == 0) {
+        const Shell& shell = *m_shell;
         throw InputError(cat(
             "raymarch: even one step would need up to ", withCommas(fixed + perStep),
-            " loop iterations in one shader invocation (", withCommas(lobesPerStep),
-            " lobes summed at each step in the densest neighbourhood, ", withCommas(fixed),
+            " loop iterations in one shader invocation (",
+            withCommas(std::uint64_t(b.maxListedImpulses) * b.lobesPerImpulse),
+            " lobes summed at each step in the longest list, ", withCommas(fixed),
             " to walk the shell's ", shell.hi.x - shell.lo.x + 1, "x", shell.hi.y - shell.lo.y + 1,
-            "x", shell.hi.z - shell.lo.z + 1, " cells) and the budget is ",
-            withCommas(settings.loopBudget), " (lavapipe stops at ",
-            withCommas(gpu_march::kMarchLavapipeLoopLimit),
+            "x", shell.hi.z - shell.lo.z + 1, " cells) and the budget is ", withCommas(budget),
+            " (lavapipe stops at ", withCommas(kMarchLavapipeLoopLimit),
             " without an error); lower the kernel density or the cell count"));
+    }
     // As few dispatches as fit, with the steps spread evenly over them.
     const std::uint32_t steps = std::uint32_t(settings.steps);
-    const std::uint32_t dispatches = std::uint32_t((steps + fits - 1) / fits);
-    const std::uint32_t perDispatch = (steps + dispatches - 1) / dispatches;
-    const std::uint64_t bound = loopBound(perDispatch);
-    if (records > 0)
-        recordBuffer.upload(std::span<const SpotMarchCell>(neighbourhoods));
-    const double hostMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - hostStart)
-            .count();
+    f.dispatches = std::uint32_t((steps + fits - 1) / fits);
+    f.stepsPerDispatch = (steps + f.dispatches - 1) / f.dispatches;
+    f.maxStepsPerDispatch = std::uint32_t(std::min<std::uint64_t>(fits, 0xffffffffu));
+    f.loopBound = loopBound(f.stepsPerDispatch);
 
-    // Submit 2: the march, in `dispatches` dispatches of at most `perDispatch` steps each (params
-    // .range names them), then the resolve: each output pixel the mean of its n x n rays.
+    ensureTargets(std::uint32_t(view.camera.width), std::uint32_t(view.camera.height), n);
+
+    f.lambert = view.shading.mode == noise::Shading::Mode::Lambert;
+    f.cull = cull;
+    f.pipelines = &pipelines(f.lambert, f.cull);
+    f.camera = view.camera;
+    f.background = view.background;
+    f.meshFrame = makeSplatFrame(marchCamera, view.shading, view.baseColor, 0, m_scene.lobeCount(),
+                                 m_scene.support(), 0, 0);
+    SpotMarchPush& p = f.push;
+    p.eye = f.meshFrame.eye;
+    p.forward = f.meshFrame.forward;
+    p.right = f.meshFrame.right;
+    p.up = f.meshFrame.up;
+    p.size = glm::vec4(glm::vec2(f.meshFrame.size), 0.0f, 0.0f);
+    p.light = glm::vec4(view.shading.lightDir, view.shading.ambient);
+    p.range = glm::uvec4(0u, 0u, steps, n);
+}
+
+void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const std::uint32_t width = m_width * m_n, height = m_height * m_n;
+
+    // The base mesh at the march's resolution.
+    for (const Image* image : {&m_base, &m_distance})
+        transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kAttachment,
+                        VK_PIPELINE_STAGE_2_NONE, 0, kColorOut, kColorRW);
+    transitionImage(cmd, m_depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0, kTests,
+                    kDepthRW);
+    m_scene.meshPass().record(cmd, f.meshFrame, m_base, m_distance, m_depth, f.background);
+    for (const Image* image : {&m_base, &m_distance})
+        transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
+                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute | kTransfer,
+                        kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT);
+    vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
+                  kStorageRW);
+    timer.mark(cmd, "mesh");
+
+    // The march, in `dispatches` dispatches of at most `stepsPerDispatch` steps each.
+    const Pipelines& p = *f.pipelines;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.march.handle());
+    Descriptors()
+        .buffer(kMarchBindParams, m_params)
+        .buffer(kMarchBindTable, m_shell->tableBuffer)
+        .buffer(kMarchBindCells, m_cells)
+        .buffer(kMarchBindSpans, m_spans)
+        .buffer(kMarchBindList, m_list)
+        .buffer(kMarchBindWorldLobes, m_worldLobes)
+        .buffer(kMarchBindBoxes, m_boxes)
+        .image(kMarchBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .buffer(kMarchBindState, m_state)
+        .buffer(kMarchBindLoops, m_loops)
+        .push(m_ctx, cmd, p.march);
+    const std::uint32_t steps = f.push.range.z;
+    for (std::uint32_t k = 0; k < f.dispatches; ++k) {
+        SpotMarchPush push = f.push;
+        push.range.x = k * f.stepsPerDispatch;
+        push.range.y = std::min(steps, (k + 1) * f.stepsPerDispatch);
+        if (k > 0) // the previous dispatch wrote the state this one continues
+            memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
+        vkCmdPushConstants(cmd, p.march.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push),
+                           &push);
+        vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+    }
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute | kHostStage,
+                  kStorageRead | VK_ACCESS_2_HOST_READ_BIT);
+    timer.mark(cmd, "march");
+
+    // The resolve: each output pixel the mean of its n x n rays.
+    transitionImage(cmd, m_result.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
+                    VK_PIPELINE_STAGE_2_NONE, 0, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.resolve.handle());
+    vkCmdPushConstants(cmd, p.resolve.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(f.push),
+                       &f.push);
+    Descriptors()
+        .image(kMarchBindBase, m_base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .buffer(kMarchBindState, m_state)
+        .image(kMarchBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .push(m_ctx, cmd, p.resolve);
+    vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                  kCompute | kTransfer | kHostStage,
+                  kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
+    timer.mark(cmd, "resolve");
+}
+
+RaymarchStats RaymarchRenderer::stats() const {
+    RaymarchStats s = m_binStats;
+    const Prepared& f = m_frame;
+    s.loopBound = std::uint32_t(std::min<std::uint64_t>(f.loopBound, 0xffffffffu));
+    s.maxLoopIterations =
+        m_loops.handle() ? *static_cast<const std::uint32_t*>(m_loops.mapped()) : 0;
+    s.stepsPerDispatch = f.stepsPerDispatch;
+    s.maxStepsPerDispatch = f.maxStepsPerDispatch;
+    s.dispatches = f.dispatches;
+    s.supersample = m_n;
+    s.binned = f.binned;
+    if (!f.binned)
+        s.binMs = s.binHostMs = 0.0;
+    return s;
+}
+
+FrameCounters RaymarchRenderer::counters() const {
+    const RaymarchStats s = stats();
+    FrameCounters c;
+    c.kernelsDrawn = s.impulses;
+    c.extra = {{"loop_bound", double(s.loopBound)},
+               {"max_loop_iterations", double(s.maxLoopIterations)},
+               {"dispatches", double(s.dispatches)},
+               {"steps_per_dispatch", double(s.stepsPerDispatch)},
+               {"listed_impulses", double(s.maxListedImpulses)},
+               {"neighbourhood_impulses", double(s.maxNeighbourhoodImpulses)},
+               {"shell_cells", double(s.shellCells)},
+               {"binned", s.binned ? 1.0 : 0.0}};
+    if (s.binned)
+        c.extra.insert(c.extra.end(), {{"bin_ms", s.binMs}, {"bin_host_ms", s.binHostMs}});
+    return c;
+}
+
+RaymarchCapture RaymarchRenderer::capture() {
+    SPOT_CHECK(m_result.handle() && m_shell && m_frame.pipelines);
+    const std::uint32_t width = m_width * m_n, height = m_height * m_n;
+    const std::uint64_t pixels = std::uint64_t(width) * height;
+    const std::uint64_t lobeBytes =
+        std::uint64_t(m_binStats.impulses) * m_scene.lobeCount() * sizeof(gpu::SpotWorldLobe);
+    Buffer base(m_ctx, pixels * sizeof(glm::vec4), VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
+                "ray march capture: base colour");
+    Buffer distance(m_ctx, pixels * sizeof(float), VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
+                    "ray march capture: mesh distance");
+    Buffer lobes(m_ctx, lobeBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
+                 "ray march capture: world lobes");
     m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
-        m_marchTimes.reset(cmd);
-        m_marchTimes.write(cmd, 0, kAll);
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_march.handle());
-        pushFrame(cmd, m_march, frame);
-        Descriptors()
-            .buffer(0, paramBuffer)
-            .buffer(1, shell.tableBuffer)
-            .buffer(2, recordBuffer)
-            .buffer(3, worldLobes)
-            .image(5, distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(6, state)
-            .buffer(7, loopCounts)
-            .buffer(9, boxes)
-            .push(m_ctx, cmd, m_march);
-        for (std::uint32_t k = 0; k < dispatches; ++k) {
-            const glm::uvec4 range(k * perDispatch, std::min(steps, (k + 1) * perDispatch), n, 0u);
-            if (k > 0) // the previous dispatch read the params and wrote the state
-                memoryBarrier(cmd, kCompute, kStorageRW, kTransfer | kCompute,
-                              VK_ACCESS_2_TRANSFER_WRITE_BIT | kStorageRW);
-            vkCmdUpdateBuffer(cmd, paramBuffer.handle(), offsetof(SpotMarchParams, range),
-                              sizeof(range), &range);
-            memoryBarrier(cmd, kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute, kStorageRead);
-            vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        region.imageExtent = {width, height, 1};
+        vkCmdCopyImageToBuffer(cmd, m_base.handle(), passes::kGeneral, base.handle(), 1, &region);
+        vkCmdCopyImageToBuffer(cmd, m_distance.handle(), passes::kGeneral, distance.handle(), 1,
+                               &region);
+        if (lobeBytes > 0) {
+            const VkBufferCopy copy{0, 0, lobeBytes};
+            vkCmdCopyBuffer(cmd, m_worldLobes.handle(), lobes.handle(), 1, &copy);
         }
-        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRead);
-        m_marchTimes.write(cmd, 1, kAll);
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_resolve.handle());
-        pushFrame(cmd, m_resolve, frame);
-        Descriptors()
-            .buffer(0, paramBuffer)
-            .image(4, base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(6, state)
-            .buffer(8, result)
-            .push(m_ctx, cmd, m_resolve);
-        vkCmdDispatch(cmd, (outWidth + 7) / 8, (outHeight + 7) / 8, 1);
-        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kHostStage,
+        memoryBarrier(cmd, passes::kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, passes::kHostStage,
                       VK_ACCESS_2_HOST_READ_BIT);
-        m_marchTimes.write(cmd, 2, kAll);
     });
-
-    noise::Image image(camera.width, camera.height);
-    const auto* rgba = static_cast<const glm::vec4*>(result.mapped());
-    for (std::size_t i = 0; i < image.pixels.size(); ++i)
-        image.pixels[i] = glm::vec3(rgba[i]);
-    const auto* counted = static_cast<const std::uint32_t*>(loopCounts.mapped());
-    if (stats) {
-        const std::vector<double> first = m_binTimes.milliseconds();
-        const std::vector<double> second = m_marchTimes.milliseconds();
-        stats->passMs = {{"prepare", first[1] - first[0]},
-                         {"bin", first[2] - first[1]},
-                         {"mesh", first[3] - first[2]},
-                         {"march", second[1] - second[0]},
-                         {"resolve", second[2] - second[1]}};
-        stats->totalMs = first[3] + second[2];
-        stats->hostMs = hostMs;
-        stats->loopBound = std::uint32_t(bound);
-        stats->maxLoopIterations = counted[0];
-        stats->stepsPerDispatch = perDispatch;
-        stats->maxStepsPerDispatch = std::uint32_t(std::min<std::uint64_t>(fits, 0xffffffffu));
-        stats->dispatches = dispatches;
-        stats->supersample = n;
-        stats->shellCells = records;
-        stats->maxNeighbourhoodLobes = std::uint32_t(lobesPerStep);
-        stats->maxNeighbourhoodImpulses = mostImpulses;
-        stats->lobesPerImpulse = m_lobeCount;
-        stats->longestProbe = std::uint32_t(shell.longestProbe);
-        stats->walkCells = walk;
-        stats->frameBytes = m_ctx.allocatedBytes() - allocatedBefore;
-        stats->gpuMemoryBytes = m_ctx.peakAllocatedBytes();
-    }
-    if (capture) {
-        capture->camera = camera;
-        capture->params = params;
-        capture->stepsPerDispatch = perDispatch;
-        capture->table = shell.table;
-        capture->cells = std::move(neighbourhoods);
-        const auto* lobes = static_cast<const gpu::SpotWorldLobe*>(worldLobes.mapped());
-        capture->lobes.assign(lobes, lobes + std::uint64_t(count) * m_lobeCount);
-        const auto* box = static_cast<const SpotMarchBox*>(boxes.mapped());
-        capture->boxes.assign(box, box + count);
-        const auto* b = static_cast<const glm::vec4*>(baseCopy.mapped());
-        capture->base.assign(b, b + pixels);
-        const auto* dist = static_cast<const float*>(distanceCopy.mapped());
-        capture->meshDistance.assign(dist, dist + pixels);
-        capture->gpuLoops.assign(counted + 1, counted + 1 + pixels);
-    }
-    return image;
+    const Prepared& f = m_frame;
+    RaymarchCapture c;
+    c.camera = f.camera;
+    c.params = *static_cast<const SpotMarchParams*>(m_params.mapped());
+    c.push = f.push;
+    c.stepsPerDispatch = f.stepsPerDispatch;
+    c.lobes = m_scene.lobeCount();
+    c.lambert = f.lambert;
+    c.cull = f.cull;
+    c.table = m_shell->table;
+    const std::uint32_t records = m_binStats.shellCells;
+    const auto* cells = static_cast<const SpotMarchCell*>(m_cells.mapped());
+    c.cells.assign(cells, cells + records);
+    const auto* spans = static_cast<const glm::uvec2*>(m_spans.mapped());
+    c.spans.assign(spans, spans + std::uint64_t(records) * kMarchSubCells);
+    const auto* list = static_cast<const std::uint32_t*>(m_list.mapped());
+    c.list.assign(list, list + m_binStats.listEntries);
+    const auto* w = static_cast<const gpu::SpotWorldLobe*>(lobes.mapped());
+    c.lobeData.assign(w, w + std::uint64_t(m_binStats.impulses) * m_scene.lobeCount());
+    const auto* box = static_cast<const SpotMarchBox*>(m_boxes.mapped());
+    c.boxes.assign(box, box + m_binStats.impulses);
+    const auto* b = static_cast<const glm::vec4*>(base.mapped());
+    c.base.assign(b, b + pixels);
+    const auto* dist = static_cast<const float*>(distance.mapped());
+    c.meshDistance.assign(dist, dist + pixels);
+    const auto* counted = static_cast<const std::uint32_t*>(m_loops.mapped());
+    c.gpuLoops.assign(counted + 1, counted + 1 + pixels);
+    return c;
 }
 
 noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint32_t>* loops) {
-    const std::uint32_t n = capture.params.range.z;
-    const std::uint32_t steps = capture.params.counts.x;
+    const std::uint32_t n = capture.push.range.w;
+    const std::uint32_t steps = capture.push.range.z;
     const std::uint32_t perDispatch = capture.stepsPerDispatch;
     SPOT_CHECK(n >= 1 && perDispatch >= 1);
-    noise::Camera marchCamera = capture.camera;
-    marchCamera.width *= int(n);
-    marchCamera.height *= int(n);
-    const SpotSplatFrame frame =
-        makeSplatFrame(marchCamera, noise::Shading{}, glm::vec3(0.0f), 0, 0, 0.0f, 0, 0);
-    const std::size_t width = std::size_t(marchCamera.width);
-    const std::uint64_t pixels = std::uint64_t(width) * std::uint64_t(marchCamera.height);
+    const int width = int(capture.push.size.x), height = int(capture.push.size.y);
+    SPOT_CHECK_EQ(width, capture.camera.width * int(n));
+    SPOT_CHECK_EQ(height, capture.camera.height * int(n));
+    const std::uint64_t pixels = std::uint64_t(width) * std::uint64_t(height);
     SPOT_CHECK_EQ(capture.base.size(), pixels);
     SPOT_CHECK_EQ(capture.meshDistance.size(), pixels);
     std::vector<glm::vec4> state(pixels);
     if (loops)
         loops->assign(pixels, 0u);
-    const MarchTwin::Arrays arrays{&capture.params, capture.table.data(), capture.cells.data(),
-                                   capture.lobes.data(), capture.boxes.data()};
+    MarchTwin::Arrays arrays;
+    arrays.params = &capture.params;
+    arrays.table = capture.table.data();
+    arrays.cells = capture.cells.data();
+    arrays.spans = capture.spans.data();
+    arrays.list = capture.list.data();
+    arrays.lobes = capture.lobeData.data();
+    arrays.boxes = capture.boxes.data();
+    arrays.light = capture.push.light;
+    arrays.lobeCount = capture.lobes;
+    arrays.lambert = capture.lambert;
+    arrays.cull = capture.cull;
     // raymarch_march.comp, every dispatch of it, one row band per thread.
     const auto rows = [&](int y0, int y1) {
         MarchTwin twin(arrays);
         for (int y = y0; y < y1; ++y)
-            for (int x = 0; x < marchCamera.width; ++x) {
-                // splatPixelRay's arithmetic, in float.
-                const float px = float(x) + 0.5f, py = float(y) + 0.5f;
-                const float sx = 2.0f * px / frame.size.x - 1.0f;
-                const float sy = 1.0f - 2.0f * py / frame.size.y;
+            for (int x = 0; x < width; ++x) {
                 glm::vec3 o, d;
-                shared::f32::spotCameraRay(glm::vec3(frame.eye), glm::vec3(frame.forward),
-                                           glm::vec3(frame.right) * frame.right.w,
-                                           glm::vec3(frame.up) * frame.up.w, frame.eye.w > 0.5f, sx,
-                                           sy, o, d);
-                const std::size_t i = std::size_t(y) * width + std::size_t(x);
+                twin.marchPixelRay(capture.push, float(x) + 0.5f, float(y) + 0.5f, o, d);
+                const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
                 glm::vec4 s(0.0f, 0.0f, 0.0f, 1.0f);
                 std::uint32_t most = 0;
                 for (std::uint32_t first = 0; first < steps; first += perDispatch) {
                     std::uint32_t count = 0;
                     s = twin.marchRay(o, d, capture.meshDistance[i], first,
-                                      std::min(steps, first + perDispatch), s, count);
+                                      std::min(steps, first + perDispatch), steps, s, count);
                     most = std::max(most, count);
                 }
                 state[i] = s;
@@ -684,8 +952,7 @@ noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint
     const int threads = int(std::clamp(std::thread::hardware_concurrency(), 1u, 16u));
     std::vector<std::thread> workers;
     for (int t = 0; t < threads; ++t)
-        workers.emplace_back(rows, marchCamera.height * t / threads,
-                             marchCamera.height * (t + 1) / threads);
+        workers.emplace_back(rows, height * t / threads, height * (t + 1) / threads);
     for (std::thread& w : workers)
         w.join();
     // raymarch_resolve.comp.
@@ -696,7 +963,7 @@ noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint
             for (std::uint32_t sy = 0; sy < n; ++sy)
                 for (std::uint32_t sx = 0; sx < n; ++sx) {
                     const std::size_t i =
-                        (std::size_t(y) * n + sy) * width + std::size_t(x) * n + sx;
+                        (std::size_t(y) * n + sy) * std::size_t(width) + std::size_t(x) * n + sx;
                     sum += glm::vec3(state[i]) + state[i].w * glm::vec3(capture.base[i]);
                 }
             image.pixels[std::size_t(y) * std::size_t(image.width) + std::size_t(x)] =

@@ -1,56 +1,66 @@
 /// @file raymarch_vk.h
 /// @brief The `raymarch` method of DESIGN section 4: the baseline the paper beats (paper sec. 4,
 /// eq. 7-9). Each pixel's ray is marched through the shell, and at every step the kernels of the
-/// 27 cells around the sample are summed.
+/// 27 cells around the sample are summed. A Renderer of the registry (method_vk.h).
 ///
-/// One frame:
+/// When the impulses change (ImpulseSet::version), prepare() redoes what depends only on them, in
+/// a submit of its own, waited for:
 ///  1. prepare (compute): each impulse's lobes placed in the world (the splat renderer's
 ///     splat_prepare.comp, without EWA widening: a widened lobe could reach past the 3x3x3 cells
 ///     that the march searches).
-///  2. bin (compute, raymarch_bin.comp): each impulse's shell cell (hash lookup) and, per cell,
-///     the range of impulses it holds. Read back; on the host: the impulse order is checked and
-///     every shell cell gets the ranges of its 27 neighbours (at most 9 ranges: the three cells of
-///     one column are contiguous in cell order). Then the loop guard (below).
-///  3. mesh (raster): the opaque base mesh's colour and ray distance (splat_mesh.vert/frag).
+///  2. bin (compute, raymarch_bin.comp): each impulse's shell cell (hash lookup), per cell the
+///     range of impulses it holds, and each impulse's box (SpotMarchBox). Read back; on the host:
+///     the impulse order is checked, and every shell cell's sub-cells (kMarchSub^3 of them) get
+///     the list of the impulses of the cell's 27 neighbours whose box reaches them, in impulse
+///     order (without RenderSettings::cullImpulses, every one of the 27 neighbours' impulses: the
+///     paper's baseline, literally). A list leaves out only impulses that have exactly zero
+///     density in the sub-cell, and keeps the order of the sums, so it changes no pixel (a test
+///     holds that, bit for bit); it spares the march the impulses it would have skipped one
+///     sample at a time (their boxes miss the sample), and it makes the loop guard's T (below)
+///     the longest list instead of the densest neighbourhood, so the steps need fewer dispatches.
+/// Every frame, recorded into the caller's command buffer with no host wait:
+///  3. mesh (raster): the opaque base mesh's colour and ray distance (the scene's MeshPass).
 ///  4. march (compute, raymarch_march.comp): per ray, the shell segments by a cell walk (3D DDA)
 ///     over the shell's bounding box, then N samples evenly spaced over the segments laid end to
 ///     end, front-to-back emission-absorption with alpha = 1 - exp(-sigma dt) (eq. 9's 0-order
 ///     attenuation). Lambert normals: the normalized negative gradient of the summed density of
 ///     all neighbouring lobes, as in the reference. The N steps are split over as many dispatches
-///     as the loop guard needs (below); each continues from the radiance and transmittance the
-///     previous one left, with the same arithmetic, so the split never changes the image.
+///     as the loop guard needs (below, decided in prepare()); each continues from the radiance and
+///     transmittance the previous one left, with the same arithmetic, so the split never changes
+///     the image.
 ///  5. resolve (compute, raymarch_resolve.comp): with supersampling n the mesh pass and the march
 ///     run at n times the resolution (n x n rays per pixel through sub-pixel centres); each
 ///     output pixel is the mean of its n x n rays, each over the mesh colour behind it (a box
-///     filter, the reference's). One ray per pixel aliases thin strands: they are hit or missed
-///     as the camera moves, which the bench's temporal flicker shows.
+///     filter, the reference's), into result(). One ray per pixel aliases thin strands: they are
+///     hit or missed as the camera moves, which the bench's temporal flicker shows.
+/// The march and resolve pipelines are specialized (lobes per kernel, Lambert, culling).
 ///
-/// The shell is the set of surface cells dilated by one cell (about 3x the surface cells); memory
-/// grows with the surface: per shell cell 96 bytes of ranges, 32 to 64 bytes of hash table (more
-/// if the table had to grow to keep probes short) and 12 bytes of bins; per kernel its world
-/// lobes (64 bytes each).
+/// Persistent: the targets (per image size and supersampling), the world lobes and boxes (per
+/// impulse capacity, grow-only), the shell and its hash table (per set of surface cells), the
+/// lists (grow-only). A warm frame (same impulses, same size) allocates nothing and reads nothing
+/// back. Memory grows with the surface: per shell cell 16 bytes of record, 64 of sub-cell spans,
+/// 32 to 64 of hash table (more if the table had to grow to keep probes short) and 12 of bins;
+/// per kernel its world lobes (64 bytes each) and box (32), per listed (sub-cell, impulse) pair 4.
 ///
-/// Not done here: per-cell lists of the impulses whose support reaches each cell (instead of all
-/// 27 neighbours' impulses, each tested against its box at every sample) and per-cell occupied
-/// boxes to tighten the segments. Both would make a better renderer than the paper's baseline,
-/// which this one is meant to be; the box test only skips work whose result is exactly zero.
+/// Not done here: per-cell occupied boxes to tighten the segments. The samples are spread over
+/// the segments, so tighter segments would move every sample: another (better) renderer than the
+/// paper's baseline, which this one is meant to be.
 ///
 /// The loop guard. lavapipe silently stops a shader invocation after 65,535 loop iterations (the
-/// image comes back wrong, with no error). Before the march is dispatched, the host bounds the
+/// image comes back wrong, with no error). Before the march is recorded, the host bounds the
 /// iterations any invocation can run (raymarch_shared.glsl explains the accounting):
 ///
 ///     bound(N) = 1 + W (P + 3)  +  1 + N (S + P + 4 + T (L + 2))
 ///
 /// with W the cells a ray can cross in the shell's bounding box (its extents in cells summed),
 /// P the longest hash probe (slots past a key's home slot), S = kMarchMaxSegments, L the lobes per
-/// kernel and T the most impulses any shell cell has in its 27 neighbours. (At each sample an
-/// impulse whose box does not hold it is skipped, lobes and all: exact, and several times faster
-/// than summing every lobe, though the bound must assume all are summed.) The march is split into
-/// dispatches of at most N' steps, N' the largest with bound(N') within the budget
+/// kernel and T the longest sub-cell list. (With culling, an impulse whose box does not hold the
+/// sample is skipped, lobes and all, though the bound must assume all are summed.) The march is
+/// split into dispatches of at most N' steps, N' the largest with bound(N') within the budget
 /// (kMarchLoopBudget = 60,000 by default); a frame where not even one step fits (about 59,000
-/// lobes around one sample) is refused with an InputError that says why. The shader counts its
-/// own loops with the same accounting (RaymarchStats::maxLoopIterations, the most in one
-/// dispatch), so tests hold the bound against what really ran.
+/// lobes in one list) is refused with an InputError that says why. The shader counts its own
+/// loops with the same accounting (RaymarchStats::maxLoopIterations, the most in one dispatch),
+/// so tests hold the bound against what really ran.
 ///
 /// Results are deterministic: no float atomics, every pixel independent, sums in a fixed order.
 /// Units: world units; pixel (x, y) of the image is pixel (x, y) of noise::CameraRays, sampled at
@@ -58,6 +68,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -68,15 +79,10 @@
 #include "noise/camera.h"
 #include "noise/cells.h"
 #include "noise/image.h"
-#include "noise/kernel.h"
-#include "noise/reference.h"
 #include "shaders/spot_layout.hpp"
 #include "splat/context_vk.h"
+#include "splat/method_vk.h"
 #include "splat/pass_vk.h"
-
-namespace spot::noise {
-struct Mesh;
-}
 
 namespace spot::splat {
 
@@ -87,9 +93,11 @@ using glm::vec4;
 #define SPOT_CONST inline constexpr
 #include "shaders/raymarch_layout.glsl"
 #undef SPOT_CONST
-static_assert(sizeof(SpotMarchParams) == 96);
-static_assert(sizeof(SpotMarchCell) == 96);
+static_assert(sizeof(SpotMarchParams) == 64);
+static_assert(sizeof(SpotMarchPush) == 112, "push constants: 128 bytes at most on lavapipe");
+static_assert(sizeof(SpotMarchCell) == 16);
 static_assert(sizeof(SpotMarchBox) == 32);
+static_assert(kMarchSubCells == kMarchSub * kMarchSub * kMarchSub);
 } // namespace gpu_march
 
 /// Loop iterations one march invocation may need by default (see the file comment).
@@ -98,91 +106,118 @@ inline constexpr std::uint32_t kRaymarchLoopBudget = gpu_march::kMarchLoopBudget
 inline constexpr int kRaymarchMaxSteps = 4096;
 inline constexpr int kRaymarchMaxSupersample = 8;
 
-struct RaymarchSettings {
-    /// N: samples along each ray, spread evenly over the ray's shell segments, in [1, 4096]. The
-    /// march is split over as many dispatches as the loop budget needs (each step costs the lobes
-    /// of the densest neighbourhood; RaymarchStats::maxStepsPerDispatch says how many fit in one).
-    int steps = 32;
-    /// n: n x n rays per pixel on a regular grid (sub-pixel centres), averaged: the box pixel
-    /// filter of the reference. In [1, 8]; the cost grows with n^2.
-    int supersample = 1;
-    /// Largest loop bound one dispatch may reach. Tests raise it past lavapipe's 65,535 (all steps
-    /// then go in one dispatch) to show what the guard prevents; anything above
-    /// kMarchLavapipeLoopLimit gives truncated images on lavapipe.
-    std::uint32_t loopBudget = kRaymarchLoopBudget;
-    /// Skip the impulses whose box (SpotMarchBox) does not hold the sample. Exact: the image is
-    /// the same without it (a test holds that), only slower.
-    bool cullImpulses = true;
-};
-
+/// What the last frame's guard decided and the shader counted (after the frame completed; the
+/// stats' FrameCounters::extra gives the main ones to `render --stats` and the bench).
 struct RaymarchStats {
-    std::vector<std::pair<std::string, double>> passMs; ///< GPU time per pass, milliseconds
-    double totalMs = 0.0;        ///< GPU time of the frame (both submits), milliseconds
-    double hostMs = 0.0;         ///< CPU time between the submits (ranges, guard), milliseconds
     std::uint32_t loopBound = 0; ///< bound(steps per dispatch) for this frame (file comment)
-    std::uint32_t maxLoopIterations = 0;     ///< counted by the shader: the maximum over pixels
-    std::uint32_t stepsPerDispatch = 0;      ///< steps each march dispatch takes (the last fewer)
-    std::uint32_t maxStepsPerDispatch = 0;   ///< the most the loop budget allows in one dispatch
-    std::uint32_t dispatches = 0;            ///< march dispatches: ceil(steps / max per dispatch)
-    std::uint32_t supersample = 1;           ///< n: n x n rays per pixel
-    std::uint32_t shellCells = 0;            ///< cells of the dilated surface
-    std::uint32_t maxNeighbourhoodLobes = 0; ///< L T: lobes summed at one sample at most
-    std::uint32_t maxNeighbourhoodImpulses = 0; ///< T
+    std::uint32_t maxLoopIterations = 0;   ///< counted by the shader: the maximum over pixels
+    std::uint32_t stepsPerDispatch = 0;    ///< steps each march dispatch takes (the last fewer)
+    std::uint32_t maxStepsPerDispatch = 0; ///< the most the loop budget allows in one dispatch
+    std::uint32_t dispatches = 0;          ///< march dispatches: ceil(steps / max per dispatch)
+    std::uint32_t supersample = 1;         ///< n: n x n rays per pixel
+    std::uint32_t shellCells = 0;          ///< cells of the dilated surface
+    std::uint32_t maxNeighbourhoodImpulses = 0; ///< impulses of the densest 27 cells
+    std::uint32_t maxListedImpulses = 0;        ///< T: the longest sub-cell list
     std::uint32_t lobesPerImpulse = 0;          ///< L
-    std::uint32_t longestProbe = 0;          ///< P
-    std::uint32_t walkCells = 0;             ///< W
-    std::uint64_t frameBytes = 0;            ///< GPU memory the frame allocated
-    std::uint64_t gpuMemoryBytes = 0;        ///< the context's peak allocation so far
+    std::uint32_t longestProbe = 0;             ///< P
+    std::uint32_t walkCells = 0;                ///< W
+    std::uint64_t listEntries = 0;              ///< (sub-cell, impulse) pairs listed
+    std::uint32_t impulses = 0;                 ///< the impulse count the lists were built for
+    bool binned = false;    ///< this frame's prepare() redid the lists (new impulses)
+    double binMs = 0.0;     ///< then: GPU time of its prepare and bin passes
+    double binHostMs = 0.0; ///< then: host time of the readback, checks and lists
 };
 
 /// What the march shader read in one frame, for the CPU twin (raymarchOnCpu).
 struct RaymarchCapture {
-    noise::Camera camera;                 ///< the output image's (the march's is n times larger)
-    gpu_march::SpotMarchParams params{};  ///< range.z is the supersampling n
-    std::uint32_t stepsPerDispatch = 1;   ///< the split of the march over dispatches
+    noise::Camera camera; ///< the output image's (the march's is n times larger)
+    gpu_march::SpotMarchParams params{};
+    gpu_march::SpotMarchPush push{};             ///< range.z: steps N; range.w: supersampling n
+    std::uint32_t stepsPerDispatch = 1;          ///< the split of the march over dispatches
+    std::uint32_t lobes = 1;                     ///< specialization: lobes per kernel
+    bool lambert = false, cull = true;           ///< specialization: shading, box test
     std::vector<glm::ivec4> table;               ///< hash slots (i, j, k, record or -1)
     std::vector<gpu_march::SpotMarchCell> cells; ///< shell cell records
-    std::vector<gpu::SpotWorldLobe> lobes;       ///< world lobes, impulse-major
+    std::vector<glm::uvec2> spans;               ///< per sub-cell: (first entry, entries)
+    std::vector<std::uint32_t> list;             ///< impulse indices
+    std::vector<gpu::SpotWorldLobe> lobeData;    ///< world lobes, impulse-major
     std::vector<gpu_march::SpotMarchBox> boxes;  ///< per impulse
-    std::vector<glm::vec4> base;         ///< mesh pass colour per march pixel (row-major)
-    std::vector<float> meshDistance;     ///< ray distance to the mesh per march pixel
+    std::vector<glm::vec4> base;                 ///< mesh pass colour per march pixel (row-major)
+    std::vector<float> meshDistance;             ///< ray distance to the mesh per march pixel
     std::vector<std::uint32_t> gpuLoops; ///< loop iterations the GPU counted per march pixel (the
                                          ///< most of any one dispatch)
 };
 
-class RaymarchRenderer {
+class RaymarchRenderer final : public Renderer {
 public:
-    /// Uploads the mesh (may be empty) and the kernel's lobes, builds the pipelines. Throws
-    /// InputError for a kernel without lobes or with more than 8.
-    RaymarchRenderer(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel);
+    /// `scene` must outlive the renderer.
+    explicit RaymarchRenderer(const SceneGpu& scene);
+    ~RaymarchRenderer() override;
 
-    /// Render one frame of `count` impulses (`impulses` holds gpu::SpotImpulse[], at least `count`,
-    /// storage-buffer usage) generated in `cells` (the generator's surface cells: impulses in
-    /// cell order, each in the cell that generated it, as noise::ImpulseGenerator and GpuGenerator
-    /// give them; the cell size must be at least the kernels' support radius, as the generator
-    /// ensures). Throws InputError for a bad setting, impulses out of cell order or outside the
-    /// cells, a frame beyond the memory budget, or a step count whose loop bound exceeds
-    /// settings.loopBudget (the message names the step count that fits). `capture`, when given,
-    /// receives what the march read (slower: for tests).
-    noise::Image render(const noise::Camera& camera, const noise::Shading& shading,
-                        glm::vec3 background, glm::vec3 baseColor, const noise::SurfaceCells& cells,
-                        const Buffer& impulses, std::uint32_t count,
-                        const RaymarchSettings& settings, RaymarchStats* stats = nullptr,
-                        RaymarchCapture* capture = nullptr);
+    /// The impulses must come with the surface cells they were generated in (ImpulseSet::cells:
+    /// impulses in cell order, each in the cell that generated it, as noise::ImpulseGenerator and
+    /// GpuGenerator give them; the cell size must be at least the kernels' support radius, as the
+    /// generator ensures). Throws InputError for a bad setting, impulses out of cell order or
+    /// outside the cells, a frame beyond the memory budget, or a step count whose loop bound
+    /// exceeds settings.loopBudget (the message names what would fit).
+    void prepare(const View& view, const ImpulseSet& impulses,
+                 const RenderSettings& settings) override;
+    void record(VkCommandBuffer cmd, PassTimer& timer) override;
+    const Image& result() const override { return m_result; }
+    /// kernelsDrawn: the impulses marched; extra: loop_bound, max_loop_iterations, dispatches,
+    /// steps_per_dispatch, listed_impulses (T), shell_cells, binned.
+    FrameCounters counters() const override;
+    bool readsImpulsesInPrepare() const override { return true; }
+
+    /// After the frame completed.
+    RaymarchStats stats() const;
+    /// After the frame completed: what the march read, read back (allocates; for tests).
+    RaymarchCapture capture();
 
 private:
     struct Shell; ///< the dilated cells and their hash table (host and GPU), kept between frames
+    struct Pipelines {
+        Pipeline march, resolve;
+    };
     const Shell& shellFor(const noise::SurfaceCells& cells);
+    const Pipelines& pipelines(bool lambert, bool cull);
+    void bin(const ImpulseSet& impulses, const noise::Camera& marchCamera, bool cull);
+    void ensureImpulseBuffers(std::uint32_t capacity);
+    void ensureTargets(std::uint32_t outWidth, std::uint32_t outHeight, std::uint32_t n);
 
+    const SceneGpu& m_scene;
     Context& m_ctx;
-    std::uint32_t m_lobeCount = 0;
-    float m_support = 3.0f;
-    MeshPass m_meshPass;
-    Buffer m_lobes;
-    Pipeline m_prepare, m_bin, m_march, m_resolve;
-    bool m_prepareOrthographic = false;
-    Timestamps m_binTimes, m_marchTimes;
+    Pipeline m_prepare, m_bin;
+    std::map<std::pair<bool, bool>, Pipelines> m_pipelines;
     std::shared_ptr<Shell> m_shell;
+
+    // Per impulse capacity (grow-only).
+    std::uint32_t m_capacity = 0;
+    Buffer m_worldLobes, m_boxes;
+    Buffer m_prepareUnused; ///< the prepare pass's screen outputs, not written here
+    // Per shell and impulse version: bins (readback), records, spans, lists (grow-only).
+    Buffer m_params, m_bins, m_cells, m_spans, m_list;
+    std::uint64_t m_version = 0; ///< the impulse version the lists were built for (0: none)
+    bool m_listsCulled = true;
+    const noise::SurfaceCells* m_listedCells = nullptr;
+    RaymarchStats m_binStats; ///< the numbers of the last binning
+    // Per image size and supersampling.
+    std::uint32_t m_width = 0, m_height = 0, m_n = 0; ///< output size and n
+    Image m_base, m_distance, m_depth, m_result;
+    Buffer m_state, m_loops;
+
+    // The frame prepared last.
+    struct Prepared {
+        gpu_splat::SpotSplatFrame meshFrame{};
+        gpu_march::SpotMarchPush push{};
+        glm::vec3 background{0.0f};
+        const Pipelines* pipelines = nullptr;
+        std::uint32_t dispatches = 0, stepsPerDispatch = 0, maxStepsPerDispatch = 0;
+        std::uint64_t loopBound = 0;
+        noise::Camera camera;
+        bool lambert = false, cull = true;
+        bool binned = false;
+    } m_frame;
 };
 
 /// A captured frame rendered on the CPU by the same march code (raymarch_shared.glsl compiled as
@@ -193,7 +228,7 @@ noise::Image raymarchOnCpu(const RaymarchCapture& capture,
 
 /// bound(N) of the file comment, in 64 bits (it may pass 2^32 for absurd settings).
 std::uint64_t raymarchLoopBound(std::uint64_t steps, std::uint64_t walkCells,
-                                std::uint64_t longestProbe, std::uint64_t neighbourhoodImpulses,
+                                std::uint64_t longestProbe, std::uint64_t listedImpulses,
                                 std::uint64_t lobesPerImpulse);
 
 } // namespace spot::splat
