@@ -3,8 +3,9 @@
 // invocation per impulse: its cell's record (the shared hash lookup), then first index, end index
 // and count per record with integer atomics (order independent, so deterministic). The host reads
 // them back, checks the impulses are in cell order (each cell's impulses contiguous, cells in the
-// shell's sorted order) and builds every sub-cell's impulse list. Also each impulse's box
-// (SpotMarchBox), from its world lobes, which the host reads for the lists.
+// shell's sorted order) and builds every sub-cell's impulse list. Also each lobe's box and each
+// impulse's (their union) (SpotMarchBox), from its world lobes, which the host reads for the
+// lists.
 #extension GL_GOOGLE_include_directive : require
 #include "spot_shared.h"
 #include "spot_layout.h"
@@ -21,6 +22,7 @@ layout(std430, binding = kMarchBindCount) readonly buffer Count { uint impulseCo
 layout(std430, binding = kMarchBindBins) buffer Bins { uint bins[]; };
 layout(std430, binding = kMarchBindWorldLobes) readonly buffer Lobes { SpotWorldLobe lobes[]; };
 layout(std430, binding = kMarchBindBoxes) writeonly buffer Boxes { SpotMarchBox boxes[]; };
+layout(std430, binding = kMarchBindLobeBoxes) writeonly buffer LobeBoxes { SpotMarchBox lobeBoxes[]; };
 
 layout(push_constant) uniform Push {
     uint records; // shell cells
@@ -44,6 +46,7 @@ void main() {
     vec3 hi = vec3(-kMarchFar);
     for (uint l = 0u; l < lobeCount; ++l) {
         SpotWorldLobe w = lobes[i * lobeCount + l];
+        lobeBoxes[i * lobeCount + l] = SpotMarchBox(vec4(kMarchFar), vec4(-kMarchFar)); // empty
         if (!(w.color.w > 0.0))
             continue; // no density anywhere
         mat3 inv = inverse(mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz));
@@ -55,9 +58,11 @@ void main() {
         if (!(max(e.x, max(e.y, e.z)) < kMarchFar)) { // not finite: never cull
             lo = vec3(-kMarchFar);
             hi = vec3(kMarchFar);
+            lobeBoxes[i * lobeCount + l] = SpotMarchBox(vec4(-kMarchFar), vec4(kMarchFar));
         } else {
             lo = min(lo, c - e);
             hi = max(hi, c + e);
+            lobeBoxes[i * lobeCount + l] = SpotMarchBox(vec4(c - e, 0.0), vec4(c + e, 0.0));
         }
     }
     boxes[i] = SpotMarchBox(vec4(lo, 0.0), vec4(hi, 0.0));

@@ -12,9 +12,10 @@
  * by one cell (a kernel centred in a cell reaches only its 3x3x3 neighbourhood, DESIGN section
  * 2). An open-addressing hash table maps a shell cell's ijk to its record. Each shell cell is cut
  * into kMarchSub^3 sub-cells, and each sub-cell lists the impulses of the cell's 27 neighbours
- * that may have density in it (their SpotMarchBox reaches it); the march sums only those, in
- * impulse order (the list is a subset, in the same order, of the 27 neighbours' impulses, and
- * each impulse it leaves out has exactly zero density there).
+ * that may have density in it (their SpotMarchBox reaches it), each with the mask of its lobes
+ * whose own box reaches it; the march sums only those lobes, in impulse and lobe order (the list
+ * is a subset, in the same order, of the 27 neighbours' lobes, and each lobe it leaves out has
+ * exactly zero density there).
  */
 #ifndef SPOT_CONST
 #define SPOT_CONST const
@@ -69,7 +70,8 @@ SPOT_CONST uint kMarchBindTable = 1u;        /* ivec4[]: hash slots (i, j, k, re
 SPOT_CONST uint kMarchBindCells = 2u;        /* SpotMarchCell[record] */
 SPOT_CONST uint kMarchBindSpans = 3u;        /* uvec2[record * kMarchSub^3 + sub-cell]: (first
                                                 list entry, entries) */
-SPOT_CONST uint kMarchBindList = 4u;         /* uint[]: impulse indices, ascending per span */
+SPOT_CONST uint kMarchBindList = 4u;         /* uint[]: list entries, ascending impulse per span:
+                                                impulse | lobe mask << kMarchEntryLobeShift */
 SPOT_CONST uint kMarchBindWorldLobes = 5u;   /* SpotWorldLobe[impulse * lobes + l] */
 SPOT_CONST uint kMarchBindBoxes = 6u;        /* SpotMarchBox[impulse] */
 SPOT_CONST uint kMarchBindMeshDistance = 7u; /* r32f image: ray distance to the mesh */
@@ -81,11 +83,17 @@ SPOT_CONST uint kMarchBindResult = 11u;      /* rgba32f image: the frame's resul
 SPOT_CONST uint kMarchBindImpulses = 12u;    /* SpotImpulse[] (bin) */
 SPOT_CONST uint kMarchBindCount = 13u;       /* uint: the impulse count (bin) */
 SPOT_CONST uint kMarchBindBins = 14u;        /* uint[]: per record first, end, count (bin) */
+SPOT_CONST uint kMarchBindLobeBoxes = 15u;   /* SpotMarchBox[impulse * lobes + l] (bin) */
 
 /* Specialization constant ids (the march and resolve are compiled per setting). */
 SPOT_CONST uint kMarchSpecLobes = 0u;   /* uint: lobes per kernel, 1..8 */
 SPOT_CONST uint kMarchSpecLambert = 1u; /* bool: Lambert + ambient shading, else unlit */
 SPOT_CONST uint kMarchSpecCull = 2u;    /* bool: skip impulses whose box misses the sample */
+
+/* A list entry: the impulse index in the low bits (fewer than 2^22 impulses: 65,535 workgroups of
+ * 64), the mask of its lobes that may have density in the sub-cell (bit l: lobe l) above. */
+SPOT_CONST uint kMarchEntryLobeShift = 22u;
+SPOT_CONST uint kMarchEntryImpulse = 0x3fffffu;
 
 /* Sub-cells per cell side: each shell cell's impulse lists are kept per sub-cell. */
 SPOT_CONST uint kMarchSub = 4u;

@@ -168,9 +168,9 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
  * samples evenly spaced over the ray's shell segments (midpoints of N equal steps of the segments
  * laid end to end); at each, the density (extinction) and extinction-weighted colour of every
  * lobe of the 27 neighbour cells' impulses, composited front to back with the 0-order
- * attenuation alpha = 1 - exp(-sigma dt). Only the impulses the sample's sub-cell lists are
- * visited (with kMarchCull, also only those whose box holds the sample): every other one adds
- * exactly zero, and the sums run in impulse order either way. With Lambert shading the normal is
+ * attenuation alpha = 1 - exp(-sigma dt). Only the lobes the sample's sub-cell lists are
+ * visited (with kMarchCull, also only those of impulses whose box holds the sample): every other
+ * one adds exactly zero, and the sums run in impulse and lobe order either way. With Lambert shading the normal is
  * the normalized negative gradient of the summed density (the reference's).
  *
  * This call takes steps [first, end) of the N, continuing from `state` (radiance, transmittance:
@@ -227,7 +227,9 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
         loops += 1u;
         for (uint e = span.x; e < span.x + span.y; ++e) {
             loops += 1u;
-            uint impulse = marchEntry(e);
+            uint entry = marchEntry(e);
+            uint impulse = entry & kMarchEntryImpulse;
+            uint lobeMask = entry >> kMarchEntryLobeShift;
             if (kMarchCull) {
                 SpotMarchBox box = marchBox(impulse);
                 if (x.x < box.lo.x || x.y < box.lo.y || x.z < box.lo.z || x.x > box.hi.x ||
@@ -237,6 +239,8 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
             loops += 1u;
             for (uint l = 0u; l < kMarchLobes; ++l) {
                 loops += 1u;
+                if ((lobeMask & (1u << l)) == 0u)
+                    continue; // its box misses the sub-cell: no density here
                 SpotWorldLobe w = marchLobe(impulse * kMarchLobes + l);
                 if (!(w.color.w > 0.0f))
                     continue;

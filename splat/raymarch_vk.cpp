@@ -22,6 +22,8 @@
 namespace spot::shared::f32 {
 
 using gpu::SpotWorldLobe;
+using splat::gpu_march::kMarchEntryImpulse;
+using splat::gpu_march::kMarchEntryLobeShift;
 using splat::gpu_march::kMarchFar;
 using splat::gpu_march::kMarchMaxSegments;
 using splat::gpu_march::kMarchOpaque;
@@ -284,12 +286,13 @@ RaymarchRenderer::RaymarchRenderer(const SceneGpu& scene) : m_scene(scene), m_ct
     requireFormat(m_ctx, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth");
     // World lobes only (no screen outputs, no EWA: they depend on the impulses alone).
     m_prepare = makePreparePipeline(m_ctx, m_scene.lobeCount(), false, false, false);
-    m_bin = makeComputePipeline(m_ctx, spirv(spv_raymarch_bin_comp),
-                                {storageBuffer(kMarchBindParams), storageBuffer(kMarchBindTable),
-                                 storageBuffer(kMarchBindImpulses), storageBuffer(kMarchBindCount),
-                                 storageBuffer(kMarchBindBins), storageBuffer(kMarchBindWorldLobes),
-                                 storageBuffer(kMarchBindBoxes)},
-                                sizeof(std::uint32_t));
+    m_bin =
+        makeComputePipeline(m_ctx, spirv(spv_raymarch_bin_comp),
+                            {storageBuffer(kMarchBindParams), storageBuffer(kMarchBindTable),
+                             storageBuffer(kMarchBindImpulses), storageBuffer(kMarchBindCount),
+                             storageBuffer(kMarchBindBins), storageBuffer(kMarchBindWorldLobes),
+                             storageBuffer(kMarchBindBoxes), storageBuffer(kMarchBindLobeBoxes)},
+                            sizeof(std::uint32_t));
     m_params = Buffer(m_ctx, sizeof(SpotMarchParams), kStorage, kHost, "ray march parameters");
     m_prepareUnused =
         Buffer(m_ctx, 16, kStorage, kDevice, "ray march prepare: unused screen outputs");
@@ -329,8 +332,9 @@ void RaymarchRenderer::ensureImpulseBuffers(std::uint32_t capacity) {
         capacity, std::uint32_t(std::min<std::uint64_t>(kMaxImpulses, capacity + capacity / 4)));
     const std::uint64_t n = std::max<std::uint32_t>(grown, 1);
     const std::uint64_t lobeBytes = n * m_scene.lobeCount() * sizeof(gpu::SpotWorldLobe);
-    const std::uint64_t need = lobeBytes + n * sizeof(SpotMarchBox);
-    const std::uint64_t held = m_worldLobes.reservedBytes() + m_boxes.reservedBytes();
+    const std::uint64_t need = lobeBytes + n * (1 + m_scene.lobeCount()) * sizeof(SpotMarchBox);
+    const std::uint64_t held =
+        m_worldLobes.reservedBytes() + m_boxes.reservedBytes() + m_lobeBoxes.reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("raymarch: ", capacity, " kernels need ", need >> 20,
                              " MiB of GPU memory; ", (m_ctx.allocatedBytes() - held) >> 20,
@@ -338,12 +342,15 @@ void RaymarchRenderer::ensureImpulseBuffers(std::uint32_t capacity) {
                              " MiB; reduce the kernel count"));
     m_worldLobes = Buffer();
     m_boxes = Buffer();
+    m_lobeBoxes = Buffer();
     m_capacity = 0;
     // The capture copies the world lobes out; the host reads the boxes for the lists.
     m_worldLobes = Buffer(m_ctx, lobeBytes, kStorage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, kDevice,
                           cat("ray march world lobes (", grown, " kernels)"));
     m_boxes = Buffer(m_ctx, n * sizeof(SpotMarchBox), kStorage, kHost,
                      cat("ray march impulse boxes (", grown, " kernels)"));
+    m_lobeBoxes = Buffer(m_ctx, n * m_scene.lobeCount() * sizeof(SpotMarchBox), kStorage, kHost,
+                         cat("ray march lobe boxes (", grown, " kernels)"));
     m_capacity = grown;
 }
 
@@ -455,6 +462,7 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
                 .buffer(kMarchBindBins, m_bins)
                 .buffer(kMarchBindWorldLobes, m_worldLobes)
                 .buffer(kMarchBindBoxes, m_boxes)
+                .buffer(kMarchBindLobeBoxes, m_lobeBoxes)
                 .push(m_ctx, cmd, m_bin);
             vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
         }
@@ -526,7 +534,9 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
     std::vector<glm::uvec2> spans(std::size_t(records) * kMarchSubCells, glm::uvec2(0u));
     std::vector<std::uint32_t> list;
     if (!cull) {
-        // The paper's baseline: every sub-cell of a cell lists all its 27 neighbours' impulses.
+        // The paper's baseline: every sub-cell of a cell lists all its 27 neighbours' impulses,
+        // with all their lobes.
+        const std::uint32_t allLobes = (1u << lobes) - 1u;
         std::uint64_t total = 0;
         for (std::uint32_t r = 0; r < records; ++r)
             total += cells[r].head.x;
@@ -538,7 +548,7 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
                 if (const int nb = neighbours[std::size_t(r) * 27 + std::size_t(n)];
                     nb >= 0 && binCount[nb] > 0)
                     for (std::uint32_t i = binFirst[nb]; i < binEnd[nb]; ++i)
-                        list.push_back(i);
+                        list.push_back(i | allLobes << kMarchEntryLobeShift);
             for (std::uint32_t q = 0; q < kMarchSubCells; ++q)
                 spans[std::size_t(r) * kMarchSubCells + q] =
                     glm::uvec2(first, std::uint32_t(list.size()) - first);
@@ -550,46 +560,70 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
         // for the shader's floor(x / (h / kMarchSub)), so a sample a hair past a sub-cell's side
         // still finds every impulse whose box holds it.
         const auto* boxes = static_cast<const SpotMarchBox*>(m_boxes.mapped());
+        const auto* lobeBoxes = static_cast<const SpotMarchBox*>(m_lobeBoxes.mapped());
         const double scale = double(params.grid.y * float(kMarchSub));
         const int sub = int(kMarchSub);
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs; // (span, impulse)
+        // The sub-cells a box reaches, clamped to [first, last] per axis (hi < lo: none).
+        const auto reach = [&](const SpotMarchBox& box, glm::ivec3 first, glm::ivec3 last,
+                               glm::ivec3& lo, glm::ivec3& hi) {
+            for (int a = 0; a < 3; ++a) {
+                const double l = double(box.lo[a]) * scale;
+                const double h = double(box.hi[a]) * scale;
+                lo[a] = int(std::clamp(std::floor(l - 1e-3 - 1e-6 * std::abs(l)), double(first[a]),
+                                       double(last[a])));
+                hi[a] = int(std::clamp(std::floor(h + 1e-3 + 1e-6 * std::abs(h)), double(first[a]),
+                                       double(last[a])));
+                if (!(l <= h)) // empty (no lobe with density) or not a number
+                    hi[a] = lo[a] - 1;
+            }
+        };
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs; // (span, entry)
+        std::vector<std::uint32_t> masks; // per sub-cell of one impulse's box: its lobes there
         for (std::uint32_t r = 0; r < records; ++r) {
             if (binCount[r] == 0)
                 continue;
             const glm::ivec3 c = shell.cells[r];
+            const glm::ivec3 first = (c - 1) * sub, last = (c + 2) * sub - 1;
             for (std::uint32_t i = binFirst[r]; i < binEnd[r]; ++i) {
                 glm::ivec3 lo, hi;
-                for (int a = 0; a < 3; ++a) {
-                    const double l = double(boxes[i].lo[a]) * scale;
-                    const double h = double(boxes[i].hi[a]) * scale;
-                    const double first = double((c[a] - 1) * sub);
-                    const double last = double((c[a] + 2) * sub - 1);
-                    lo[a] = int(std::clamp(std::floor(l - 1e-3 - 1e-6 * std::abs(l)), first, last));
-                    hi[a] = int(std::clamp(std::floor(h + 1e-3 + 1e-6 * std::abs(h)), first, last));
-                    if (!(l <= h)) // empty (no lobe with density) or not a number
-                        hi[a] = lo[a] - 1;
+                reach(boxes[i], first, last, lo, hi);
+                if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z)
+                    continue;
+                const glm::ivec3 size = hi - lo + 1;
+                masks.assign(std::size_t(size.x) * size.y * size.z, 0u);
+                for (std::uint32_t l = 0; l < lobes; ++l) {
+                    glm::ivec3 a, b;
+                    reach(lobeBoxes[std::size_t(i) * lobes + l], lo, hi, a, b);
+                    for (int x = a.x; x <= b.x; ++x)
+                        for (int y = a.y; y <= b.y; ++y)
+                            for (int z = a.z; z <= b.z; ++z)
+                                masks[(std::size_t(x - lo.x) * size.y + std::size_t(y - lo.y)) *
+                                          size.z +
+                                      std::size_t(z - lo.z)] |= 1u << l;
                 }
+                std::size_t m = 0;
                 for (int x = lo.x; x <= hi.x; ++x)
                     for (int y = lo.y; y <= hi.y; ++y)
-                        for (int z = lo.z; z <= hi.z; ++z) {
-                            const glm::ivec3 s(x, y, z);
+                        for (int z = lo.z; z <= hi.z; ++z, ++m) {
+                            if (masks[m] == 0)
+                                continue;
                             const glm::ivec3 q(floorDiv(x, sub), floorDiv(y, sub),
                                                floorDiv(z, sub));
                             const glm::ivec3 d = q - c + 1;
                             const int nb = neighbours[std::size_t(r) * 27 +
                                                       std::size_t(d.x * 9 + d.y * 3 + d.z)];
                             SPOT_CHECK_LE(0, nb);
-                            const glm::ivec3 local = s - q * sub;
+                            const glm::ivec3 local = glm::ivec3(x, y, z) - q * sub;
                             pairs.emplace_back(
                                 std::uint32_t(nb) * kMarchSubCells +
                                     std::uint32_t((local.x * sub + local.y) * sub + local.z),
-                                i);
+                                i | masks[m] << kMarchEntryLobeShift);
                         }
             }
         }
         // Counting sort by sub-cell, stable: each list in impulse order.
-        for (const auto& [span, impulse] : pairs)
-            ++spans[span].y;
+        for (const auto& pair : pairs)
+            ++spans[pair.first].y;
         std::uint32_t first = 0;
         for (glm::uvec2& s : spans) {
             s.x = first;
@@ -597,8 +631,8 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
         }
         list.resize(pairs.size());
         std::vector<std::uint32_t> fill(spans.size(), 0u);
-        for (const auto& [span, impulse] : pairs)
-            list[spans[span].x + fill[span]++] = impulse;
+        for (const auto& [span, entry] : pairs)
+            list[spans[span].x + fill[span]++] = entry;
         for (std::uint32_t r = 0; r < records; ++r)
             for (std::uint32_t q = 0; q < kMarchSubCells; ++q)
                 cells[r].head.y += spans[std::size_t(r) * kMarchSubCells + q].y;

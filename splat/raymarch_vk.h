@@ -98,6 +98,8 @@ static_assert(sizeof(SpotMarchPush) == 112, "push constants: 128 bytes at most o
 static_assert(sizeof(SpotMarchCell) == 16);
 static_assert(sizeof(SpotMarchBox) == 32);
 static_assert(kMarchSubCells == kMarchSub * kMarchSub * kMarchSub);
+static_assert(kMarchEntryImpulse + 1 == 1u << kMarchEntryLobeShift);
+static_assert(65535u * 64u <= kMarchEntryImpulse + 1, "every impulse index fits an entry");
 } // namespace gpu_march
 
 /// Loop iterations one march invocation may need by default (see the file comment).
@@ -193,7 +195,7 @@ private:
 
     // Per impulse capacity (grow-only).
     std::uint32_t m_capacity = 0;
-    Buffer m_worldLobes, m_boxes;
+    Buffer m_worldLobes, m_boxes, m_lobeBoxes;
     Buffer m_prepareUnused; ///< the prepare pass's screen outputs, not written here
     // Per shell and impulse version: bins (readback), records, spans, lists (grow-only).
     Buffer m_params, m_bins, m_cells, m_spans, m_list;
