@@ -124,6 +124,10 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
     vec3 tNext = vec3(ax.x, ay.x, az.x);
     vec3 tDelta = vec3(ax.y, ay.y, az.y);
     float tc = t0;
+    // The last segment (index s.count - 1) stays in `last` until the walk ends: the array is
+    // written once per segment, not indexed at every cell (a per-lane index into a local array
+    // costs much more than a register on lavapipe).
+    vec2 last = vec2(0.0f);
     loops += 1u;
     for (uint n = 0u; n < p.counts.z; ++n) {
         loops += 1u;
@@ -132,16 +136,18 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
         if (tb > tc) {
             int record = marchFind(c, loops);
             if (record >= 0 && marchCell(uint(record)).head.x > 0u) {
-                if (s.count > 0u && s.seg[s.count - 1u].y >= tc) {
-                    s.span += tb - s.seg[s.count - 1u].y; // adjacent: extend
-                    s.seg[s.count - 1u].y = tb;
+                if (s.count > 0u && last.y >= tc) {
+                    s.span += tb - last.y; // adjacent: extend
+                    last.y = tb;
                 } else if (s.count < kMarchMaxSegments) {
-                    s.seg[s.count] = vec2(tc, tb);
+                    if (s.count > 0u)
+                        s.seg[s.count - 1u] = last;
+                    last = vec2(tc, tb);
                     s.count += 1u;
                     s.span += tb - tc;
                 } else {
-                    s.span += tb - s.seg[s.count - 1u].y; // full: the last one spans the gap
-                    s.seg[s.count - 1u].y = tb;
+                    s.span += tb - last.y; // full: the last one spans the gap
+                    last.y = tb;
                 }
             }
         }
@@ -161,6 +167,8 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
         if (c.x < lo.x || c.y < lo.y || c.z < lo.z || c.x > hi.x || c.y > hi.y || c.z > hi.z)
             break;
     }
+    if (s.count > 0u)
+        s.seg[s.count - 1u] = last;
     return s;
 }
 
@@ -192,6 +200,7 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
     float k = p.grid.z;
     float subScale = p.grid.y * float(kMarchSub);
     uint seg = 0u;
+    vec2 cur = s.seg[0]; // segment `seg`, in registers
     float segStart = 0.0f; // shell length before segment `seg`
     // The last cell looked up (consecutive samples often share one): its index and record.
     ivec3 lastCell = ivec3(p.hi) + ivec3(1);
@@ -201,12 +210,13 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
         loops += 1u;
         float sj = (float(j) + 0.5f) * dt;
         loops += 1u;
-        while (seg + 1u < s.count && sj >= segStart + (s.seg[seg].y - s.seg[seg].x)) {
+        while (seg + 1u < s.count && sj >= segStart + (cur.y - cur.x)) {
             loops += 1u;
-            segStart += s.seg[seg].y - s.seg[seg].x;
+            segStart += cur.y - cur.x;
             seg += 1u;
+            cur = s.seg[seg];
         }
-        float t = clamp(s.seg[seg].x + (sj - segStart), s.seg[seg].x, s.seg[seg].y);
+        float t = clamp(cur.x + (sj - segStart), cur.x, cur.y);
         vec3 x = o + t * d;
         ivec3 cell = ivec3(floor(x * p.grid.y));
         if (cell.x != lastCell.x || cell.y != lastCell.y || cell.z != lastCell.z) {

@@ -361,6 +361,19 @@ void RaymarchRenderer::ensureTargets(std::uint32_t outWidth, std::uint32_t outHe
     const std::uint64_t width = std::uint64_t(outWidth) * n, height = std::uint64_t(outHeight) * n;
     const std::uint64_t need = width * height * kBytesPerMarchPixel + 4 +
                                std::uint64_t(outWidth) * outHeight * kBytesPerPixel;
+    // What the device cannot hold is refused before the old targets are freed, like the budget.
+    const VkPhysicalDeviceLimits& limits = m_ctx.properties().limits;
+    if (width > limits.maxImageDimension2D || height > limits.maxImageDimension2D)
+        throw InputError(cat("raymarch: a ", outWidth, "x", outHeight, " frame with ", n, "x", n,
+                             " rays per pixel marches ", width, "x", height,
+                             " rays, more than this device's ", limits.maxImageDimension2D,
+                             " per side; reduce the image size or the supersampling"));
+    if (width * height * sizeof(glm::vec4) > limits.maxStorageBufferRange)
+        throw InputError(cat("raymarch: the march state of ", width, "x", height, " rays needs ",
+                             (width * height * sizeof(glm::vec4)) >> 20,
+                             " MiB in one storage buffer, more than this device's limit of ",
+                             limits.maxStorageBufferRange >> 20,
+                             " MiB; reduce the image size or the supersampling"));
     std::uint64_t held = m_state.reservedBytes() + m_loops.reservedBytes();
     for (const Image* i : {&m_base, &m_distance, &m_depth, &m_result})
         held += i->reservedBytes();
