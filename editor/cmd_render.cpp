@@ -134,11 +134,11 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
         r.stats["fragment_efficiency"] =
             c.pixelsCovered > 0 ? double(c.fragmentsShaded) / double(c.pixelsCovered) : 0.0;
     }
-    r.summary = cat(first.kernelsGenerated, " kernels, ", last.counters.kernelsDrawn, " drawn, ",
-                    first.gpuMs, " ms GPU");
+    r.summary = cat(first.kernelsGenerated, " kernels, ", last.counters.kernelsDrawn, " drawn, ");
     if (method.marching)
-        r.summary += cat(" (", settings.steps, " steps, ", settings.supersample, "x",
-                         settings.supersample, " rays per pixel)");
+        r.summary += cat(settings.steps, " steps, ", settings.supersample, "x", settings.supersample,
+                         " rays per pixel, ");
+    r.summary += cat(first.gpuMs, " ms GPU");
     if (repeat > 0)
         r.summary += cat(" (", repeat, " warm frames: median ", double(summary(gpu)["median"]),
                          " ms GPU, ", double(summary(wall)["median"]), " ms wall)");

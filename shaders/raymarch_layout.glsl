@@ -68,9 +68,11 @@ struct SpotMarchBox {
 SPOT_CONST uint kMarchBindParams = 0u;       /* SpotMarchParams */
 SPOT_CONST uint kMarchBindTable = 1u;        /* ivec4[]: hash slots (i, j, k, record or -1) */
 SPOT_CONST uint kMarchBindCells = 2u;        /* SpotMarchCell[record] */
-SPOT_CONST uint kMarchBindSpans = 3u;        /* uvec2[record * kMarchSub^3 + sub-cell]: (first
-                                                list entry, entries) */
-SPOT_CONST uint kMarchBindList = 4u;         /* uint[]: list entries, ascending impulse per span:
+SPOT_CONST uint kMarchBindStarts = 3u;       /* uint[slots + 1]: list slot q is entries
+                                                [starts[q], starts[q + 1]); with culling, slot
+                                                record * kMarchSubCells + sub-cell (x-major),
+                                                without, one slot per record */
+SPOT_CONST uint kMarchBindList = 4u;         /* uint[]: list entries, ascending impulse per slot:
                                                 impulse | lobe mask << kMarchEntryLobeShift */
 SPOT_CONST uint kMarchBindWorldLobes = 5u;   /* SpotWorldLobe[impulse * lobes + l] */
 SPOT_CONST uint kMarchBindBoxes = 6u;        /* SpotMarchBox[impulse] */

@@ -23,7 +23,7 @@ layout(constant_id = kMarchSpecCull) const bool kMarchCull = true;
 layout(std430, binding = kMarchBindParams) readonly buffer Params { SpotMarchParams params; };
 layout(std430, binding = kMarchBindTable) readonly buffer Table { ivec4 table[]; };
 layout(std430, binding = kMarchBindCells) readonly buffer Cells { SpotMarchCell cells[]; };
-layout(std430, binding = kMarchBindSpans) readonly buffer Spans { uvec2 spans[]; };
+layout(std430, binding = kMarchBindStarts) readonly buffer Starts { uint starts[]; };
 layout(std430, binding = kMarchBindList) readonly buffer List { uint entries[]; };
 layout(std430, binding = kMarchBindWorldLobes) readonly buffer Lobes { SpotWorldLobe lobes[]; };
 layout(std430, binding = kMarchBindBoxes) readonly buffer Boxes { SpotMarchBox boxes[]; };
@@ -34,9 +34,11 @@ layout(std430, binding = kMarchBindLoops) buffer Loops { uint loopCounts[]; };
 SpotMarchParams marchParams() { return params; }
 ivec4 marchSlot(uint i) { return table[i]; }
 SpotMarchCell marchCell(uint record) { return cells[record]; }
-uvec2 marchSpan(uint subCell) { return spans[subCell]; }
+uint marchStart(uint slot) { return starts[slot]; }
 uint marchEntry(uint i) { return entries[i]; }
-SpotWorldLobe marchLobe(uint i) { return lobes[i]; }
+mat3 marchLobeMatrix(uint i) { return mat3(lobes[i].a0.xyz, lobes[i].a1.xyz, lobes[i].a2.xyz); }
+vec3 marchLobeCentre(uint i) { return vec3(lobes[i].a0.w, lobes[i].a1.w, lobes[i].a2.w); }
+vec4 marchLobeColor(uint i) { return lobes[i].color; }
 SpotMarchBox marchBox(uint impulse) { return boxes[impulse]; }
 vec4 marchLight() { return push.light; }
 

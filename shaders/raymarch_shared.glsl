@@ -6,9 +6,11 @@
  * raymarch_layout.glsl; the includer provides the data accessors
  *   SpotMarchParams marchParams(); ivec4 marchSlot(uint i);
  * and, unless RAYMARCH_LOOKUP_ONLY is defined,
- *   SpotMarchCell marchCell(uint record); uvec2 marchSpan(uint subCell); uint marchEntry(uint i);
- *   SpotWorldLobe marchLobe(uint i); SpotMarchBox marchBox(uint impulse); vec4 marchLight()
- * (SpotMarchPush::light), and the specialization constants kMarchLobes (uint), kMarchLambert and kMarchCull (bool).
+ *   SpotMarchCell marchCell(uint record); uint marchStart(uint slot); uint marchEntry(uint i);
+ *   mat3 marchLobeMatrix(uint i); vec3 marchLobeCentre(uint i); vec4 marchLobeColor(uint i)
+ *   (world lobe i's A, centre and colour with its amplitude, SpotWorldLobe);
+ *   SpotMarchBox marchBox(uint impulse); vec4 marchLight() (SpotMarchPush::light),
+ * and the specialization constants kMarchLobes (uint), kMarchLambert and kMarchCull (bool).
  *
  * Loop accounting. lavapipe stops an invocation after 65,535 loop iterations in total, counted
  * per SIMD vector of invocations: a loop runs while any lane of the vector is still in it, and
@@ -209,12 +211,16 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
     for (uint j = first; j < min(end, steps) && transmittance > kMarchOpaque; ++j) {
         loops += 1u;
         float sj = (float(j) + 0.5f) * dt;
+        // The structure below keeps the work in `if` blocks rather than behind `continue`: lavapipe
+        // runs 8 lanes in lockstep and skips a block only when no lane enters it.
         loops += 1u;
-        while (seg + 1u < s.count && sj >= segStart + (cur.y - cur.x)) {
-            loops += 1u;
-            segStart += cur.y - cur.x;
-            seg += 1u;
-            cur = s.seg[seg];
+        if (seg + 1u < s.count && sj >= segStart + (cur.y - cur.x)) {
+            while (seg + 1u < s.count && sj >= segStart + (cur.y - cur.x)) {
+                loops += 1u;
+                segStart += cur.y - cur.x;
+                seg += 1u;
+                cur = s.seg[seg];
+            }
         }
         float t = clamp(cur.x + (sj - segStart), cur.x, cur.y);
         vec3 x = o + t * d;
@@ -223,59 +229,73 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
             lastCell = cell;
             record = marchFind(cell, loops);
         }
-        if (record < 0)
-            continue;
-        // The sample's sub-cell (rounding may put it a hair past the cell: the lists were built
-        // with a margin, so the nearest sub-cell of the cell lists every impulse that counts).
-        ivec3 sub = clamp(ivec3(floor(x * subScale)) - cell * int(kMarchSub), ivec3(0),
-                          ivec3(int(kMarchSub) - 1));
-        uvec2 span = marchSpan(uint(record) * kMarchSubCells +
-                               uint((sub.x * int(kMarchSub) + sub.y) * int(kMarchSub) + sub.z));
-        float sigma = 0.0f;
-        vec3 emitted = vec3(0.0f);
-        vec3 gradient = vec3(0.0f); // of -density: points out of the strands
-        loops += 1u;
-        for (uint e = span.x; e < span.x + span.y; ++e) {
-            loops += 1u;
-            uint entry = marchEntry(e);
-            uint impulse = entry & kMarchEntryImpulse;
-            uint lobeMask = entry >> kMarchEntryLobeShift;
+        if (record >= 0) {
+            // With culling, the list of the sample's sub-cell (rounding may put it a hair past the
+            // cell: the lists were built with a margin, so the nearest sub-cell of the cell lists
+            // every lobe that counts); without, the cell's list of all its neighbours' impulses.
+            uint slot = uint(record);
             if (kMarchCull) {
-                SpotMarchBox box = marchBox(impulse);
-                if (x.x < box.lo.x || x.y < box.lo.y || x.z < box.lo.z || x.x > box.hi.x ||
-                    x.y > box.hi.y || x.z > box.hi.z)
-                    continue;
+                ivec3 sub = clamp(ivec3(floor(x * subScale)) - cell * int(kMarchSub), ivec3(0),
+                                  ivec3(int(kMarchSub) - 1));
+                slot = slot * kMarchSubCells +
+                       uint((sub.x * int(kMarchSub) + sub.y) * int(kMarchSub) + sub.z);
             }
+            uint listStart = marchStart(slot);
+            uint listEnd = marchStart(slot + 1u);
+            float sigma = 0.0f;
+            vec3 emitted = vec3(0.0f);
+            vec3 gradient = vec3(0.0f); // of -density: points out of the strands
             loops += 1u;
-            for (uint l = 0u; l < kMarchLobes; ++l) {
-                loops += 1u;
-                if ((lobeMask & (1u << l)) == 0u)
-                    continue; // its box misses the sub-cell: no density here
-                SpotWorldLobe w = marchLobe(impulse * kMarchLobes + l);
-                if (!(w.color.w > 0.0f))
-                    continue;
-                mat3 A = mat3(vec3(w.a0), vec3(w.a1), vec3(w.a2));
-                vec3 u = A * (x - vec3(w.a0.w, w.a1.w, w.a2.w));
-                float rho = w.color.w * spotLobeDensity(u, k);
-                if (!(rho > 0.0f))
-                    continue;
-                sigma += rho;
-                emitted += rho * vec3(w.color);
-                if (kMarchLambert)
-                    gradient += rho * (transpose(A) * u);
+            if (listStart < listEnd) {
+                for (uint e = listStart; e < listEnd; ++e) {
+                    loops += 1u;
+                    uint entry = marchEntry(e);
+                    uint impulse = entry & kMarchEntryImpulse;
+                    uint lobeMask = entry >> kMarchEntryLobeShift;
+                    bool inside = true;
+                    if (kMarchCull) {
+                        SpotMarchBox box = marchBox(impulse);
+                        inside = !(x.x < box.lo.x || x.y < box.lo.y || x.z < box.lo.z ||
+                                   x.x > box.hi.x || x.y > box.hi.y || x.z > box.hi.z);
+                    }
+                    loops += 1u;
+                    if (inside) {
+                        for (uint l = 0u; l < kMarchLobes; ++l) {
+                            loops += 1u;
+                            // A lobe whose box misses the sub-cell has no density here.
+                            if ((lobeMask & (1u << l)) != 0u) {
+                                uint i = impulse * kMarchLobes + l;
+                                mat3 A = marchLobeMatrix(i);
+                                vec3 u = A * (x - marchLobeCentre(i));
+                                // Outside its support the lobe adds exactly zero: its colour
+                                // and the exponential are read only inside.
+                                if (dot(u, u) < k * k) {
+                                    vec4 c = marchLobeColor(i);
+                                    float rho = c.w * spotLobeDensity(u, k);
+                                    if (c.w > 0.0f && rho > 0.0f) {
+                                        sigma += rho;
+                                        emitted += rho * vec3(c);
+                                        if (kMarchLambert)
+                                            gradient += rho * (transpose(A) * u);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            if (sigma > 0.0f && sigma < kMarchFar) {
+                float alpha = spotOneMinusExp(sigma * dt);
+                vec3 color = emitted / sigma;
+                if (kMarchLambert) {
+                    float len = length(gradient);
+                    vec3 normal = len > 0.0f && len < kMarchFar ? gradient / len : -d;
+                    color *= spotLambertFactor(normal, vec3(marchLight()), marchLight().w);
+                }
+                radiance += transmittance * alpha * color;
+                transmittance *= 1.0f - alpha;
             }
         }
-        if (!(sigma > 0.0f && sigma < kMarchFar))
-            continue;
-        float alpha = spotOneMinusExp(sigma * dt);
-        vec3 color = emitted / sigma;
-        if (kMarchLambert) {
-            float len = length(gradient);
-            vec3 normal = len > 0.0f && len < kMarchFar ? gradient / len : -d;
-            color *= spotLambertFactor(normal, vec3(marchLight()), marchLight().w);
-        }
-        radiance += transmittance * alpha * color;
-        transmittance *= 1.0f - alpha;
     }
     return vec4(radiance, transmittance);
 }

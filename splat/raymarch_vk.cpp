@@ -43,7 +43,7 @@ public:
         const SpotMarchParams* params = nullptr;
         const glm::ivec4* table = nullptr;
         const SpotMarchCell* cells = nullptr;
-        const glm::uvec2* spans = nullptr;
+        const std::uint32_t* starts = nullptr;
         const std::uint32_t* list = nullptr;
         const SpotWorldLobe* lobes = nullptr;
         const SpotMarchBox* boxes = nullptr;
@@ -63,9 +63,17 @@ private:
     const SpotMarchParams& marchParams() const { return *m_a.params; }
     glm::ivec4 marchSlot(uint i) const { return m_a.table[i]; }
     const SpotMarchCell& marchCell(uint record) const { return m_a.cells[record]; }
-    glm::uvec2 marchSpan(uint subCell) const { return m_a.spans[subCell]; }
+    uint marchStart(uint slot) const { return m_a.starts[slot]; }
     uint marchEntry(uint i) const { return m_a.list[i]; }
-    const SpotWorldLobe& marchLobe(uint i) const { return m_a.lobes[i]; }
+    glm::mat3 marchLobeMatrix(uint i) const {
+        const SpotWorldLobe& w = m_a.lobes[i];
+        return glm::mat3(glm::vec3(w.a0), glm::vec3(w.a1), glm::vec3(w.a2));
+    }
+    glm::vec3 marchLobeCentre(uint i) const {
+        const SpotWorldLobe& w = m_a.lobes[i];
+        return glm::vec3(w.a0.w, w.a1.w, w.a2.w);
+    }
+    glm::vec4 marchLobeColor(uint i) const { return m_a.lobes[i].color; }
     const SpotMarchBox& marchBox(uint impulse) const { return m_a.boxes[impulse]; }
     glm::vec4 marchLight() const { return m_a.light; }
 
@@ -145,6 +153,37 @@ double since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
         .count();
 }
+
+/// The three slabs |a_i . (x - c)| < k that hold a lobe's support |A (x - c)| < k (a_i: row i of
+/// A), as a conservative test of whether the support may reach a box: a flat or thin lobe tilted
+/// across the axes reaches far fewer sub-cells than its axis-aligned box. The margin covers the
+/// float arithmetic of the march's u = A (x - c) (about 1e-7 relative) many times over; a lobe
+/// with a non-finite or zero matrix is never excluded.
+struct Slabs {
+    glm::dvec3 row[3];
+    double centre[3]; ///< a_i . c
+    double limit[3];  ///< k, plus the margin
+    Slabs(const gpu::SpotWorldLobe& w, double k) {
+        const glm::dvec3 c(w.a0.w, w.a1.w, w.a2.w);
+        const double far = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z), 1.0});
+        for (int i = 0; i < 3; ++i) {
+            row[i] = glm::dvec3(w.a0[i], w.a1[i], w.a2[i]);
+            centre[i] = glm::dot(row[i], c);
+            const double norm = std::abs(row[i].x) + std::abs(row[i].y) + std::abs(row[i].z);
+            limit[i] = 1.01 * k + 1e-4 * norm * far;
+        }
+    }
+    /// Whether the support may reach the box of centre `b` and half sides `half` (world).
+    bool mayReach(const glm::dvec3& b, const glm::dvec3& half) const {
+        for (int i = 0; i < 3; ++i) {
+            const double reach = limit[i] + std::abs(row[i].x) * half.x +
+                                 std::abs(row[i].y) * half.y + std::abs(row[i].z) * half.z;
+            if (std::abs(glm::dot(row[i], b) - centre[i]) > reach) // false for NaN: kept
+                return false;
+        }
+        return true;
+    }
+};
 
 /// floor(a / b) for b > 0.
 int floorDiv(int a, int b) {
@@ -313,7 +352,7 @@ const RaymarchRenderer::Pipelines& RaymarchRenderer::pipelines(bool lambert, boo
     p.march =
         makeComputePipeline(m_ctx, spirv(spv_raymarch_march_comp),
                             {storageBuffer(kMarchBindParams), storageBuffer(kMarchBindTable),
-                             storageBuffer(kMarchBindCells), storageBuffer(kMarchBindSpans),
+                             storageBuffer(kMarchBindCells), storageBuffer(kMarchBindStarts),
                              storageBuffer(kMarchBindList), storageBuffer(kMarchBindWorldLobes),
                              storageBuffer(kMarchBindBoxes), storageImage(kMarchBindMeshDistance),
                              storageBuffer(kMarchBindState), storageBuffer(kMarchBindLoops)},
@@ -344,8 +383,8 @@ void RaymarchRenderer::ensureImpulseBuffers(std::uint32_t capacity) {
     m_boxes = Buffer();
     m_lobeBoxes = Buffer();
     m_capacity = 0;
-    // The capture copies the world lobes out; the host reads the boxes for the lists.
-    m_worldLobes = Buffer(m_ctx, lobeBytes, kStorage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, kDevice,
+    // Host-visible: the host reads the world lobes and boxes for the lists.
+    m_worldLobes = Buffer(m_ctx, lobeBytes, kStorage, kHost,
                           cat("ray march world lobes (", grown, " kernels)"));
     m_boxes = Buffer(m_ctx, n * sizeof(SpotMarchBox), kStorage, kHost,
                      cat("ray march impulse boxes (", grown, " kernels)"));
@@ -544,7 +583,9 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
             mostAround = std::max(mostAround, around);
         }
     }
-    std::vector<glm::uvec2> spans(std::size_t(records) * kMarchSubCells, glm::uvec2(0u));
+    // List slots: per sub-cell with culling, per cell without.
+    const std::size_t slots = std::size_t(records) * (cull ? kMarchSubCells : 1u);
+    std::vector<std::uint32_t> starts(slots + 1, 0u);
     std::vector<std::uint32_t> list;
     if (!cull) {
         // The paper's baseline: every sub-cell of a cell lists all its 27 neighbours' impulses,
@@ -557,16 +598,15 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
         list.reserve(total);
         for (std::uint32_t r = 0; r < records; ++r) {
             const std::uint32_t first = std::uint32_t(list.size());
+            starts[r] = first;
             for (int n = 0; n < 27; ++n)
                 if (const int nb = neighbours[std::size_t(r) * 27 + std::size_t(n)];
                     nb >= 0 && binCount[nb] > 0)
                     for (std::uint32_t i = binFirst[nb]; i < binEnd[nb]; ++i)
                         list.push_back(i | allLobes << kMarchEntryLobeShift);
-            for (std::uint32_t q = 0; q < kMarchSubCells; ++q)
-                spans[std::size_t(r) * kMarchSubCells + q] =
-                    glm::uvec2(first, std::uint32_t(list.size()) - first);
             cells[r].head.y = std::uint32_t(list.size()) - first;
         }
+        starts[records] = std::uint32_t(list.size());
     } else {
         // Each impulse goes to the sub-cells its box reaches within its cell's 27 neighbours,
         // with a margin of 1/1000 of a sub-cell (and the float rounding of large coordinates)
@@ -574,7 +614,14 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
         // still finds every impulse whose box holds it.
         const auto* boxes = static_cast<const SpotMarchBox*>(m_boxes.mapped());
         const auto* lobeBoxes = static_cast<const SpotMarchBox*>(m_lobeBoxes.mapped());
+        const auto* worldLobes = static_cast<const gpu::SpotWorldLobe*>(m_worldLobes.mapped());
         const double scale = double(params.grid.y * float(kMarchSub));
+        const double k = double(m_scene.support());
+        // A sub-cell as the slab test sees it: its centre and half side, grown by the margin of
+        // `reach` (1/1000 of a sub-cell, and the rounding of large coordinates below).
+        const double subSize = 1.0 / scale;
+        const glm::dvec3 subHalf(0.5 * subSize);
+        const glm::dvec3 subReach(0.5 * subSize * 1.002);
         const int sub = int(kMarchSub);
         // The sub-cells a box reaches, clamped to [first, last] per axis (hi < lo: none).
         const auto reach = [&](const SpotMarchBox& box, glm::ivec3 first, glm::ivec3 last,
@@ -590,7 +637,7 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
                     hi[a] = lo[a] - 1;
             }
         };
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs; // (span, entry)
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs; // (slot, entry)
         std::vector<std::uint32_t> masks; // per sub-cell of one impulse's box: its lobes there
         for (std::uint32_t r = 0; r < records; ++r) {
             if (binCount[r] == 0)
@@ -607,12 +654,15 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
                 for (std::uint32_t l = 0; l < lobes; ++l) {
                     glm::ivec3 a, b;
                     reach(lobeBoxes[std::size_t(i) * lobes + l], lo, hi, a, b);
+                    const Slabs slabs(worldLobes[std::size_t(i) * lobes + l], k);
                     for (int x = a.x; x <= b.x; ++x)
                         for (int y = a.y; y <= b.y; ++y)
                             for (int z = a.z; z <= b.z; ++z)
-                                masks[(std::size_t(x - lo.x) * size.y + std::size_t(y - lo.y)) *
-                                          size.z +
-                                      std::size_t(z - lo.z)] |= 1u << l;
+                                if (slabs.mayReach(glm::dvec3(x, y, z) * subSize + subHalf,
+                                                   subReach))
+                                    masks[(std::size_t(x - lo.x) * size.y + std::size_t(y - lo.y)) *
+                                              size.z +
+                                          std::size_t(z - lo.z)] |= 1u << l;
                 }
                 std::size_t m = 0;
                 for (int x = lo.x; x <= hi.x; ++x)
@@ -634,38 +684,42 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
                         }
             }
         }
-        // Counting sort by sub-cell, stable: each list in impulse order.
+        // Counting sort by slot, stable: each list in impulse order.
         for (const auto& pair : pairs)
-            ++spans[pair.first].y;
-        std::uint32_t first = 0;
-        for (glm::uvec2& s : spans) {
-            s.x = first;
-            first += s.y;
-        }
+            ++starts[pair.first + 1];
+        for (std::size_t q = 0; q < slots; ++q)
+            starts[q + 1] += starts[q];
         list.resize(pairs.size());
-        std::vector<std::uint32_t> fill(spans.size(), 0u);
-        for (const auto& [span, entry] : pairs)
-            list[spans[span].x + fill[span]++] = entry;
+        std::vector<std::uint32_t> fill(starts.begin(), starts.end() - 1);
+        for (const auto& [slot, entry] : pairs)
+            list[fill[slot]++] = entry;
         for (std::uint32_t r = 0; r < records; ++r)
-            for (std::uint32_t q = 0; q < kMarchSubCells; ++q)
-                cells[r].head.y += spans[std::size_t(r) * kMarchSubCells + q].y;
+            cells[r].head.y = starts[std::size_t(r + 1) * kMarchSubCells] -
+                              starts[std::size_t(r) * kMarchSubCells];
     }
     std::uint32_t longest = 0;
-    for (const glm::uvec2& s : spans)
-        longest = std::max(longest, s.y);
+    for (std::size_t q = 0; q < slots; ++q)
+        longest = std::max(longest, starts[q + 1] - starts[q]);
 
     // Upload into the grow-only buffers (each checked against the budget before anything is
     // freed, so a refused frame leaves the old ones).
     const std::uint64_t cellBytes = std::uint64_t(records) * sizeof(SpotMarchCell);
-    const std::uint64_t spanBytes = spans.size() * sizeof(glm::uvec2);
+    const std::uint64_t startBytes = starts.size() * sizeof(std::uint32_t);
     const std::uint64_t listBytes = list.size() * sizeof(std::uint32_t);
     std::uint64_t held = 0, need = 0;
     for (const auto& [buffer, bytes] : {std::pair<Buffer*, std::uint64_t>{&m_cells, cellBytes},
-                                        {&m_spans, spanBytes},
+                                        {&m_starts, startBytes},
                                         {&m_list, listBytes}})
         if (buffer->size() < bytes || !buffer->handle()) {
             held += buffer->reservedBytes();
             need += grownSize(bytes);
+            if (grownSize(bytes) > m_ctx.properties().limits.maxStorageBufferRange)
+                throw InputError(cat("raymarch: the impulse lists of ", records, " shell cells (",
+                                     list.size(), " entries) need ", grownSize(bytes) >> 20,
+                                     " MiB in one storage buffer, more than this device's limit "
+                                     "of ",
+                                     m_ctx.properties().limits.maxStorageBufferRange >> 20,
+                                     " MiB; reduce the kernel density or the cell count"));
         }
     if (need > 0 && m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("raymarch: the impulse lists of ", records, " shell cells (",
@@ -682,7 +736,7 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
             buffer.upload(data, bytes);
     };
     put(m_cells, cells.data(), cellBytes, "ray march shell cells");
-    put(m_spans, spans.data(), spanBytes, "ray march sub-cell spans");
+    put(m_starts, starts.data(), startBytes, "ray march list starts");
     put(m_list, list.data(), listBytes, "ray march impulse lists");
 
     RaymarchStats& s = m_binStats;
@@ -819,7 +873,7 @@ void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .buffer(kMarchBindParams, m_params)
         .buffer(kMarchBindTable, m_shell->tableBuffer)
         .buffer(kMarchBindCells, m_cells)
-        .buffer(kMarchBindSpans, m_spans)
+        .buffer(kMarchBindStarts, m_starts)
         .buffer(kMarchBindList, m_list)
         .buffer(kMarchBindWorldLobes, m_worldLobes)
         .buffer(kMarchBindBoxes, m_boxes)
@@ -887,6 +941,8 @@ FrameCounters RaymarchRenderer::counters() const {
                {"listed_impulses", double(s.maxListedImpulses)},
                {"neighbourhood_impulses", double(s.maxNeighbourhoodImpulses)},
                {"shell_cells", double(s.shellCells)},
+               {"walk_cells", double(s.walkCells)},
+               {"longest_probe", double(s.longestProbe)},
                {"binned", s.binned ? 1.0 : 0.0}};
     if (s.binned)
         c.extra.insert(c.extra.end(), {{"bin_ms", s.binMs}, {"bin_host_ms", s.binHostMs}});
@@ -897,14 +953,10 @@ RaymarchCapture RaymarchRenderer::capture() {
     SPOT_CHECK(m_result.handle() && m_shell && m_frame.pipelines);
     const std::uint32_t width = m_width * m_n, height = m_height * m_n;
     const std::uint64_t pixels = std::uint64_t(width) * height;
-    const std::uint64_t lobeBytes =
-        std::uint64_t(m_binStats.impulses) * m_scene.lobeCount() * sizeof(gpu::SpotWorldLobe);
     Buffer base(m_ctx, pixels * sizeof(glm::vec4), VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                 "ray march capture: base colour");
     Buffer distance(m_ctx, pixels * sizeof(float), VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                     "ray march capture: mesh distance");
-    Buffer lobes(m_ctx, lobeBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
-                 "ray march capture: world lobes");
     m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
         VkBufferImageCopy region{};
         region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
@@ -912,10 +964,6 @@ RaymarchCapture RaymarchRenderer::capture() {
         vkCmdCopyImageToBuffer(cmd, m_base.handle(), passes::kGeneral, base.handle(), 1, &region);
         vkCmdCopyImageToBuffer(cmd, m_distance.handle(), passes::kGeneral, distance.handle(), 1,
                                &region);
-        if (lobeBytes > 0) {
-            const VkBufferCopy copy{0, 0, lobeBytes};
-            vkCmdCopyBuffer(cmd, m_worldLobes.handle(), lobes.handle(), 1, &copy);
-        }
         memoryBarrier(cmd, passes::kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, passes::kHostStage,
                       VK_ACCESS_2_HOST_READ_BIT);
     });
@@ -932,11 +980,11 @@ RaymarchCapture RaymarchRenderer::capture() {
     const std::uint32_t records = m_binStats.shellCells;
     const auto* cells = static_cast<const SpotMarchCell*>(m_cells.mapped());
     c.cells.assign(cells, cells + records);
-    const auto* spans = static_cast<const glm::uvec2*>(m_spans.mapped());
-    c.spans.assign(spans, spans + std::uint64_t(records) * kMarchSubCells);
+    const auto* starts = static_cast<const std::uint32_t*>(m_starts.mapped());
+    c.starts.assign(starts, starts + std::uint64_t(records) * (f.cull ? kMarchSubCells : 1u) + 1);
     const auto* list = static_cast<const std::uint32_t*>(m_list.mapped());
     c.list.assign(list, list + m_binStats.listEntries);
-    const auto* w = static_cast<const gpu::SpotWorldLobe*>(lobes.mapped());
+    const auto* w = static_cast<const gpu::SpotWorldLobe*>(m_worldLobes.mapped());
     c.lobeData.assign(w, w + std::uint64_t(m_binStats.impulses) * m_scene.lobeCount());
     const auto* box = static_cast<const SpotMarchBox*>(m_boxes.mapped());
     c.boxes.assign(box, box + m_binStats.impulses);
@@ -967,7 +1015,7 @@ noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint
     arrays.params = &capture.params;
     arrays.table = capture.table.data();
     arrays.cells = capture.cells.data();
-    arrays.spans = capture.spans.data();
+    arrays.starts = capture.starts.data();
     arrays.list = capture.list.data();
     arrays.lobes = capture.lobeData.data();
     arrays.boxes = capture.boxes.data();

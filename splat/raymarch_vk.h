@@ -9,15 +9,19 @@
 ///     splat_prepare.comp, without EWA widening: a widened lobe could reach past the 3x3x3 cells
 ///     that the march searches).
 ///  2. bin (compute, raymarch_bin.comp): each impulse's shell cell (hash lookup), per cell the
-///     range of impulses it holds, and each impulse's box (SpotMarchBox). Read back; on the host:
-///     the impulse order is checked, and every shell cell's sub-cells (kMarchSub^3 of them) get
-///     the list of the impulses of the cell's 27 neighbours whose box reaches them, in impulse
-///     order (without RenderSettings::cullImpulses, every one of the 27 neighbours' impulses: the
-///     paper's baseline, literally). A list leaves out only impulses that have exactly zero
-///     density in the sub-cell, and keeps the order of the sums, so it changes no pixel (a test
-///     holds that, bit for bit); it spares the march the impulses it would have skipped one
-///     sample at a time (their boxes miss the sample), and it makes the loop guard's T (below)
-///     the longest list instead of the densest neighbourhood, so the steps need fewer dispatches.
+///     range of impulses it holds, and each lobe's and impulse's box (SpotMarchBox). Read back;
+///     on the host: the impulse order is checked, and every shell cell's sub-cells (kMarchSub^3 of
+///     them) get the list of the impulses of the cell's 27 neighbours that may have density
+///     there, each with the mask of its lobes that may (the lobe's box reaches the sub-cell, and
+///     so does each of the three slabs |a_i . (x - c)| < k that hold its support: a flat or thin
+///     lobe tilted across the axes reaches far fewer sub-cells than its box), in impulse order.
+///     Without RenderSettings::cullImpulses a cell's one list holds every lobe of its 27
+///     neighbours' impulses: the paper's baseline, literally. A list leaves out only lobes that
+///     have exactly zero density in the sub-cell, and keeps the order of the sums, so it changes
+///     no pixel (a test holds that, bit for bit, and the images are bit for bit those of the
+///     march before the lists); it spares the march the lobes it would have found empty one
+///     sample at a time, and it makes the loop guard's T (below) the longest list instead of the
+///     densest neighbourhood, so the steps need fewer dispatches.
 /// Every frame, recorded into the caller's command buffer with no host wait:
 ///  3. mesh (raster): the opaque base mesh's colour and ray distance (the scene's MeshPass).
 ///  4. march (compute, raymarch_march.comp): per ray, the shell segments by a cell walk (3D DDA)
@@ -38,9 +42,10 @@
 /// Persistent: the targets (per image size and supersampling), the world lobes and boxes (per
 /// impulse capacity, grow-only), the shell and its hash table (per set of surface cells), the
 /// lists (grow-only). A warm frame (same impulses, same size) allocates nothing and reads nothing
-/// back. Memory grows with the surface: per shell cell 16 bytes of record, 64 of sub-cell spans,
-/// 32 to 64 of hash table (more if the table had to grow to keep probes short) and 12 of bins;
-/// per kernel its world lobes (64 bytes each) and box (32), per listed (sub-cell, impulse) pair 4.
+/// back. Memory grows with the surface: per shell cell 16 bytes of record, 256 of list starts
+/// (one per sub-cell), 32 to 64 of hash table (more if the table had to grow to keep probes
+/// short) and 12 of bins; per kernel its world lobes (64 bytes each) and boxes (32 per lobe and
+/// 32), per listed (sub-cell, impulse) pair 4; per march pixel 44 bytes, per output pixel 16.
 ///
 /// Not done here: per-cell occupied boxes to tighten the segments. The samples are spread over
 /// the segments, so tighter segments would move every sample: another (better) renderer than the
@@ -54,8 +59,10 @@
 ///
 /// with W the cells a ray can cross in the shell's bounding box (its extents in cells summed),
 /// P the longest hash probe (slots past a key's home slot), S = kMarchMaxSegments, L the lobes per
-/// kernel and T the longest sub-cell list. (With culling, an impulse whose box does not hold the
-/// sample is skipped, lobes and all, though the bound must assume all are summed.) The march is
+/// kernel and T the longest list. (An impulse whose box does not hold the sample is skipped,
+/// lobes and all, and so is a lobe outside its support, though the bound must assume every lobe
+/// listed is summed; the lobe loop, unrolled by lavapipe for the specialized count, is charged
+/// as a loop all the same.) The march is
 /// split into dispatches of at most N' steps, N' the largest with bound(N') within the budget
 /// (kMarchLoopBudget = 60,000 by default); a frame where not even one step fits (about 59,000
 /// lobes in one list) is refused with an InputError that says why. The shader counts its own
@@ -140,7 +147,7 @@ struct RaymarchCapture {
     bool lambert = false, cull = true;           ///< specialization: shading, box test
     std::vector<glm::ivec4> table;               ///< hash slots (i, j, k, record or -1)
     std::vector<gpu_march::SpotMarchCell> cells; ///< shell cell records
-    std::vector<glm::uvec2> spans;               ///< per sub-cell: (first entry, entries)
+    std::vector<std::uint32_t> starts;           ///< per list slot, its first entry; then the end
     std::vector<std::uint32_t> list;             ///< impulse indices
     std::vector<gpu::SpotWorldLobe> lobeData;    ///< world lobes, impulse-major
     std::vector<gpu_march::SpotMarchBox> boxes;  ///< per impulse
@@ -197,8 +204,9 @@ private:
     std::uint32_t m_capacity = 0;
     Buffer m_worldLobes, m_boxes, m_lobeBoxes;
     Buffer m_prepareUnused; ///< the prepare pass's screen outputs, not written here
-    // Per shell and impulse version: bins (readback), records, spans, lists (grow-only).
-    Buffer m_params, m_bins, m_cells, m_spans, m_list;
+    // Per shell and impulse version: bins (readback), records, list starts and entries
+    // (grow-only).
+    Buffer m_params, m_bins, m_cells, m_starts, m_list;
     std::uint64_t m_version = 0; ///< the impulse version the lists were built for (0: none)
     bool m_listsCulled = true;
     const noise::SurfaceCells* m_listedCells = nullptr;
