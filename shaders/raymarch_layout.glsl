@@ -91,6 +91,7 @@ SPOT_CONST uint kMarchBindLobeBoxes = 15u;   /* SpotMarchBox[impulse * lobes + l
 SPOT_CONST uint kMarchSpecLobes = 0u;   /* uint: lobes per kernel, 1..8 */
 SPOT_CONST uint kMarchSpecLambert = 1u; /* bool: Lambert + ambient shading, else unlit */
 SPOT_CONST uint kMarchSpecCull = 2u;    /* bool: skip impulses whose box misses the sample */
+SPOT_CONST uint kMarchSpecCount = 3u;   /* bool: write each invocation's loop count (tests) */
 
 /* A list entry: the impulse index in the low bits (fewer than 2^22 impulses: 65,535 workgroups of
  * 64), the mask of its lobes that may have density in the sub-cell (bit l: lobe l) above. */

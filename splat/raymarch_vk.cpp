@@ -339,14 +339,16 @@ RaymarchRenderer::RaymarchRenderer(const SceneGpu& scene) : m_scene(scene), m_ct
 
 RaymarchRenderer::~RaymarchRenderer() = default;
 
-const RaymarchRenderer::Pipelines& RaymarchRenderer::pipelines(bool lambert, bool cull) {
-    const auto key = std::make_pair(lambert, cull);
+const RaymarchRenderer::Pipelines& RaymarchRenderer::pipelines(bool lambert, bool cull,
+                                                               bool count) {
+    const auto key = std::make_tuple(lambert, cull, count);
     if (const auto it = m_pipelines.find(key); it != m_pipelines.end())
         return it->second;
     Specialization spec;
     spec.set(kMarchSpecLobes, m_scene.lobeCount())
         .set(kMarchSpecLambert, lambert)
-        .set(kMarchSpecCull, cull);
+        .set(kMarchSpecCull, cull)
+        .set(kMarchSpecCount, count);
     const std::uint32_t push = sizeof(SpotMarchPush);
     Pipelines p;
     p.march =
@@ -829,7 +831,8 @@ void RaymarchRenderer::prepare(const View& view, const ImpulseSet& impulses,
 
     f.lambert = view.shading.mode == noise::Shading::Mode::Lambert;
     f.cull = cull;
-    f.pipelines = &pipelines(f.lambert, f.cull);
+    f.count = m_countLoops;
+    f.pipelines = &pipelines(f.lambert, f.cull, f.count);
     f.camera = view.camera;
     f.background = view.background;
     f.meshFrame = makeSplatFrame(marchCamera, view.shading, view.baseColor, 0, m_scene.lobeCount(),
@@ -861,9 +864,11 @@ void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute | kTransfer,
                         kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT);
-    vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
-    memoryBarrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
-                  kStorageRW);
+    if (f.count) {
+        vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
+        memoryBarrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
+                      kStorageRW);
+    }
     timer.mark(cmd, "mesh");
 
     // The march, in `dispatches` dispatches of at most `stepsPerDispatch` steps each.
@@ -919,7 +924,7 @@ RaymarchStats RaymarchRenderer::stats() const {
     const Prepared& f = m_frame;
     s.loopBound = std::uint32_t(std::min<std::uint64_t>(f.loopBound, 0xffffffffu));
     s.maxLoopIterations =
-        m_loops.handle() ? *static_cast<const std::uint32_t*>(m_loops.mapped()) : 0;
+        m_loops.handle() && f.count ? *static_cast<const std::uint32_t*>(m_loops.mapped()) : 0;
     s.stepsPerDispatch = f.stepsPerDispatch;
     s.maxStepsPerDispatch = f.maxStepsPerDispatch;
     s.dispatches = f.dispatches;
@@ -935,7 +940,6 @@ FrameCounters RaymarchRenderer::counters() const {
     FrameCounters c;
     c.kernelsDrawn = s.impulses;
     c.extra = {{"loop_bound", double(s.loopBound)},
-               {"max_loop_iterations", double(s.maxLoopIterations)},
                {"dispatches", double(s.dispatches)},
                {"steps_per_dispatch", double(s.stepsPerDispatch)},
                {"listed_impulses", double(s.maxListedImpulses)},
@@ -944,6 +948,8 @@ FrameCounters RaymarchRenderer::counters() const {
                {"walk_cells", double(s.walkCells)},
                {"longest_probe", double(s.longestProbe)},
                {"binned", s.binned ? 1.0 : 0.0}};
+    if (m_frame.count)
+        c.extra.emplace_back("max_loop_iterations", double(s.maxLoopIterations));
     if (s.binned)
         c.extra.insert(c.extra.end(), {{"bin_ms", s.binMs}, {"bin_host_ms", s.binHostMs}});
     return c;
@@ -993,7 +999,8 @@ RaymarchCapture RaymarchRenderer::capture() {
     const auto* dist = static_cast<const float*>(distance.mapped());
     c.meshDistance.assign(dist, dist + pixels);
     const auto* counted = static_cast<const std::uint32_t*>(m_loops.mapped());
-    c.gpuLoops.assign(counted + 1, counted + 1 + pixels);
+    if (f.count)
+        c.gpuLoops.assign(counted + 1, counted + 1 + pixels);
     return c;
 }
 

@@ -66,8 +66,8 @@
 /// split into dispatches of at most N' steps, N' the largest with bound(N') within the budget
 /// (kMarchLoopBudget = 60,000 by default); a frame where not even one step fits (about 59,000
 /// lobes in one list) is refused with an InputError that says why. The shader counts its own
-/// loops with the same accounting (RaymarchStats::maxLoopIterations, the most in one dispatch),
-/// so tests hold the bound against what really ran.
+/// loops with the same accounting when asked (countLoops: RaymarchStats::maxLoopIterations, the
+/// most in one dispatch), so tests hold the bound against what really ran.
 ///
 /// Results are deterministic: no float atomics, every pixel independent, sums in a fixed order.
 /// Units: world units; pixel (x, y) of the image is pixel (x, y) of noise::CameraRays, sampled at
@@ -78,6 +78,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -119,7 +120,7 @@ inline constexpr int kRaymarchMaxSupersample = 8;
 /// stats' FrameCounters::extra gives the main ones to `render --stats` and the bench).
 struct RaymarchStats {
     std::uint32_t loopBound = 0; ///< bound(steps per dispatch) for this frame (file comment)
-    std::uint32_t maxLoopIterations = 0;   ///< counted by the shader: the maximum over pixels
+    std::uint32_t maxLoopIterations = 0;   ///< counted by the shader (countLoops): the maximum
     std::uint32_t stepsPerDispatch = 0;    ///< steps each march dispatch takes (the last fewer)
     std::uint32_t maxStepsPerDispatch = 0; ///< the most the loop budget allows in one dispatch
     std::uint32_t dispatches = 0;          ///< march dispatches: ceil(steps / max per dispatch)
@@ -153,8 +154,9 @@ struct RaymarchCapture {
     std::vector<gpu_march::SpotMarchBox> boxes;  ///< per impulse
     std::vector<glm::vec4> base;                 ///< mesh pass colour per march pixel (row-major)
     std::vector<float> meshDistance;             ///< ray distance to the mesh per march pixel
-    std::vector<std::uint32_t> gpuLoops; ///< loop iterations the GPU counted per march pixel (the
-                                         ///< most of any one dispatch)
+    /// Loop iterations the GPU counted per march pixel (the most of any one dispatch); empty
+    /// unless the frame counted (RaymarchRenderer::countLoops).
+    std::vector<std::uint32_t> gpuLoops;
 };
 
 class RaymarchRenderer final : public Renderer {
@@ -173,10 +175,18 @@ public:
                  const RenderSettings& settings) override;
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
     const Image& result() const override { return m_result; }
-    /// kernelsDrawn: the impulses marched; extra: loop_bound, max_loop_iterations, dispatches,
-    /// steps_per_dispatch, listed_impulses (T), shell_cells, binned.
+    /// kernelsDrawn: the impulses marched; extra: loop_bound, dispatches, steps_per_dispatch,
+    /// listed_impulses (T), neighbourhood_impulses, shell_cells, walk_cells, longest_probe,
+    /// binned (1 when this frame rebuilt the lists, with bin_ms and bin_host_ms), and
+    /// max_loop_iterations when counting (countLoops).
     FrameCounters counters() const override;
     bool readsImpulsesInPrepare() const override { return true; }
+
+    /// Count every invocation's loop iterations from the next frame on (RaymarchStats::
+    /// maxLoopIterations, FrameCounters::extra max_loop_iterations, RaymarchCapture::gpuLoops):
+    /// for tests, which hold the guard's bound against what ran; off by default (about 5% of a
+    /// frame).
+    void countLoops(bool on) { m_countLoops = on; }
 
     /// After the frame completed.
     RaymarchStats stats() const;
@@ -189,7 +199,7 @@ private:
         Pipeline march, resolve;
     };
     const Shell& shellFor(const noise::SurfaceCells& cells);
-    const Pipelines& pipelines(bool lambert, bool cull);
+    const Pipelines& pipelines(bool lambert, bool cull, bool count);
     void bin(const ImpulseSet& impulses, const noise::Camera& marchCamera, bool cull);
     void ensureImpulseBuffers(std::uint32_t capacity);
     void ensureTargets(std::uint32_t outWidth, std::uint32_t outHeight, std::uint32_t n);
@@ -197,7 +207,8 @@ private:
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_prepare, m_bin;
-    std::map<std::pair<bool, bool>, Pipelines> m_pipelines;
+    std::map<std::tuple<bool, bool, bool>, Pipelines> m_pipelines;
+    bool m_countLoops = false;
     std::shared_ptr<Shell> m_shell;
 
     // Per impulse capacity (grow-only).
@@ -225,7 +236,7 @@ private:
         std::uint32_t dispatches = 0, stepsPerDispatch = 0, maxStepsPerDispatch = 0;
         std::uint64_t loopBound = 0;
         noise::Camera camera;
-        bool lambert = false, cull = true;
+        bool lambert = false, cull = true, count = false;
         bool binned = false;
     } m_frame;
 };

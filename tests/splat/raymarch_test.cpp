@@ -36,11 +36,13 @@ using namespace spot::test;
 
 /// The ray-march renderer over one mesh and kernel, rendering impulses the test holds: one frame
 /// per call through splat::renderImpulses (each call a new impulse set, so the lists are redone),
-/// with the renderer's stats and, when asked, what the march read.
+/// with the renderer's stats (loops counted) and, when asked, what the march read.
 class MarchRig {
 public:
     MarchRig(splat::Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
-        : m_ctx(ctx), m_scene(ctx, mesh, kernel), m_renderer(m_scene) {}
+        : m_ctx(ctx), m_scene(ctx, mesh, kernel), m_renderer(m_scene) {
+        m_renderer.countLoops(true); // the tests hold the guard's bound against what ran
+    }
     noise::Image render(const noise::Camera& camera, const noise::Shading& shading,
                         glm::vec3 background, glm::vec3 baseColor, const noise::SurfaceCells& cells,
                         const splat::Buffer& impulses, std::uint32_t count,
@@ -581,6 +583,7 @@ TEST(RaymarchFrame, WarmFramesAllocateNothingAndKeepTheLists) {
     splat::Context ctx(validated());
     splat::SceneGpu scene(ctx, s.mesh, s.kernel);
     splat::RaymarchRenderer renderer(scene);
+    renderer.countLoops(true);
     const splat::Buffer impulses = upload(ctx, s.impulses);
     splat::Buffer count(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                         splat::Buffer::Memory::HostVisible, "test impulse count");
@@ -671,6 +674,9 @@ TEST(RaymarchFrame, ThroughTheRegistryAndTheFrame) {
     const noise::ImpulseGenerator generator(mesh, noise::loadPreset(desc.preset), options);
     splat::Context ctx(validated());
     splat::Frame frame(ctx, mesh, generator);
+    auto* marcher = dynamic_cast<splat::RaymarchRenderer*>(&frame.renderer("raymarch"));
+    ASSERT_NE(marcher, nullptr);
+    marcher->countLoops(true);
     const splat::View view{desc.camera, desc.shading, desc.background, desc.baseColor};
     splat::RenderSettings settings;
     settings.steps = 16;
@@ -685,6 +691,7 @@ TEST(RaymarchFrame, ThroughTheRegistryAndTheFrame) {
     EXPECT_FALSE(warm.regenerated);
     EXPECT_EQ(extra(warm.counters, "binned"), 0.0);
     EXPECT_EQ(ctx.allocatedBytes(), allocated);
+    EXPECT_GT(extra(warm.counters, "max_loop_iterations"), 0.0);
     EXPECT_LE(extra(warm.counters, "max_loop_iterations"), extra(warm.counters, "loop_bound"));
     EXPECT_GT(passMs(warm, "march"), 0.0);
     EXPECT_EQ(std::memcmp(images[0].pixels.data(), images[1].pixels.data(),
