@@ -42,7 +42,7 @@
 /// Persistent: the targets (per image size and supersampling), the world lobes and boxes (per
 /// impulse capacity, grow-only), the shell and its hash table (per set of surface cells), the
 /// lists (grow-only). A warm frame (same impulses, same size) allocates nothing and reads nothing
-/// back. Memory grows with the surface: per shell cell 16 bytes of record, 256 of list starts
+/// back. Memory grows with the surface: per shell cell 16 bytes of record, 500 of list starts
 /// (one per sub-cell), 32 to 64 of hash table (more if the table had to grow to keep probes
 /// short) and 12 of bins; per kernel its world lobes (64 bytes each) and boxes (32 per lobe and
 /// 32), per listed (sub-cell, impulse) pair 4; per march pixel 44 bytes, per output pixel 16.
