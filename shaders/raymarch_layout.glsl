@@ -12,10 +12,10 @@
  * by one cell (a kernel centred in a cell reaches only its 3x3x3 neighbourhood, DESIGN section
  * 2). An open-addressing hash table maps a shell cell's ijk to its record. Each shell cell is cut
  * into kMarchSub^3 sub-cells, and each sub-cell lists the impulses of the cell's 27 neighbours
- * that may have density in it (their SpotMarchBox reaches it), each with the mask of its lobes
- * whose own box reaches it; the march sums only those lobes, in impulse and lobe order (the list
- * is a subset, in the same order, of the 27 neighbours' lobes, and each lobe it leaves out has
- * exactly zero density there).
+ * that may have density in it, each with the mask of its lobes that may (the lobe's box and the
+ * slabs holding its support reach the sub-cell: splat/raymarch_vk.h); the march sums only those
+ * lobes, in impulse and lobe order (the list is a subset, in the same order, of the 27
+ * neighbours' lobes, and each lobe it leaves out has exactly zero density there).
  */
 #ifndef SPOT_CONST
 #define SPOT_CONST const

@@ -170,7 +170,9 @@ public:
     /// GpuGenerator give them; the cell size must be at least the kernels' support radius, as the
     /// generator ensures). Throws InputError for a bad setting, impulses out of cell order or
     /// outside the cells, a frame beyond the memory budget, or a step count whose loop bound
-    /// exceeds settings.loopBudget (the message names what would fit).
+    /// exceeds settings.loopBudget (the message names what would fit). For new impulses it
+    /// submits and waits for work of its own and rewrites the lists the last frame read: call it
+    /// once that frame completed (splat::Frame does).
     void prepare(const View& view, const ImpulseSet& impulses,
                  const RenderSettings& settings) override;
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
