@@ -4,6 +4,7 @@
 // the mesh and the other kernels; elsewhere the fragment is discarded.
 #extension GL_GOOGLE_include_directive : require
 #define SPLAT_READS_LOBES
+#define SPLAT_FRAGMENT
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
 

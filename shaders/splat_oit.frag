@@ -12,6 +12,7 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #define SPLAT_READS_LOBES
+#define SPLAT_FRAGMENT
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
 

@@ -7,6 +7,7 @@
 // back, integrated up to the mesh).
 #extension GL_GOOGLE_include_directive : require
 #define SPLAT_READS_LOBES
+#define SPLAT_FRAGMENT
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
 

@@ -117,6 +117,9 @@ SPOT_CONST uint kSplatResolveHybridPass = 3u; /* eq. 13, closest kernel from the
 /* SpotSplatFrame.counts.w bits (what stays a run-time flag). */
 SPOT_CONST uint kSplatFlagLambert = 2u;     /* Lambert + ambient shading, else unlit */
 
+/* Lobes per kernel at most (the kernel's varyings are sized for them). */
+SPOT_CONST uint kSplatMaxLobes = 8u;
+
 /* Kernel samples (paper eq. 10's N_s) at most. Every shader invocation stays far below lavapipe's
  * 65,535 loop iterations: a march costs N x (lobes + 1) <= 2048 x 9 = 18,432 iterations, the
  * analytic path at most about 300. */
