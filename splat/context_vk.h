@@ -229,6 +229,11 @@ class Timestamps {
 public:
     Timestamps(Context& ctx, std::uint32_t count);
     ~Timestamps();
+    /// One owner per query pool: a copy would destroy it twice.
+    Timestamps(const Timestamps&) = delete;
+    Timestamps& operator=(const Timestamps&) = delete;
+    Timestamps(Timestamps&&) = delete;
+    Timestamps& operator=(Timestamps&&) = delete;
     void reset(VkCommandBuffer cmd);
     void write(VkCommandBuffer cmd, std::uint32_t slot, VkPipelineStageFlags2 stage);
     /// Milliseconds between two slots.
