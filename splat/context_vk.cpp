@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <string_view>
 
 #include "noise/error.h"
 #include "noise/system.h"
@@ -19,6 +20,8 @@ ContextOptions contextOptionsFromEnvironment() {
     ContextOptions o;
     const char* v = std::getenv("SPOT_VALIDATION");
     o.validation = v && std::strcmp(v, "1") == 0;
+    if (const char* device = std::getenv("SPOT_DEVICE"))
+        o.device = device;
     return o;
 }
 
@@ -52,6 +55,14 @@ bool hasLayer(const char* name) {
     vkEnumerateInstanceLayerProperties(&n, layers.data());
     return std::any_of(layers.begin(), layers.end(),
                        [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
+}
+
+bool containsIgnoringCase(std::string_view text, std::string_view part) {
+    // ASCII case folding: device names are ASCII.
+    const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? char(c - 'A' + 'a') : c; };
+    return std::search(text.begin(), text.end(), part.begin(), part.end(), [&](char a, char b) {
+               return lower(a) == lower(b);
+           }) != text.end();
 }
 
 } // namespace
@@ -110,6 +121,10 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
     for (VkPhysicalDevice d : devices) {
         VkPhysicalDeviceProperties p;
         vkGetPhysicalDeviceProperties(d, &p);
+        if (!options.device.empty() && !containsIgnoringCase(p.deviceName, options.device)) {
+            rejected += cat(" ", p.deviceName, " (name does not contain '", options.device, "')");
+            continue;
+        }
         if (p.apiVersion < VK_API_VERSION_1_3) {
             rejected += cat(" ", p.deviceName, " (Vulkan < 1.3)");
             continue;
@@ -130,10 +145,17 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
                 break;
             }
     }
-    if (!m_physical)
-        throw std::runtime_error(cat("Vulkan: no usable device (need Vulkan 1.3 with a graphics and "
-                                     "compute queue; install mesa-vulkan-drivers for lavapipe)",
-                                     rejected.empty() ? "" : "; rejected:", rejected));
+    if (!m_physical) {
+        const std::string message =
+            cat("Vulkan: no usable device (need Vulkan 1.3 with a graphics and compute queue",
+                options.device.empty() ? "" : cat(", a name containing '", options.device, "' (SPOT_DEVICE)"),
+                "; install mesa-vulkan-drivers for lavapipe)", rejected.empty() ? "" : "; rejected:",
+                rejected);
+        // A device the user named and cannot have is bad input (exit code 2), not our failure.
+        if (!options.device.empty())
+            throw InputError(message);
+        throw std::runtime_error(message);
+    }
     vkGetPhysicalDeviceMemoryProperties(m_physical, &m_memory);
 
     VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};

@@ -1,6 +1,8 @@
 // The Vulkan context on whatever device this machine has (lavapipe here), validation on.
+#include <cctype>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -74,6 +76,21 @@ TEST(VulkanContext, ValidationErrorsAreCounted) {
     if (r == VK_SUCCESS && buffer)
         vkDestroyBuffer(ctx.device(), buffer, nullptr);
     EXPECT_GE(ctx.validation().errors, 1u);
+}
+
+TEST(VulkanContext, SelectsTheDeviceByNameIgnoringCase) {
+    std::string name;
+    {
+        splat::Context any(validated());
+        name = any.deviceName();
+    }
+    splat::ContextOptions o = validated();
+    o.device = name.substr(0, 4);
+    for (char& c : o.device)
+        c = char(std::toupper(static_cast<unsigned char>(c)));
+    splat::Context ctx(o);
+    EXPECT_EQ(ctx.deviceName().substr(0, 4), name.substr(0, 4));
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
 }
 
 } // namespace
