@@ -65,9 +65,38 @@ bool containsIgnoringCase(std::string_view text, std::string_view part) {
            }) != text.end();
 }
 
+/// Release a context's handles in reverse order of creation; null handles are skipped. The
+/// destructor calls it, and so does a constructor that throws (the destructor then never runs).
+void destroyHandles(VkInstance instance, VkDebugUtilsMessengerEXT messenger, VkDevice device,
+                    VkCommandPool pool) {
+    if (device) {
+        vkDeviceWaitIdle(device);
+        vkDestroyCommandPool(device, pool, nullptr);
+        vkDestroyDevice(device, nullptr);
+    }
+    if (messenger) {
+        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT"));
+        if (destroy)
+            destroy(instance, messenger, nullptr);
+    }
+    if (instance)
+        vkDestroyInstance(instance, nullptr);
+}
+
 } // namespace
 
 Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Messenger>()) {
+    // Every throw below the instance's creation must release what was made so far: the
+    // destructor only runs for a fully constructed object.
+    struct ReleaseOnThrow {
+        Context& ctx;
+        bool armed = true;
+        ~ReleaseOnThrow() {
+            if (armed)
+                destroyHandles(ctx.m_instance, ctx.m_messenger, ctx.m_device, ctx.m_pool);
+        }
+    } releaseOnThrow{*this};
     m_validation = options.validation;
     const char* validationLayer = "VK_LAYER_KHRONOS_validation";
     if (m_validation && !hasLayer(validationLayer))
@@ -211,23 +240,10 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
     vkCheck(vkCreateCommandPool(m_device, &pci, nullptr, &m_pool), "vkCreateCommandPool");
 
     m_budget = options.memoryBudget ? options.memoryBudget : memoryBudgetBytes() / 10 * 8;
+    releaseOnThrow.armed = false;
 }
 
-Context::~Context() {
-    if (m_device) {
-        vkDeviceWaitIdle(m_device);
-        vkDestroyCommandPool(m_device, m_pool, nullptr);
-        vkDestroyDevice(m_device, nullptr);
-    }
-    if (m_messenger) {
-        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
-            vkGetInstanceProcAddr(m_instance, "vkDestroyDebugUtilsMessengerEXT"));
-        if (destroy)
-            destroy(m_instance, m_messenger, nullptr);
-    }
-    if (m_instance)
-        vkDestroyInstance(m_instance, nullptr);
-}
+Context::~Context() { destroyHandles(m_instance, m_messenger, m_device, m_pool); }
 
 ValidationCounts Context::validation() const {
     const std::lock_guard<std::mutex> lock(m_messages->mutex);
