@@ -3,6 +3,7 @@
 // on the close-up fur) and the sorted method's (it beats oit where opaque kernels overlap);
 // sorted's exact back-to-front compositing of stacked lobes; determinism; finite output for
 // degenerate lobes; refused settings.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -399,21 +400,31 @@ TEST(SplatRenderer, SortedReportsItsSortPass) {
         s.method = method;
         for (std::uint32_t count : {0u, 1u}) {
             splat::FrameStats stats;
+            const auto start = std::chrono::steady_clock::now();
             const noise::Image image = renderer.render(cam, noise::Shading{}, c.background,
                                                        glm::vec3(0.0f), impulses, count, s, &stats);
+            const double wallMs = std::chrono::duration<double, std::milli>(
+                                      std::chrono::steady_clock::now() - start)
+                                      .count();
             std::vector<std::string> names;
-            double sum = 0.0;
             for (const auto& [name, ms] : stats.passMs) {
                 names.push_back(name);
+                // Spans between consecutive slots: a slot written out of order gives a negative
+                // one; one never written, whatever the driver left there.
+                EXPECT_TRUE(std::isfinite(ms)) << name;
                 EXPECT_GE(ms, 0.0) << name;
-                sum += ms;
+                if (name == "resolve") // a dispatch over every pixel, whatever the kernels
+                    EXPECT_GT(ms, 0.0);
             }
             const std::vector<std::string> expected =
                 method == splat::Method::Sorted
                     ? std::vector<std::string>{"prepare", "sort", "mesh", "splat", "resolve"}
                     : std::vector<std::string>{"prepare", "mesh", "splat", "resolve"};
             EXPECT_EQ(names, expected);
-            EXPECT_NEAR(sum, stats.gpuMs, 1e-6 + 1e-9 * stats.gpuMs);
+            // The GPU time lies within the host's wait for it: a wrong tick period (units) or
+            // timestamps of another frame would break this. 1% for two clocks on a real GPU.
+            EXPECT_GT(stats.gpuMs, 0.0);
+            EXPECT_LE(stats.gpuMs, wallMs * 1.01) << "GPU ms against the render call's wall ms";
             EXPECT_EQ(stats.counters.kernelsDrawn, count);
             if (count == 0) // nothing but the background
                 EXPECT_EQ(image.at(16, 16), c.background);
