@@ -16,6 +16,9 @@
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
 
+// The depth test against the mesh (splat_quad.vert) runs before shading despite the side effects.
+layout(early_fragment_tests) in;
+
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };
 

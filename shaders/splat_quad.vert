@@ -2,7 +2,9 @@
 // One oriented quad (a 4-vertex strip) per kept kernel, from its screen bound (centre, half
 // extents along u and v); the instance is the compacted kernel list's entry. Each corner also
 // carries the kernel's lobes in screen form evaluated there (splat_common.glsl: vLobeW, vLobeV,
-// vLobeColor): they are affine in the pixel, so the rasterizer interpolates them exactly.
+// vLobeColor): they are affine in the pixel, so the rasterizer interpolates them exactly. The
+// quad lies at the reversed depth of the kernel's nearest point: where the mesh is nearer, the
+// depth test drops the pixel before any shading (exact: the ray meets the mesh first).
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 
@@ -23,7 +25,8 @@ void main() {
     float su = (gl_VertexIndex & 1) != 0 ? 1.0 : -1.0;
     float sv = (gl_VertexIndex & 2) != 0 ? 1.0 : -1.0;
     vec2 corner = b.quad.xy + su * b.quad.z * u + sv * b.quad.w * v;
-    gl_Position = vec4(2.0 * corner / frame.size.xy - 1.0, 0.0, 1.0);
+    // The depth of the support's nearest point, tested against the mesh (reversed depth).
+    gl_Position = vec4(2.0 * corner / frame.size.xy - 1.0, spotReversedDepth(b.axis.w, frame.forward.w), 1.0);
     vKernel = kernel;
     for (uint l = 0u; l < kLobes; ++l) {
         SpotScreenLobe s = screenLobes[kernel * kLobes + l];

@@ -11,6 +11,9 @@
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
 
+// The depth test against the mesh (splat_quad.vert) runs before shading despite the side effects.
+layout(early_fragment_tests) in;
+
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 
 layout(location = 0) flat in uint vKernel;

@@ -64,7 +64,9 @@ struct SpotKernelBound {
     vec4 quad; /* xy: centre (pixels); zw: half extents along u and along v = (-u.y, u.x);
                   empty (culled) when z <= 0 */
     vec4 axis; /* xy: unit u (pixels); z: view depth of the kernel's centre of mass (sorting);
-                  w: unused */
+                  w: nearest view depth of its support (the quad's depth: behind the mesh, a
+                  pixel's ray cannot reach the kernel before the mesh, so the depth test skips
+                  it) */
 };
 
 /* Descriptor bindings of the splat pipelines (one numbering for all; each pipeline declares the

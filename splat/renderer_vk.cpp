@@ -118,6 +118,12 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
     quads.spec = spec;
     GraphicsPipelineDesc splat = quads;
     splat.bindings.push_back(storageBuffer(kSplatBindCounters)); // read only when counting
+    // Quads at their kernel's nearest depth, tested against the mesh's depth (not written):
+    // pixels where the mesh hides the whole kernel are never shaded.
+    splat.depthFormat = kDepthFormat;
+    splat.depthTest = true;
+    splat.depthWrite = false;
+    splat.depthCompare = VK_COMPARE_OP_GREATER;
     if (roofline) {
         splat.fragment = spirv(spv_splat_roofline_frag);
         splat.colorFormats = {kColorFormat, kScalarFormat};
@@ -462,12 +468,12 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
                        &depthInfo);
     else if (f.sorted)
         beginRendering(cmd, width, height, {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)},
-                       nullptr);
+                       &depthInfo);
     else
         beginRendering(cmd, width, height,
                        {colorAttachment(m_accum, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f)),
                         colorAttachment(m_opticalDepth, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f))},
-                       nullptr);
+                       &depthInfo);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.splat.handle());
     pushFrame(cmd, p.splat, f.frame);
     const bool oitPass = usesOit(m_method) && !f.settings.roofline;
