@@ -115,6 +115,8 @@ float splatLobeShading(uint first, SpotWorldLobe w, vec3 o, vec3 d, float tMesh,
 layout(location = 1) noperspective in vec4 vLobeW[kSplatMaxLobes];
 layout(location = 9) noperspective in vec4 vLobeV[kSplatMaxLobes];
 layout(location = 17) flat in vec4 vLobeColor[kSplatMaxLobes];
+// The view depth of the kernel support's nearest point (SpotKernelBound.axis.w).
+layout(location = 25) flat in float vNearDepth;
 #endif
 
 // Analytic: each lobe's exact optical depth up to the mesh (spotScreenLobeDepth on the lobe's

@@ -15,7 +15,12 @@ layout(location = 0) flat in uint vKernel;
 layout(location = 0) out vec4 outColor;
 
 void main() {
-    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, ivec2(gl_FragCoord.xy)).r);
+    float tMesh = imageLoad(meshDistance, ivec2(gl_FragCoord.xy)).r;
+    // The depth written below rules out the early depth test: where the mesh is nearer than the
+    // kernel's nearest point (view depth), the ray meets the mesh first, and nothing shows.
+    if (vNearDepth * splatRayScale(gl_FragCoord.xy) >= tMesh)
+        discard;
+    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, tMesh);
     splatCount(s.alpha);
     if (!(s.alpha >= kSplatInstancedMinAlpha))
         discard;

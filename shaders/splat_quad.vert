@@ -16,6 +16,7 @@ layout(location = 0) flat out uint vKernel;
 layout(location = 1) noperspective out vec4 vLobeW[kSplatMaxLobes];
 layout(location = 9) noperspective out vec4 vLobeV[kSplatMaxLobes];
 layout(location = 17) flat out vec4 vLobeColor[kSplatMaxLobes];
+layout(location = 25) flat out float vNearDepth;
 
 void main() {
     uint kernel = visible[gl_InstanceIndex];
@@ -28,6 +29,7 @@ void main() {
     // The depth of the support's nearest point, tested against the mesh (reversed depth).
     gl_Position = vec4(2.0 * corner / frame.size.xy - 1.0, spotReversedDepth(b.axis.w, frame.forward.w), 1.0);
     vKernel = kernel;
+    vNearDepth = b.axis.w;
     for (uint l = 0u; l < kLobes; ++l) {
         SpotScreenLobe s = screenLobes[kernel * kLobes + l];
         vec2 delta = corner - vec2(s.k0.w, s.kx.w);
