@@ -57,7 +57,7 @@ const char* methodName(Method method) {
 }
 
 SplatRenderer::SplatRenderer(const SceneGpu& scene, Method method)
-    : m_scene(scene), m_ctx(scene.context()), m_method(method), m_sort(scene.context()) {
+    : m_scene(scene), m_ctx(scene.context()), m_method(method) {
     requireFormat(m_ctx, kColorFormat,
                   VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
                   "blended, stored RGBA32F targets");
@@ -147,7 +147,7 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
         splat.blends = {additiveBlend(), additiveBlend()};
     }
     p.splat = makeGraphicsPipeline(m_ctx, splat);
-    if (m_method == Method::Hybrid && !roofline) {
+    if (s.closestPass && !roofline) {
         // The closest kernel by a depth pass: nearest wins, the first on a tie.
         GraphicsPipelineDesc closest = quads;
         closest.fragment = spirv(spv_splat_closest_frag);
@@ -334,6 +334,7 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
     s.orthographic = view.camera.projection == noise::Projection::Orthographic;
     s.ewa = settings.ewa;
     s.hybridAtomic = f.hybridAtomic;
+    s.closestPass = f.closestPass;
     s.count = settings.countFragments && !settings.roofline;
     s.weight = settings.weight == OitWeight::McGuireBavoil ? shared::f32::kSpotWeightMcGuireBavoil
                                                            : shared::f32::kSpotWeightConstant;
@@ -344,6 +345,8 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
     if (settings.roofline) // the roofline's image is meaningless; resolve it as plain OIT
         s.resolve = kSplatResolveOit;
     f.pipelines = &pipelines(s, settings.roofline);
+    if (f.sorted && !m_sort)
+        m_sort = std::make_unique<RadixSort>(m_ctx);
     f.frame = makeSplatFrame(view.camera, view.shading, view.baseColor, impulses.capacity,
                              m_scene.lobeCount(), m_scene.support(),
                              std::uint32_t(settings.kernelSamples), 0);
@@ -400,7 +403,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         if (capacity > 0)
             vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
         memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRW);
-        m_sort.record(cmd, m_sortKeys, m_visible, capacity, m_sortScratch);
+        m_sort->record(cmd, m_sortKeys, m_visible, capacity, m_sortScratch);
         timer.mark(cmd, "sort");
     }
 
