@@ -248,20 +248,20 @@ SPOT_FN real spotLobeDepth(rvec3 o, rvec3 d, real t0, real t1, real k, SPOT_OUT(
     return kSqrtTwoPi * invLen * exp(real(-0.5) * perp2) * fraction;
 }
 
-/* erf(x) for x >= 0 given e = exp(-x^2): Abramowitz and Stegun 7.1.26, absolute error below
- * 1.5e-7. Taking the exponential as an argument lets the splat shaders reuse one they have. */
-SPOT_FN real spotErfWithExp(real x, real e) {
+/* The polynomial of Abramowitz and Stegun 7.1.26: erf(x) = 1 - spotErfPoly(x) exp(-x^2) for
+ * x >= 0, absolute error below 1.5e-7. */
+SPOT_FN real spotErfPoly(real x) {
     real t = real(1.0) / (real(1.0) + real(0.3275911) * x);
-    real poly = t * (real(0.254829592) +
-                     t * (real(-0.284496736) +
-                          t * (real(1.421413741) + t * (real(-1.453152027) + t * real(1.061405429)))));
-    return real(1.0) - poly * e;
+    return t * (real(0.254829592) +
+                t * (real(-0.284496736) +
+                     t * (real(1.421413741) + t * (real(-1.453152027) + t * real(1.061405429)))));
 }
 
-/* erf(u / sqrt 2) for any u (odd), its exponential computed here. */
-SPOT_FN real spotErfHalfSqrt2(real u) {
+/* g x erf(u / sqrt 2) for any u (odd in u), g > 0 a factor the caller multiplies in anyway: the
+ * clipped ends of a chord. */
+SPOT_FN real spotScaledErfHalfSqrt2(real u, real g) {
     real x = abs(u) * kInvSqrtTwo;
-    real r = spotErfWithExp(x, exp(-x * x));
+    real r = g * (real(1.0) - spotErfPoly(x) * exp(-x * x));
     return u < real(0.0) ? -r : r;
 }
 
@@ -272,10 +272,12 @@ SPOT_FN real spotErfHalfSqrt2(real u) {
  * t* = -on / |v|^2, and the lobe-space arc length s = (t - t*) |v| runs over the chord
  * |s| < h = sqrt(k^2 - |w|^2 / |v|^2) clipped to t in [0, tEnd]. Returns the integral over t (per
  * unit peak extinction; multiply by |e| for world units), 0 when the ray misses; `tPeak` receives
- * t*. Cost matters here (the splat fragment shaders run it per lobe and pixel): erf by
- * spotErfWithExp (absolute error 1.5e-7 on the chord's fraction), and at an unclipped end of the
- * chord exp(-h^2 / 2) = exp(-k^2 / 2) / exp(-|w|^2 / (2 |v|^2)) comes from the Gaussian's own
- * exponential, so an unclipped lobe costs one exp. */
+ * t*.
+ * Cost matters here (the splat fragment shaders run it per lobe and pixel), so erf is
+ * Abramowitz and Stegun's (absolute error 1.5e-7 on the chord's fraction), and at an unclipped
+ * end of the chord the Gaussian's own exponential does for erf's: with G = exp(-|w|^2/(2|v|^2)),
+ * exp(-h^2 / 2) = exp(-k^2 / 2) / G, so G erf(h / sqrt 2) = G - poly exp(-k^2 / 2). An unclipped
+ * lobe costs one exp, one sqrt and two divisions. */
 SPOT_FN real spotScreenLobeDepth(rvec3 w, rvec3 v, real on, real tEnd, real k, SPOT_OUT(real) tPeak) {
     real vv = dot(v, v);
     real ww = dot(w, w);
@@ -293,19 +295,19 @@ SPOT_FN real spotScreenLobeDepth(rvec3 w, rvec3 v, real on, real tEnd, real k, S
     real ub = (tEnd - tStar) * len;  /* the mesh */
     if (!(min(ub, h) > max(ua, -h)))
         return real(0.0);
-    real fa = real(-1.0);
-    real fb = real(1.0);
+    /* G x erf at each end of the chord (the lower end negative). */
+    real ga = -gauss;
+    real gb = gauss;
     if (ua <= -h || ub >= h) {
-        real eh = exp(real(-0.5) * k * k) / gauss; /* exp(-h^2 / 2) */
-        real full = spotErfWithExp(h * kInvSqrtTwo, eh);
-        fa = -full;
-        fb = full;
+        real full = gauss - spotErfPoly(h * kInvSqrtTwo) * exp(real(-0.5) * k * k);
+        ga = -full;
+        gb = full;
     }
     if (ua > -h)
-        fa = spotErfHalfSqrt2(ua);
+        ga = spotScaledErfHalfSqrt2(ua, gauss);
     if (ub < h)
-        fb = spotErfHalfSqrt2(ub);
-    return kSqrtTwoPi / len * gauss * real(0.5) * (fb - fa);
+        gb = spotScaledErfHalfSqrt2(ub, gauss);
+    return kSqrtTwoPi * real(0.5) * (gb - ga) / len;
 }
 
 /* Density of a lobe at lobe-space point u, per unit peak extinction, truncated at k. */
