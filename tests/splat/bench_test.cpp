@@ -71,6 +71,14 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
             EXPECT_LE(double(r["splat_ms_median"]), ms) << r.dump();
             EXPECT_GT(double(r["roofline_splat_ms"]), 0.0) << r.dump();
             EXPECT_GT(double(r["roofline_fraction"]), 0.0) << r.dump();
+            // Fragment efficiency, counted: every covered pixel was shaded, and on the whole
+            // furry bunny the splat pass shades at most twice the covered pixels.
+            const double fragments = r["fragments_shaded"], covered = r["pixels_covered"];
+            EXPECT_GT(covered, 0.0) << r.dump();
+            EXPECT_GE(fragments, covered) << r.dump();
+            EXPECT_NEAR(double(r["fragment_efficiency"]), fragments / covered, 1e-9) << r.dump();
+            if (r["scene"] == "fur-bunny")
+                EXPECT_LE(fragments, 2.0 * covered) << r.dump();
         }
         // Every method is ok on the whole furry bunny, at every quick setting (the ray-march's
         // with 2 x 2 rays per pixel: with one ray per pixel it aliases sub-pixel strands and its
