@@ -110,11 +110,13 @@ SPOT_CONST uint kSplatSpecScreen = 9u;       /* bool: prepare writes screen lobe
                                                 (the ray-march reads world lobes only) */
 
 /* What the resolve makes of its inputs. */
-SPOT_CONST uint kSplatResolveCopy = 0u;      /* the base colour image is the result (instanced,
-                                                sorted: kernels were drawn onto it) */
+SPOT_CONST uint kSplatResolveCopy = 0u;      /* the base colour image is the result (sorted:
+                                                kernels were drawn onto it) */
 SPOT_CONST uint kSplatResolveOit = 1u;       /* eq. 12 */
 SPOT_CONST uint kSplatResolveHybrid = 2u;    /* eq. 13, closest kernel from the atomicMin buffer */
 SPOT_CONST uint kSplatResolveHybridPass = 3u; /* eq. 13, closest kernel from the depth pass */
+SPOT_CONST uint kSplatResolveInstanced = 4u; /* the nearest opaque kernel (atomicMin buffer)
+                                                 painted over the base colour */
 
 /* SpotSplatFrame.counts.w bits (what stays a run-time flag). */
 SPOT_CONST uint kSplatFlagLambert = 2u;     /* Lambert + ambient shading, else unlit */

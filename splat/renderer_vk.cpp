@@ -130,13 +130,8 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
         splat.blends = {additiveBlend(), additiveBlend()};
     } else if (m_method == Method::Instanced) {
         splat.fragment = spirv(spv_splat_instanced_frag);
-        splat.colorFormats = {kColorFormat};
-        splat.blends = {opaqueBlend()};
-        splat.depthFormat = kDepthFormat;
-        splat.depthTest = true;
-        splat.depthWrite = true;
-        splat.depthCompare = VK_COMPARE_OP_GREATER;
-    } else if (m_method == Method::Sorted) {
+        splat.bindings.push_back(storageBuffer(kSplatBindClosest));
+        } else if (m_method == Method::Sorted) {
         splat.fragment = spirv(spv_splat_sorted_frag);
         splat.colorFormats = {kColorFormat};
         splat.blends = {overBlend()};
@@ -171,6 +166,8 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
     if (m_method == Method::Hybrid)
         perPixel += settings.closest == ClosestKernel::DepthPass ? kClosestPassBytesPerPixel
                                                                  : kAtomicBytesPerPixel;
+    if (m_method == Method::Instanced)
+        perPixel += kAtomicBytesPerPixel;
     const std::uint64_t perKernel = std::uint64_t(m_scene.lobeCount()) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t);
@@ -183,7 +180,8 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
 void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
                                   const RenderSettings& settings) {
     const bool oit = usesOit(m_method);
-    const bool atomic = m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic;
+    const bool atomic = m_method == Method::Instanced ||
+                        (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
     const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
     const bool have = m_width == width && m_height == height && m_base.handle() &&
                       (!oit || m_accum.handle()) && (!atomic || m_closest.handle()) &&
@@ -338,7 +336,8 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
     s.count = settings.countFragments && !settings.roofline;
     s.weight = settings.weight == OitWeight::McGuireBavoil ? shared::f32::kSpotWeightMcGuireBavoil
                                                            : shared::f32::kSpotWeightConstant;
-    s.resolve = f.sorted || f.instanced ? kSplatResolveCopy
+    s.resolve = f.sorted              ? kSplatResolveCopy
+                : f.instanced           ? kSplatResolveInstanced
                 : f.hybridAtomic        ? kSplatResolveHybrid
                 : f.closestPass         ? kSplatResolveHybridPass
                                         : kSplatResolveOit;
@@ -379,7 +378,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .buffer(kSplatBindCount, *f.impulses.count)
         .push(m_ctx, cmd, p.compact);
     vkCmdDispatch(cmd, 1, 1, 1);
-    if (f.hybridAtomic)
+    if (f.hybridAtomic || f.instanced)
         vkCmdFillBuffer(cmd, m_closest.handle(), 0, VK_WHOLE_SIZE, 0xffffffffu); // "no kernel"
     if (f.settings.countFragments)
         vkCmdFillBuffer(cmd, m_counters.handle(), 0, VK_WHOLE_SIZE, 0u);
@@ -466,9 +465,8 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
 
     // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
     const VkRenderingAttachmentInfo depthInfo = depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
-    if (f.instanced)
-        beginRendering(cmd, width, height, {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)},
-                       &depthInfo);
+    if (f.instanced) // nothing but the atomics, behind the mesh test
+        beginRendering(cmd, width, height, {}, &depthInfo);
     else if (f.sorted)
         beginRendering(cmd, width, height, {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)},
                        &depthInfo);
@@ -479,8 +477,8 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
                        &depthInfo);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.splat.handle());
     pushFrame(cmd, p.splat, f.frame);
-    const bool oitPass = usesOit(m_method) && !f.settings.roofline;
-    quadDescriptors(p.splat, oitPass, true);
+    const bool atomics = (usesOit(m_method) || f.instanced) && !f.settings.roofline;
+    quadDescriptors(p.splat, atomics, true);
     vkCmdDrawIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
     vkCmdEndRendering(cmd);
     for (const Image* image : targets)
