@@ -1,15 +1,22 @@
 // Impulses generated on the GPU equal the CPU's: same count, same order, positions within 1e-5 h.
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <string>
+#include <vector>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include "noise/camera.h"
+#include "noise/image.h"
 #include "noise/impulses.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
 #include "noise/shared_data.h"
 #include "splat/generate_vk.h"
+#include "splat_test_support.h"
 
 namespace {
 
@@ -31,12 +38,15 @@ noise::Mesh meshFor(const std::string& name) {
     return noise::loadMesh(std::string(SPOT_SOURCE_DIR) + "/presets/meshes/" + name + ".ply");
 }
 
-void expectSameImpulses(const std::string& presetName, const std::string& meshName) {
-    const noise::Mesh mesh = meshFor(meshName);
-    const noise::PresetDesc preset =
-        noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/" + presetName + ".json");
+noise::PresetDesc shippedPreset(const std::string& name) {
+    return noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/" + name + ".json");
+}
+
+void expectSameImpulses(const noise::PresetDesc& preset, const noise::Mesh& mesh,
+                        const std::string& meshName, std::uint32_t seed = 17) {
+    const std::string& presetName = preset.name;
     noise::GeneratorOptions options;
-    options.seed = 17;
+    options.seed = seed;
     const noise::ImpulseGenerator generator(mesh, preset, options);
     const std::vector<noise::Impulse> cpu = generator.generate();
 
@@ -63,15 +73,98 @@ void expectSameImpulses(const std::string& presetName, const std::string& meshNa
                 worst / generator.cellSize());
 }
 
-TEST(GpuGenerate, FurOnTheBunny) { expectSameImpulses("fur", "bunny"); }          // poisson, noise density
-TEST(GpuGenerate, GrassOnAPlane) { expectSameImpulses("grass", "plane"); }         // jittered
-TEST(GpuGenerate, LichenOnATorus) { expectSameImpulses("lichen", "torus"); }       // jittered, patchy
-TEST(GpuGenerate, RingOnASphere) { expectSameImpulses("ring", "sphere"); }
-TEST(GpuGenerate, UniformOnTheBunny) { expectSameImpulses("uniform", "bunny"); }
+void expectSameImpulses(const std::string& presetName, const std::string& meshName,
+                        std::uint32_t seed = 17) {
+    expectSameImpulses(shippedPreset(presetName), meshFor(meshName), meshName, seed);
+}
+
+// Every shipped preset (each compiles its own specialization of the candidate pass).
+TEST(GpuGenerate, FurOnTheBunny) {
+    expectSameImpulses("fur", "bunny");
+} // poisson, noise density
+TEST(GpuGenerate, DenseFurOnTheBunny) {
+    expectSameImpulses("fur-dense", "bunny");
+}
+TEST(GpuGenerate, GrassOnAPlane) {
+    expectSameImpulses("grass", "plane");
+} // jittered
+TEST(GpuGenerate, LichenOnATorus) {
+    expectSameImpulses("lichen", "torus");
+} // jittered, patchy
+TEST(GpuGenerate, RingOnASphere) {
+    expectSameImpulses("ring", "sphere");
+} // jittered, gradient
+TEST(GpuGenerate, UniformOnTheBunny) {
+    expectSameImpulses("uniform", "bunny");
+}
+TEST(GpuGenerate, FlakesOnASphere) {
+    expectSameImpulses("flakes", "sphere");
+}
+
+// The jittered lattice on a curved mesh without uvs or tangents, off the grid's axes: which
+// triangle and cell a site falls in is decided from float lattice axes, identical on both sides.
+TEST(GpuGenerate, JitteredOnTheBunny) {
+    expectSameImpulses("grass", "bunny", 3);
+    expectSameImpulses("lichen", "bunny", 5);
+}
+
+// Every field kind (constant, gradient, noise, vertex, image; scalar and RGB), a comb field,
+// uvs and tangents: what the specialization constants select.
+TEST(GpuGenerate, EveryFieldKindOnAPlane) {
+    noise::Mesh mesh = noise::makePlane(2.0f, 16);
+    mesh.attributes["heat"].resize(mesh.positions.size());
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+        mesh.attributes["heat"][i] = 0.2f + 0.6f * float(i % 7) / 6.0f;
+    noise::PresetDesc preset = test::uniformPreset(3000.0f, 0.02f);
+    preset.name = "every-field-kind";
+    const std::string spots = std::string(SPOT_SOURCE_DIR) + "/presets/textures/density_spots.png";
+    const std::string rgb =
+        std::string(SPOT_TEST_TMP_DIR) + "/generate-rgb-" + std::to_string(::getpid()) + ".exr";
+    {
+        noise::Image img(7, 5);
+        for (int y = 0; y < 5; ++y)
+            for (int x = 0; x < 7; ++x)
+                img.at(x, y) = glm::vec3(0.1f * float(x), 0.2f * float(y), 0.05f * float(x + y));
+        noise::writeImage(rgb, img);
+    }
+    preset.density.kind = noise::FieldDesc::Kind::Image;
+    preset.density.file = spots;
+    preset.density.lo = glm::vec3(0.2f);
+    noise::FieldDesc comb;
+    comb.kind = noise::FieldDesc::Kind::Gradient;
+    comb.components = 3;
+    comb.from = glm::vec3(-1.0f, 0.0f, -1.0f);
+    comb.to = glm::vec3(1.0f, 0.0f, 1.0f);
+    comb.lo = glm::vec3(1.0f, 0.0f, 0.0f);
+    comb.hi = glm::vec3(0.0f, 0.0f, 1.0f);
+    preset.comb = comb;
+    preset.tiltDeg.kind = noise::FieldDesc::Kind::Noise;
+    preset.tiltDeg.frequency = 3.0f;
+    preset.tiltDeg.octaves = 2;
+    preset.tiltDeg.lo = glm::vec3(10.0f);
+    preset.tiltDeg.hi = glm::vec3(60.0f);
+    preset.spinDeg.kind = noise::FieldDesc::Kind::Gradient;
+    preset.spinDeg.from = glm::vec3(0.0f, 0.0f, -1.0f);
+    preset.spinDeg.to = glm::vec3(0.0f, 0.0f, 1.0f);
+    preset.spinDeg.hi = glm::vec3(90.0f);
+    preset.bendDeg.kind = noise::FieldDesc::Kind::Vertex;
+    preset.bendDeg.attributes = {"heat"};
+    preset.color.kind = noise::FieldDesc::Kind::Image;
+    preset.color.components = 3;
+    preset.color.file = rgb;
+    preset.color.repeat = false;
+    preset.weight.kind = noise::FieldDesc::Kind::Vertex;
+    preset.weight.attributes = {"heat"};
+    preset.scale.kind = noise::FieldDesc::Kind::Vertex;
+    preset.scale.attributes = {"heat", "heat", "heat"};
+    expectSameImpulses(preset, mesh, "plane");
+    std::remove(rgb.c_str());
+}
 
 TEST(GpuGenerate, CellsOutsideTheViewGenerateNothing) {
     const noise::Mesh mesh = meshFor("bunny");
-    const noise::PresetDesc preset = noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur.json");
+    const noise::PresetDesc preset =
+        noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur.json");
     const noise::ImpulseGenerator generator(mesh, preset, noise::GeneratorOptions{});
     splat::Context ctx(validated());
     splat::GpuGenerator gpuGenerator(ctx, mesh, generator);
@@ -93,7 +186,8 @@ TEST(GpuGenerate, CellsOutsideTheViewGenerateNothing) {
     const auto* g = static_cast<const gpu::SpotImpulse*>(culled.impulses.mapped());
     for (std::uint32_t i = 0; i < culled.count; ++i)
         EXPECT_LT(g[i].position.x, 0.1f); // nothing from the right half
-    const splat::GpuImpulses none = gpuGenerator.generate([](const noise::SurfaceCell&) { return false; });
+    const splat::GpuImpulses none =
+        gpuGenerator.generate([](const noise::SurfaceCell&) { return false; });
     EXPECT_EQ(none.count, 0u);
     EXPECT_EQ(none.candidates, 0u);
     EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
@@ -105,7 +199,8 @@ namespace {
 
 TEST(GpuGenerate, LevelOfDetailThinsFarCellsAndConservesMass) {
     const noise::Mesh mesh = meshFor("bunny");
-    const noise::PresetDesc preset = noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur.json");
+    const noise::PresetDesc preset =
+        noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur.json");
     const noise::ImpulseGenerator generator(mesh, preset, noise::GeneratorOptions{});
     splat::Context ctx(validated());
     splat::GpuGenerator gpuGenerator(ctx, mesh, generator);
