@@ -51,6 +51,7 @@ private:
     glm::uvec4 spotParamFlags() const { return m_a.params->flags; }
     glm::vec4 spotParamLod() const { return m_a.params->lod; }
     const SpotField& spotParamField(uint slot) const { return m_a.params->fields[slot]; }
+    glm::ivec2 spotParamFieldKind(uint slot) const { return glm::ivec2(m_a.params->fields[slot].kind); }
 
 public:
 #define SPOT_FN

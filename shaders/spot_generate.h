@@ -6,8 +6,11 @@
  *   SpotPiece spotCellPiece(uint i); real spotFieldData(uint i);
  *   vec4 spotParamDistribution(); vec4 spotParamVariation0(); vec4 spotParamVariation1();
  *   uvec4 spotParamFlags(); vec4 spotParamLod(); SpotField spotParamField(uint slot);
- * In GLSL these read storage buffers; in C++ this file is included inside a class body
- * (noise/generator_shared.h) whose members read the model's arrays.
+ *   ivec2 spotParamFieldKind(uint slot) (the slot's SpotField.kind.xy: kind, components).
+ * In GLSL these read storage buffers, except what the pipeline is specialized for (the
+ * distribution and flags, each field's kind: generate_candidates.comp), which are constants so
+ * that only the paths a preset uses are compiled; in C++ this file is included inside a class
+ * body (noise/generator_shared.h) whose members read the model's arrays.
  * Everything is single precision (`real` is float on both sides), so no GPU needs float64.
  *
  * Generation is split into candidates so that no GPU invocation loops long (lavapipe silently
@@ -84,8 +87,9 @@ SPOT_FN real spotImageTexel(SpotField f, int x, int y, int c) {
 /* A field's value at a surface point (scalars in .x). */
 SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
     SpotField f = spotParamField(slot);
-    int kind = f.kind.x;
-    int components = f.kind.y;
+    ivec2 kindComponents = spotParamFieldKind(slot);
+    int kind = kindComponents.x;
+    int components = kindComponents.y;
     if (kind == 1) {
         rvec3 from = rvec3(f.from);
         real t = clamp(dot(s.position - from, rvec3(f.axis)), real(0.0), real(1.0));

@@ -1,4 +1,6 @@
-// Impulses generated on the GPU equal the CPU's: same count, same order, positions within 1e-5 h.
+// Impulses generated on the GPU equal the CPU's: same count, same order, positions within 1e-5 h;
+// the persistent generation (prepared on the host, recorded into a caller's command buffer)
+// equals the one-shot one and allocates nothing for a frame like the last.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -231,6 +233,130 @@ TEST(GpuGenerate, LevelOfDetailThinsFarCellsAndConservesMass) {
     ortho.projection = noise::Projection::Orthographic;
     EXPECT_EQ(splat::lodParameters(ortho, 6.0).w, 0.0f);
     EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+} // namespace
+
+namespace {
+
+// --- The persistent generation ---------------------------------------------------------------
+
+/// The fur preset on the bunny, its GPU generator and a validated context (shared set-up).
+struct FurOnTheBunny {
+    noise::Mesh mesh = meshFor("bunny");
+    noise::ImpulseGenerator generator{mesh, shippedPreset("fur"), noise::GeneratorOptions{}};
+    splat::Context ctx{validated()};
+    splat::GpuGenerator gpu{ctx, mesh, generator};
+
+    /// Cells left of x (world units); all cells for a large x.
+    std::function<bool(const noise::SurfaceCell&)> leftOf(double x) const {
+        const double h = generator.cellSize();
+        return [x, h](const noise::SurfaceCell& c) { return (c.ijk.x + 0.5) * h < x; };
+    }
+};
+
+/// The impulses of the last generation read back after `record` (into a caller's command buffer,
+/// followed by the caller's own copy of the impulses, in one submit).
+std::vector<gpu::SpotImpulse> generateInFrame(splat::Context& ctx, splat::GpuGenerator& gpu) {
+    const splat::ImpulseSet set = gpu.impulses();
+    const VkDeviceSize bytes =
+        std::max<VkDeviceSize>(VkDeviceSize(set.capacity) * sizeof(gpu::SpotImpulse), 16);
+    splat::Buffer readback(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                           splat::Buffer::Memory::HostVisible, "test readback");
+    splat::CommandBuffer commands(ctx);
+    splat::PassTimer timer(ctx);
+    VkCommandBuffer cmd = commands.begin();
+    timer.begin(cmd);
+    gpu.record(cmd, timer);
+    if (set.capacity > 0) {
+        const VkBufferCopy region{0, 0, VkDeviceSize(set.capacity) * sizeof(gpu::SpotImpulse)};
+        vkCmdCopyBuffer(cmd, set.impulses->handle(), readback.handle(), 1, &region);
+        splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                             VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                             VK_ACCESS_2_HOST_READ_BIT);
+    }
+    commands.submitAndWait();
+    EXPECT_EQ(timer.passMilliseconds().size(), 1u);
+    EXPECT_EQ(timer.passMilliseconds().front().first, "generate");
+    const std::uint32_t count = gpu.count();
+    EXPECT_EQ(*static_cast<const std::uint32_t*>(set.count->mapped()), count);
+    EXPECT_LE(count, set.capacity);
+    const auto* p = static_cast<const gpu::SpotImpulse*>(readback.mapped());
+    return std::vector<gpu::SpotImpulse>(p, p + count);
+}
+
+/// Byte-identical impulses (the generation is deterministic).
+void expectIdentical(const std::vector<gpu::SpotImpulse>& a, const splat::GpuImpulses& b) {
+    ASSERT_EQ(a.size(), b.count);
+    EXPECT_EQ(std::memcmp(a.data(), b.impulses.mapped(), a.size() * sizeof(gpu::SpotImpulse)), 0);
+}
+
+TEST(GpuGenerate, PersistentGenerationInACallersFrameEqualsTheOneShot) {
+    FurOnTheBunny s;
+    const glm::vec4 lod(0.3f, 2.0f, 3.0f, 40.0f); // thins some cells: the LOD variant too
+    const splat::GpuImpulses oneShot = s.gpu.generate(s.leftOf(0.0), lod);
+    ASSERT_GT(oneShot.count, 1000u);
+
+    splat::GpuGenerator fresh(s.ctx, s.mesh, s.generator);
+    ASSERT_TRUE(fresh.prepare(s.leftOf(0.0), lod));
+    EXPECT_EQ(fresh.candidates(), oneShot.candidates);
+    EXPECT_EQ(fresh.cells(), oneShot.cells);
+    EXPECT_EQ(fresh.impulses().capacity, oneShot.candidates);
+    expectIdentical(generateInFrame(s.ctx, fresh), oneShot);
+    EXPECT_EQ(fresh.count(), oneShot.count);
+    test::expectNoValidationErrors(s.ctx);
+}
+
+TEST(GpuGenerate, PrepareRegeneratesOnlyWhenTheCellsOrTheLevelOfDetailChange) {
+    FurOnTheBunny s;
+    const glm::vec4 lodOff(0.0f);
+    const glm::vec4 lodOn(0.3f, 2.0f, 3.0f, 40.0f);
+    ASSERT_TRUE(s.gpu.prepare(s.leftOf(0.0), lodOff));
+    const std::uint64_t first = s.gpu.impulses().version;
+    generateInFrame(s.ctx, s.gpu);
+    EXPECT_FALSE(s.gpu.prepare(s.leftOf(0.0), lodOff)); // same cells, same lod: impulses stand
+    EXPECT_EQ(s.gpu.impulses().version, first);
+    EXPECT_TRUE(s.gpu.prepare(s.leftOf(0.05), lodOff)); // more cells
+    EXPECT_GT(s.gpu.impulses().version, first);
+    generateInFrame(s.ctx, s.gpu);
+    EXPECT_TRUE(s.gpu.prepare(s.leftOf(0.05), lodOn)); // same cells, another lod
+    generateInFrame(s.ctx, s.gpu);
+    EXPECT_FALSE(s.gpu.prepare(s.leftOf(0.05), lodOn));
+    EXPECT_TRUE(s.gpu.prepare({}, lodOn));             // all cells
+    EXPECT_FALSE(s.gpu.prepare(s.leftOf(1e9), lodOn)); // ... the same cells, chosen otherwise
+    test::expectNoValidationErrors(s.ctx);
+}
+
+TEST(GpuGenerate, RegrowthKeepsResultsAndAFrameLikeTheLastAllocatesNothing) {
+    FurOnTheBunny s;
+    // Small, then everything (the buffers grow), then small again: the same impulses.
+    ASSERT_TRUE(s.gpu.prepare(s.leftOf(-0.4), glm::vec4(0.0f)));
+    const std::vector<gpu::SpotImpulse> small = generateInFrame(s.ctx, s.gpu);
+    ASSERT_GT(small.size(), 100u);
+    const std::uint64_t allocatedSmall = s.ctx.allocatedBytes();
+    ASSERT_TRUE(s.gpu.prepare({}, glm::vec4(0.0f)));
+    const std::vector<gpu::SpotImpulse> all = generateInFrame(s.ctx, s.gpu);
+    ASSERT_GT(all.size(), 2 * small.size());
+    // Now large enough: frames that need no more room allocate nothing, regenerating or not.
+    const std::uint64_t allocated = s.ctx.allocatedBytes();
+    EXPECT_GT(allocated, allocatedSmall); // the buffers did grow
+    ASSERT_TRUE(s.gpu.prepare(s.leftOf(-0.4), glm::vec4(0.0f)));
+    const std::vector<gpu::SpotImpulse> smallAgain = generateInFrame(s.ctx, s.gpu);
+    ASSERT_EQ(smallAgain.size(), small.size());
+    EXPECT_EQ(std::memcmp(smallAgain.data(), small.data(), small.size() * sizeof(gpu::SpotImpulse)),
+              0);
+    EXPECT_FALSE(s.gpu.prepare(s.leftOf(-0.4), glm::vec4(0.0f)));
+    EXPECT_TRUE(s.gpu.prepare(s.leftOf(0.0), glm::vec4(0.0f)));
+    generateInFrame(s.ctx, s.gpu);
+    EXPECT_TRUE(s.gpu.prepare({}, glm::vec4(0.0f)));
+    const std::vector<gpu::SpotImpulse> allAgain = generateInFrame(s.ctx, s.gpu);
+    EXPECT_EQ(s.ctx.allocatedBytes(), allocated);
+    ASSERT_EQ(allAgain.size(), all.size());
+    EXPECT_EQ(std::memcmp(allAgain.data(), all.data(), all.size() * sizeof(gpu::SpotImpulse)), 0);
+    // ... and equal what a generator that never grew makes.
+    splat::GpuGenerator fresh(s.ctx, s.mesh, s.generator);
+    expectIdentical(all, fresh.generate());
+    test::expectNoValidationErrors(s.ctx);
 }
 
 } // namespace
