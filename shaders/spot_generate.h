@@ -202,6 +202,8 @@ SPOT_FN bool spotFinishImpulse(ivec3 cell, uint key, uint tri, rvec3 bary, SPOT_
     return true;
 }
 
+#ifndef SPOT_GEN_NO_POISSON
+
 /* ---- Poisson: count ~ Poisson(density_max x area), uniform on the cell's pieces --------------- */
 
 SPOT_FN uint spotCellKeyOf(SpotCell cell) {
@@ -231,6 +233,10 @@ SPOT_FN bool spotPoissonCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) i
     return spotFinishImpulse(ivec3(cell.ijk), key, floatBitsToUint(piece.c2.w),
                              rvec3(real(1.0) - b.x - b.y, b.x, b.y), imp);
 }
+
+#endif /* SPOT_GEN_NO_POISSON */
+
+#ifndef SPOT_GEN_NO_JITTERED
 
 /* ---- Jittered: a square lattice in each triangle's plane ------------------------------------- */
 /* Spacing 1/sqrt(density_max), aligned with the surface tangent: site (a, b) of a triangle's plane
@@ -326,42 +332,56 @@ SPOT_FN uint spotJitteredCandidates(SpotCell cell) {
     return min(total, kMaxCandidatesPerCell);
 }
 
+/* Site m (in the group's candidate order) of lattice l, the group of triangle `tri` in `cell`: its
+ * random key and the barycentric coordinates of the moved site; false when the moved site falls
+ * outside the triangle or the cell. */
+SPOT_FN bool spotLatticeSite(SpotLattice l, uint tri, uint m, ivec3 cell, SPOT_OUT(uint) key,
+                             SPOT_OUT(rvec3) bary) {
+    real spacing = spotParamVariation1().w;
+    real jitter = spotParamDistribution().y;
+    real h = spotParamVariation1().z;
+    uint seedKey = spotHash(spotParamFlags().x ^ 0x3c6ef372u);
+    int a = l.a0 + int(m / l.rows);
+    int b = l.b0 + int(m % l.rows);
+    key = spotHashCombine(spotHashCombine(spotHashCombine(seedKey, tri), uint(l.k0.x + a)),
+                          uint(l.k0.y + b));
+    /* The moved site's offset from p0, in lattice units. */
+    real la = real(a) - l.f0.x + kLatticeOffsetA +
+              jitter * (spotRand(key, kRandJitterU) - real(0.5));
+    real lb = real(b) - l.f0.y + kLatticeOffsetB +
+              jitter * (spotRand(key, kRandJitterV) - real(0.5));
+    rvec3 v2 = spacing * (la * l.e1 + lb * l.e2);
+    real d00 = dot(l.v0, l.v0);
+    real d01 = dot(l.v0, l.v1);
+    real d11 = dot(l.v1, l.v1);
+    real d20 = dot(v2, l.v0);
+    real d21 = dot(v2, l.v1);
+    real denom = d00 * d11 - d01 * d01;
+    real w1 = (d11 * d20 - d01 * d21) / denom;
+    real w2 = (d00 * d21 - d01 * d20) / denom;
+    real w0 = real(1.0) - w1 - w2;
+    if (w0 < real(0.0) || w1 < real(0.0) || w2 < real(0.0))
+        return false;
+    if (ivec3(floor((l.p0 + v2) / h)) != cell)
+        return false;
+    bary = rvec3(w0, w1, w2);
+    return true;
+}
+
 SPOT_FN bool spotJitteredCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
     real spacing = spotParamVariation1().w;
     real jitter = spotParamDistribution().y;
     uint end = cell.info.x + uint(cell.ijk.w);
-    uint seedKey = spotHash(spotParamFlags().x ^ 0x3c6ef372u);
-    real h = spotParamVariation1().z;
     for (uint first = cell.info.x; first < end;) {
         uint last = spotGroupEnd(first, end);
         uint tri = floatBitsToUint(spotCellPiece(first).c2.w);
         SpotLattice l = spotLatticeOf(first, last, tri, spacing, jitter);
         if (m < l.sites) {
-            int a = l.a0 + int(m / l.rows);
-            int b = l.b0 + int(m % l.rows);
-            uint key = spotHashCombine(spotHashCombine(spotHashCombine(seedKey, tri), uint(l.k0.x + a)),
-                                       uint(l.k0.y + b));
-            /* The jittered site's offset from p0, in lattice units. */
-            real la = real(a) - l.f0.x + kLatticeOffsetA +
-                      jitter * (spotRand(key, kRandJitterU) - real(0.5));
-            real lb = real(b) - l.f0.y + kLatticeOffsetB +
-                      jitter * (spotRand(key, kRandJitterV) - real(0.5));
-            rvec3 v2 = spacing * (la * l.e1 + lb * l.e2);
-            real d00 = dot(l.v0, l.v0);
-            real d01 = dot(l.v0, l.v1);
-            real d11 = dot(l.v1, l.v1);
-            real d20 = dot(v2, l.v0);
-            real d21 = dot(v2, l.v1);
-            real denom = d00 * d11 - d01 * d01;
-            real w1 = (d11 * d20 - d01 * d21) / denom;
-            real w2 = (d00 * d21 - d01 * d20) / denom;
-            real w0 = real(1.0) - w1 - w2;
-            if (w0 < real(0.0) || w1 < real(0.0) || w2 < real(0.0))
+            uint key;
+            rvec3 bary;
+            if (!spotLatticeSite(l, tri, m, ivec3(cell.ijk), key, bary))
                 return false;
-            ivec3 owner = ivec3(floor((l.p0 + v2) / h));
-            if (owner != ivec3(cell.ijk))
-                return false;
-            return spotFinishImpulse(ivec3(cell.ijk), key, tri, rvec3(w0, w1, w2), imp);
+            return spotFinishImpulse(ivec3(cell.ijk), key, tri, bary, imp);
         }
         m -= l.sites;
         first = last;
@@ -369,17 +389,34 @@ SPOT_FN bool spotJitteredCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) 
     return false;
 }
 
+#endif /* SPOT_GEN_NO_JITTERED */
+
 /* ---- Both distributions ---------------------------------------------------------------------- */
+/* A GPU module carries one distribution (SPOT_GEN_NO_POISSON or SPOT_GEN_NO_JITTERED defined before
+ * inclusion: lavapipe spends pipeline creation on every function of a module, even one a
+ * specialization makes dead); C++ has both. */
 
 SPOT_FN uint spotCellCandidates(SpotCell cell) {
+#ifndef SPOT_GEN_NO_JITTERED
     if (spotParamFlags().y == 1u)
         return spotJitteredCandidates(cell);
+#endif
+#ifndef SPOT_GEN_NO_POISSON
     real lambda = spotParamDistribution().x * uintBitsToFloat(cell.info.y);
     return spotPoisson(lambda, spotCellKeyOf(cell));
+#else
+    return 0u;
+#endif
 }
 
 SPOT_FN bool spotCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
+#ifndef SPOT_GEN_NO_JITTERED
     if (spotParamFlags().y == 1u)
         return spotJitteredCandidate(cell, m, imp);
+#endif
+#ifndef SPOT_GEN_NO_POISSON
     return spotPoissonCandidate(cell, m, imp);
+#else
+    return false;
+#endif
 }

@@ -8,9 +8,10 @@
  *
  * One generation is three passes, recorded into the frame's command buffer with no host wait
  * (the host has already counted each cell's candidates with the CPU twin of spot_generate.h and
- * written their offsets into SpotCell.info.z):
- *   candidates  one invocation per candidate decides it (spotCandidate): the impulse into
- *               scratch[g], 1 into flags[g] when accepted, 0 otherwise;
+ * written their offsets into SpotCell.info.z; for a jittered lattice it examined the sites and
+ * lists only those that land in their triangle and cell, the only ones that can pass):
+ *   candidates  one invocation per candidate examined decides it (spotCandidate): the impulse
+ *               into scratch[g], 1 into flags[g] when accepted, 0 otherwise;
  *   scan        one workgroup turns the flags into 1-based output indices in (cell, candidate)
  *               order (each thread a contiguous chunk, a shared-memory scan of the chunk totals,
  *               no atomics) and writes the impulse count;
@@ -18,7 +19,7 @@
  * Loop iterations per invocation (lavapipe stops a shader silently after 65,535 in all):
  *   candidates  32 (cell search) + spot_generate.h's per-candidate loops (piece search; the
  *               jittered lattice walks the cell's pieces: at most a few hundred);
- *   scan        2 x ceil(candidates / kGenScanThreads) + 8 <= 2 x 8,192 + 8 at kGenMaxCandidates;
+ *   scan        2 x ceil(examined / kGenScanThreads) + 8 <= 2 x 8,192 + 8 at kGenMaxCandidates;
  *   scatter     none.
  */
 #ifndef SPOT_CONST
@@ -27,8 +28,8 @@
 
 /* Push constants of every generator pipeline (32 bytes). */
 struct SpotGenPush {
-    uvec4 counts; /* x: cells; y: candidates; z, w: unused */
-    vec4 lod;     /* SpotGenParams::lod of this generation (read when kGenSpecLod is set) */
+    uvec4 counts; /* x: cells; y: candidates examined; z, w: unused */
+    vec4 lod;     /* SpotGenParams::lod of this generation (w = 0: off) */
 };
 
 /* Descriptor bindings. */
@@ -41,23 +42,24 @@ SPOT_CONST uint kGenBindNormals = 5u;    /* float[3 x vertices] (candidates) */
 SPOT_CONST uint kGenBindTangents = 6u;   /* float[3 x vertices], read when kGenSpecTangents */
 SPOT_CONST uint kGenBindUvs = 7u;        /* float[2 x vertices], read when kGenSpecUv */
 SPOT_CONST uint kGenBindFieldData = 8u;  /* float[]: the fields' data (candidates) */
-SPOT_CONST uint kGenBindScratch = 9u;    /* SpotImpulse[candidates] (candidates, scatter) */
-SPOT_CONST uint kGenBindFlags = 10u;     /* uint[candidates] (candidates, scan, scatter) */
+SPOT_CONST uint kGenBindScratch = 9u;    /* SpotImpulse[examined] (candidates, scatter) */
+SPOT_CONST uint kGenBindFlags = 10u;     /* uint[examined] (candidates, scan, scatter) */
 SPOT_CONST uint kGenBindImpulses = 11u;  /* SpotImpulse[]: the output (scatter) */
 SPOT_CONST uint kGenBindCount = 12u;     /* uint: the impulse count (scan) */
+SPOT_CONST uint kGenBindSites = 13u;     /* uint[examined]: each one's index in its cell
+                                            (jittered candidates) */
 
-/* Specialization constants of the candidates pass: it is compiled for one preset's generator
- * (lavapipe compiles a shader at its first use and pays for every path it carries), so only the
- * distribution and the field kinds a preset uses are compiled. */
-SPOT_CONST uint kGenSpecJittered = 0u;   /* bool: jittered lattice (else Poisson) */
-SPOT_CONST uint kGenSpecComb = 1u;       /* bool: a comb field is set (else the surface tangent) */
-SPOT_CONST uint kGenSpecUv = 2u;         /* bool: the mesh has uvs */
-SPOT_CONST uint kGenSpecTangents = 3u;   /* bool: the mesh has tangents */
-SPOT_CONST uint kGenSpecLod = 4u;        /* bool: level of detail (SpotGenPush.lod) */
+/* Specialization constants of the candidates pass, compiled for one preset's generator: lavapipe
+ * compiles a shader at its first use and pays for every path it carries, so only the field kinds
+ * a preset uses are compiled. (The distribution picks the module itself, generate_poisson.comp or
+ * generate_jittered.comp: a path made dead by a constant still costs pipeline creation.) */
+SPOT_CONST uint kGenSpecComb = 0u;       /* bool: a comb field is set (else the surface tangent) */
+SPOT_CONST uint kGenSpecUv = 1u;         /* bool: the mesh has uvs */
+SPOT_CONST uint kGenSpecTangents = 2u;   /* bool: the mesh has tangents */
 /* int: field slot s's kind (SpotField.kind.x) at id kGenSpecFieldKind + s, its component count
  * (1 or 3) at kGenSpecFieldComponents + s; s < SPOT_FIELD_COUNT. */
-SPOT_CONST uint kGenSpecFieldKind = 5u;
-SPOT_CONST uint kGenSpecFieldComponents = 13u;
+SPOT_CONST uint kGenSpecFieldKind = 3u;
+SPOT_CONST uint kGenSpecFieldComponents = 11u;
 
 SPOT_CONST uint kGenGroup = 64u;          /* workgroup size of the per-candidate passes */
 SPOT_CONST uint kGenScanThreads = 256u;   /* the scan's one workgroup */

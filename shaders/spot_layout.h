@@ -10,8 +10,8 @@
 /* A surface cell as the GPU generator sees it. */
 struct SpotCell {
     ivec4 ijk;  /* xyz: cell index; w: piece count */
-    uvec4 info; /* x: first piece; y: floatBitsToUint(area); z, w: the GPU generator's first
-                   candidate index and candidate count (written by the host per generation) */
+    uvec4 info; /* x: first piece; y: floatBitsToUint(area); z, w: the offset and the count of
+                   the candidates the GPU generator examines (written by the host) */
 };
 
 /* A piece of one triangle inside a cell, in the triangle's barycentric coordinates (b1, b2). */

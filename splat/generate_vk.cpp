@@ -5,7 +5,8 @@
 #include <limits>
 #include <vector>
 
-#include "generate_candidates.comp.h"
+#include "generate_jittered.comp.h"
+#include "generate_poisson.comp.h"
 #include "generate_scan.comp.h"
 #include "generate_scatter.comp.h"
 #include "noise/error.h"
@@ -103,7 +104,8 @@ glm::vec4 lodParameters(const noise::Camera& camera, double pixels) {
 GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
                            const noise::ImpulseGenerator& generator)
     : m_ctx(ctx), m_generator(generator), m_shared(arraysOf(mesh, generator)),
-      m_cellCandidateCache(generator.cells().cells.size(), kUncounted) {
+      m_jittered(generator.sharedParams().flags.y == 1u),
+      m_cellCandidates(generator.cells().cells.size()) {
     m_scanPipeline = makeComputePipeline(
         ctx, spirv(spv_generate_scan_comp),
         {storageBuffer(kGenBindFlags), storageBuffer(kGenBindCount)}, sizeof(SpotGenPush));
@@ -129,17 +131,15 @@ GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
     *static_cast<std::uint32_t*>(m_count.mapped()) = 0;
 }
 
-const Pipeline& GpuGenerator::candidatePipeline(bool lod) {
-    Pipeline& p = m_candidatePipelines[lod ? 1 : 0];
+const Pipeline& GpuGenerator::candidatePipeline() {
+    Pipeline& p = m_candidatePipeline;
     if (p.handle())
         return p;
     const gpu::SpotGenParams& params = m_generator.sharedParams();
     Specialization spec;
-    spec.set(kGenSpecJittered, params.flags.y == 1u)
-        .set(kGenSpecComb, params.flags.z != 0u)
+    spec.set(kGenSpecComb, params.flags.z != 0u)
         .set(kGenSpecUv, (params.flags.w & 1u) != 0u)
-        .set(kGenSpecTangents, (params.flags.w & 2u) != 0u)
-        .set(kGenSpecLod, lod);
+        .set(kGenSpecTangents, (params.flags.w & 2u) != 0u);
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
         spec.set(kGenSpecFieldKind + slot, std::int32_t(params.fields[slot].kind.x))
             .set(kGenSpecFieldComponents + slot, std::int32_t(params.fields[slot].kind.y));
@@ -148,16 +148,21 @@ const Pipeline& GpuGenerator::candidatePipeline(bool lod) {
                                storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
                                storageBuffer(kGenBindTangents),  storageBuffer(kGenBindUvs),
                                storageBuffer(kGenBindFieldData), storageBuffer(kGenBindScratch),
-                               storageBuffer(kGenBindFlags)};
-    p = makeComputePipeline(m_ctx, spirv(spv_generate_candidates_comp), bindings,
-                            sizeof(SpotGenPush), spec);
+                               storageBuffer(kGenBindFlags),     storageBuffer(kGenBindSites)};
+    p = makeComputePipeline(
+        m_ctx, m_jittered ? spirv(spv_generate_jittered_comp) : spirv(spv_generate_poisson_comp),
+        bindings, sizeof(SpotGenPush), spec);
     return p;
 }
 
-std::uint32_t GpuGenerator::cellCandidates(std::uint32_t cell) {
-    std::uint32_t& n = m_cellCandidateCache[cell];
-    if (n == kUncounted)
-        n = m_shared.spotCellCandidates(gpu::toGpu(m_generator.cells().cells[cell]));
+const GpuGenerator::CellCandidates& GpuGenerator::cellCandidates(std::uint32_t cell) {
+    CellCandidates& n = m_cellCandidates[cell];
+    if (n.candidates == kUncounted) {
+        const gpu::SpotCell c = gpu::toGpu(m_generator.cells().cells[cell]);
+        if (m_jittered)
+            m_shared.jitteredSitesInside(c, n.inside);
+        n.candidates = m_shared.spotCellCandidates(c);
+    }
     return n;
 }
 
@@ -172,49 +177,56 @@ bool GpuGenerator::choose(const std::function<bool(const noise::SurfaceCell&)>& 
     if (!force && m_valid && key == m_cellKey && lod == m_lod)
         return false;
 
-    // Candidates of each cell, counted on the host with the shared code (as the CPU generator
-    // does), and their offsets.
+    // Each cell's candidates, counted on the host with the shared code (as the CPU generator
+    // does), those the GPU examines and their offsets.
     m_valid = false;
-    std::uint64_t total = 0;
+    std::uint64_t total = 0, examinedTotal = 0;
     std::uint32_t withCandidates = 0;
     for (const std::uint32_t c : key) {
-        const std::uint32_t n = cellCandidates(c);
-        total += n;
-        withCandidates += n > 0 ? 1u : 0u;
+        const CellCandidates& n = cellCandidates(c);
+        total += n.candidates;
+        examinedTotal += examined(n);
+        withCandidates += examined(n) > 0 ? 1u : 0u;
     }
-    if (total > kGenMaxCandidates)
-        throw InputError(cat(total, " impulse candidates in view, more than one generation takes (",
-                             kGenMaxCandidates, "); lower density_max"));
-    const std::uint32_t candidates = std::uint32_t(total);
+    if (examinedTotal > kGenMaxCandidates)
+        throw InputError(cat(examinedTotal, " impulse candidates in view, more than ",
+                             kGenMaxCandidates, " (one generation); lower density_max"));
+    const auto examinedCount = std::uint32_t(examinedTotal);
     reserve(m_ctx, m_cells, withCandidates, sizeof(gpu::SpotCell), kStorage,
             Buffer::Memory::HostVisible, "visible cells");
-    reserve(m_ctx, m_scratch, candidates, sizeof(gpu::SpotImpulse), kStorage,
+    reserve(m_ctx, m_sites, m_jittered ? examinedCount : 0, sizeof(std::uint32_t), kStorage,
+            Buffer::Memory::HostVisible, "lattice sites");
+    reserve(m_ctx, m_scratch, examinedCount, sizeof(gpu::SpotImpulse), kStorage,
             Buffer::Memory::DeviceLocal, "impulse candidates");
-    reserve(m_ctx, m_flags, candidates, sizeof(std::uint32_t), kStorage,
+    reserve(m_ctx, m_flags, examinedCount, sizeof(std::uint32_t), kStorage,
             Buffer::Memory::DeviceLocal, "candidate flags");
     // Host-visible: a renderer may read the impulses on the host after their frame (and on
     // lavapipe all memory is host memory anyway); a transfer source for readback copies.
-    reserve(m_ctx, m_impulses, candidates, sizeof(gpu::SpotImpulse),
+    reserve(m_ctx, m_impulses, examinedCount, sizeof(gpu::SpotImpulse),
             kStorage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, Buffer::Memory::HostVisible, "impulses");
     auto* cells = static_cast<gpu::SpotCell*>(m_cells.mapped());
+    auto* sites = static_cast<std::uint32_t*>(m_sites.mapped());
     std::uint32_t offset = 0, uploaded = 0;
     for (const std::uint32_t c : key) {
-        const std::uint32_t n = cellCandidates(c);
-        if (n == 0)
+        const CellCandidates& n = cellCandidates(c);
+        if (examined(n) == 0)
             continue; // generates nothing: the GPU's cell search need not see it
         gpu::SpotCell cell = gpu::toGpu(all[c]);
         cell.info.z = offset;
-        cell.info.w = n;
+        cell.info.w = examined(n);
         cells[uploaded++] = cell;
-        offset += n;
+        if (m_jittered)
+            std::copy(n.inside.begin(), n.inside.end(), sites + offset);
+        offset += examined(n);
     }
     m_cellKey = std::move(key);
     m_lod = lod;
-    m_candidates = candidates;
+    m_candidates = std::uint32_t(total);
+    m_examined = examinedCount;
     m_cellCount = std::uint32_t(m_cellKey.size());
     m_uploadedCells = uploaded;
-    if (candidates > 0)
-        candidatePipeline(lod.w > 0.0f); // made here, on the host, not while recording
+    if (examinedCount > 0)
+        candidatePipeline(); // made here, on the host, not while recording
     ++m_version;
     m_valid = true;
     return true;
@@ -227,11 +239,10 @@ bool GpuGenerator::prepare(const std::function<bool(const noise::SurfaceCell&)>&
 
 void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
     SPOT_CHECK(m_valid);
-    const bool lod = m_lod.w > 0.0f;
-    const SpotGenPush push{glm::uvec4(m_uploadedCells, m_candidates, 0u, 0u), m_lod};
+    const SpotGenPush push{glm::uvec4(m_uploadedCells, m_examined, 0u, 0u), m_lod};
     // 1. Every candidate decided.
-    if (m_candidates > 0) {
-        const Pipeline& candidates = m_candidatePipelines[lod ? 1 : 0];
+    if (m_examined > 0) {
+        const Pipeline& candidates = m_candidatePipeline;
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, candidates.handle());
         Descriptors()
             .buffer(kGenBindParams, m_params)
@@ -245,9 +256,10 @@ void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kGenBindFieldData, m_fieldData)
             .buffer(kGenBindScratch, m_scratch)
             .buffer(kGenBindFlags, m_flags)
+            .buffer(kGenBindSites, m_sites)
             .push(m_ctx, cmd, candidates);
         pushConstants(cmd, candidates, push);
-        dispatch(cmd, m_candidates);
+        dispatch(cmd, m_examined);
         memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
     }
     // 2. The flags become output indices, and the count is written (0 without candidates).
@@ -259,7 +271,7 @@ void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
     pushConstants(cmd, m_scanPipeline, push);
     vkCmdDispatch(cmd, 1, 1, 1);
     // 3. Accepted impulses packed in (cell, candidate) order.
-    if (m_candidates > 0) {
+    if (m_examined > 0) {
         memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_scatterPipeline.handle());
         Descriptors()
@@ -268,7 +280,7 @@ void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kGenBindImpulses, m_impulses)
             .push(m_ctx, cmd, m_scatterPipeline);
         pushConstants(cmd, m_scatterPipeline, push);
-        dispatch(cmd, m_candidates);
+        dispatch(cmd, m_examined);
     }
     // The impulses and their count for every later command, and the count for the host.
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kAll | kHostStage,
@@ -280,7 +292,7 @@ ImpulseSet GpuGenerator::impulses() const {
     ImpulseSet s;
     s.impulses = &m_impulses;
     s.count = &m_count;
-    s.capacity = m_candidates;
+    s.capacity = m_examined;
     s.version = m_version;
     s.cells = &m_generator.cells();
     return s;

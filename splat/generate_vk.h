@@ -24,7 +24,9 @@ namespace spot::splat {
 struct GpuImpulses {
     Buffer impulses; ///< SpotImpulse[count] (shaders/spot_layout.h), host-visible
     std::uint32_t count = 0;
-    std::uint32_t candidates = 0; ///< examined before the density test
+    /// Candidates of the cells, as the CPU generator counts them (of a jittered lattice the GPU
+    /// examines only those that can pass: ImpulseSet::capacity).
+    std::uint32_t candidates = 0;
     std::uint32_t cells = 0;      ///< cells generated (after culling)
     double milliseconds = 0.0;    ///< GPU time of the generation's passes
 };
@@ -55,8 +57,9 @@ public:
     /// command of `cmd` and to the host.
     void record(VkCommandBuffer cmd, PassTimer& timer);
     /// The impulses of the last generation, valid once its frame ran: host-visible buffers (also
-    /// a transfer source), capacity is the generation's candidate count (the buffer may hold
-    /// more), version changes with every generation.
+    /// a transfer source); capacity is a bound of the count known on the host, the candidates
+    /// the GPU examines (all of them for Poisson; for jittered, those whose lattice site lies in
+    /// its triangle and cell), version changes with every generation.
     ImpulseSet impulses() const;
     /// After the frame that generated them: the impulse count of the last generation.
     std::uint32_t count() const;
@@ -73,29 +76,41 @@ public:
 private:
     bool choose(const std::function<bool(const noise::SurfaceCell&)>& keep, glm::vec4 lod,
                 bool force);
-    std::uint32_t cellCandidates(std::uint32_t cell);
-    const Pipeline& candidatePipeline(bool lod);
+    /// What the host knows of one model cell, found on first use (it depends on neither the view
+    /// nor the level of detail).
+    struct CellCandidates {
+        std::uint32_t candidates = 0xffffffffu; ///< spotCellCandidates; all ones: not counted yet
+        std::vector<std::uint16_t> inside; ///< jittered: the candidates that can pass, in order
+    };
+    const CellCandidates& cellCandidates(std::uint32_t cell);
+    /// The candidates of a cell the GPU examines: all of them (Poisson) or those inside.
+    std::uint32_t examined(const CellCandidates& c) const {
+        return m_jittered ? std::uint32_t(c.inside.size()) : c.candidates;
+    }
+    const Pipeline& candidatePipeline();
 
     Context& m_ctx;
     const noise::ImpulseGenerator& m_generator;
     /// The CPU twin of the shared code, over the same arrays the GPU reads (host-side counts).
     shared::f32::SharedGenerator m_shared;
-    std::vector<std::uint32_t> m_cellCandidateCache; ///< per model cell, counted on first use
-    Pipeline m_candidatePipelines[2];                ///< specialized, LOD off / on; made on use
+    bool m_jittered = false;
+    std::vector<CellCandidates> m_cellCandidates; ///< per model cell
+    Pipeline m_candidatePipeline;                 ///< specialized for the preset; made on first use
     Pipeline m_scanPipeline, m_scatterPipeline;
     Buffer m_params, m_pieces, m_triangles, m_positions, m_normals, m_tangents, m_uvs, m_fieldData;
 
     // The persistent generation.
     Buffer m_cells;    ///< SpotCell[], the chosen cells with candidates, offsets in info.z
-    Buffer m_scratch;  ///< SpotImpulse[candidates]: every candidate's impulse
-    Buffer m_flags;    ///< uint[candidates]: accepted flags, then 1-based output indices
-    Buffer m_impulses; ///< SpotImpulse[candidates]: the impulses, compacted (host-visible)
+    Buffer m_sites;    ///< jittered: uint[examined], each candidate's index in its cell
+    Buffer m_scratch;  ///< SpotImpulse[examined]: every examined candidate's impulse
+    Buffer m_flags;    ///< uint[examined]: accepted flags, then 1-based output indices
+    Buffer m_impulses; ///< SpotImpulse[examined]: the impulses, compacted (host-visible)
     Buffer m_count;    ///< uint: the impulse count (host-visible)
     std::vector<std::uint32_t> m_cellKey; ///< indices of the cells last generated
     glm::vec4 m_lod{0.0f};
     bool m_valid = false; ///< a generation is prepared (false after a failed prepare)
     std::uint64_t m_version = 0;
-    std::uint32_t m_candidates = 0, m_cellCount = 0, m_uploadedCells = 0;
+    std::uint32_t m_candidates = 0, m_examined = 0, m_cellCount = 0, m_uploadedCells = 0;
 };
 
 } // namespace spot::splat

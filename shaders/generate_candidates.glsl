@@ -1,9 +1,16 @@
-#version 450
-// Impulse generation, pass 1 of 3 (spot_generate_layout.h): one invocation per candidate decides
-// it with the shared code of spot_generate.h, specialized for one preset's generator. The impulse
-// goes to scratch[g] and its accepted flag to flags[g], g = the cell's offset + the candidate's
-// index in the cell: the CPU's (cell, candidate) order.
+// Impulse generation, pass 1 of 3 (spot_generate_layout.h): one invocation per candidate examined
+// decides it with the shared code of spot_generate.h, specialized for one preset's generator.
+// The impulse goes to scratch[g] and its accepted flag to flags[g], g = the cell's offset + the
+// candidate's rank among the cell's examined ones: the CPU's (cell, candidate) order.
+//
+// Included by generate_poisson.comp and generate_jittered.comp, one module per distribution, each
+// defining SPOT_GEN_JITTERED (0 or 1) first; the rest is specialization constants.
 #extension GL_GOOGLE_include_directive : require
+#if SPOT_GEN_JITTERED
+#define SPOT_GEN_NO_POISSON
+#else
+#define SPOT_GEN_NO_JITTERED
+#endif
 #include "spot_shared.h"
 #include "spot_layout.h"
 #include "spot_generate_layout.h"
@@ -23,13 +30,13 @@ layout(std430, binding = kGenBindUvs) readonly buffer Uvs { float uvs[]; };
 layout(std430, binding = kGenBindFieldData) readonly buffer FieldData { float fieldData[]; };
 layout(std430, binding = kGenBindScratch) writeonly buffer Scratch { SpotImpulse scratch[]; };
 layout(std430, binding = kGenBindFlags) writeonly buffer Flags { uint flags[]; };
+layout(std430, binding = kGenBindSites) readonly buffer Sites { uint sites[]; };
 
+const bool kJittered = SPOT_GEN_JITTERED != 0;
 // Set by splat/generate_vk.cpp from the generator's parameters; the defaults are never used.
-layout(constant_id = kGenSpecJittered) const bool kJittered = false;
 layout(constant_id = kGenSpecComb) const bool kComb = false;
 layout(constant_id = kGenSpecUv) const bool kUv = false;
 layout(constant_id = kGenSpecTangents) const bool kTangents = false;
-layout(constant_id = kGenSpecLod) const bool kLod = false;
 layout(constant_id = kGenSpecFieldKind + 0u) const int kKind0 = 0;
 layout(constant_id = kGenSpecFieldKind + 1u) const int kKind1 = 0;
 layout(constant_id = kGenSpecFieldKind + 2u) const int kKind2 = 0;
@@ -73,7 +80,7 @@ uvec4 spotParamFlags() {
     uint mesh = (kUv ? 1u : 0u) | (kTangents ? 2u : 0u);
     return uvec4(params.flags.x, kJittered ? 1u : 0u, kComb ? 1u : 0u, mesh);
 }
-vec4 spotParamLod() { return kLod ? push.lod : vec4(0.0); }
+vec4 spotParamLod() { return push.lod; } // w = 0: off (a uniform branch: not worth a variant)
 SpotField spotParamField(uint slot) { return params.fields[slot]; }
 ivec2 spotParamFieldKind(uint slot) {
     switch (slot) {
@@ -107,7 +114,9 @@ void main() {
     }
     SpotCell cell = cells[lo];
     SpotImpulse imp;
-    bool accepted = spotCandidate(cell, id - cell.info.z, imp);
+    // Poisson: every candidate is examined; jittered: those the host listed.
+    uint m = kJittered ? sites[id] : id - cell.info.z;
+    bool accepted = spotCandidate(cell, m, imp);
     if (accepted)
         scratch[id] = imp;
     flags[id] = accepted ? 1u : 0u;
