@@ -35,7 +35,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 /// Bump when the reference renderer changes, so cached references are not reused.
-constexpr int kReferenceVersion = 1;
+constexpr int kReferenceVersion = 2; // 2: impulses generated in single precision
 /// Verdicts (documented in the stability report): FLIP above this is "degraded"...
 constexpr double kDegradedFlip = 0.15;
 /// ... and so is flicker above the reference's own by more than this (mean display difference).
@@ -50,11 +50,12 @@ struct Variant {
 struct SceneEntry {
     std::string file;     ///< relative to presets/scenes
     std::string scenario; ///< the stability matrix's row
+    int width = 0, height = 0; ///< image size; 0: the suite's
 };
 
 struct Suite {
     std::string name;
-    int size = 64;
+    int width = 128, height = 128; ///< image size (a scene entry may have its own)
     int frames = 5;        ///< warm frames timed for the roofline (one more, the first, is not)
     int referenceSpp = 16;
     int orbitFrames = 8;   ///< frames of the orbit: every row's timed warm frames and its flicker
@@ -73,7 +74,10 @@ splat::RenderSettings splatSettings(bool ewa, splat::OitWeight w, int samples, d
     return s;
 }
 
-std::vector<Variant> variants(bool full) {
+enum class Variants { Quick, Full, Realtime };
+
+std::vector<Variant> variants(Variants which) {
+    const bool full = which == Variants::Full;
     using W = splat::OitWeight;
     std::vector<Variant> v = {
         {"instanced", "default", splatSettings(true, W::McGuireBavoil, 0)},
@@ -98,9 +102,10 @@ std::vector<Variant> variants(bool full) {
     // The ray-march baseline at rising step counts, with one ray per pixel and with 2 x 2 (the
     // pixel filter: one ray per pixel aliases sub-pixel strands, which flicker as the camera moves).
     const std::vector<std::pair<int, int>> marches =
-        full ? std::vector<std::pair<int, int>>{{8, 1}, {16, 1}, {32, 1}, {64, 1}, {128, 1},
-                                                {16, 2}, {32, 2}, {64, 2}}
-             : std::vector<std::pair<int, int>>{{16, 2}, {32, 2}, {64, 2}};
+        full                             ? std::vector<std::pair<int, int>>{{8, 1}, {16, 1}, {32, 1}, {64, 1}, {128, 1},
+                                                                            {16, 2}, {32, 2}, {64, 2}}
+        : which == Variants::Realtime ? std::vector<std::pair<int, int>>{{16, 1}, {32, 2}}
+                                      : std::vector<std::pair<int, int>>{{16, 2}, {32, 2}, {64, 2}};
     for (const auto& [steps, n] : marches) {
         splat::RenderSettings s;
         s.steps = steps;
@@ -110,34 +115,49 @@ std::vector<Variant> variants(bool full) {
     return v;
 }
 
+/// The shipped scenes of the stability matrix, one scenario each.
+std::vector<SceneEntry> matrixScenes() {
+    return {{"fur-bunny.json", "whole object"},
+            {"fur-bunny-far.json", "far view"},
+            {"fur-bunny-close.json", "close-up"},
+            {"grass-plane-grazing.json", "grazing angle"},
+            {"lichen-torus.json", "semi-transparent overlap"},
+            {"ring-sphere.json", "ring kernel"},
+            {"bench/fur-dense-bunny.json", "high density"},
+            {"bench/flakes-sphere.json", "1e4:1 anisotropy"},
+            {"bench/grass-plane-top.json", "thin flat blades"}};
+}
+
 Suite makeSuite(const std::string& name) {
     Suite s;
     s.name = name;
     if (name == "quick") {
         // 128 px: below that the close-up's strands are sub-pixel and the methods' ranking is
         // decided by EWA rather than by compositing.
-        s.size = 128;
         s.frames = 5;
         s.referenceSpp = 16;
         s.scenes = {{"fur-bunny.json", "whole object"}, {"fur-bunny-close.json", "close-up"}};
-        s.variants = variants(false);
+        s.variants = variants(Variants::Quick);
     } else if (name == "full") {
-        s.size = 128;
         s.frames = 7;
         s.referenceSpp = 64;
-        s.scenes = {{"fur-bunny.json", "whole object"},
-                    {"fur-bunny-far.json", "far view"},
-                    {"fur-bunny-close.json", "close-up"},
-                    {"grass-plane-grazing.json", "grazing angle"},
-                    {"lichen-torus.json", "semi-transparent overlap"},
-                    {"ring-sphere.json", "ring kernel"},
-                    {"bench/fur-dense-bunny.json", "high density"},
-                    {"bench/flakes-sphere.json", "1e4:1 anisotropy"},
-                    {"bench/grass-plane-top.json", "thin flat blades"}};
-        s.variants = variants(true);
+        s.scenes = matrixScenes();
+        s.variants = variants(Variants::Full);
         s.scaling = true;
+    } else if (name == "realtime") {
+        // The interactive sizes: every scene at 640x480, and the real-time target, 50,000 fur
+        // kernels at 1024x1024. References at 16 spp, a 5-frame orbit (references dominate the
+        // run time at these sizes).
+        s.width = 640;
+        s.height = 480;
+        s.frames = 5;
+        s.referenceSpp = 16;
+        s.orbitFrames = 5;
+        s.scenes = matrixScenes();
+        s.scenes.push_back({"bench/fur-bunny-50k.json", "real-time target", 1024, 1024});
+        s.variants = variants(Variants::Realtime);
     } else {
-        throw InputError(cat("spotshell bench: unknown suite '", name, "' (quick or full)"));
+        throw InputError(cat("spotshell bench: unknown suite '", name, "' (quick, full or realtime)"));
     }
     return s;
 }
@@ -228,6 +248,7 @@ struct Bench {
         double gpuMs = 0.0, wallMs = 0.0;
         double splatMs = 0.0; ///< the splat pass alone (splatting methods)
         std::uint32_t generated = 0, drawn = 0;
+        std::uint64_t fragments = 0, covered = 0; ///< counted frames (countFragments)
     };
 
     /// One frame of the scene's persistent frame (impulses regenerated only when the visible cells
@@ -241,6 +262,8 @@ struct Bench {
         f.wallMs = stats.wallMs;
         f.drawn = stats.counters.kernelsDrawn;
         f.generated = stats.kernelsGenerated;
+        f.fragments = stats.counters.fragmentsShaded;
+        f.covered = stats.counters.pixelsCovered;
         for (const auto& [pass, ms] : stats.passMs)
             if (pass == "splat")
                 f.splatMs = ms;
@@ -272,12 +295,21 @@ struct Bench {
                 if (k == 0)
                     last = std::move(f);
             }
-            if (v.method != "raymarch") {
+            if (splat::gpuMethod(v.method).splatting) {
                 // The splat pass against the rasterizer's own cost for the same primitives.
                 const double splatMs = percentile(splatPass, 0.5);
                 row["splat_ms_median"] = splatMs;
                 row["roofline_splat_ms"] = rooflineMs;
                 row["roofline_fraction"] = splatMs > 0.0 ? rooflineMs / splatMs : 0.0;
+                // Fragment efficiency: fragments shaded against the pixels where a kernel's alpha
+                // reaches 1/255, summed over kernels (one more frame, counted, not timed).
+                Variant counted = v;
+                counted.settings.countFragments = true;
+                const Frame c = render(job, frame, job.scene.camera, counted, false);
+                row["fragments_shaded"] = c.fragments;
+                row["pixels_covered"] = c.covered;
+                row["fragment_efficiency"] =
+                    c.covered > 0 ? double(c.fragments) / double(c.covered) : 0.0;
             }
             const splat::ImageMetrics m = splat::compareImages(ref, last.image);
             const double flick = flicker(frames) - refFlicker;
@@ -319,7 +351,8 @@ struct Bench {
 
     void runScene(const SceneEntry& entry, cli::ProgressBar& bar, int& done, int total) {
         const fs::path file = scenesDir / entry.file;
-        cli::SceneJob job = cli::loadSceneJob(file, suite.size, suite.size, false);
+        cli::SceneJob job = cli::loadSceneJob(file, entry.width > 0 ? entry.width : suite.width,
+                                              entry.height > 0 ? entry.height : suite.height, false);
         const noise::Image ref = reference(file, job, job.scene.camera);
         std::vector<noise::Image> refOrbit;
         refOrbit.reserve(std::size_t(suite.orbitFrames));
@@ -434,7 +467,7 @@ std::string stabilityMarkdown(const json& rows, const Suite& suite) {
             b = r;
     }
     std::ostringstream md;
-    md << "# Stability matrix (suite " << suite.name << ", " << suite.size << "x" << suite.size
+    md << "# Stability matrix (suite " << suite.name << ", " << suite.width << "x" << suite.height
        << ")\n\nEach cell: the method's best setting on the scenario (least FLIP; named in "
           "italics): FLIP against the reference / "
           "temporal flicker above the reference's own (mean display difference between frames of "
@@ -476,6 +509,7 @@ void writeCsv(const fs::path& file, const json& rows) {
     const char* cols[] = {"scene", "scenario", "method", "setting", "width", "height",
                           "kernels_generated", "kernels_drawn", "ms_median", "ms_p90",
                           "splat_ms_median", "roofline_splat_ms", "roofline_fraction",
+                          "fragments_shaded", "pixels_covered", "fragment_efficiency",
                           "wall_ms_median", "psnr", "ssim", "flip", "flicker", "reference_flicker",
                           "gpu_memory_bytes", "host_memory_bytes", "status", "reason"};
     writeFileAtomic(file, [&](std::ostream& o) {
@@ -508,7 +542,8 @@ int bench(int argc, char** argv) {
                    "Render every scene x method x setting, measure speed, error against the "
                    "reference, flicker and memory; write results.csv/json, pareto.png, "
                    "stability.md/png and scaling.png into DIR.",
-                   {{"suite", "NAME", "quick (a few minutes) or full (default quick)", false},
+                   {{"suite", "NAME", "quick (a few minutes), full (every scene at 128x128) or realtime (every "
+                                      "scene at 640x480 and 50k fur kernels at 1024x1024); default quick", false},
                     {"out", "DIR", "output folder (created; references are cached in DIR/cache)", true},
                     {"scenes", "DIR", "scene folder (default: presets/scenes next to the source)", false},
                     cli::threadsOption()},
@@ -536,7 +571,8 @@ int bench(int argc, char** argv) {
         b.runScaling(bar, done, total);
     bar.finish();
 
-    const json doc = {{"suite", b.suite.name}, {"size", b.suite.size}, {"frames", b.suite.frames},
+    const json doc = {{"suite", b.suite.name}, {"width", b.suite.width}, {"height", b.suite.height},
+                      {"frames", b.suite.frames},
                       {"reference_spp", b.suite.referenceSpp}, {"device", b.ctx.deviceName()},
                       {"rows", b.rows}};
     writeFileAtomic(b.out / "results.json", [&](std::ostream& o) { o << doc.dump(2) << "\n"; });

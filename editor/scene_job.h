@@ -20,7 +20,18 @@ namespace spot::cli {
 /// The options shared by commands that take a scene (--scene, --mesh, --preset, --size, --seed).
 std::vector<OptionSpec> sceneOptions();
 
+/// Neither copyable nor movable: `generator` keeps a reference to the sibling `mesh`, so the job
+/// must stay where it was built. The loaders return it as a prvalue (guaranteed copy elision), so
+/// `SceneJob job = loadSceneJob(...);` still works.
 struct SceneJob {
+    /// Sets the camera, loads mesh and preset, builds the surface cells; with `cpuImpulses`, also
+    /// generates the impulses of the visible cells on the CPU.
+    SceneJob(noise::SceneDesc desc, bool cpuImpulses);
+    SceneJob(const SceneJob&) = delete;
+    SceneJob& operator=(const SceneJob&) = delete;
+    SceneJob(SceneJob&&) = delete;
+    SceneJob& operator=(SceneJob&&) = delete;
+
     /// Cells whose kernels may reach the view (a cell's kernels reach at most h beyond it).
     bool cellVisible(const noise::SurfaceCell& cell) const;
 

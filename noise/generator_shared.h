@@ -7,6 +7,7 @@
 #pragma once
 
 #include <bit>
+#include <cstdint>
 #include <vector>
 
 #include "shaders/spot_layout.hpp"
@@ -51,6 +52,7 @@ private:
     glm::uvec4 spotParamFlags() const { return m_a.params->flags; }
     glm::vec4 spotParamLod() const { return m_a.params->lod; }
     const SpotField& spotParamField(uint slot) const { return m_a.params->fields[slot]; }
+    glm::ivec2 spotParamFieldKind(uint slot) const { return glm::ivec2(m_a.params->fields[slot].kind); }
 
 public:
 #define SPOT_FN
@@ -60,6 +62,31 @@ public:
 #undef SPOT_FN
 #undef SPOT_CONST
 #undef SPOT_OUT
+
+    /// Host only, jittered distribution: the candidates of `cell` whose moved lattice site lies
+    /// in its triangle and the cell, in candidate order, appended to `out`. Only the density
+    /// test and the level of detail stand between them and impulses; the others are rejected
+    /// whatever the fields say, so the GPU need not examine them. Walks the groups and their
+    /// sites in spotJitteredCandidate's order (at most kMaxCandidatesPerCell candidates).
+    void jitteredSitesInside(const SpotCell& cell, std::vector<std::uint16_t>& out) {
+        static_assert(kMaxCandidatesPerCell <= 65536u, "candidate indices are 16-bit");
+        const real spacing = spotParamVariation1().w;
+        const real jitter = spotParamDistribution().y;
+        const uint end = cell.info.x + uint(cell.ijk.w);
+        uint m = 0;
+        for (uint first = cell.info.x; first < end;) {
+            const uint last = spotGroupEnd(first, end);
+            const uint tri = floatBitsToUint(spotCellPiece(first).c2.w);
+            const SpotLattice l = spotLatticeOf(first, last, tri, spacing, jitter);
+            for (uint site = 0; site < l.sites && m < kMaxCandidatesPerCell; ++site, ++m) {
+                uint key;
+                rvec3 bary;
+                if (spotLatticeSite(l, tri, site, glm::ivec3(cell.ijk), key, bary))
+                    out.push_back(std::uint16_t(m));
+            }
+            first = last;
+        }
+    }
 };
 
 } // namespace spot::shared::f32

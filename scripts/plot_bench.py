@@ -77,7 +77,7 @@ handles = [plt.Line2D([], [], marker=m, color=c, linestyle="", markersize=7, lab
            for k, (m, c) in METHOD_STYLE.items() if any(r["method"] == k for r in rows)]
 handles.append(plt.Line2D([], [], color="black", alpha=0.6, label="Pareto front"))
 fig.suptitle("spotshell: speed against accuracy (%s suite, %dx%d, %s)"
-             % (doc["suite"], doc["size"], doc["size"], doc["device"]), y=0.995, fontsize=12)
+             % (doc["suite"], doc["width"], doc["height"], doc["device"]), y=0.995, fontsize=12)
 fig.legend(handles=handles, loc="upper center", ncol=len(handles), frameon=False,
            bbox_to_anchor=(0.5, 0.965))
 fig.tight_layout(rect=(0, 0, 1, 0.92))

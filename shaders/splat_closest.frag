@@ -8,6 +8,7 @@
 // (depth bits, index) finds.
 #extension GL_GOOGLE_include_directive : require
 #define SPLAT_READS_LOBES
+#define SPLAT_FRAGMENT
 #include "splat_common.glsl"
 
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;

@@ -107,45 +107,72 @@ float splatLobeShading(uint first, SpotWorldLobe w, vec3 o, vec3 d, float tMesh,
     return sum / float(kSplatShadingSamples);
 }
 
+#ifdef SPLAT_FRAGMENT
+// The kernel's lobes as this pixel sees them, from splat_quad.vert: w = o' x v and on = dot(o', v)
+// (xyz, w) and v (xyz) of each lobe's screen form are affine in the pixel, so the rasterizer's
+// noperspective interpolation evaluates them exactly (no per-pixel loads or matrix products);
+// colour and amplitude are flat. Only the first kLobes entries are written and read.
+layout(location = 1) noperspective in vec4 vLobeW[kSplatMaxLobes];
+layout(location = 9) noperspective in vec4 vLobeV[kSplatMaxLobes];
+layout(location = 17) flat in vec4 vLobeColor[kSplatMaxLobes];
+// The view depth of the kernel support's nearest point (SpotKernelBound.axis.w).
+layout(location = 25) flat in float vNearDepth;
+#endif
+
 // Analytic: each lobe's exact optical depth up to the mesh (spotScreenLobeDepth on the lobe's
-// screen form: no matrix product per pixel), lobes composited front to back in the order of their
-// density peaks along the ray. kLobes is a specialization constant, so the loops unroll and the
-// per-lobe arrays stay in registers (llvmpipe keeps dynamically indexed arrays in memory); the
-// order is a stable compare-and-swap network on constant indices.
-// p: pixel position; o, d: its world ray (Lambert only); tMesh: world distance to the mesh;
-// scale: splatRayScale(p).
+// screen form), lobes composited front to back in the order of their density peaks along the
+// ray. kLobes is a specialization constant, so the loops unroll and the per-lobe arrays stay in
+// registers (llvmpipe keeps dynamically indexed arrays in memory); the order is a stable
+// compare-and-swap network on constant indices, swapping by selects.
+// p: pixel position (its centre); o, d: its world ray (Lambert only); tMesh: world distance to the
+// mesh; scale: splatRayScale(p).
 SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float tMesh, float scale) {
     uint first = kernel * kLobes;
     float k = frame.size.w;
     float tEnd = tMesh / scale;
     float peaks[kLobes];
     float depths[kLobes];
+    vec3 colors[kLobes];
     uint ids[kLobes];
     for (uint l = 0u; l < kLobes; ++l) {
+#ifdef SPLAT_FRAGMENT
+        vec4 wo = vLobeW[l];
+        vec3 v = vLobeV[l].xyz;
+        vec4 c = vLobeColor[l];
+#else
         SpotScreenLobe s = screenLobes[first + l];
         vec2 delta = p - vec2(s.k0.w, s.kx.w);
-        vec3 w = s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz;
+        vec4 wo = vec4(s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz,
+                       s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w);
         vec3 v = s.v0.xyz + delta.x * s.vx.xyz + delta.y * s.vy.xyz;
-        float on = s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w;
+        vec4 c = vec4(s.color.rgb, s.ky.w);
+#endif
         float tPeak;
-        float tau = s.ky.w * scale * spotScreenLobeDepth(w, v, on, tEnd, k, tPeak);
+        float tau = c.w * scale * spotScreenLobeDepth(wo.xyz, v, wo.w, tEnd, k, tPeak);
         depths[l] = tau > 0.0 && !isinf(tau) ? tau : 0.0;
         peaks[l] = tPeak;
+        colors[l] = c.rgb;
         ids[l] = l;
     }
-    for (uint i = 1u; i < kLobes; ++i) {
-        for (uint j = 0u; j + i < kLobes; ++j) {
-            if (peaks[j] > peaks[j + 1u]) {
-                float tp = peaks[j];
-                peaks[j] = peaks[j + 1u];
-                peaks[j + 1u] = tp;
-                float td = depths[j];
-                depths[j] = depths[j + 1u];
-                depths[j + 1u] = td;
-                uint ti = ids[j];
-                ids[j] = ids[j + 1u];
-                ids[j + 1u] = ti;
-            }
+    for (uint i = 0u; i + 1u < kLobes; ++i) {
+        for (uint j = 0u; j + 1u < kLobes; ++j) {
+            bool swap = peaks[j] > peaks[j + 1u];
+            float p0 = peaks[j];
+            float p1 = peaks[j + 1u];
+            peaks[j] = swap ? p1 : p0;
+            peaks[j + 1u] = swap ? p0 : p1;
+            float d0 = depths[j];
+            float d1 = depths[j + 1u];
+            depths[j] = swap ? d1 : d0;
+            depths[j + 1u] = swap ? d0 : d1;
+            vec3 c0 = colors[j];
+            vec3 c1 = colors[j + 1u];
+            colors[j] = swap ? c1 : c0;
+            colors[j + 1u] = swap ? c0 : c1;
+            uint i0 = ids[j];
+            uint i1 = ids[j + 1u];
+            ids[j] = swap ? i1 : i0;
+            ids[j + 1u] = swap ? i0 : i1;
         }
     }
     SplatKernelSample s;
@@ -155,21 +182,20 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     float depthSum = 0.0;
     float weightSum = 0.0;
     for (uint i = 0u; i < kLobes; ++i) {
-        if (!(depths[i] > 0.0))
-            continue;
         s.tau += depths[i];
         float a = spotOneMinusExp(depths[i]);
         float t = clamp(peaks[i], 0.0, tEnd);
-        vec3 color = screenLobes[first + ids[i]].color.rgb;
         float shade = 1.0;
-        if (kLambert)
+        if (kLambert && a > 0.0)
             shade = splatLobeShading(first, worldLobes[first + ids[i]], o, d, tMesh, depths[i]);
-        s.premul += transmittance * a * shade * color;
+        s.premul += transmittance * a * shade * colors[i];
         depthSum += transmittance * a * t;
         weightSum += transmittance * a;
         transmittance *= 1.0 - a;
     }
-    s.alpha = spotOneMinusExp(s.tau);
+    // exp(-sum tau) is the product of the lobes' transmittances, already at hand (faint
+    // kernels take the series, as spotOneMinusExp does, for relative precision).
+    s.alpha = s.tau < 1e-3 ? s.tau * (1.0 - s.tau * (0.5 - s.tau * (1.0 / 6.0))) : 1.0 - transmittance;
     s.depth = weightSum > 0.0 ? depthSum / weightSum : 0.0;
     return s;
 }

@@ -1,23 +1,32 @@
 #version 450
-// Instanced opaque kernels (paper fig. 4 left): where the kernel's alpha at this pixel reaches
-// kSplatInstancedMinAlpha it is drawn opaque with its mean colour at its depth, tested against
-// the mesh and the other kernels; elsewhere the fragment is discarded.
+// Instanced opaque kernels (paper fig. 4 left): a kernel covers a pixel, opaque with its mean
+// colour, where its alpha there reaches kSplatInstancedMinAlpha, and the nearest covering kernel
+// wins. The nearest is found as the hybrid finds its closest kernel: a 64-bit atomicMin of
+// (depth bits << 32 | kernel index) into a storage buffer (the index breaks ties as a depth test
+// does, the first drawn kernel winning); the resolve paints the winner's colour over the mesh. No
+// depth is written, so the test against the mesh (the quad at its kernel's nearest depth) runs
+// before shading.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
 #define SPLAT_READS_LOBES
+#define SPLAT_FRAGMENT
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
 
+layout(early_fragment_tests) in;
+
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
+layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };
 
 layout(location = 0) flat in uint vKernel;
 
-layout(location = 0) out vec4 outColor;
-
 void main() {
-    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, ivec2(gl_FragCoord.xy)).r);
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, pixel).r);
     splatCount(s.alpha);
-    if (!(s.alpha >= kSplatInstancedMinAlpha))
-        discard;
-    outColor = vec4(s.premul / s.alpha, 1.0);
-    gl_FragDepth = spotReversedDepth(s.depth, frame.forward.w);
+    if (s.alpha >= kSplatInstancedMinAlpha) {
+        uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
+        atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);
+    }
 }

@@ -12,8 +12,12 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #define SPLAT_READS_LOBES
+#define SPLAT_FRAGMENT
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
+
+// The depth test against the mesh (splat_quad.vert) runs before shading despite the side effects.
+layout(early_fragment_tests) in;
 
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };

@@ -126,6 +126,7 @@ void main() {
     mat2 shapes[kLobes];
     bool live[kLobes];
     bool unbounded = false;
+    float zNear = 3e38;
     float massSum = 0.0;
     float depthSum = 0.0;
     for (uint l = 0u; l < kLobes; ++l) {
@@ -185,6 +186,7 @@ void main() {
             bounded = false; // reaches the eye plane: the projection is unbounded
         if (!seen)
             continue;
+        zNear = min(zNear, zc - zHalf);
         if (!bounded || any(isnan(centres[l])) || any(isinf(centres[l])))
             unbounded = true;
         live[l] = true;
@@ -208,6 +210,7 @@ void main() {
     b.axis = vec4(1.0, 0.0, 0.0, 0.0);
     float z = massSum > 0.0 && !isinf(massSum) ? depthSum / massSum : splatViewDepth(imp.position.xyz);
     b.axis.z = z > 0.0 ? z : 0.0; // also maps NaN and -0 to +0
+    b.axis.w = zNear;
     if (n > 0u && unbounded) {
         b.quad = vec4(0.5 * frame.size.xy, 0.5 * frame.size.xy + 1.0);
     } else if (n > 0u) {

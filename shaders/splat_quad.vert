@@ -1,13 +1,22 @@
 #version 450
 // One oriented quad (a 4-vertex strip) per kept kernel, from its screen bound (centre, half
-// extents along u and v); the instance is the compacted kernel list's entry.
+// extents along u and v); the instance is the compacted kernel list's entry. Each corner also
+// carries the kernel's lobes in screen form evaluated there (splat_common.glsl: vLobeW, vLobeV,
+// vLobeColor): they are affine in the pixel, so the rasterizer interpolates them exactly. The
+// quad lies at the reversed depth of the kernel's nearest point: where the mesh is nearer, the
+// depth test drops the pixel before any shading (exact: the ray meets the mesh first).
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 
 layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
 layout(std430, binding = kSplatBindVisible) readonly buffer Visible { uint visible[]; };
+layout(std430, binding = kSplatBindScreenLobes) readonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
 
 layout(location = 0) flat out uint vKernel;
+layout(location = 1) noperspective out vec4 vLobeW[kSplatMaxLobes];
+layout(location = 9) noperspective out vec4 vLobeV[kSplatMaxLobes];
+layout(location = 17) flat out vec4 vLobeColor[kSplatMaxLobes];
+layout(location = 25) flat out float vNearDepth;
 
 void main() {
     uint kernel = visible[gl_InstanceIndex];
@@ -17,6 +26,16 @@ void main() {
     float su = (gl_VertexIndex & 1) != 0 ? 1.0 : -1.0;
     float sv = (gl_VertexIndex & 2) != 0 ? 1.0 : -1.0;
     vec2 corner = b.quad.xy + su * b.quad.z * u + sv * b.quad.w * v;
-    gl_Position = vec4(2.0 * corner / frame.size.xy - 1.0, 0.0, 1.0);
+    // The depth of the support's nearest point, tested against the mesh (reversed depth).
+    gl_Position = vec4(2.0 * corner / frame.size.xy - 1.0, spotReversedDepth(b.axis.w, frame.forward.w), 1.0);
     vKernel = kernel;
+    vNearDepth = b.axis.w;
+    for (uint l = 0u; l < kLobes; ++l) {
+        SpotScreenLobe s = screenLobes[kernel * kLobes + l];
+        vec2 delta = corner - vec2(s.k0.w, s.kx.w);
+        vLobeW[l] = vec4(s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz,
+                         s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w);
+        vLobeV[l] = vec4(s.v0.xyz + delta.x * s.vx.xyz + delta.y * s.vy.xyz, 0.0);
+        vLobeColor[l] = vec4(s.color.rgb, s.ky.w);
+    }
 }

@@ -1,6 +1,8 @@
 #version 450
 // The final image, one thread per pixel, into the linear float RGBA result image.
-// Instanced and sorted (kSplatResolveCopy): the base colour image (kernels were drawn onto it).
+// Sorted (kSplatResolveCopy): the base colour image (kernels were drawn onto it). Instanced: the
+// nearest kernel whose alpha reaches 0.5 (splat_instanced.frag) re-evaluated, its mean colour
+// premul / alpha over the base.
 // OIT (eq. 12, MB13): avg = accum.rgb / max(accum.a, eps); avg (1 - revealage) + base revealage,
 // revealage = exp(-sum of the kernels' optical depths) (see splat_oit.frag). MB13 floor accum.a
 // at eps = 1e-5 for their 16-bit float targets; ours are 32-bit, and with w proportional to alpha
@@ -43,7 +45,14 @@ void main() {
     ivec2 pixel = ivec2(p);
     vec3 base = imageLoad(baseColor, pixel).rgb;
     vec3 color = base;
-    if (kResolve != kSplatResolveCopy) {
+    if (kResolve == kSplatResolveInstanced) {
+        uint64_t key = closest[p.y * width + p.x];
+        if (key != ~uint64_t(0)) {
+            SplatKernelSample f = splatKernel(uint(key & 0xffffffffUL), vec2(p) + 0.5,
+                                              imageLoad(meshDistance, pixel).r);
+            color = f.premul / f.alpha;
+        }
+    } else if (kResolve != kSplatResolveCopy) {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
         uint64_t key = ~uint64_t(0);

@@ -7,8 +7,12 @@
 // back, integrated up to the mesh).
 #extension GL_GOOGLE_include_directive : require
 #define SPLAT_READS_LOBES
+#define SPLAT_FRAGMENT
 #define SPLAT_COUNTS
 #include "splat_common.glsl"
+
+// The depth test against the mesh (splat_quad.vert) runs before shading despite the side effects.
+layout(early_fragment_tests) in;
 
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 

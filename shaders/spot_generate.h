@@ -5,9 +5,13 @@
  *   rvec3 spotMeshTangent(uint v) (zero when the mesh has none); rvec2 spotMeshUv(uint v);
  *   SpotPiece spotCellPiece(uint i); real spotFieldData(uint i);
  *   vec4 spotParamDistribution(); vec4 spotParamVariation0(); vec4 spotParamVariation1();
- *   uvec4 spotParamFlags(); SpotField spotParamField(uint slot);
- * In GLSL these read storage buffers; in C++ this file is included inside a class body
- * (noise/generator_shared.h) whose members read the model's arrays.
+ *   uvec4 spotParamFlags(); vec4 spotParamLod(); SpotField spotParamField(uint slot);
+ *   ivec2 spotParamFieldKind(uint slot) (the slot's SpotField.kind.xy: kind, components).
+ * In GLSL these read storage buffers, except what the pipeline is specialized for (the
+ * distribution and flags, each field's kind: generate_candidates.comp), which are constants so
+ * that only the paths a preset uses are compiled; in C++ this file is included inside a class
+ * body (noise/generator_shared.h) whose members read the model's arrays.
+ * Everything is single precision (`real` is float on both sides), so no GPU needs float64.
  *
  * Generation is split into candidates so that no GPU invocation loops long (lavapipe silently
  * stops a shader invocation after 65,535 loop iterations): spotCellCandidates(cell) gives a
@@ -28,11 +32,17 @@ struct SpotSurface {
     rvec3 bary;
 };
 
+/* v / |v| with a correctly rounded square root and division, where GLSL's normalize may use an
+ * approximate reciprocal square root (lavapipe does): the lattice and the surface frame then come
+ * out bit-identical on the CPU and the GPU, so the discrete decisions made from them (which
+ * triangle and cell a lattice site falls in) agree. */
+SPOT_FN rvec3 spotUnit(rvec3 v) { return v / sqrt(dot(v, v)); }
+
 SPOT_FN rvec3 spotDefaultTangent(rvec3 n) {
     rvec3 t = rvec3(real(0.0), real(-1.0), real(0.0)) - n * -n.y;
     if (dot(t, t) < real(1e-8))
         t = rvec3(real(1.0), real(0.0), real(0.0)) - n * n.x;
-    return normalize(t);
+    return spotUnit(t);
 }
 
 SPOT_FN SpotSurface spotSurfaceAt(uint tri, rvec3 b) {
@@ -47,11 +57,11 @@ SPOT_FN SpotSurface spotSurfaceAt(uint tri, rvec3 b) {
     rvec3 n = b.x * spotMeshNormal(t.x) + b.y * spotMeshNormal(t.y) + b.z * spotMeshNormal(t.z);
     if (!(dot(n, n) > real(1e-12)))
         n = cross(p1 - p0, p2 - p0);
-    s.normal = normalize(n);
+    s.normal = spotUnit(n);
     s.uv = b.x * spotMeshUv(t.x) + b.y * spotMeshUv(t.y) + b.z * spotMeshUv(t.z);
     rvec3 tg = b.x * spotMeshTangent(t.x) + b.y * spotMeshTangent(t.y) + b.z * spotMeshTangent(t.z);
     tg -= s.normal * dot(tg, s.normal);
-    s.tangent = dot(tg, tg) > real(1e-12) ? normalize(tg) : spotDefaultTangent(s.normal);
+    s.tangent = dot(tg, tg) > real(1e-12) ? spotUnit(tg) : spotDefaultTangent(s.normal);
     return s;
 }
 
@@ -77,8 +87,9 @@ SPOT_FN real spotImageTexel(SpotField f, int x, int y, int c) {
 /* A field's value at a surface point (scalars in .x). */
 SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
     SpotField f = spotParamField(slot);
-    int kind = f.kind.x;
-    int components = f.kind.y;
+    ivec2 kindComponents = spotParamFieldKind(slot);
+    int kind = kindComponents.x;
+    int components = kindComponents.y;
     if (kind == 1) {
         rvec3 from = rvec3(f.from);
         real t = clamp(dot(s.position - from, rvec3(f.axis)), real(0.0), real(1.0));
@@ -191,6 +202,8 @@ SPOT_FN bool spotFinishImpulse(ivec3 cell, uint key, uint tri, rvec3 bary, SPOT_
     return true;
 }
 
+#ifndef SPOT_GEN_NO_POISSON
+
 /* ---- Poisson: count ~ Poisson(density_max x area), uniform on the cell's pieces --------------- */
 
 SPOT_FN uint spotCellKeyOf(SpotCell cell) {
@@ -221,63 +234,76 @@ SPOT_FN bool spotPoissonCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) i
                              rvec3(real(1.0) - b.x - b.y, b.x, b.y), imp);
 }
 
-/* ---- Jittered: a square lattice in each triangle's plane ------------------------------------- */
-/* Spacing 1/sqrt(density_max), anchored at the plane's point nearest the world origin and aligned
- * with the surface tangent, so coplanar triangles share one lattice. Each site is jittered by up to
- * +-jitter/2 spacing and belongs to the triangle and cell its jittered point falls in; its random
- * numbers come from (triangle, site, seed), so every cell that examines it decides the same way.
- * Irrational-looking offsets keep a regular lattice (jitter 0) off cell faces and shared edges.
- * Double precision: lattice coordinates of a large mesh need more than float's 24 bits. */
+#endif /* SPOT_GEN_NO_POISSON */
 
-/* Float-exact so GLSL (float literals) and C++ agree on the same double values. */
+#ifndef SPOT_GEN_NO_JITTERED
+
+/* ---- Jittered: a square lattice in each triangle's plane ------------------------------------- */
+/* Spacing 1/sqrt(density_max), aligned with the surface tangent: site (a, b) of a triangle's plane
+ * lies where the plane's lattice coordinates (dot(x, e1), dot(x, e2)) / spacing equal
+ * (a + kLatticeOffsetA, b + kLatticeOffsetB), so coplanar triangles share one lattice. Each site
+ * is jittered by up to +-jitter/2 spacing and belongs to the triangle and cell its jittered point
+ * falls in; its random numbers come from (triangle, site, seed), so every cell that examines it
+ * decides the same way. Irrational-looking offsets keep a regular lattice (jitter 0) off cell
+ * faces and shared edges.
+ * Single precision: lattice coordinates are taken relative to the triangle's first corner p0,
+ * whose own coordinates are split once into an integer site k0 and a fraction f0, so every other
+ * number stays small however far the mesh lies from the origin (sites are placed to the float
+ * rounding of p0 and of their offset from it; coplanar triangles' lattices agree to the rounding
+ * of their corners' coordinates). */
+
 SPOT_CONST real kLatticeOffsetA = real(0.2360679774997897);
 SPOT_CONST real kLatticeOffsetB = real(0.6180339887498949);
 
 struct SpotLattice {
-    dvec3 p0;
-    dvec3 e1;
-    dvec3 e2;
-    dvec3 origin;
-    dvec3 v0;
-    dvec3 v1;
-    int a0;
+    rvec3 p0;     /* the triangle's first corner (world) */
+    rvec3 v0;     /* p1 - p0 */
+    rvec3 v1;     /* p2 - p0 */
+    rvec3 e1;     /* unit lattice axes in the triangle's plane */
+    rvec3 e2;
+    ivec2 k0;     /* floor of p0's lattice coordinates */
+    rvec2 f0;     /* p0's lattice coordinates minus k0, in [0, 1] */
+    int a0;       /* first site examined, relative to k0 */
     int b0;
     uint rows;    /* sites along b */
     uint sites;   /* (a1 - a0 + 1) x rows */
 };
 
-SPOT_FN SpotLattice spotLatticeOf(uint first, uint last, uint tri, double spacing, double jitter) {
+SPOT_FN SpotLattice spotLatticeOf(uint first, uint last, uint tri, real spacing, real jitter) {
     uvec3 t = spotMeshTriangle(tri);
     SpotLattice l;
-    l.p0 = dvec3(spotMeshPosition(t.x));
-    dvec3 p1 = dvec3(spotMeshPosition(t.y));
-    dvec3 p2 = dvec3(spotMeshPosition(t.z));
-    dvec3 n = normalize(cross(p1 - l.p0, p2 - l.p0));
-    dvec3 e1 = dvec3(spotMeshTangent(t.x) + spotMeshTangent(t.y) + spotMeshTangent(t.z));
+    l.p0 = spotMeshPosition(t.x);
+    l.v0 = spotMeshPosition(t.y) - l.p0;
+    l.v1 = spotMeshPosition(t.z) - l.p0;
+    rvec3 n = spotUnit(cross(l.v0, l.v1));
+    rvec3 e1 = spotMeshTangent(t.x) + spotMeshTangent(t.y) + spotMeshTangent(t.z);
     e1 -= n * dot(e1, n);
-    e1 = dot(e1, e1) > 1e-12 ? normalize(e1) : dvec3(spotDefaultTangent(rvec3(n)));
+    e1 = dot(e1, e1) > real(1e-12) ? spotUnit(e1) : spotDefaultTangent(n);
     l.e1 = e1;
     l.e2 = cross(n, e1);
-    l.origin = n * dot(n, l.p0);
-    l.v0 = p1 - l.p0;
-    l.v1 = p2 - l.p0;
-    dvec2 lo = dvec2(1e30);
-    dvec2 hi = dvec2(-1e30);
+    rvec2 c0 = rvec2(dot(l.p0, l.e1), dot(l.p0, l.e2)) / spacing;
+    rvec2 k = floor(c0);
+    l.k0 = ivec2(k);
+    l.f0 = c0 - k;
+    /* The pieces' lattice coordinates relative to k0. */
+    rvec2 lo = rvec2(real(1e30));
+    rvec2 hi = rvec2(real(-1e30));
     for (uint p = first; p < last; ++p) {
         SpotPiece piece = spotCellPiece(p);
         for (int c = 0; c < 3; ++c) {
             rvec2 b = c == 0 ? rvec2(piece.c01.x, piece.c01.y)
-                             : (c == 1 ? rvec2(piece.c01.z, piece.c01.w) : rvec2(piece.c2.x, piece.c2.y));
-            dvec3 q = (1.0 - double(b.x) - double(b.y)) * l.p0 + double(b.x) * p1 + double(b.y) * p2 - l.origin;
-            dvec2 lc = dvec2(dot(q, l.e1) / spacing, dot(q, l.e2) / spacing);
+                             : (c == 1 ? rvec2(piece.c01.z, piece.c01.w)
+                                       : rvec2(piece.c2.x, piece.c2.y));
+            rvec3 q = b.x * l.v0 + b.y * l.v1;
+            rvec2 lc = rvec2(dot(q, l.e1), dot(q, l.e2)) / spacing + l.f0;
             lo = min(lo, lc);
             hi = max(hi, lc);
         }
     }
-    l.a0 = int(ceil(lo.x - double(kLatticeOffsetA) - 0.5 * jitter));
-    int a1 = int(floor(hi.x - double(kLatticeOffsetA) + 0.5 * jitter));
-    l.b0 = int(ceil(lo.y - double(kLatticeOffsetB) - 0.5 * jitter));
-    int b1 = int(floor(hi.y - double(kLatticeOffsetB) + 0.5 * jitter));
+    l.a0 = int(ceil(lo.x - kLatticeOffsetA - real(0.5) * jitter));
+    int a1 = int(floor(hi.x - kLatticeOffsetA + real(0.5) * jitter));
+    l.b0 = int(ceil(lo.y - kLatticeOffsetB - real(0.5) * jitter));
+    int b1 = int(floor(hi.y - kLatticeOffsetB + real(0.5) * jitter));
     l.rows = b1 >= l.b0 ? uint(b1 - l.b0 + 1) : 0u;
     l.sites = a1 >= l.a0 ? uint(a1 - l.a0 + 1) * l.rows : 0u;
     return l;
@@ -293,51 +319,69 @@ SPOT_FN uint spotGroupEnd(uint first, uint end) {
 }
 
 SPOT_FN uint spotJitteredCandidates(SpotCell cell) {
-    double spacing = double(spotParamVariation1().w);
-    double jitter = double(spotParamDistribution().y);
+    real spacing = spotParamVariation1().w;
+    real jitter = spotParamDistribution().y;
     uint end = cell.info.x + uint(cell.ijk.w);
     uint total = 0u;
     for (uint first = cell.info.x; first < end;) {
         uint last = spotGroupEnd(first, end);
-        total += spotLatticeOf(first, last, floatBitsToUint(spotCellPiece(first).c2.w), spacing, jitter).sites;
+        uint tri = floatBitsToUint(spotCellPiece(first).c2.w);
+        total += spotLatticeOf(first, last, tri, spacing, jitter).sites;
         first = last;
     }
     return min(total, kMaxCandidatesPerCell);
 }
 
-SPOT_FN bool spotJitteredCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
-    double spacing = double(spotParamVariation1().w);
-    double jitter = double(spotParamDistribution().y);
-    uint end = cell.info.x + uint(cell.ijk.w);
+/* Site m (in the group's candidate order) of lattice l, the group of triangle `tri` in `cell`: its
+ * random key and the barycentric coordinates of the moved site; false when the moved site falls
+ * outside the triangle or the cell. */
+SPOT_FN bool spotLatticeSite(SpotLattice l, uint tri, uint m, ivec3 cell, SPOT_OUT(uint) key,
+                             SPOT_OUT(rvec3) bary) {
+    real spacing = spotParamVariation1().w;
+    real jitter = spotParamDistribution().y;
+    real h = spotParamVariation1().z;
     uint seedKey = spotHash(spotParamFlags().x ^ 0x3c6ef372u);
-    double h = double(spotParamVariation1().z);
+    int a = l.a0 + int(m / l.rows);
+    int b = l.b0 + int(m % l.rows);
+    key = spotHashCombine(spotHashCombine(spotHashCombine(seedKey, tri), uint(l.k0.x + a)),
+                          uint(l.k0.y + b));
+    /* The moved site's offset from p0, in lattice units. */
+    real la = real(a) - l.f0.x + kLatticeOffsetA +
+              jitter * (spotRand(key, kRandJitterU) - real(0.5));
+    real lb = real(b) - l.f0.y + kLatticeOffsetB +
+              jitter * (spotRand(key, kRandJitterV) - real(0.5));
+    rvec3 v2 = spacing * (la * l.e1 + lb * l.e2);
+    real d00 = dot(l.v0, l.v0);
+    real d01 = dot(l.v0, l.v1);
+    real d11 = dot(l.v1, l.v1);
+    real d20 = dot(v2, l.v0);
+    real d21 = dot(v2, l.v1);
+    real denom = d00 * d11 - d01 * d01;
+    real w1 = (d11 * d20 - d01 * d21) / denom;
+    real w2 = (d00 * d21 - d01 * d20) / denom;
+    real w0 = real(1.0) - w1 - w2;
+    if (w0 < real(0.0) || w1 < real(0.0) || w2 < real(0.0))
+        return false;
+    if (ivec3(floor((l.p0 + v2) / h)) != cell)
+        return false;
+    bary = rvec3(w0, w1, w2);
+    return true;
+}
+
+SPOT_FN bool spotJitteredCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
+    real spacing = spotParamVariation1().w;
+    real jitter = spotParamDistribution().y;
+    uint end = cell.info.x + uint(cell.ijk.w);
     for (uint first = cell.info.x; first < end;) {
         uint last = spotGroupEnd(first, end);
         uint tri = floatBitsToUint(spotCellPiece(first).c2.w);
         SpotLattice l = spotLatticeOf(first, last, tri, spacing, jitter);
         if (m < l.sites) {
-            int a = l.a0 + int(m / l.rows);
-            int b = l.b0 + int(m % l.rows);
-            uint key = spotHashCombine(spotHashCombine(spotHashCombine(seedKey, tri), uint(a)), uint(b));
-            double la = double(a) + double(kLatticeOffsetA) + jitter * (double(spotRand(key, kRandJitterU)) - 0.5);
-            double lb = double(b) + double(kLatticeOffsetB) + jitter * (double(spotRand(key, kRandJitterV)) - 0.5);
-            dvec3 point = l.origin + spacing * (la * l.e1 + lb * l.e2);
-            dvec3 v2 = point - l.p0;
-            double d00 = dot(l.v0, l.v0);
-            double d01 = dot(l.v0, l.v1);
-            double d11 = dot(l.v1, l.v1);
-            double d20 = dot(v2, l.v0);
-            double d21 = dot(v2, l.v1);
-            double denom = d00 * d11 - d01 * d01;
-            double w1 = (d11 * d20 - d01 * d21) / denom;
-            double w2 = (d00 * d21 - d01 * d20) / denom;
-            double w0 = 1.0 - w1 - w2;
-            if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0)
+            uint key;
+            rvec3 bary;
+            if (!spotLatticeSite(l, tri, m, ivec3(cell.ijk), key, bary))
                 return false;
-            ivec3 owner = ivec3(floor(point / h));
-            if (owner != ivec3(cell.ijk))
-                return false;
-            return spotFinishImpulse(ivec3(cell.ijk), key, tri, rvec3(real(w0), real(w1), real(w2)), imp);
+            return spotFinishImpulse(ivec3(cell.ijk), key, tri, bary, imp);
         }
         m -= l.sites;
         first = last;
@@ -345,17 +389,34 @@ SPOT_FN bool spotJitteredCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) 
     return false;
 }
 
+#endif /* SPOT_GEN_NO_JITTERED */
+
 /* ---- Both distributions ---------------------------------------------------------------------- */
+/* A GPU module carries one distribution (SPOT_GEN_NO_POISSON or SPOT_GEN_NO_JITTERED defined before
+ * inclusion: lavapipe spends pipeline creation on every function of a module, even one a
+ * specialization makes dead); C++ has both. */
 
 SPOT_FN uint spotCellCandidates(SpotCell cell) {
+#ifndef SPOT_GEN_NO_JITTERED
     if (spotParamFlags().y == 1u)
         return spotJitteredCandidates(cell);
+#endif
+#ifndef SPOT_GEN_NO_POISSON
     real lambda = spotParamDistribution().x * uintBitsToFloat(cell.info.y);
     return spotPoisson(lambda, spotCellKeyOf(cell));
+#else
+    return 0u;
+#endif
 }
 
 SPOT_FN bool spotCandidate(SpotCell cell, uint m, SPOT_OUT(SpotImpulse) imp) {
+#ifndef SPOT_GEN_NO_JITTERED
     if (spotParamFlags().y == 1u)
         return spotJitteredCandidate(cell, m, imp);
+#endif
+#ifndef SPOT_GEN_NO_POISSON
     return spotPoissonCandidate(cell, m, imp);
+#else
+    return false;
+#endif
 }

@@ -10,7 +10,8 @@
 /* A surface cell as the GPU generator sees it. */
 struct SpotCell {
     ivec4 ijk;  /* xyz: cell index; w: piece count */
-    uvec4 info; /* x: first piece; y: floatBitsToUint(area); z: output offset; w: unused */
+    uvec4 info; /* x: first piece; y: floatBitsToUint(area); z, w: the offset and the count of
+                   the candidates the GPU generator examines (written by the host) */
 };
 
 /* A piece of one triangle inside a cell, in the triangle's barycentric coordinates (b1, b2). */
@@ -83,6 +84,8 @@ struct SpotGenParams {
     vec4 lod;          /* level of detail for the current view: xyz eye (world); w: focal length in
                           pixels / LOD size in pixels (0 = off). A cell seen smaller than the LOD
                           size keeps each impulse with probability (size / LOD size)^2 and divides
-                          the kept ones' weight by it (stochastic simplification). */
+                          the kept ones' weight by it (stochastic simplification). The CPU
+                          generator leaves it off; the GPU's comes per generation in
+                          SpotGenPush.lod (spot_generate_layout.h). */
     SpotField fields[SPOT_FIELD_COUNT];
 };

@@ -64,7 +64,9 @@ struct SpotKernelBound {
     vec4 quad; /* xy: centre (pixels); zw: half extents along u and along v = (-u.y, u.x);
                   empty (culled) when z <= 0 */
     vec4 axis; /* xy: unit u (pixels); z: view depth of the kernel's centre of mass (sorting);
-                  w: unused */
+                  w: nearest view depth of its support (the quad's depth: behind the mesh, a
+                  pixel's ray cannot reach the kernel before the mesh, so the depth test skips
+                  it) */
 };
 
 /* Descriptor bindings of the splat pipelines (one numbering for all; each pipeline declares the
@@ -108,14 +110,19 @@ SPOT_CONST uint kSplatSpecScreen = 9u;       /* bool: prepare writes screen lobe
                                                 (the ray-march reads world lobes only) */
 
 /* What the resolve makes of its inputs. */
-SPOT_CONST uint kSplatResolveCopy = 0u;      /* the base colour image is the result (instanced,
-                                                sorted: kernels were drawn onto it) */
+SPOT_CONST uint kSplatResolveCopy = 0u;      /* the base colour image is the result (sorted:
+                                                kernels were drawn onto it) */
 SPOT_CONST uint kSplatResolveOit = 1u;       /* eq. 12 */
 SPOT_CONST uint kSplatResolveHybrid = 2u;    /* eq. 13, closest kernel from the atomicMin buffer */
 SPOT_CONST uint kSplatResolveHybridPass = 3u; /* eq. 13, closest kernel from the depth pass */
+SPOT_CONST uint kSplatResolveInstanced = 4u; /* the nearest opaque kernel (atomicMin buffer)
+                                                 painted over the base colour */
 
 /* SpotSplatFrame.counts.w bits (what stays a run-time flag). */
 SPOT_CONST uint kSplatFlagLambert = 2u;     /* Lambert + ambient shading, else unlit */
+
+/* Lobes per kernel at most (the kernel's varyings are sized for them). */
+SPOT_CONST uint kSplatMaxLobes = 8u;
 
 /* Kernel samples (paper eq. 10's N_s) at most. Every shader invocation stays far below lavapipe's
  * 65,535 loop iterations: a march costs N x (lobes + 1) <= 2048 x 9 = 18,432 iterations, the

@@ -28,9 +28,12 @@ struct ContextOptions {
     bool validation = false;
     /// Device memory this context may allocate, bytes; 0 = 80% of spot::memoryBudgetBytes().
     std::uint64_t memoryBudget = 0;
+    /// Use only a device whose name contains this, ignoring case (e.g. "llvmpipe" for lavapipe
+    /// on a machine with a GPU); empty: any, a discrete GPU preferred. Default: SPOT_DEVICE.
+    std::string device;
 };
 
-/// ContextOptions with `validation` taken from SPOT_VALIDATION.
+/// ContextOptions with `validation` taken from SPOT_VALIDATION and `device` from SPOT_DEVICE.
 ContextOptions contextOptionsFromEnvironment();
 
 struct ValidationCounts {
@@ -289,6 +292,11 @@ class Timestamps {
 public:
     Timestamps(Context& ctx, std::uint32_t count);
     ~Timestamps();
+    /// One owner per query pool: a copy would destroy it twice.
+    Timestamps(const Timestamps&) = delete;
+    Timestamps& operator=(const Timestamps&) = delete;
+    Timestamps(Timestamps&&) = delete;
+    Timestamps& operator=(Timestamps&&) = delete;
     void reset(VkCommandBuffer cmd);
     void write(VkCommandBuffer cmd, std::uint32_t slot, VkPipelineStageFlags2 stage);
     /// Milliseconds of the first `count` slots (0: all) after slot 0; every one must have been

@@ -1,25 +1,38 @@
 #include "generate_vk.h"
 
+#include <algorithm>
 #include <cmath>
-#include <cstring>
+#include <limits>
 #include <vector>
 
-#include "generate.comp.h"
+#include "generate_jittered.comp.h"
+#include "generate_poisson.comp.h"
+#include "generate_scan.comp.h"
+#include "generate_scatter.comp.h"
 #include "noise/error.h"
 #include "noise/mesh.h"
 #include "noise/shared_data.h"
+#include "splat/pass_vk.h"
 
 namespace spot::splat {
 
+namespace gpu_gen {
+using glm::uvec4;
+using glm::vec4;
+using uint = std::uint32_t;
+#define SPOT_CONST inline constexpr
+#include "shaders/spot_generate_layout.h"
+#undef SPOT_CONST
+static_assert(sizeof(SpotGenPush) == 32, "push constants");
+} // namespace gpu_gen
+
 namespace {
 
-constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+using namespace gpu_gen;
+using namespace passes;
 
-struct Push {
-    std::uint32_t mode;
-    std::uint32_t cellCount;
-    std::uint32_t candidateCount;
-};
+constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+constexpr std::uint32_t kUncounted = std::numeric_limits<std::uint32_t>::max();
 
 template <typename T>
 Buffer upload(Context& ctx, const std::vector<T>& items, const std::string& what) {
@@ -39,12 +52,44 @@ template <typename V> std::vector<float> flatten(const std::vector<V>& v, int n)
     return out;
 }
 
-/// Dispatch enough 64-wide groups for `n` invocations (2D when n is beyond one dimension).
+/// Make `buffer` hold at least `count` items of `itemBytes`: kept when it does, else replaced by
+/// one with a quarter more room (within the device's storage-buffer limit) so that frames a
+/// little larger than this one allocate nothing either.
+void reserve(Context& ctx, Buffer& buffer, std::uint64_t count, std::uint64_t itemBytes,
+             VkBufferUsageFlags usage, Buffer::Memory memory, const char* what) {
+    const std::uint64_t need = std::max<std::uint64_t>(count * itemBytes, 16);
+    if (buffer.handle() && buffer.size() >= need)
+        return;
+    const std::uint64_t limit = ctx.properties().limits.maxStorageBufferRange;
+    const std::uint64_t roomy =
+        std::max(need, std::min(need + need / 4, limit / itemBytes * itemBytes));
+    buffer = Buffer(); // free the old one first: the two need not fit together
+    buffer = Buffer(ctx, roomy, usage, memory, what);
+}
+
+/// Dispatch enough kGenGroup-wide groups for `n` invocations (2D when n is beyond one dimension).
 void dispatch(VkCommandBuffer cmd, std::uint32_t n) {
-    const std::uint32_t groups = (n + 63) / 64;
+    const std::uint32_t groups = (n + kGenGroup - 1) / kGenGroup;
     const std::uint32_t x = std::min<std::uint32_t>(groups, 65535);
     const std::uint32_t y = (groups + x - 1) / x;
     vkCmdDispatch(cmd, x, y, 1);
+}
+
+shared::f32::GeneratorArrays arraysOf(const noise::Mesh& mesh, const noise::ImpulseGenerator& g) {
+    shared::f32::GeneratorArrays a;
+    a.triangles = mesh.triangles.data();
+    a.positions = mesh.positions.data();
+    a.normals = mesh.normals.data();
+    a.tangents = mesh.tangents.empty() ? nullptr : mesh.tangents.data();
+    a.uvs = mesh.uvs.empty() ? nullptr : mesh.uvs.data();
+    a.pieces = g.sharedPieces().data();
+    a.fieldData = g.sharedFieldData().data();
+    a.params = &g.sharedParams();
+    return a;
+}
+
+void pushConstants(VkCommandBuffer cmd, const Pipeline& pipeline, const SpotGenPush& push) {
+    vkCmdPushConstants(cmd, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
 }
 
 } // namespace
@@ -58,12 +103,19 @@ glm::vec4 lodParameters(const noise::Camera& camera, double pixels) {
 
 GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
                            const noise::ImpulseGenerator& generator)
-    : m_ctx(ctx), m_generator(generator) {
-    Bindings bindings; // TODO(binding names): the shader's bindings by position
-    for (std::uint32_t i = 0; i < 12; ++i)
-        bindings.push_back(storageBuffer(i));
-    m_pipeline = makeComputePipeline(ctx, spv_generate_comp, bindings, sizeof(Push));
-    m_params = upload(ctx, std::vector<gpu::SpotGenParams>{generator.sharedParams()}, "generator parameters");
+    : m_ctx(ctx), m_generator(generator), m_shared(arraysOf(mesh, generator)),
+      m_jittered(generator.sharedParams().flags.y == 1u),
+      m_cellCandidates(generator.cells().cells.size()) {
+    m_scanPipeline = makeComputePipeline(
+        ctx, spirv(spv_generate_scan_comp),
+        {storageBuffer(kGenBindFlags), storageBuffer(kGenBindCount)}, sizeof(SpotGenPush));
+    m_scatterPipeline =
+        makeComputePipeline(ctx, spirv(spv_generate_scatter_comp),
+                            {storageBuffer(kGenBindScratch), storageBuffer(kGenBindFlags),
+                             storageBuffer(kGenBindImpulses)},
+                            sizeof(SpotGenPush));
+    m_params = upload(ctx, std::vector<gpu::SpotGenParams>{generator.sharedParams()},
+                      "generator parameters");
     m_pieces = upload(ctx, generator.sharedPieces(), "surface pieces");
     std::vector<std::uint32_t> tris;
     tris.reserve(mesh.triangles.size() * 3);
@@ -75,117 +127,198 @@ GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
     m_tangents = upload(ctx, flatten(mesh.tangents, 3), "mesh tangents");
     m_uvs = upload(ctx, flatten(mesh.uvs, 2), "mesh uvs");
     m_fieldData = upload(ctx, generator.sharedFieldData(), "field data");
+    m_count = Buffer(ctx, 16, kStorage, Buffer::Memory::HostVisible, "impulse count");
+    *static_cast<std::uint32_t*>(m_count.mapped()) = 0;
+}
+
+const Pipeline& GpuGenerator::candidatePipeline() {
+    Pipeline& p = m_candidatePipeline;
+    if (p.handle())
+        return p;
+    const gpu::SpotGenParams& params = m_generator.sharedParams();
+    Specialization spec;
+    spec.set(kGenSpecComb, params.flags.z != 0u)
+        .set(kGenSpecUv, (params.flags.w & 1u) != 0u)
+        .set(kGenSpecTangents, (params.flags.w & 2u) != 0u);
+    for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
+        spec.set(kGenSpecFieldKind + slot, std::int32_t(params.fields[slot].kind.x))
+            .set(kGenSpecFieldComponents + slot, std::int32_t(params.fields[slot].kind.y));
+    const Bindings bindings = {storageBuffer(kGenBindParams),    storageBuffer(kGenBindCells),
+                               storageBuffer(kGenBindPieces),    storageBuffer(kGenBindTriangles),
+                               storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
+                               storageBuffer(kGenBindTangents),  storageBuffer(kGenBindUvs),
+                               storageBuffer(kGenBindFieldData), storageBuffer(kGenBindScratch),
+                               storageBuffer(kGenBindFlags),     storageBuffer(kGenBindSites)};
+    p = makeComputePipeline(
+        m_ctx, m_jittered ? spirv(spv_generate_jittered_comp) : spirv(spv_generate_poisson_comp),
+        bindings, sizeof(SpotGenPush), spec);
+    return p;
+}
+
+const GpuGenerator::CellCandidates& GpuGenerator::cellCandidates(std::uint32_t cell) {
+    CellCandidates& n = m_cellCandidates[cell];
+    if (n.candidates == kUncounted) {
+        const gpu::SpotCell c = gpu::toGpu(m_generator.cells().cells[cell]);
+        if (m_jittered)
+            m_shared.jitteredSitesInside(c, n.inside);
+        n.candidates = m_shared.spotCellCandidates(c);
+    }
+    return n;
+}
+
+bool GpuGenerator::choose(const std::function<bool(const noise::SurfaceCell&)>& keep, glm::vec4 lod,
+                          bool force) {
+    const auto& all = m_generator.cells().cells;
+    std::vector<std::uint32_t> key;
+    key.reserve(m_cellKey.size());
+    for (std::uint32_t i = 0; i < all.size(); ++i)
+        if (!keep || keep(all[i]))
+            key.push_back(i);
+    if (!force && m_valid && key == m_cellKey && lod == m_lod)
+        return false;
+
+    // Each cell's candidates, counted on the host with the shared code (as the CPU generator
+    // does), those the GPU examines and their offsets.
+    m_valid = false;
+    std::uint64_t total = 0, examinedTotal = 0;
+    std::uint32_t withCandidates = 0;
+    for (const std::uint32_t c : key) {
+        const CellCandidates& n = cellCandidates(c);
+        total += n.candidates;
+        examinedTotal += examined(n);
+        withCandidates += examined(n) > 0 ? 1u : 0u;
+    }
+    if (examinedTotal > kGenMaxCandidates)
+        throw InputError(cat(examinedTotal, " impulse candidates in view, more than ",
+                             kGenMaxCandidates, " (one generation); lower density_max"));
+    const auto examinedCount = std::uint32_t(examinedTotal);
+    reserve(m_ctx, m_cells, withCandidates, sizeof(gpu::SpotCell), kStorage,
+            Buffer::Memory::HostVisible, "visible cells");
+    reserve(m_ctx, m_sites, m_jittered ? examinedCount : 0, sizeof(std::uint32_t), kStorage,
+            Buffer::Memory::HostVisible, "lattice sites");
+    reserve(m_ctx, m_scratch, examinedCount, sizeof(gpu::SpotImpulse), kStorage,
+            Buffer::Memory::DeviceLocal, "impulse candidates");
+    reserve(m_ctx, m_flags, examinedCount, sizeof(std::uint32_t), kStorage,
+            Buffer::Memory::DeviceLocal, "candidate flags");
+    // Host-visible: a renderer may read the impulses on the host after their frame (and on
+    // lavapipe all memory is host memory anyway); a transfer source for readback copies.
+    reserve(m_ctx, m_impulses, examinedCount, sizeof(gpu::SpotImpulse),
+            kStorage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, Buffer::Memory::HostVisible, "impulses");
+    auto* cells = static_cast<gpu::SpotCell*>(m_cells.mapped());
+    auto* sites = static_cast<std::uint32_t*>(m_sites.mapped());
+    std::uint32_t offset = 0, uploaded = 0;
+    for (const std::uint32_t c : key) {
+        const CellCandidates& n = cellCandidates(c);
+        if (examined(n) == 0)
+            continue; // generates nothing: the GPU's cell search need not see it
+        gpu::SpotCell cell = gpu::toGpu(all[c]);
+        cell.info.z = offset;
+        cell.info.w = examined(n);
+        cells[uploaded++] = cell;
+        if (m_jittered)
+            std::copy(n.inside.begin(), n.inside.end(), sites + offset);
+        offset += examined(n);
+    }
+    m_cellKey = std::move(key);
+    m_lod = lod;
+    m_candidates = std::uint32_t(total);
+    m_examined = examinedCount;
+    m_cellCount = std::uint32_t(m_cellKey.size());
+    m_uploadedCells = uploaded;
+    if (examinedCount > 0)
+        candidatePipeline(); // made here, on the host, not while recording
+    ++m_version;
+    m_valid = true;
+    return true;
 }
 
 bool GpuGenerator::prepare(const std::function<bool(const noise::SurfaceCell&)>& keep,
                            glm::vec4 lod) {
-    std::vector<std::uint32_t> key;
-    const auto& all = m_generator.cells().cells;
-    for (std::uint32_t i = 0; i < all.size(); ++i)
-        if (!keep || keep(all[i]))
-            key.push_back(i);
-    if (m_version > 0 && key == m_cellKey && lod == m_lod)
-        return false;
-    m_current = generate(keep, lod);
-    m_cellKey = std::move(key);
-    m_lod = lod;
-    ++m_version;
-    m_candidates = m_current.candidates;
-    m_cellCount = m_current.cells;
-    if (!m_count.handle())
-        m_count = Buffer(m_ctx, 16, kStorage, Buffer::Memory::HostVisible, "impulse count");
-    *static_cast<std::uint32_t*>(m_count.mapped()) = m_current.count;
-    return true;
+    return choose(keep, lod, false);
 }
 
-void GpuGenerator::record(VkCommandBuffer, PassTimer&) {}
+void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
+    SPOT_CHECK(m_valid);
+    const SpotGenPush push{glm::uvec4(m_uploadedCells, m_examined, 0u, 0u), m_lod};
+    // 1. Every candidate decided.
+    if (m_examined > 0) {
+        const Pipeline& candidates = m_candidatePipeline;
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, candidates.handle());
+        Descriptors()
+            .buffer(kGenBindParams, m_params)
+            .buffer(kGenBindCells, m_cells)
+            .buffer(kGenBindPieces, m_pieces)
+            .buffer(kGenBindTriangles, m_triangles)
+            .buffer(kGenBindPositions, m_positions)
+            .buffer(kGenBindNormals, m_normals)
+            .buffer(kGenBindTangents, m_tangents)
+            .buffer(kGenBindUvs, m_uvs)
+            .buffer(kGenBindFieldData, m_fieldData)
+            .buffer(kGenBindScratch, m_scratch)
+            .buffer(kGenBindFlags, m_flags)
+            .buffer(kGenBindSites, m_sites)
+            .push(m_ctx, cmd, candidates);
+        pushConstants(cmd, candidates, push);
+        dispatch(cmd, m_examined);
+        memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
+    }
+    // 2. The flags become output indices, and the count is written (0 without candidates).
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_scanPipeline.handle());
+    Descriptors()
+        .buffer(kGenBindFlags, m_flags)
+        .buffer(kGenBindCount, m_count)
+        .push(m_ctx, cmd, m_scanPipeline);
+    pushConstants(cmd, m_scanPipeline, push);
+    vkCmdDispatch(cmd, 1, 1, 1);
+    // 3. Accepted impulses packed in (cell, candidate) order.
+    if (m_examined > 0) {
+        memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_scatterPipeline.handle());
+        Descriptors()
+            .buffer(kGenBindScratch, m_scratch)
+            .buffer(kGenBindFlags, m_flags)
+            .buffer(kGenBindImpulses, m_impulses)
+            .push(m_ctx, cmd, m_scatterPipeline);
+        pushConstants(cmd, m_scatterPipeline, push);
+        dispatch(cmd, m_examined);
+    }
+    // The impulses and their count for every later command, and the count for the host.
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kAll | kHostStage,
+                  VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
+    timer.mark(cmd, "generate");
+}
 
 ImpulseSet GpuGenerator::impulses() const {
     ImpulseSet s;
-    s.impulses = &m_current.impulses;
+    s.impulses = &m_impulses;
     s.count = &m_count;
-    s.capacity = m_current.count;
+    s.capacity = m_examined;
     s.version = m_version;
     s.cells = &m_generator.cells();
     return s;
 }
 
-std::uint32_t GpuGenerator::count() const { return m_current.count; }
+std::uint32_t GpuGenerator::count() const {
+    return *static_cast<const std::uint32_t*>(m_count.mapped());
+}
 
 GpuImpulses GpuGenerator::generate(const std::function<bool(const noise::SurfaceCell&)>& keep,
                                    glm::vec4 lod) {
+    choose(keep, lod, true);
+    PassTimer timer(m_ctx, 1);
+    m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
+        timer.begin(cmd);
+        record(cmd, timer);
+    });
     GpuImpulses result;
-    static_cast<gpu::SpotGenParams*>(m_params.mapped())->lod = lod;
-    std::vector<gpu::SpotCell> cells;
-    for (const noise::SurfaceCell& c : m_generator.cells().cells)
-        if (!keep || keep(c))
-            cells.push_back(gpu::toGpu(c));
-    result.cells = std::uint32_t(cells.size());
-    result.impulses = Buffer(m_ctx, 16, kStorage, Buffer::Memory::HostVisible, "impulses");
-    if (cells.empty())
-        return result;
-    Buffer cellBuffer = upload(m_ctx, cells, "visible cells");
-    Buffer none(m_ctx, 16, kStorage, Buffer::Memory::HostVisible, "unused binding"); // a pass's unused bindings
-    Timestamps time(m_ctx, 2);
-    auto run = [&](std::uint32_t mode, std::uint32_t n, const Buffer& scratch, const Buffer& flags,
-                   const Buffer& out) {
-        m_ctx.submitAndWait([&](VkCommandBuffer cmd) {
-            time.reset(cmd);
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_pipeline.handle());
-            Descriptors()
-                .buffer(0, m_params)
-                .buffer(1, cellBuffer)
-                .buffer(2, m_pieces)
-                .buffer(3, m_triangles)
-                .buffer(4, m_positions)
-                .buffer(5, m_normals)
-                .buffer(6, m_tangents)
-                .buffer(7, m_uvs)
-                .buffer(8, m_fieldData)
-                .buffer(9, scratch)
-                .buffer(10, flags)
-                .buffer(11, out)
-                .push(m_ctx, cmd, m_pipeline);
-            const Push push{mode, result.cells, result.candidates};
-            vkCmdPushConstants(cmd, m_pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-            time.write(cmd, 0, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT);
-            dispatch(cmd, n);
-            time.write(cmd, 1, VK_PIPELINE_STAGE_2_BOTTOM_OF_PIPE_BIT);
-            memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_WRITE_BIT,
-                          VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
-        });
-        result.milliseconds += time.milliseconds()[1];
-    };
-
-    // 1. Candidates per cell, then their offsets (prefix sums here: a few thousand cells).
-    run(0, result.cells, none, none, none);
-    auto* gpuCells = static_cast<gpu::SpotCell*>(cellBuffer.mapped());
-    std::uint64_t total = 0;
-    for (std::uint32_t i = 0; i < result.cells; ++i) {
-        gpuCells[i].info.z = std::uint32_t(total);
-        total += gpuCells[i].info.w;
-    }
-    if (total > 0xffffffffull)
-        throw InputError(cat(total, " impulse candidates are more than one GPU pass can index"));
-    result.candidates = std::uint32_t(total);
-    if (total == 0)
-        return result;
-
-    // 2. Every candidate decided; 3. accepted ones packed in (cell, candidate) order.
-    Buffer scratch(m_ctx, total * sizeof(gpu::SpotImpulse), kStorage, Buffer::Memory::DeviceLocal,
-                   "impulse candidates");
-    Buffer flags(m_ctx, total * sizeof(std::uint32_t), kStorage, Buffer::Memory::HostVisible,
-                 "candidate flags");
-    run(1, result.candidates, scratch, flags, none);
-    auto* flag = static_cast<std::uint32_t*>(flags.mapped());
-    std::uint32_t accepted = 0;
-    for (std::uint32_t i = 0; i < result.candidates; ++i)
-        flag[i] = flag[i] ? ++accepted : 0u;
-    result.count = accepted;
-    result.impulses = Buffer(m_ctx, std::max<VkDeviceSize>(accepted, 1) * sizeof(gpu::SpotImpulse),
-                             kStorage, Buffer::Memory::HostVisible, "impulses");
-    if (accepted > 0)
-        run(2, result.candidates, scratch, flags, result.impulses);
+    result.count = count();
+    result.candidates = m_candidates;
+    result.cells = m_cellCount;
+    result.milliseconds = timer.totalMilliseconds();
+    const VkDeviceSize bytes = VkDeviceSize(result.count) * sizeof(gpu::SpotImpulse);
+    result.impulses = Buffer(m_ctx, bytes, kStorage, Buffer::Memory::HostVisible, "impulses");
+    if (result.count > 0)
+        result.impulses.upload(m_impulses.mapped(), bytes);
     return result;
 }
 

@@ -57,7 +57,7 @@ const char* methodName(Method method) {
 }
 
 SplatRenderer::SplatRenderer(const SceneGpu& scene, Method method)
-    : m_scene(scene), m_ctx(scene.context()), m_method(method), m_sort(scene.context()) {
+    : m_scene(scene), m_ctx(scene.context()), m_method(method) {
     requireFormat(m_ctx, kColorFormat,
                   VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
                   "blended, stored RGBA32F targets");
@@ -118,19 +118,20 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
     quads.spec = spec;
     GraphicsPipelineDesc splat = quads;
     splat.bindings.push_back(storageBuffer(kSplatBindCounters)); // read only when counting
+    // Quads at their kernel's nearest depth, tested against the mesh's depth (not written):
+    // pixels where the mesh hides the whole kernel are never shaded.
+    splat.depthFormat = kDepthFormat;
+    splat.depthTest = true;
+    splat.depthWrite = false;
+    splat.depthCompare = VK_COMPARE_OP_GREATER;
     if (roofline) {
         splat.fragment = spirv(spv_splat_roofline_frag);
         splat.colorFormats = {kColorFormat, kScalarFormat};
         splat.blends = {additiveBlend(), additiveBlend()};
     } else if (m_method == Method::Instanced) {
         splat.fragment = spirv(spv_splat_instanced_frag);
-        splat.colorFormats = {kColorFormat};
-        splat.blends = {opaqueBlend()};
-        splat.depthFormat = kDepthFormat;
-        splat.depthTest = true;
-        splat.depthWrite = true;
-        splat.depthCompare = VK_COMPARE_OP_GREATER;
-    } else if (m_method == Method::Sorted) {
+        splat.bindings.push_back(storageBuffer(kSplatBindClosest));
+        } else if (m_method == Method::Sorted) {
         splat.fragment = spirv(spv_splat_sorted_frag);
         splat.colorFormats = {kColorFormat};
         splat.blends = {overBlend()};
@@ -141,7 +142,7 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
         splat.blends = {additiveBlend(), additiveBlend()};
     }
     p.splat = makeGraphicsPipeline(m_ctx, splat);
-    if (m_method == Method::Hybrid && !roofline) {
+    if (s.closestPass && !roofline) {
         // The closest kernel by a depth pass: nearest wins, the first on a tie.
         GraphicsPipelineDesc closest = quads;
         closest.fragment = spirv(spv_splat_closest_frag);
@@ -165,6 +166,8 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
     if (m_method == Method::Hybrid)
         perPixel += settings.closest == ClosestKernel::DepthPass ? kClosestPassBytesPerPixel
                                                                  : kAtomicBytesPerPixel;
+    if (m_method == Method::Instanced)
+        perPixel += kAtomicBytesPerPixel;
     const std::uint64_t perKernel = std::uint64_t(m_scene.lobeCount()) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t);
@@ -177,7 +180,8 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
 void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
                                   const RenderSettings& settings) {
     const bool oit = usesOit(m_method);
-    const bool atomic = m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic;
+    const bool atomic = m_method == Method::Instanced ||
+                        (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
     const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
     const bool have = m_width == width && m_height == height && m_base.handle() &&
                       (!oit || m_accum.handle()) && (!atomic || m_closest.handle()) &&
@@ -328,16 +332,20 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
     s.orthographic = view.camera.projection == noise::Projection::Orthographic;
     s.ewa = settings.ewa;
     s.hybridAtomic = f.hybridAtomic;
+    s.closestPass = f.closestPass;
     s.count = settings.countFragments && !settings.roofline;
     s.weight = settings.weight == OitWeight::McGuireBavoil ? shared::f32::kSpotWeightMcGuireBavoil
                                                            : shared::f32::kSpotWeightConstant;
-    s.resolve = f.sorted || f.instanced ? kSplatResolveCopy
+    s.resolve = f.sorted              ? kSplatResolveCopy
+                : f.instanced           ? kSplatResolveInstanced
                 : f.hybridAtomic        ? kSplatResolveHybrid
                 : f.closestPass         ? kSplatResolveHybridPass
                                         : kSplatResolveOit;
     if (settings.roofline) // the roofline's image is meaningless; resolve it as plain OIT
         s.resolve = kSplatResolveOit;
     f.pipelines = &pipelines(s, settings.roofline);
+    if (f.sorted && !m_sort)
+        m_sort = std::make_unique<RadixSort>(m_ctx);
     f.frame = makeSplatFrame(view.camera, view.shading, view.baseColor, impulses.capacity,
                              m_scene.lobeCount(), m_scene.support(),
                              std::uint32_t(settings.kernelSamples), 0);
@@ -370,7 +378,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .buffer(kSplatBindCount, *f.impulses.count)
         .push(m_ctx, cmd, p.compact);
     vkCmdDispatch(cmd, 1, 1, 1);
-    if (f.hybridAtomic)
+    if (f.hybridAtomic || f.instanced)
         vkCmdFillBuffer(cmd, m_closest.handle(), 0, VK_WHOLE_SIZE, 0xffffffffu); // "no kernel"
     if (f.settings.countFragments)
         vkCmdFillBuffer(cmd, m_counters.handle(), 0, VK_WHOLE_SIZE, 0u);
@@ -394,7 +402,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         if (capacity > 0)
             vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
         memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRW);
-        m_sort.record(cmd, m_sortKeys, m_visible, capacity, m_sortScratch);
+        m_sort->record(cmd, m_sortKeys, m_visible, capacity, m_sortScratch);
         timer.mark(cmd, "sort");
     }
 
@@ -457,21 +465,20 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
 
     // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
     const VkRenderingAttachmentInfo depthInfo = depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
-    if (f.instanced)
-        beginRendering(cmd, width, height, {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)},
-                       &depthInfo);
+    if (f.instanced) // nothing but the atomics, behind the mesh test
+        beginRendering(cmd, width, height, {}, &depthInfo);
     else if (f.sorted)
         beginRendering(cmd, width, height, {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)},
-                       nullptr);
+                       &depthInfo);
     else
         beginRendering(cmd, width, height,
                        {colorAttachment(m_accum, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f)),
                         colorAttachment(m_opticalDepth, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f))},
-                       nullptr);
+                       &depthInfo);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.splat.handle());
     pushFrame(cmd, p.splat, f.frame);
-    const bool oitPass = usesOit(m_method) && !f.settings.roofline;
-    quadDescriptors(p.splat, oitPass, true);
+    const bool atomics = (usesOit(m_method) || f.instanced) && !f.settings.roofline;
+    quadDescriptors(p.splat, atomics, true);
     vkCmdDrawIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
     vkCmdEndRendering(cmd);
     for (const Image* image : targets)

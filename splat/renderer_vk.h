@@ -39,6 +39,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <tuple>
 
 #include "splat/context_vk.h"
@@ -75,10 +76,11 @@ private:
     struct Spec {
         std::uint32_t samples = 0;
         bool lambert = false, orthographic = false, ewa = true, hybridAtomic = false,
-             count = false;
+             count = false, closestPass = false;
         std::uint32_t weight = 0, resolve = 0;
         auto tie() const {
-            return std::tie(samples, lambert, orthographic, ewa, hybridAtomic, count, weight, resolve);
+            return std::tie(samples, lambert, orthographic, ewa, hybridAtomic, count, closestPass,
+                            weight, resolve);
         }
         bool operator<(const Spec& o) const { return tie() < o.tie(); }
     };
@@ -93,7 +95,7 @@ private:
     Context& m_ctx;
     Method m_method;
     std::map<std::pair<Spec, bool>, Pipelines> m_pipelines;
-    RadixSort m_sort;
+    std::unique_ptr<RadixSort> m_sort; ///< sorted only (made on first use)
 
     // Per image size.
     std::uint32_t m_width = 0, m_height = 0;

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 namespace {
 
@@ -223,6 +224,29 @@ TEST(Cli, RenderGpuMethodsWithValidation) {
                                 "\"gpu_memory_bytes\"", "\"validation_errors\": 0", "\"width\": 64"})
             EXPECT_NE(json.find(key), std::string::npos) << method << ": " << key << " in " << json;
     }
+}
+
+TEST(Cli, RenderRepeatsWarmFramesAndReportsTheirTimes) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+    const std::string out = tmp("gpu-repeat.png"), stats = tmp("gpu-repeat.json");
+    const Result r = run("render --scene " + scene + " --method hybrid --size 64x48 --repeat 3 "
+                         "--count-fragments --out " + out + " --stats " + stats);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("3 warm frames"), std::string::npos) << r.out;
+    const nlohmann::json j = nlohmann::json::parse(slurp(stats));
+    EXPECT_EQ(j["warm_frames"], 3);
+    for (const char* series : {"frame_ms", "wall_ms"})
+        for (const char* stat : {"median", "p90", "min"}) {
+            ASSERT_TRUE(j[series].contains(stat)) << series << "." << stat;
+            EXPECT_GT(double(j[series][stat]), 0.0) << series << "." << stat;
+        }
+    // The host waits for the GPU: a frame's wall time holds its GPU time.
+    EXPECT_GE(double(j["wall_ms"]["min"]), 0.99 * double(j["frame_ms"]["min"]));
+    EXPECT_GT(double(j["first_frame"]["gpu_ms"]), 0.0);
+    EXPECT_GE(double(j["fragment_efficiency"]), 1.0);
+    EXPECT_GT(j["pixels_covered"].get<std::uint64_t>(), 0u);
+    expectInputError("render --scene " + scene + " --method oit --repeat -1 --out " + tmp("x.png"),
+                     "--repeat");
 }
 
 TEST(Cli, RenderGpuRejectsBadSettings) {

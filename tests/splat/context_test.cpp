@@ -1,6 +1,11 @@
 // The Vulkan context on whatever device this machine has (lavapipe here), validation on.
+#include <cctype>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -16,6 +21,26 @@ splat::ContextOptions validated() {
     o.validation = true;
     return o;
 }
+
+/// This process's resident memory, MiB (Linux).
+double residentMiB() {
+    std::ifstream statm("/proc/self/statm");
+    double pages = 0.0, resident = 0.0;
+    statm >> pages >> resident;
+    return resident * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
 
 TEST(VulkanContext, CreatesADeviceWithValidation) {
     splat::Context ctx(validated());
@@ -74,6 +99,62 @@ TEST(VulkanContext, ValidationErrorsAreCounted) {
     if (r == VK_SUCCESS && buffer)
         vkDestroyBuffer(ctx.device(), buffer, nullptr);
     EXPECT_GE(ctx.validation().errors, 1u);
+}
+
+TEST(VulkanContext, SelectsTheDeviceByNameIgnoringCase) {
+    std::string name;
+    {
+        splat::Context any(validated());
+        name = any.deviceName();
+    }
+    splat::ContextOptions o = validated();
+    o.device = name.substr(0, 4);
+    for (char& c : o.device)
+        c = char(std::toupper(static_cast<unsigned char>(c)));
+    splat::Context ctx(o);
+    EXPECT_EQ(ctx.deviceName().substr(0, 4), name.substr(0, 4));
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+TEST(VulkanContext, FailedConstructionReleasesWhatItMade) {
+    // An unknown device name throws after the instance and the validation messenger exist. The
+    // constructor must release them (its destructor never runs): the loader keeps a leaked
+    // instance reachable, so LeakSanitizer would not see it, but each leaked lavapipe instance
+    // with the validation layer holds about 2.4 MiB of resident memory (measured: 20 leaks grow
+    // the process by ~49 MiB; without them it does not grow at all).
+    std::string realDevice;
+    {
+        splat::Context any(validated());
+        realDevice = any.deviceName();
+    }
+    splat::ContextOptions o = validated();
+    o.device = "no-such-device";
+    const auto attempt = [&] {
+        try {
+            splat::Context ctx(o);
+            ADD_FAILURE() << "a context was created on " << ctx.deviceName();
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("no usable device"), std::string::npos) << what;
+            EXPECT_NE(what.find("'no-such-device'"), std::string::npos) << what;
+            EXPECT_NE(what.find(realDevice), std::string::npos) << "rejected devices: " << what;
+        }
+    };
+    for (int i = 0; i < 3; ++i)
+        attempt(); // the loader's and the driver's one-time state
+    const double before = residentMiB();
+    constexpr int kAttempts = 20;
+    for (int i = 0; i < kAttempts; ++i)
+        attempt();
+    const double grown = residentMiB() - before;
+    // AddressSanitizer holds freed memory in quarantine, so resident memory grows anyway there.
+    if (!kAddressSanitizer)
+        EXPECT_LT(grown, 16.0) << kAttempts << " failed constructions grew resident memory by "
+                               << grown << " MiB";
+
+    splat::Context ctx(validated()); // and the device is still there
+    ctx.submitAndWait([](VkCommandBuffer) {});
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
 }
 
 } // namespace
