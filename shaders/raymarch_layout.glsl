@@ -86,17 +86,27 @@ SPOT_CONST uint kMarchBindImpulses = 12u;    /* SpotImpulse[] (bin) */
 SPOT_CONST uint kMarchBindCount = 13u;       /* uint: the impulse count (bin) */
 SPOT_CONST uint kMarchBindBins = 14u;        /* uint[]: per record first, end, count (bin) */
 SPOT_CONST uint kMarchBindLobeBoxes = 15u;   /* SpotMarchBox[impulse * lobes + l] (bin) */
+SPOT_CONST uint kMarchBindWalkBits = 16u;    /* uvec2[brick]: per kMarchWalkBrick^3 brick of the
+                                                shell's bounding box (x-major from lo), one bit per
+                                                cell ((x * 4 + y) * 4 + z within the brick, x, y in
+                                                bits 0-31, then .y): the cells the walk keeps
+                                                (kMarchSpecWalkBits) */
 
 /* Specialization constant ids (the march and resolve are compiled per setting). */
 SPOT_CONST uint kMarchSpecLobes = 0u;   /* uint: lobes per kernel, 1..8 */
 SPOT_CONST uint kMarchSpecLambert = 1u; /* bool: Lambert + ambient shading, else unlit */
 SPOT_CONST uint kMarchSpecCull = 2u;    /* bool: skip impulses whose box misses the sample */
 SPOT_CONST uint kMarchSpecCount = 3u;   /* bool: write each invocation's loop count (tests) */
+SPOT_CONST uint kMarchSpecWalkBits = 4u; /* bool: the walk reads kMarchBindWalkBits, not the hash
+                                            table (when the bounding box is small enough) */
 
 /* A list entry: the impulse index in the low bits (fewer than 2^22 impulses: 65,535 workgroups of
  * 64), the mask of its lobes that may have density in the sub-cell (bit l: lobe l) above. */
 SPOT_CONST uint kMarchEntryLobeShift = 22u;
 SPOT_CONST uint kMarchEntryImpulse = 0x3fffffu;
+
+/* Cells per brick side of the walk's bits (4^3 = 64 bits per brick). */
+SPOT_CONST int kMarchWalkBrick = 4;
 
 /* Sub-cells per cell side: each shell cell's lists are kept per sub-cell. 5, measured against 2,
  * 3, 4 and 6 (CPU time per warm frame on fur-bunny, lichen-torus and ring-sphere): finer lists

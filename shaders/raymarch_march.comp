@@ -21,6 +21,7 @@ layout(constant_id = kMarchSpecLobes) const uint kMarchLobes = 1u;
 layout(constant_id = kMarchSpecLambert) const bool kMarchLambert = false;
 layout(constant_id = kMarchSpecCull) const bool kMarchCull = true;
 layout(constant_id = kMarchSpecCount) const bool kMarchCount = false;
+layout(constant_id = kMarchSpecWalkBits) const bool kMarchWalkBits = false;
 
 layout(std430, binding = kMarchBindParams) readonly buffer Params { SpotMarchParams params; };
 layout(std430, binding = kMarchBindTable) readonly buffer Table { ivec4 table[]; };
@@ -32,6 +33,7 @@ layout(std430, binding = kMarchBindBoxes) readonly buffer Boxes { SpotMarchBox b
 layout(binding = kMarchBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = kMarchBindState) buffer State { vec4 state[]; };
 layout(std430, binding = kMarchBindLoops) buffer Loops { uint loopCounts[]; };
+layout(std430, binding = kMarchBindWalkBits) readonly buffer WalkBits { uvec2 walkBits[]; };
 
 SpotMarchParams marchParams() { return params; }
 ivec4 marchSlot(uint i) { return table[i]; }
@@ -43,6 +45,10 @@ vec3 marchLobeCentre(uint i) { return vec3(lobes[i].a0.w, lobes[i].a1.w, lobes[i
 vec4 marchLobeColor(uint i) { return lobes[i].color; }
 SpotMarchBox marchBox(uint impulse) { return boxes[impulse]; }
 vec4 marchLight() { return push.light; }
+uvec2 marchWalkBrick(ivec3 b) {
+    ivec3 n = (params.hi.xyz - params.lo.xyz + ivec3(kMarchWalkBrick)) / kMarchWalkBrick;
+    return walkBits[uint((b.x * n.y + b.y) * n.z + b.z)];
+}
 
 #include "raymarch_shared.glsl"
 

@@ -7,10 +7,11 @@
  *   SpotMarchParams marchParams(); ivec4 marchSlot(uint i);
  * and, unless RAYMARCH_LOOKUP_ONLY is defined,
  *   SpotMarchCell marchCell(uint record); uint marchStart(uint slot); uint marchEntry(uint i);
- *   mat3 marchLobeMatrix(uint i); vec3 marchLobeCentre(uint i); vec4 marchLobeColor(uint i)
+ *   uvec2 marchWalkBrick(ivec3 brick) (kMarchBindWalkBits); mat3 marchLobeMatrix(uint i); vec3 marchLobeCentre(uint i); vec4 marchLobeColor(uint i)
  *   (world lobe i's A, centre and colour with its amplitude, SpotWorldLobe);
  *   SpotMarchBox marchBox(uint impulse); vec4 marchLight() (SpotMarchPush::light),
- * and the specialization constants kMarchLobes (uint), kMarchLambert and kMarchCull (bool).
+ * and the specialization constants kMarchLobes (uint), kMarchLambert, kMarchCull and
+ * kMarchWalkBits (bool).
  *
  * Loop accounting. lavapipe stops an invocation after 65,535 loop iterations in total, counted
  * per SIMD vector of invocations: a loop runs while any lane of the vector is still in it, and
@@ -98,7 +99,8 @@ SPOT_FN int marchStep(float d) { return d > 0.0f ? 1 : (d < 0.0f ? -1 : 0); }
 
 /* The shell segments of the ray o + t d (unit d), t in [0, tEnd]: a cell-by-cell walk (3D DDA)
  * through the shell's bounding box, keeping the cells that are in the shell and have impulses
- * around them; adjacent cells merge into one segment. Costs at most
+ * around them (their bits with kMarchWalkBits, else the hash table and the cell's record);
+ * adjacent cells merge into one segment. Costs at most
  * 1 + walkCap (1 + longest probe + 2) loops. */
 SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) loops) {
     SpotMarchParams p = marchParams();
@@ -130,14 +132,32 @@ SPOT_FN MarchSegments marchShell(vec3 o, vec3 d, float tEnd, SPOT_INOUT(uint) lo
     // written once per segment, not indexed at every cell (a per-lane index into a local array
     // costs much more than a register on lavapipe).
     vec2 last = vec2(0.0f);
+    // With kMarchWalkBits, the bits of the brick the cell lies in, read again only when the walk
+    // enters another brick (a load per cell costs more than the rest of the step on lavapipe).
+    ivec3 brick = ivec3(-1);
+    uvec2 brickBits = uvec2(0u);
     loops += 1u;
     for (uint n = 0u; n < p.counts.z; ++n) {
         loops += 1u;
         float tn = min(tNext.x, min(tNext.y, tNext.z));
         float tb = min(tn, t1);
         if (tb > tc) {
-            int record = marchFind(c, loops);
-            if (record >= 0 && marchCell(uint(record)).head.x > 0u) {
+            bool kept;
+            if (kMarchWalkBits) {
+                ivec3 q = c - lo; // inside the box: the walk leaves when c does
+                ivec3 b = q / kMarchWalkBrick;
+                if (b.x != brick.x || b.y != brick.y || b.z != brick.z) {
+                    brick = b;
+                    brickBits = marchWalkBrick(b);
+                }
+                ivec3 l = q - b * kMarchWalkBrick;
+                uint bit = uint((l.x * kMarchWalkBrick + l.y) * kMarchWalkBrick + l.z);
+                kept = ((bit < 32u ? brickBits.x >> bit : brickBits.y >> (bit - 32u)) & 1u) != 0u;
+            } else {
+                int record = marchFind(c, loops);
+                kept = record >= 0 && marchCell(uint(record)).head.x > 0u;
+            }
+            if (kept) {
                 if (s.count > 0u && last.y >= tc) {
                     s.span += tb - last.y; // adjacent: extend
                     last.y = tb;

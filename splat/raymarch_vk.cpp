@@ -29,6 +29,7 @@ using splat::gpu_march::kMarchMaxSegments;
 using splat::gpu_march::kMarchOpaque;
 using splat::gpu_march::kMarchSub;
 using splat::gpu_march::kMarchSubCells;
+using splat::gpu_march::kMarchWalkBrick;
 using splat::gpu_march::SpotMarchBox;
 using splat::gpu_march::SpotMarchCell;
 using splat::gpu_march::SpotMarchParams;
@@ -47,19 +48,21 @@ public:
         const std::uint32_t* list = nullptr;
         const SpotWorldLobe* lobes = nullptr;
         const SpotMarchBox* boxes = nullptr;
+        const glm::uvec2* walkBits = nullptr; ///< null: the walk uses the hash table
         glm::vec4 light{0.0f};
         std::uint32_t lobeCount = 1;
         bool lambert = false, cull = true;
     };
     explicit MarchTwin(const Arrays& arrays)
         : m_a(arrays), kMarchLobes(arrays.lobeCount), kMarchLambert(arrays.lambert),
-          kMarchCull(arrays.cull) {}
+          kMarchCull(arrays.cull), kMarchWalkBits(arrays.walkBits != nullptr) {}
 
 private:
     Arrays m_a;
     uint kMarchLobes;
     bool kMarchLambert;
     bool kMarchCull;
+    bool kMarchWalkBits;
     const SpotMarchParams& marchParams() const { return *m_a.params; }
     glm::ivec4 marchSlot(uint i) const { return m_a.table[i]; }
     const SpotMarchCell& marchCell(uint record) const { return m_a.cells[record]; }
@@ -76,6 +79,12 @@ private:
     glm::vec4 marchLobeColor(uint i) const { return m_a.lobes[i].color; }
     const SpotMarchBox& marchBox(uint impulse) const { return m_a.boxes[impulse]; }
     glm::vec4 marchLight() const { return m_a.light; }
+    glm::uvec2 marchWalkBrick(glm::ivec3 b) const {
+        const glm::ivec3 n =
+            (glm::ivec3(m_a.params->hi) - glm::ivec3(m_a.params->lo) + kMarchWalkBrick) /
+            kMarchWalkBrick;
+        return m_a.walkBits[(b.x * n.y + b.y) * n.z + b.z];
+    }
 
 public:
 #define SPOT_FN
@@ -189,6 +198,10 @@ struct Slabs {
 int floorDiv(int a, int b) {
     return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
+
+/// The walk reads bits per brick of the shell's bounding box up to this many bricks (16 MiB),
+/// else the hash table.
+constexpr std::uint64_t kMaxWalkBricks = std::uint64_t(1) << 21;
 
 /// Grow-only with a margin, so a size creeping up does not reallocate every frame.
 std::uint64_t grownSize(std::uint64_t need) {
@@ -339,16 +352,17 @@ RaymarchRenderer::RaymarchRenderer(const SceneGpu& scene) : m_scene(scene), m_ct
 
 RaymarchRenderer::~RaymarchRenderer() = default;
 
-const RaymarchRenderer::Pipelines& RaymarchRenderer::pipelines(bool lambert, bool cull,
-                                                               bool count) {
-    const auto key = std::make_tuple(lambert, cull, count);
+const RaymarchRenderer::Pipelines& RaymarchRenderer::pipelines(bool lambert, bool cull, bool count,
+                                                               bool walkBits) {
+    const auto key = std::make_tuple(lambert, cull, count, walkBits);
     if (const auto it = m_pipelines.find(key); it != m_pipelines.end())
         return it->second;
     Specialization spec;
     spec.set(kMarchSpecLobes, m_scene.lobeCount())
         .set(kMarchSpecLambert, lambert)
         .set(kMarchSpecCull, cull)
-        .set(kMarchSpecCount, count);
+        .set(kMarchSpecCount, count)
+        .set(kMarchSpecWalkBits, walkBits);
     const std::uint32_t push = sizeof(SpotMarchPush);
     Pipelines p;
     p.march =
@@ -357,7 +371,8 @@ const RaymarchRenderer::Pipelines& RaymarchRenderer::pipelines(bool lambert, boo
                              storageBuffer(kMarchBindCells), storageBuffer(kMarchBindStarts),
                              storageBuffer(kMarchBindList), storageBuffer(kMarchBindWorldLobes),
                              storageBuffer(kMarchBindBoxes), storageImage(kMarchBindMeshDistance),
-                             storageBuffer(kMarchBindState), storageBuffer(kMarchBindLoops)},
+                             storageBuffer(kMarchBindState), storageBuffer(kMarchBindLoops),
+                             storageBuffer(kMarchBindWalkBits)},
                             push, spec);
     p.resolve = makeComputePipeline(m_ctx, spirv(spv_raymarch_resolve_comp),
                                     {storageImage(kMarchBindBase), storageBuffer(kMarchBindState),
@@ -705,13 +720,33 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
 
     // Upload into the grow-only buffers (each checked against the budget before anything is
     // freed, so a refused frame leaves the old ones).
+    // The walk's bits: per brick of the shell's bounding box, the cells a segment may pass (shell
+    // cells with impulses around them), when the box is small enough (else the walk looks cells
+    // up in the hash table: memory never grows without bound with the volume).
+    std::vector<glm::uvec2> walkBits;
+    const glm::ivec3 extent = glm::max(shell.hi - shell.lo + 1, glm::ivec3(0));
+    const glm::u64vec3 bricks = glm::u64vec3((extent + kMarchWalkBrick - 1) / kMarchWalkBrick);
+    if (records > 0 && bricks.x * bricks.y * bricks.z <= kMaxWalkBricks) {
+        walkBits.assign(std::size_t(bricks.x * bricks.y * bricks.z), glm::uvec2(0u));
+        for (std::uint32_t r = 0; r < records; ++r)
+            if (cells[r].head.x > 0) {
+                const glm::ivec3 q = shell.cells[r] - shell.lo;
+                const glm::u64vec3 b = glm::u64vec3(q / kMarchWalkBrick);
+                const glm::ivec3 l = q - glm::ivec3(b) * kMarchWalkBrick;
+                const int bit = (l.x * kMarchWalkBrick + l.y) * kMarchWalkBrick + l.z;
+                walkBits[std::size_t((b.x * bricks.y + b.y) * bricks.z + b.z)][bit / 32] |=
+                    1u << (bit % 32);
+            }
+    }
     const std::uint64_t cellBytes = std::uint64_t(records) * sizeof(SpotMarchCell);
     const std::uint64_t startBytes = starts.size() * sizeof(std::uint32_t);
     const std::uint64_t listBytes = list.size() * sizeof(std::uint32_t);
+    const std::uint64_t bitBytes = walkBits.size() * sizeof(glm::uvec2);
     std::uint64_t held = 0, need = 0;
     for (const auto& [buffer, bytes] : {std::pair<Buffer*, std::uint64_t>{&m_cells, cellBytes},
                                         {&m_starts, startBytes},
-                                        {&m_list, listBytes}})
+                                        {&m_list, listBytes},
+                                        {&m_walkBits, bitBytes}})
         if (buffer->size() < bytes || !buffer->handle()) {
             held += buffer->reservedBytes();
             need += grownSize(bytes);
@@ -740,6 +775,8 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
     put(m_cells, cells.data(), cellBytes, "ray march shell cells");
     put(m_starts, starts.data(), startBytes, "ray march list starts");
     put(m_list, list.data(), listBytes, "ray march impulse lists");
+    put(m_walkBits, walkBits.data(), bitBytes, "ray march walk bits");
+    m_walkBitData = std::move(walkBits);
 
     RaymarchStats& s = m_binStats;
     s = RaymarchStats{};
@@ -832,7 +869,8 @@ void RaymarchRenderer::prepare(const View& view, const ImpulseSet& impulses,
     f.lambert = view.shading.mode == noise::Shading::Mode::Lambert;
     f.cull = cull;
     f.count = m_countLoops;
-    f.pipelines = &pipelines(f.lambert, f.cull, f.count);
+    f.walkBits = !m_walkBitData.empty() && !m_walkByHash;
+    f.pipelines = &pipelines(f.lambert, f.cull, f.count, f.walkBits);
     f.camera = view.camera;
     f.background = view.background;
     f.meshFrame = makeSplatFrame(marchCamera, view.shading, view.baseColor, 0, m_scene.lobeCount(),
@@ -885,6 +923,7 @@ void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .image(kMarchBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .buffer(kMarchBindState, m_state)
         .buffer(kMarchBindLoops, m_loops)
+        .buffer(kMarchBindWalkBits, m_walkBits)
         .push(m_ctx, cmd, p.march);
     const std::uint32_t steps = f.push.range.z;
     for (std::uint32_t k = 0; k < f.dispatches; ++k) {
@@ -982,6 +1021,8 @@ RaymarchCapture RaymarchRenderer::capture() {
     c.lobes = m_scene.lobeCount();
     c.lambert = f.lambert;
     c.cull = f.cull;
+    if (f.walkBits)
+        c.walkBits = m_walkBitData;
     c.table = m_shell->table;
     const std::uint32_t records = m_binStats.shellCells;
     const auto* cells = static_cast<const SpotMarchCell*>(m_cells.mapped());
@@ -1030,6 +1071,7 @@ noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint
     arrays.lobeCount = capture.lobes;
     arrays.lambert = capture.lambert;
     arrays.cull = capture.cull;
+    arrays.walkBits = capture.walkBits.empty() ? nullptr : capture.walkBits.data();
     // raymarch_march.comp, every dispatch of it, one row band per thread.
     const auto rows = [&](int y0, int y1) {
         MarchTwin twin(arrays);

@@ -146,6 +146,7 @@ struct RaymarchCapture {
     std::uint32_t stepsPerDispatch = 1;          ///< the split of the march over dispatches
     std::uint32_t lobes = 1;                     ///< specialization: lobes per kernel
     bool lambert = false, cull = true;           ///< specialization: shading, box test
+    std::vector<glm::uvec2> walkBits;            ///< the walk's bits per brick (empty: hashed)
     std::vector<glm::ivec4> table;               ///< hash slots (i, j, k, record or -1)
     std::vector<gpu_march::SpotMarchCell> cells; ///< shell cell records
     std::vector<std::uint32_t> starts;           ///< per list slot, its first entry; then the end
@@ -189,6 +190,10 @@ public:
     /// for tests, which hold the guard's bound against what ran; off by default (about 5% of a
     /// frame).
     void countLoops(bool on) { m_countLoops = on; }
+    /// From the next frame on, walk the shell with the hash table even where the bounding box is
+    /// small enough for the walk's bits (as it is beyond their limit): for tests, which hold the
+    /// two walks to the same image.
+    void walkByHash(bool on) { m_walkByHash = on; }
 
     /// After the frame completed.
     RaymarchStats stats() const;
@@ -201,7 +206,7 @@ private:
         Pipeline march, resolve;
     };
     const Shell& shellFor(const noise::SurfaceCells& cells);
-    const Pipelines& pipelines(bool lambert, bool cull, bool count);
+    const Pipelines& pipelines(bool lambert, bool cull, bool count, bool walkBits);
     void bin(const ImpulseSet& impulses, const noise::Camera& marchCamera, bool cull);
     void ensureImpulseBuffers(std::uint32_t capacity);
     void ensureTargets(std::uint32_t outWidth, std::uint32_t outHeight, std::uint32_t n);
@@ -209,8 +214,8 @@ private:
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_prepare, m_bin;
-    std::map<std::tuple<bool, bool, bool>, Pipelines> m_pipelines;
-    bool m_countLoops = false;
+    std::map<std::tuple<bool, bool, bool, bool>, Pipelines> m_pipelines;
+    bool m_countLoops = false, m_walkByHash = false;
     std::shared_ptr<Shell> m_shell;
 
     // Per impulse capacity (grow-only).
@@ -219,7 +224,8 @@ private:
     Buffer m_prepareUnused; ///< the prepare pass's screen outputs, not written here
     // Per shell and impulse version: bins (readback), records, list starts and entries
     // (grow-only).
-    Buffer m_params, m_bins, m_cells, m_starts, m_list;
+    Buffer m_params, m_bins, m_cells, m_starts, m_list, m_walkBits;
+    std::vector<glm::uvec2> m_walkBitData; ///< empty: the box is too large, the walk hashes
     std::uint64_t m_version = 0; ///< the impulse version the lists were built for (0: none)
     bool m_listsCulled = true;
     const noise::SurfaceCells* m_listedCells = nullptr;
@@ -238,7 +244,7 @@ private:
         std::uint32_t dispatches = 0, stepsPerDispatch = 0, maxStepsPerDispatch = 0;
         std::uint64_t loopBound = 0;
         noise::Camera camera;
-        bool lambert = false, cull = true, count = false;
+        bool lambert = false, cull = true, count = false, walkBits = false;
         bool binned = false;
     } m_frame;
 };
