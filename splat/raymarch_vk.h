@@ -25,7 +25,8 @@
 /// Every frame, recorded into the caller's command buffer with no host wait:
 ///  3. mesh (raster): the opaque base mesh's colour and ray distance (the scene's MeshPass).
 ///  4. march (compute, raymarch_march.comp): per ray, the shell segments by a cell walk (3D DDA)
-///     over the shell's bounding box, then N samples evenly spaced over the segments laid end to
+///     over the shell's bounding box (the cells it keeps read from one bit per cell, 64 per 4^3
+///     brick, once per brick), then N samples evenly spaced over the segments laid end to
 ///     end, front-to-back emission-absorption with alpha = 1 - exp(-sigma dt) (eq. 9's 0-order
 ///     attenuation). Lambert normals: the normalized negative gradient of the summed density of
 ///     all neighbouring lobes, as in the reference. The N steps are split over as many dispatches
@@ -37,7 +38,8 @@
 ///     output pixel is the mean of its n x n rays, each over the mesh colour behind it (a box
 ///     filter, the reference's), into result(). One ray per pixel aliases thin strands: they are
 ///     hit or missed as the camera moves, which the bench's temporal flicker shows.
-/// The march and resolve pipelines are specialized (lobes per kernel, Lambert, culling).
+/// The march and resolve pipelines are specialized (lobes per kernel, Lambert, culling, loop
+/// counting, the walk's bits).
 ///
 /// Persistent: the targets (per image size and supersampling), the world lobes and boxes (per
 /// impulse capacity, grow-only), the shell and its hash table (per set of surface cells), the
@@ -45,7 +47,9 @@
 /// back. Memory grows with the surface: per shell cell 16 bytes of record, 500 of list starts
 /// (one per sub-cell), 32 to 64 of hash table (more if the table had to grow to keep probes
 /// short) and 12 of bins; per kernel its world lobes (64 bytes each) and boxes (32 per lobe and
-/// 32), per listed (sub-cell, impulse) pair 4; per march pixel 44 bytes, per output pixel 16.
+/// 32), per listed (sub-cell, impulse) pair 4; per march pixel 44 bytes, per output pixel 16;
+/// and one bit per cell of the shell's bounding box for the walk (at most 16 MiB: beyond, the
+/// walk uses the hash table).
 ///
 /// Not done here: per-cell occupied boxes to tighten the segments. The samples are spread over
 /// the segments, so tighter segments would move every sample: another (better) renderer than the
