@@ -71,40 +71,66 @@ vec3 splatShade(vec3 color, vec3 normal) {
     return color * spotLambertFactor(normal, frame.light.xyz, frame.light.w);
 }
 
-// Shading normal at world point x: the normalized negative gradient of the kernel's density
-// sum a g(x) (the reference's formula); -dir where the gradient vanishes.
-vec3 splatKernelNormal(uint first, vec3 x, vec3 dir) {
-    vec3 g = vec3(0.0);
+// Lambert shading of the analytic path (kLambert), per lobe: the mean of the Lambert factor at
+// kSplatShadingSamples points that split what the lobe emits towards the camera into equal
+// shares, the normal at each the normalized negative gradient of the kernel's density sum
+// a g(x) (the reference's formula; -d where it vanishes). One point at the lobe's density peak
+// would not do: the gradient there is perpendicular to the ray, whatever the lobe's orientation;
+// the shares put the points on the lobe's front for an opaque lobe and across it for a thin one,
+// like the reference's quadrature.
+// Every lobe's ray is known in its own space from its screen form, u_m(t) = o'_m + t v_m (t the
+// view depth; o' = (v x w + n v) / |v|^2), so along this pixel's ray a lobe's density is
+// G_m(t) = exp(-(p_m + |v_m|^2 (t - t*_m)^2) / 2), p_m = |w_m|^2 / |v_m|^2, and its world gradient
+// direction A_m^T u_m(t) = P_m + t Q_m with P_m = A_m^T o'_m and Q_m = A_m^T v_m: a point costs
+// a few multiplies and one exp per lobe, A_m^T being loaded and applied once per pixel.
+void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float peaks[kLobes],
+                     float depths[kLobes], float tEnd, vec3 d, inout float shades[kLobes]) {
+    float k = frame.size.w;
+    vec3 P[kLobes];
+    vec3 Q[kLobes];
+    float perp2[kLobes];
+    float vv[kLobes];
+    float amps[kLobes];
+    for (uint m = 0u; m < kLobes; ++m) {
+        SpotWorldLobe w = worldLobes[first + m];
+        mat3 At = transpose(mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz));
+        P[m] = At * origins[m];
+        Q[m] = At * dirs[m];
+        vv[m] = dot(dirs[m], dirs[m]);
+        vec3 perp = origins[m] + peaks[m] * dirs[m];
+        perp2[m] = dot(perp, perp);
+        amps[m] = w.color.w;
+    }
     for (uint l = 0u; l < kLobes; ++l) {
-        SpotWorldLobe w = worldLobes[first + l];
-        if (!(w.color.w > 0.0))
+        if (!(depths[l] > 0.0))
             continue;
-        mat3 A = splatLobeMatrix(w);
-        vec3 u = A * (x - splatLobeCentre(w));
-        g += w.color.w * spotLobeDensity(u, frame.size.w) * (transpose(A) * u);
+        // The lobe's chord along the ray in its arc length s = (t - t*) |v|, clipped to [0, tEnd].
+        float len = sqrt(vv[l]);
+        float tStar = peaks[l];
+        float h = sqrt(max(k * k - perp2[l], 0.0));
+        float ua = max(-h, -tStar * len);
+        float ub = min(h, (tEnd - tStar) * len);
+        float erfA = spotScaledErfHalfSqrt2(ua, 1.0);
+        float erfB = spotScaledErfHalfSqrt2(ub, 1.0);
+        float sum = 0.0;
+        for (uint j = 0u; j < kSplatShadingSamples; ++j) {
+            float q = (float(j) + 0.5) / float(kSplatShadingSamples);
+            float f = spotEmissionQuantileFraction(depths[l], q);
+            float sj = 1.4142135623730951 * spotErfinvApprox(erfA + f * (erfB - erfA));
+            float t = tStar + clamp(sj, ua, ub) / len;
+            vec3 g = vec3(0.0);
+            for (uint m = 0u; m < kLobes; ++m) {
+                float dt = t - peaks[m];
+                float r2 = perp2[m] + vv[m] * dt * dt;
+                if (r2 < k * k)
+                    g += (amps[m] * exp(-0.5 * r2)) * (P[m] + t * Q[m]);
+            }
+            float gLen = length(g);
+            vec3 normal = gLen > 0.0 && !isinf(gLen) ? g / gLen : -d;
+            sum += spotLambertFactor(normal, frame.light.xyz, frame.light.w);
+        }
+        shades[l] = sum / float(kSplatShadingSamples);
     }
-    float len = length(g);
-    return len > 0.0 && !isinf(len) ? g / len : -dir;
-}
-
-// Lambert factor of one lobe along the ray (optical depth tau over [0, tMesh], world units): the
-// mean of the factor with the kernel's normal at kSplatShadingSamples points splitting what the
-// lobe emits towards the camera into equal shares. One point at the lobe's density peak would not
-// do: the gradient there is perpendicular to the ray, whatever the lobe's orientation; the shares
-// put the points on the lobe's front for an opaque lobe and across it for a thin one, like the
-// reference's quadrature.
-float splatLobeShading(uint first, SpotWorldLobe w, vec3 o, vec3 d, float tMesh, float tau) {
-    mat3 A = splatLobeMatrix(w);
-    vec3 ol = A * (o - splatLobeCentre(w));
-    vec3 dl = A * d;
-    float sum = 0.0;
-    for (uint j = 0u; j < kSplatShadingSamples; ++j) {
-        float q = (float(j) + 0.5) / float(kSplatShadingSamples);
-        float t = spotLobeDepthQuantile(ol, dl, 0.0, tMesh, frame.size.w, spotEmissionQuantileFraction(tau, q));
-        vec3 normal = splatKernelNormal(first, o + t * d, d);
-        sum += spotLambertFactor(normal, frame.light.xyz, frame.light.w);
-    }
-    return sum / float(kSplatShadingSamples);
 }
 
 #ifdef SPLAT_FRAGMENT
@@ -133,7 +159,9 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     float peaks[kLobes];
     float depths[kLobes];
     vec3 colors[kLobes];
-    uint ids[kLobes];
+    float shades[kLobes];
+    vec3 origins[kLobes]; // Lambert: each lobe's ray in its space, u(t) = origin + t dir
+    vec3 dirs[kLobes];
     for (uint l = 0u; l < kLobes; ++l) {
 #ifdef SPLAT_FRAGMENT
         vec4 wo = vLobeW[l];
@@ -152,8 +180,14 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
         depths[l] = tau > 0.0 && !isinf(tau) ? tau : 0.0;
         peaks[l] = tPeak;
         colors[l] = c.rgb;
-        ids[l] = l;
+        shades[l] = 1.0;
+        origins[l] = vec3(0.0);
+        dirs[l] = v;
+        if (kLambert)
+            origins[l] = (cross(v, wo.xyz) + wo.w * v) / dot(v, v);
     }
+    if (kLambert)
+        splatShadeLobes(first, origins, dirs, peaks, depths, tEnd, d, shades);
     for (uint i = 0u; i + 1u < kLobes; ++i) {
         for (uint j = 0u; j + 1u < kLobes; ++j) {
             bool swap = peaks[j] > peaks[j + 1u];
@@ -169,10 +203,10 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
             vec3 c1 = colors[j + 1u];
             colors[j] = swap ? c1 : c0;
             colors[j + 1u] = swap ? c0 : c1;
-            uint i0 = ids[j];
-            uint i1 = ids[j + 1u];
-            ids[j] = swap ? i1 : i0;
-            ids[j + 1u] = swap ? i0 : i1;
+            float s0 = shades[j];
+            float s1 = shades[j + 1u];
+            shades[j] = swap ? s1 : s0;
+            shades[j + 1u] = swap ? s0 : s1;
         }
     }
     SplatKernelSample s;
@@ -185,10 +219,7 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
         s.tau += depths[i];
         float a = spotOneMinusExp(depths[i]);
         float t = clamp(peaks[i], 0.0, tEnd);
-        float shade = 1.0;
-        if (kLambert && a > 0.0)
-            shade = splatLobeShading(first, worldLobes[first + ids[i]], o, d, tMesh, depths[i]);
-        s.premul += transmittance * a * shade * colors[i];
+        s.premul += transmittance * a * shades[i] * colors[i];
         depthSum += transmittance * a * t;
         weightSum += transmittance * a;
         transmittance *= 1.0 - a;
