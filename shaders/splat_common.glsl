@@ -37,13 +37,13 @@ void splatPixelRay(vec2 p, out vec3 origin, out vec3 dir) {
 
 // World length of the pixel's ray direction scaled to unit view depth (1 for orthographic): a
 // view depth t along the ray is the world distance t x splatRayScale(p).
+// With forward, right and up orthonormal and square pixels of footprint f per unit depth,
+// |e|^2 = 1 + ((p.x - W/2) f)^2 + ((p.y - H/2) f)^2.
 float splatRayScale(vec2 p) {
     if (kOrthographic)
         return 1.0;
-    float sx = 2.0 * p.x / frame.size.x - 1.0;
-    float sy = 1.0 - 2.0 * p.y / frame.size.y;
-    return length(frame.forward.xyz + sx * frame.right.w * frame.right.xyz +
-                  sy * frame.up.w * frame.up.xyz);
+    vec2 q = (p - 0.5 * frame.size.xy) * frame.size.z;
+    return sqrt(1.0 + dot(q, q));
 }
 
 // View depth (world units along the view direction) of a world point.
@@ -138,9 +138,9 @@ void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float 
 // (xyz, w) and v (xyz) of each lobe's screen form are affine in the pixel, so the rasterizer's
 // noperspective interpolation evaluates them exactly (no per-pixel loads or matrix products);
 // colour and amplitude are flat. Only the first kLobes entries are written and read.
-layout(location = 1) noperspective in vec4 vLobeW[kSplatMaxLobes];
-layout(location = 9) noperspective in vec4 vLobeV[kSplatMaxLobes];
-layout(location = 17) flat in vec4 vLobeColor[kSplatMaxLobes];
+layout(location = 1) noperspective in vec3 vLobeA[kLobes];
+layout(location = 9) flat in vec3 vLobeB[kLobes];
+layout(location = 17) flat in vec4 vLobeColor[kLobes];
 // The view depth of the kernel support's nearest point (SpotKernelBound.axis.w).
 layout(location = 25) flat in float vNearDepth;
 #endif
@@ -164,8 +164,9 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     vec3 dirs[kLobes];
     for (uint l = 0u; l < kLobes; ++l) {
 #ifdef SPLAT_FRAGMENT
-        vec4 wo = vLobeW[l];
-        vec3 v = vLobeV[l].xyz;
+        vec3 v = kOrthographic ? vLobeB[l] : vLobeA[l];
+        vec3 ol = kOrthographic ? vLobeA[l] : vLobeB[l];
+        vec4 wo = vec4(cross(ol, v), dot(ol, v));
         vec4 c = vLobeColor[l];
 #else
         SpotScreenLobe s = screenLobes[first + l];

@@ -13,9 +13,9 @@ layout(std430, binding = kSplatBindVisible) readonly buffer Visible { uint visib
 layout(std430, binding = kSplatBindScreenLobes) readonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
 
 layout(location = 0) flat out uint vKernel;
-layout(location = 1) noperspective out vec4 vLobeW[kSplatMaxLobes];
-layout(location = 9) noperspective out vec4 vLobeV[kSplatMaxLobes];
-layout(location = 17) flat out vec4 vLobeColor[kSplatMaxLobes];
+layout(location = 1) noperspective out vec3 vLobeA[kLobes];
+layout(location = 9) flat out vec3 vLobeB[kLobes];
+layout(location = 17) flat out vec4 vLobeColor[kLobes];
 layout(location = 25) flat out float vNearDepth;
 
 void main() {
@@ -33,9 +33,12 @@ void main() {
     for (uint l = 0u; l < kLobes; ++l) {
         SpotScreenLobe s = screenLobes[kernel * kLobes + l];
         vec2 delta = corner - vec2(s.k0.w, s.kx.w);
-        vLobeW[l] = vec4(s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz,
-                         s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w);
-        vLobeV[l] = vec4(s.v0.xyz + delta.x * s.vx.xyz + delta.y * s.vy.xyz, 0.0);
+        vec3 v = s.v0.xyz + delta.x * s.vx.xyz + delta.y * s.vy.xyz;
+        vec3 w = s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz;
+        float on = s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w;
+        vec3 o = (cross(v, w) + on * v) / dot(v, v); // w = o x v, on = o.v
+        vLobeA[l] = kOrthographic ? o : v;
+        vLobeB[l] = kOrthographic ? v : o;
         vLobeColor[l] = vec4(s.color.rgb, s.ky.w);
     }
 }

@@ -284,8 +284,9 @@ SPOT_FN real spotScreenLobeDepth(rvec3 w, rvec3 v, real on, real tEnd, real k, S
     tPeak = real(0.0);
     if (!(ww < k * k * vv))
         return real(0.0);
-    real inv = real(1.0) / vv;
-    real len = sqrt(vv);
+    real rs = real(1.0) / sqrt(vv);
+    real inv = rs * rs;
+    real len = vv * rs;
     real perp2 = ww * inv;
     real tStar = -on * inv;
     tPeak = tStar;
@@ -307,7 +308,7 @@ SPOT_FN real spotScreenLobeDepth(rvec3 w, rvec3 v, real on, real tEnd, real k, S
         ga = spotScaledErfHalfSqrt2(ua, gauss);
     if (ub < h)
         gb = spotScaledErfHalfSqrt2(ub, gauss);
-    return kSqrtTwoPi * real(0.5) * (gb - ga) / len;
+    return kSqrtTwoPi * real(0.5) * (gb - ga) * rs;
 }
 
 /* Density of a lobe at lobe-space point u, per unit peak extinction, truncated at k. */
