@@ -134,15 +134,56 @@ void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float 
 }
 
 #ifdef SPLAT_FRAGMENT
-// The kernel's lobes as this pixel sees them, from splat_quad.vert: w = o' x v and on = dot(o', v)
-// (xyz, w) and v (xyz) of each lobe's screen form are affine in the pixel, so the rasterizer's
-// noperspective interpolation evaluates them exactly (no per-pixel loads or matrix products);
-// colour and amplitude are flat. Only the first kLobes entries are written and read.
+// The kernel's lobes as this pixel sees them, from splat_quad.vert. Each lobe's ray in lobe space,
+// u(t) = o' + t v: perspective, v = A e is affine in the pixel, so the rasterizer's noperspective
+// interpolation gives it exactly (vLobeA), and o' = A (eye - c) is one point (vLobeB, flat);
+// orthographic, the other way round. Then w = o' x v and n = o'.v (no per-pixel loads or matrix
+// products). vLobeB.w: the lobe's amplitude (extinction x weight x EWA). A lobe's colour is the
+// kernel lobe's (a specialization constant) times the impulse's (vColor). Every flat input costs llvmpipe
+// work per triangle and per 4x4 block, so there are as few as the kernel needs.
 layout(location = 1) noperspective in vec3 vLobeA[kLobes];
-layout(location = 9) flat in vec3 vLobeB[kLobes];
-layout(location = 17) flat in vec4 vLobeColor[kLobes];
+layout(location = 9) flat in vec4 vLobeB[kLobes];
+layout(location = 17) flat in vec3 vColor;
 // The view depth of the kernel support's nearest point (SpotKernelBound.axis.w).
 layout(location = 25) flat in float vNearDepth;
+// The kernel lobes' colours (kSplatSpecLobeColor).
+layout(constant_id = 16) const float kLobeColor0r = 1.0;
+layout(constant_id = 17) const float kLobeColor0g = 1.0;
+layout(constant_id = 18) const float kLobeColor0b = 1.0;
+layout(constant_id = 19) const float kLobeColor1r = 1.0;
+layout(constant_id = 20) const float kLobeColor1g = 1.0;
+layout(constant_id = 21) const float kLobeColor1b = 1.0;
+layout(constant_id = 22) const float kLobeColor2r = 1.0;
+layout(constant_id = 23) const float kLobeColor2g = 1.0;
+layout(constant_id = 24) const float kLobeColor2b = 1.0;
+layout(constant_id = 25) const float kLobeColor3r = 1.0;
+layout(constant_id = 26) const float kLobeColor3g = 1.0;
+layout(constant_id = 27) const float kLobeColor3b = 1.0;
+layout(constant_id = 28) const float kLobeColor4r = 1.0;
+layout(constant_id = 29) const float kLobeColor4g = 1.0;
+layout(constant_id = 30) const float kLobeColor4b = 1.0;
+layout(constant_id = 31) const float kLobeColor5r = 1.0;
+layout(constant_id = 32) const float kLobeColor5g = 1.0;
+layout(constant_id = 33) const float kLobeColor5b = 1.0;
+layout(constant_id = 34) const float kLobeColor6r = 1.0;
+layout(constant_id = 35) const float kLobeColor6g = 1.0;
+layout(constant_id = 36) const float kLobeColor6b = 1.0;
+layout(constant_id = 37) const float kLobeColor7r = 1.0;
+layout(constant_id = 38) const float kLobeColor7g = 1.0;
+layout(constant_id = 39) const float kLobeColor7b = 1.0;
+// Lobe l's colour: l is a constant once the lobe loops unroll, so this folds to a constant.
+vec3 splatLobeColor(uint l) {
+    switch (l) {
+    case 0u: return vec3(kLobeColor0r, kLobeColor0g, kLobeColor0b);
+    case 1u: return vec3(kLobeColor1r, kLobeColor1g, kLobeColor1b);
+    case 2u: return vec3(kLobeColor2r, kLobeColor2g, kLobeColor2b);
+    case 3u: return vec3(kLobeColor3r, kLobeColor3g, kLobeColor3b);
+    case 4u: return vec3(kLobeColor4r, kLobeColor4g, kLobeColor4b);
+    case 5u: return vec3(kLobeColor5r, kLobeColor5g, kLobeColor5b);
+    case 6u: return vec3(kLobeColor6r, kLobeColor6g, kLobeColor6b);
+    default: return vec3(kLobeColor7r, kLobeColor7g, kLobeColor7b);
+    }
+}
 #endif
 
 // Analytic: each lobe's exact optical depth up to the mesh (spotScreenLobeDepth on the lobe's
@@ -164,10 +205,10 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     vec3 dirs[kLobes];
     for (uint l = 0u; l < kLobes; ++l) {
 #ifdef SPLAT_FRAGMENT
-        vec3 v = kOrthographic ? vLobeB[l] : vLobeA[l];
-        vec3 ol = kOrthographic ? vLobeA[l] : vLobeB[l];
+        vec3 v = kOrthographic ? vLobeB[l].xyz : vLobeA[l];
+        vec3 ol = kOrthographic ? vLobeA[l] : vLobeB[l].xyz;
         vec4 wo = vec4(cross(ol, v), dot(ol, v));
-        vec4 c = vLobeColor[l];
+        vec4 c = vec4(splatLobeColor(l) * vColor, vLobeB[l].w);
 #else
         SpotScreenLobe s = screenLobes[first + l];
         vec2 delta = p - vec2(s.k0.w, s.kx.w);

@@ -211,6 +211,7 @@ void main() {
     float z = massSum > 0.0 && !isinf(massSum) ? depthSum / massSum : splatViewDepth(imp.position.xyz);
     b.axis.z = z > 0.0 ? z : 0.0; // also maps NaN and -0 to +0
     b.axis.w = zNear;
+    b.color = vec4(imp.color.rgb, 0.0);
     if (n > 0u && unbounded) {
         b.quad = vec4(0.5 * frame.size.xy, 0.5 * frame.size.xy + 1.0);
     } else if (n > 0u) {

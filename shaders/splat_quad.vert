@@ -1,8 +1,8 @@
 #version 450
 // One oriented quad (a 4-vertex strip) per kept kernel, from its screen bound (centre, half
 // extents along u and v); the instance is the compacted kernel list's entry. Each corner also
-// carries the kernel's lobes in screen form evaluated there (splat_common.glsl: vLobeW, vLobeV,
-// vLobeColor): they are affine in the pixel, so the rasterizer interpolates them exactly. The
+// carries the kernel's lobes in screen form (splat_common.glsl: vLobeA, vLobeB): the ray direction
+// in lobe space is affine in the pixel, so the rasterizer interpolates it exactly. The
 // quad lies at the reversed depth of the kernel's nearest point: where the mesh is nearer, the
 // depth test drops the pixel before any shading (exact: the ray meets the mesh first).
 #extension GL_GOOGLE_include_directive : require
@@ -14,8 +14,8 @@ layout(std430, binding = kSplatBindScreenLobes) readonly buffer ScreenLobes { Sp
 
 layout(location = 0) flat out uint vKernel;
 layout(location = 1) noperspective out vec3 vLobeA[kLobes];
-layout(location = 9) flat out vec3 vLobeB[kLobes];
-layout(location = 17) flat out vec4 vLobeColor[kLobes];
+layout(location = 9) flat out vec4 vLobeB[kLobes];
+layout(location = 17) flat out vec3 vColor;
 layout(location = 25) flat out float vNearDepth;
 
 void main() {
@@ -30,6 +30,7 @@ void main() {
     gl_Position = vec4(2.0 * corner / frame.size.xy - 1.0, spotReversedDepth(b.axis.w, frame.forward.w), 1.0);
     vKernel = kernel;
     vNearDepth = b.axis.w;
+    vColor = b.color.rgb;
     for (uint l = 0u; l < kLobes; ++l) {
         SpotScreenLobe s = screenLobes[kernel * kLobes + l];
         vec2 delta = corner - vec2(s.k0.w, s.kx.w);
@@ -38,7 +39,6 @@ void main() {
         float on = s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w;
         vec3 o = (cross(v, w) + on * v) / dot(v, v); // w = o x v, on = o.v
         vLobeA[l] = kOrthographic ? o : v;
-        vLobeB[l] = kOrthographic ? v : o;
-        vLobeColor[l] = vec4(s.color.rgb, s.ky.w);
+        vLobeB[l] = vec4(kOrthographic ? v : o, s.ky.w);
     }
 }

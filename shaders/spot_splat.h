@@ -57,7 +57,7 @@ struct SpotScreenLobe {
     vec4 color; /* rgb: lobe colour x impulse colour; w: unused */
 };
 
-/* Screen bound of one kernel for the current view (32 bytes): an oriented rectangle holding every
+/* Screen bound of one kernel for the current view (48 bytes): an oriented rectangle holding every
  * pixel centre whose ray meets the kernel's support (its lobes' k-sigma ellipsoids project to
  * ellipses; the rectangle is their union's bound along the union's principal axis). */
 struct SpotKernelBound {
@@ -67,6 +67,8 @@ struct SpotKernelBound {
                   w: nearest view depth of its support (the quad's depth: behind the mesh, a
                   pixel's ray cannot reach the kernel before the mesh, so the depth test skips
                   it) */
+    vec4 color; /* rgb: the impulse's colour multiplier (a lobe's colour is the kernel lobe's times
+                   this); w: unused */
 };
 
 /* Descriptor bindings of the splat pipelines (one numbering for all; each pipeline declares the
@@ -108,6 +110,10 @@ SPOT_CONST uint kSplatSpecCount = 7u;        /* bool: count fragments and covere
 SPOT_CONST uint kSplatSpecResolve = 8u;      /* uint: kSplatResolve* (resolve) */
 SPOT_CONST uint kSplatSpecScreen = 9u;       /* bool: prepare writes screen lobes and bounds too
                                                 (the ray-march reads world lobes only) */
+SPOT_CONST uint kSplatSpecLobeColor = 16u;   /* float x 24: the kernel lobes' colours, lobe l's
+                                                r, g, b at ids 16 + 3 l + 0, 1, 2 (constants in
+                                                the fragment shaders: llvmpipe pays dearly for
+                                                every buffer load or flat input there) */
 
 /* What the resolve makes of its inputs. */
 SPOT_CONST uint kSplatResolveCopy = 0u;      /* the base colour image is the result (sorted:

@@ -1,5 +1,6 @@
 #include "pass_vk.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 

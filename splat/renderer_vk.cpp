@@ -86,6 +86,10 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
         .set(kSplatSpecCount, s.count)
         .set(kSplatSpecResolve, s.resolve)
         .set(kSplatSpecScreen, true);
+    const noise::Kernel& kernel = m_scene.kernel();
+    for (std::uint32_t l = 0; l < kernel.lobes.size(); ++l)
+        for (std::uint32_t c = 0; c < 3; ++c)
+            spec.set(kSplatSpecLobeColor + 3 * l + c, kernel.lobes[l].color[c]);
     Pipelines p;
     p.prepare = makePreparePipeline(m_ctx, m_scene.lobeCount(), true, s.ewa, s.orthographic);
     p.compact = makeComputePipeline(m_ctx, spirv(spv_splat_compact_comp),
