@@ -1,5 +1,5 @@
 // spotshell bench: every scene x method x setting against the converged reference: speed, error,
-// temporal flicker, memory, and the charts that put speed against accuracy (DESIGN section 7).
+// temporal flicker, memory, and the charts that put speed against accuracy (docs/design.md section 7).
 #include <algorithm>
 #include <chrono>
 #include <cmath>

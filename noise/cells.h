@@ -1,6 +1,6 @@
 /// @file cells.h
 /// @brief Surface cells: the sparse cells of a regular grid that the surface passes through
-/// (DESIGN section 2; paper section 3.1).
+/// (docs/design.md section 2; paper section 3.1).
 ///
 /// Cell (i, j, k) spans [i h, (i+1) h) x [j h, (j+1) h) x [k h, (k+1) h) in world units. Each
 /// cell holds the exact parts of the triangles inside it ("pieces", so impulses can be placed

@@ -1,5 +1,5 @@
 /// @file impulses.h
-/// @brief Impulses generated on the fly in surface cells (DESIGN section 2; paper eq. 2, 3.1).
+/// @brief Impulses generated on the fly in surface cells (docs/design.md section 2; paper eq. 2, 3.1).
 ///
 /// For a constant density the impulses are uniform per unit of surface area, whatever the mesh's
 /// orientation against the grid and its triangle sizes: a cell's expected candidate count is

@@ -1,5 +1,5 @@
 /// @file kernel.h
-/// @brief Lobes and kernels (DESIGN section 1; paper eq. 1, 3, 4).
+/// @brief Lobes and kernels (docs/design.md section 1; paper eq. 1, 3, 4).
 ///
 /// A kernel is a sum of up to 8 lobes in kernel space (x = comb direction, y = bitangent,
 /// z = surface normal; kernel units). Lobe l is g_l(p) = a_l exp(-1/2 |T_l^-1 p|^2) with the

@@ -9,7 +9,7 @@
  * (noise/cells.h).
  *
  * The "shell" is the set of cells where any kernel can have density: the surface cells dilated
- * by one cell (a kernel centred in a cell reaches only its 3x3x3 neighbourhood, DESIGN section
+ * by one cell (a kernel centred in a cell reaches only its 3x3x3 neighbourhood, docs/design.md section
  * 2). An open-addressing hash table maps a shell cell's ijk to its record. Each shell cell is cut
  * into kMarchSub^3 sub-cells, and each sub-cell lists the impulses of the cell's 27 neighbours
  * that may have density in it, each with the mask of its lobes that may (the lobe's box and the
@@ -130,7 +130,7 @@ SPOT_CONST float kMarchFar = 3.0e38;
 SPOT_CONST int kMarchEmptySlot = -1;
 
 /* lavapipe (Mesa 22.3) stops every shader invocation after this many loop iterations in total,
- * silently (DESIGN section 8). */
+ * silently (docs/design.md section 8). */
 SPOT_CONST uint kMarchLavapipeLoopLimit = 65535u;
 
 /* The loop iterations a march invocation may need at most, by the host's bound (see

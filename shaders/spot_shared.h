@@ -508,7 +508,7 @@ SPOT_FN bool spotEllipsoidRange(rvec3 rel, rmat3 M, real k, rvec3 axis, rvec3 fo
     return true;
 }
 
-/* Lambert + ambient shading factor (DESIGN section 4): ambient + (1 - ambient) max(0, n.l), n and
+/* Lambert + ambient shading factor (docs/design.md section 4): ambient + (1 - ambient) max(0, n.l), n and
  * l unit. The reference shades with the same formula. */
 SPOT_FN real spotLambertFactor(rvec3 n, rvec3 l, real ambient) {
     return ambient + (real(1.0) - ambient) * max(real(0.0), dot(n, l));

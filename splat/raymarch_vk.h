@@ -1,5 +1,5 @@
 /// @file raymarch_vk.h
-/// @brief The `raymarch` method of DESIGN section 4: the baseline the paper beats (paper sec. 4,
+/// @brief The `raymarch` method of docs/design.md section 4: the baseline the paper beats (paper sec. 4,
 /// eq. 7-9). Each pixel's ray is marched through the shell, and at every step the kernels of the
 /// 27 cells around the sample are summed. A Renderer of the registry (method_vk.h).
 ///

@@ -107,7 +107,7 @@ TEST(LobeMath, LineIntegralMatchesQuadratureForRandomLobesAndRays) {
 }
 
 TEST(LobeMath, WholeLineClosedFormMatchesDesignFormula) {
-    // DESIGN: tau = a sqrt(2 pi) / |d'| exp(-1/2 (|o'|^2 - (o'.d')^2 / |d'|^2)).
+    // docs/design.md section 1: tau = a sqrt(2 pi) / |d'| exp(-1/2 (|o'|^2 - (o'.d')^2 / |d'|^2)).
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
     for (int i = 0; i < 100; ++i) {

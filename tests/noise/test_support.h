@@ -107,7 +107,7 @@ inline noise::Impulse impulseAt(glm::vec3 position) {
     return imp;
 }
 
-/// Optical depth of a world lobe along a whole line: DESIGN section 1's closed form, written
+/// Optical depth of a world lobe along a whole line: docs/design.md section 1's closed form, written
 /// independently of the shared header's.
 inline double closedFormDepth(const noise::WorldLobe& lobe, glm::dvec3 o, glm::dvec3 d) {
     const glm::dvec3 op = lobe.toLobe * (o - lobe.centre), dp = lobe.toLobe * d;

@@ -681,7 +681,7 @@ TEST(SplatRendererScenes, SortedBeatsOitWhereStrandsAreResolved) {
 }
 
 TEST(SplatRendererScenes, HybridFindsTheSameClosestKernelEitherWay) {
-    // DESIGN section 4: the hybrid's closest kernel in the OIT pass (64-bit atomicMin) or in a
+    // docs/design.md section 4: the hybrid's closest kernel in the OIT pass (64-bit atomicMin) or in a
     // depth pass of its own: the same kernel per pixel, so the same image, bit for bit, on every
     // shipped scene (analytic and with kernel samples). And not the OIT image: the closest kernel
     // changes the result, so the depth pass really found it.
