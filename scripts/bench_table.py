@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""Print README's per-scene summary tables from a bench run's results.json.
+
+    python3 scripts/bench_table.py docs/bench/results.json
+
+Table 1, per scene: the most accurate row; the fastest splatting row within 1 dB of the best
+splatting PSNR; the cheapest ray-march whose FLIP is at least as low, and the splatter's speed-up
+over it. Table 2, per scene and splat method at its default setting: the splat pass's time
+against its roofline (the rasterizer's own cost for the same quads) and the fragment efficiency
+(fragments shaded / pixels where a kernel's alpha reaches 1/255).
+"""
+import json
+import sys
+
+SPLATTERS = ("instanced", "oit", "hybrid", "sorted")
+DEFAULTS = {"instanced": "default", "oit": "ewa mb analytic", "hybrid": "ewa mb analytic",
+            "sorted": "ewa analytic"}
+
+
+def label(row):
+    return f"{row['method']} {row['setting']}".replace(" default", "")
+
+
+def main(path):
+    doc = json.load(open(path))
+    rows = [r for r in doc["rows"] if r.get("status") in ("ok", "degraded", "fails") and "psnr" in r]
+    scenes = []
+    for r in rows:
+        if r["scene"] not in scenes:
+            scenes.append(r["scene"])
+
+    size = f"{doc['width']}x{doc['height']}" if "width" in doc else f"{doc.get('size')}"
+    print(f"Suite {doc['suite']}, {size}, references at "
+          f"{doc['reference_spp']} spp, {doc['device']}.\n")
+    print("| scene (scenario) | best PSNR (method) | fastest splatter within 1 dB of the best splatter "
+          "| ray-march at matched error | speed-up |")
+    print("| --- | --- | --- | --- | --- |")
+    for s in scenes:
+        sr = [r for r in rows if r["scene"] == s]
+        best = max(sr, key=lambda r: r["psnr"])
+        splat = [r for r in sr if r["method"] in SPLATTERS]
+        march = [r for r in sr if r["method"] == "raymarch"]
+        cells = [f"{s} ({sr[0]['scenario']})", f"{best['psnr']:.2f} ({label(best)})"]
+        if splat:
+            top = max(r["psnr"] for r in splat)
+            fast = min((r for r in splat if r["psnr"] >= top - 1.0), key=lambda r: r["ms_median"])
+            cells.append(f"{label(fast)}: {fast['psnr']:.2f} dB, FLIP {fast['flip']:.3f}, "
+                         f"{fast['ms_median']:.1f} ms")
+            matched = [r for r in march if r["flip"] <= fast["flip"]]
+            if matched:
+                m = min(matched, key=lambda r: r["ms_median"])
+                cells += [f"{m['setting']}, {m['ms_median']:.1f} ms",
+                          f"{m['ms_median'] / fast['ms_median']:.1f}x"]
+            elif march:
+                cells += [f"never (best FLIP {min(r['flip'] for r in march):.3f})", "-"]
+            else:
+                cells += ["-", "-"]
+        else:
+            cells += ["-", "-", "-"]
+        print("| " + " | ".join(cells) + " |")
+
+    print("\nSplat pass / roofline, and fragment efficiency, at each method's default setting:\n")
+    print("| scene | " + " | ".join(f"{m} ms (x roofline)" for m in SPLATTERS) + " | fragment efficiency |")
+    print("| --- " * (len(SPLATTERS) + 2) + "|")
+    for s in scenes:
+        cells = [s]
+        eff = "-"
+        for m in SPLATTERS:
+            r = next((r for r in rows if r["scene"] == s and r["method"] == m
+                      and r["setting"] == DEFAULTS[m]), None)
+            if r is None or not r.get("roofline_splat_ms"):
+                cells.append("-")
+                continue
+            cells.append(f"{r['ms_median']:.1f} ({r['splat_ms_median'] / r['roofline_splat_ms']:.2f})")
+            if r.get("fragment_efficiency"):
+                eff = f"{r['fragment_efficiency']:.2f}"
+        cells.append(eff)
+        print("| " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit("usage: bench_table.py RESULTS.json")
+    main(sys.argv[1])
