@@ -249,8 +249,20 @@ void Session::rebuild() {
 }
 
 void Session::refreshFields() {
-    m_generator->refreshFields();
-    m_frame->fieldsChanged();
+    // A length stroke may change the smallest valid cell size; the generator then starts over
+    // with the cell size a fresh load of the preset picks, so the impulses match the saved file
+    // and undo stays exact.
+    bool cellsChanged = false;
+    try {
+        m_generator->refreshFields();
+        cellsChanged = m_generator->minimumCellSize() != m_generator->cellSize();
+    } catch (const InputError&) {
+        cellsChanged = true;
+    }
+    if (cellsChanged)
+        rebuild();
+    else
+        m_frame->fieldsChanged();
 }
 
 void Session::ensurePainted(Slot slot, Edit& edit) {
