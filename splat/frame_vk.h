@@ -71,6 +71,9 @@ public:
     Renderer& renderer(std::string_view method);
     const SceneGpu& scene() const { return m_scene; }
     GpuGenerator& generator() { return m_generator; }
+    /// The generator's fields changed (noise::ImpulseGenerator::setField or refreshFields after
+    /// painting): the next render() uploads nothing stale and regenerates the impulses.
+    void fieldsChanged() { m_generator.refreshFields(); }
     /// Whether a cell may be seen by the camera (its box grown by one cell: kernels reach the
     /// neighbouring cells).
     bool cellVisible(const noise::CameraRays& rays, const noise::SurfaceCell& cell) const;

@@ -103,7 +103,7 @@ glm::vec4 lodParameters(const noise::Camera& camera, double pixels) {
 
 GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
                            const noise::ImpulseGenerator& generator)
-    : m_ctx(ctx), m_generator(generator), m_shared(arraysOf(mesh, generator)),
+    : m_ctx(ctx), m_mesh(mesh), m_generator(generator), m_shared(arraysOf(mesh, generator)),
       m_jittered(generator.sharedParams().flags.y == 1u),
       m_cellCandidates(generator.cells().cells.size()) {
     m_scanPipeline = makeComputePipeline(
@@ -131,10 +131,34 @@ GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
     *static_cast<std::uint32_t*>(m_count.mapped()) = 0;
 }
 
+std::vector<std::int32_t> GpuGenerator::specializationKey() const {
+    const gpu::SpotGenParams& params = m_generator.sharedParams();
+    std::vector<std::int32_t> key = {std::int32_t(params.flags.z != 0u)};
+    for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
+        key.insert(key.end(), {params.fields[slot].kind.x, params.fields[slot].kind.y});
+    return key;
+}
+
+void GpuGenerator::refreshFields() {
+    const std::vector<float>& data = m_generator.sharedFieldData();
+    reserve(m_ctx, m_fieldData, data.size(), sizeof(float), kStorage, Buffer::Memory::HostVisible,
+            "field data");
+    if (!data.empty())
+        m_fieldData.upload(data.data(), data.size() * sizeof(float));
+    const gpu::SpotGenParams& params = m_generator.sharedParams();
+    m_params.upload(&params, sizeof(params));
+    // The host twin reads the generator's arrays, which may have moved.
+    m_shared = shared::f32::SharedGenerator(arraysOf(m_mesh, m_generator));
+    if (m_candidatePipeline.handle() && specializationKey() != m_candidateKey)
+        m_candidatePipeline = Pipeline();
+    m_valid = false;
+}
+
 const Pipeline& GpuGenerator::candidatePipeline() {
     Pipeline& p = m_candidatePipeline;
     if (p.handle())
         return p;
+    m_candidateKey = specializationKey();
     const gpu::SpotGenParams& params = m_generator.sharedParams();
     Specialization spec;
     spec.set(kGenSpecComb, params.flags.z != 0u)

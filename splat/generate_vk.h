@@ -66,6 +66,14 @@ public:
     std::uint32_t candidates() const { return m_candidates; }
     std::uint32_t cells() const { return m_cellCount; }
 
+    /// After the generator's fields changed (noise::ImpulseGenerator::setField, refreshFields):
+    /// uploads the field data and parameters again (growing the buffer when needed, within the
+    /// memory budget), remakes the candidates pipeline when a slot's kind, component count or the
+    /// comb's presence changed (they are specialization constants), and makes the next prepare()
+    /// regenerate. The cells' candidate counts stay (they depend on no field). No frame that
+    /// reads this generator may be in flight.
+    void refreshFields();
+
     /// One-shot generation, waited for (tests and host-side users): prepare() (regenerating even
     /// when the cells and lod are those of the last generation), record(), submit, wait; the
     /// impulses copied into a host-visible buffer of the caller's. The generation also becomes
@@ -88,14 +96,19 @@ private:
         return m_jittered ? std::uint32_t(c.inside.size()) : c.candidates;
     }
     const Pipeline& candidatePipeline();
+    /// What the candidates pipeline is specialized for: the comb flag, each slot's kind and
+    /// component count.
+    std::vector<std::int32_t> specializationKey() const;
 
     Context& m_ctx;
+    const noise::Mesh& m_mesh;
     const noise::ImpulseGenerator& m_generator;
     /// The CPU twin of the shared code, over the same arrays the GPU reads (host-side counts).
     shared::f32::SharedGenerator m_shared;
     bool m_jittered = false;
     std::vector<CellCandidates> m_cellCandidates; ///< per model cell
     Pipeline m_candidatePipeline;                 ///< specialized for the preset; made on first use
+    std::vector<std::int32_t> m_candidateKey;     ///< specializationKey() it was made for
     Pipeline m_scanPipeline, m_scatterPipeline;
     Buffer m_params, m_pieces, m_triangles, m_positions, m_normals, m_tangents, m_uvs, m_fieldData;
 
