@@ -255,6 +255,21 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         } catch (const nlohmann::json::exception&) {
             line.fail(cat("value '", value, "' is not JSON"));
         }
+    } else if (verb == "wind") {
+        a.type = T::Wind;
+        const std::string state = line.word("on or off");
+        if (state != "on" && state != "off")
+            line.fail(cat("wind '", state, "' must be on or off"));
+        a.on = state == "on";
+        while (!line.done()) {
+            const std::string key = line.word("wind option");
+            if (key == "amplitude")
+                a.amplitudeDeg = float(line.number("amplitude", 0.0, 80.0));
+            else if (key == "frequency")
+                a.frequencyHz = float(line.number("frequency", 0.0, 100.0));
+            else
+                line.fail(cat("unknown wind option '", key, "' (amplitude, frequency)"));
+        }
     } else if (verb == "frames") {
         a.type = T::Frames;
         a.count = line.integer("frame count", 1, 100000);
@@ -268,8 +283,8 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         checkExtension(line, a.file, {".png", ".exr"});
     } else {
         line.fail(cat("unknown action '", verb,
-                      "' (camera, method, brush, stroke, undo, redo, lobe, set, frames, save, "
-                      "screenshot)"));
+                      "' (camera, method, brush, stroke, undo, redo, lobe, set, wind, frames, "
+                      "save, screenshot)"));
     }
     line.end();
     return a;
@@ -377,6 +392,9 @@ ScriptReport runScript(Session& session, const std::vector<ScriptAction>& action
                 note = cat("rebuilt in ", cost.milliseconds, " ms");
                 break;
             }
+            case T::Wind:
+                session.setWind(a.on, a.amplitudeDeg, a.frequencyHz);
+                break;
             case T::Frames:
                 for (int i = 0; i < a.count; ++i) {
                     session.setTime(session.time() + 1.0 / 30.0);

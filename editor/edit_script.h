@@ -11,7 +11,8 @@
 ///     lobe I offset X Y Z | rotation X Y Z | sigma X Y Z | extinction A | color R G B
 ///     lobe add I | lobe remove I
 ///     set KEY.PATH JSON                  # any preset key path
-///     frames N                           # render N frames
+///     wind on|off [amplitude DEG] [frequency HZ]   # animate the comb (Session::setWind)
+///     frames N                           # render N frames, 1/30 s apart
 ///     save FILE.json                     # the preset, with its .vdb grids beside it
 ///     screenshot FILE.png|FILE.exr
 ///
@@ -37,7 +38,9 @@ namespace spot::edit {
 class Session;
 
 struct ScriptAction {
-    enum class Type { Camera, Method, Brush, Stroke, Undo, Redo, Lobe, Set, Frames, Save, Screenshot };
+    enum class Type {
+        Camera, Method, Brush, Stroke, Undo, Redo, Lobe, Set, Wind, Frames, Save, Screenshot
+    };
     Type type = Type::Frames;
     int line = 0;
     std::string text; ///< the line, for the log
@@ -51,6 +54,8 @@ struct ScriptAction {
     int index = 0;                    ///< Lobe
     nlohmann::json value;             ///< Lobe, Set
     int count = 0;                    ///< Frames
+    bool on = false;                  ///< Wind
+    float amplitudeDeg = 20.0f, frequencyHz = 0.5f; ///< Wind
     std::filesystem::path file;       ///< Save, Screenshot
 };
 

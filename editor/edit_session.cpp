@@ -151,6 +151,8 @@ void Session::setMethod(const std::string& method, const splat::RenderSettings& 
 }
 
 splat::FrameStats Session::render(noise::Image* out) {
+    if (m_windOn)
+        applyWind();
     const splat::View view{m_camera, m_scene.shading, m_scene.background, m_scene.baseColor};
     return m_frame->render(m_method, view, m_settings, out);
 }
@@ -246,6 +248,7 @@ void Session::rebuild() {
     m_frame.reset();
     m_generator = std::move(generator);
     m_frame = std::make_unique<splat::Frame>(*m_ctx, m_mesh, *m_generator);
+    m_windBase.clear();
 }
 
 void Session::refreshFields() {
@@ -280,15 +283,10 @@ void Session::ensurePainted(Slot slot, Edit& edit) {
     if (!constant) {
         // Sample the old field into every voxel near the surface, so painting starts from what
         // was there.
-        std::unique_ptr<noise::Field> field;
-        if (!absentComb)
-            field = noise::makeField(old, m_mesh, m_preset.baseDir,
-                                     cat("preset ", m_presetFile.string(), ", fields.", slotKey(slot)));
-        const noise::Bounds b = m_mesh.bounds();
-        const glm::vec3 centre = 0.5f * (b.lo + b.hi);
-        const float radius = 0.5f * glm::length(b.size()) + 2.0f * voxelSize();
-        for (const SurfaceVoxel& v : m_surface->voxelsNear(centre, radius, voxelSize()))
-            grid->set(v.ijk, field ? field->eval(v.point) : v.point.tangent);
+        const std::vector<glm::vec3> values = sampleSlot(slot);
+        const std::vector<SurfaceVoxel>& voxels = surfaceVoxels();
+        for (std::size_t i = 0; i < voxels.size(); ++i)
+            grid->set(voxels[i].ijk, values[i]);
     }
     const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
     JsonChange change{ptr, std::nullopt, paintedJson(slot)};
@@ -299,6 +297,58 @@ void Session::ensurePainted(Slot slot, Edit& edit) {
     m_grids[s] = grid;
     m_presetJson[ptr] = *change.after;
     rebuild();
+}
+
+const std::vector<SurfaceVoxel>& Session::surfaceVoxels() {
+    if (m_surfaceVoxelSize != voxelSize()) {
+        const noise::Bounds b = m_mesh.bounds();
+        const glm::vec3 centre = 0.5f * (b.lo + b.hi);
+        const float radius = 0.5f * glm::length(b.size()) + 2.0f * voxelSize();
+        m_surfaceVoxels = m_surface->voxelsNear(centre, radius, voxelSize());
+        m_surfaceVoxelSize = voxelSize();
+    }
+    return m_surfaceVoxels;
+}
+
+std::vector<glm::vec3> Session::sampleSlot(Slot slot) {
+    const noise::FieldDesc* desc = slotDesc(slot);
+    std::unique_ptr<noise::Field> field;
+    if (desc)
+        field = noise::makeField(*desc, m_mesh, m_preset.baseDir,
+                                 cat("preset ", m_presetFile.string(), ", fields.", slotKey(slot)));
+    std::vector<glm::vec3> values;
+    values.reserve(surfaceVoxels().size());
+    for (const SurfaceVoxel& v : surfaceVoxels())
+        values.push_back(field ? field->eval(v.point) : v.point.tangent);
+    return values;
+}
+
+void Session::applyWind() {
+    const std::vector<SurfaceVoxel>& voxels = surfaceVoxels();
+    const noise::PaintedGrid* comb = grid(Slot::Comb);
+    if (!comb && m_windBase.size() != voxels.size())
+        m_windBase = sampleSlot(Slot::Comb);
+    const noise::Bounds b = m_mesh.bounds();
+    const float wavelength = std::max(glm::length(b.size()), 1e-6f);
+    const float gain = std::tan(glm::radians(std::clamp(m_windAmplitudeDeg, 0.0f, 80.0f)));
+    const float twoPi = 6.28318530718f;
+    auto wind = std::make_shared<noise::PaintedGrid>(slotKey(Slot::Comb), 3, voxelSize(),
+                                                     glm::vec3(0.0f));
+    for (std::size_t i = 0; i < voxels.size(); ++i) {
+        const glm::vec3 p = glm::vec3(voxels[i].ijk) * voxelSize();
+        const glm::vec3 base = comb ? comb->get(voxels[i].ijk) : m_windBase[i];
+        const float phase = twoPi * (m_windFrequencyHz * float(m_time) - p.x / wavelength);
+        wind->set(voxels[i].ijk, base + gain * glm::length(base) * std::sin(phase) *
+                                            glm::vec3(1.0f, 0.0f, 0.0f));
+    }
+    noise::FieldDesc desc;
+    desc.kind = noise::FieldDesc::Kind::Painted;
+    desc.components = 3;
+    desc.file = m_vdbName;
+    desc.grid = slotKey(Slot::Comb);
+    desc.painted = wind;
+    m_generator->setField(SPOT_FIELD_COMB, desc);
+    m_frame->fieldsChanged();
 }
 
 void Session::applyJson(const std::vector<JsonChange>& changes, bool after) {
@@ -642,9 +692,13 @@ void Session::save(const std::filesystem::path& file) {
 }
 
 void Session::setWind(bool on, float amplitudeDeg, float frequencyHz) {
+    const bool wasOn = m_windOn;
     m_windOn = on;
     m_windAmplitudeDeg = amplitudeDeg;
     m_windFrequencyHz = frequencyHz;
+    m_windBase.clear();
+    if (wasOn && !on)
+        rebuild(); // the document's comb again
 }
 
 void Session::setTime(double seconds) { m_time = seconds; }

@@ -120,8 +120,11 @@ public:
     EditCost addLobe(int copyOf);
     EditCost removeLobe(int lobe);
 
-    /// Wind: while on, render() offsets the comb directions of the impulses by a sine in time
-    /// and space (deterministic for a time, seconds). Not part of the document.
+    /// Wind: while on, render() bends the comb directions by a travelling wave, the comb
+    /// offset by tan(amplitude) sin(2 pi (f t - x / wavelength)) along world +x (then projected
+    /// on the tangent plane by the generator), on the voxels near the surface. Deterministic for
+    /// a time `t` (seconds, setTime). Not part of the document: turning it off restores the
+    /// document's comb; saving writes the document's comb.
     void setWind(bool on, float amplitudeDeg = 20.0f, float frequencyHz = 0.5f);
     bool wind() const { return m_windOn; }
     void setTime(double seconds);
@@ -184,6 +187,11 @@ private:
     EditCost dabsAlong(glm::vec2 from, glm::vec2 to);
     void dab(glm::vec2 pixel, glm::vec2 dragPixels);
     glm::vec3 screenToWorld(glm::vec2 dragPixels) const;
+    /// The voxels of the current voxel size near the whole surface.
+    const std::vector<SurfaceVoxel>& surfaceVoxels();
+    /// `slot`'s current field (or the surface tangent for an unset comb) at the surface voxels.
+    std::vector<glm::vec3> sampleSlot(Slot slot);
+    void applyWind();
 
     noise::SceneDesc m_scene;
     noise::Mesh m_mesh;
@@ -217,6 +225,9 @@ private:
     bool m_windOn = false;
     float m_windAmplitudeDeg = 20.0f, m_windFrequencyHz = 0.5f;
     double m_time = 0.0;
+    std::vector<SurfaceVoxel> m_surfaceVoxels; ///< cache of surfaceVoxels()
+    float m_surfaceVoxelSize = 0.0f;           ///< ... for this voxel size
+    std::vector<glm::vec3> m_windBase;         ///< unpainted comb at the surface voxels
 };
 
 /// The process's peak resident memory, bytes (getrusage).
