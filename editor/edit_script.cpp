@@ -353,21 +353,30 @@ ScriptReport runScript(Session& session, const std::vector<ScriptAction>& action
                 // fields' refresh, the regeneration and the render, pixels read back.
                 EditCost cost = session.beginStroke(a.points.front());
                 Clock::time_point lastEvent = start;
+                double eventMs = cost.milliseconds;
                 for (std::size_t i = 1; i < a.points.size(); ++i) {
                     lastEvent = Clock::now();
                     const EditCost c = session.dragStroke(a.points[i]);
                     cost.milliseconds += c.milliseconds;
+                    eventMs = c.milliseconds;
                 }
                 const EditCost end = session.endStroke();
                 noise::Image image;
                 const splat::FrameStats frame = session.render(&image);
                 const double toFrame = msSince(lastEvent);
                 report.strokeToFrameMs.push_back(toFrame);
+                report.eventMs.push_back(eventMs);
+                report.frameMs.push_back(frame.wallMs);
+                double generateMs = 0.0;
+                for (const auto& [pass, ms] : frame.passMs)
+                    generateMs += pass == "generate" ? ms : 0.0;
+                report.generateMs.push_back(generateMs);
                 report.strokeMs += cost.milliseconds;
                 ++report.strokes;
                 note = cat(end.dabs, " dabs, ", end.voxelsWritten, " voxels, ", cost.milliseconds,
                            " ms painting; frame ", frame.kernelsGenerated, " kernels, ",
-                           toFrame, " ms event-to-frame");
+                           toFrame, " ms event-to-frame (event ", eventMs, " ms, frame ",
+                           frame.wallMs, " ms of which generate ", generateMs, " ms GPU)");
                 break;
             }
             case T::Undo:

@@ -71,6 +71,9 @@ struct ScriptReport {
     double strokeMs = 0.0;      ///< summed dab + field refresh time of the strokes
     double paramMs = 0.0;       ///< summed rebuild time of set / lobe / undo / redo
     std::vector<double> strokeToFrameMs; ///< per stroke: last drag event to its frame's pixels
+    std::vector<double> eventMs;    ///< per stroke: the last drag event's dabs and field refresh
+    std::vector<double> frameMs;    ///< per stroke: the frame after it (host wall time)
+    std::vector<double> generateMs; ///< per stroke: that frame's impulse regeneration (GPU)
 };
 
 /// Run the actions on `session`, printing one line per action to `log` (null: silent). Errors
