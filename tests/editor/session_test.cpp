@@ -325,3 +325,71 @@ TEST(EditSession, WindIsDeterministicInTime) {
 }
 
 } // namespace
+
+namespace {
+
+/// A scene of the uniform preset on the unit sphere seen from +z, written to the test folder.
+std::filesystem::path sphereScene() {
+    const std::filesystem::path file = test::tmpPath("edit_sphere_scene.json");
+    test::writeText(file, R"({"version": 1, "name": "edit-sphere", "mesh": "generated:sphere",
+        "preset": ")" + (std::filesystem::path(SPOT_SOURCE_DIR) / "presets/uniform.json").string() +
+                              R"(", "seed": 3,
+        "camera": {"eye": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 35},
+        "image": {"width": 128, "height": 128}})");
+    return file;
+}
+
+TEST(EditBrush, FalloffWeights) {
+    using edit::Falloff;
+    EXPECT_EQ(edit::falloffWeight(Falloff::Smooth, 0.0f), 1.0f);
+    EXPECT_EQ(edit::falloffWeight(Falloff::Smooth, 0.5f), 0.5f);
+    EXPECT_EQ(edit::falloffWeight(Falloff::Smooth, 1.0f), 0.0f);
+    EXPECT_EQ(edit::falloffWeight(Falloff::Linear, 0.25f), 0.75f);
+    EXPECT_EQ(edit::falloffWeight(Falloff::Constant, 0.999f), 1.0f);
+    EXPECT_EQ(edit::falloffWeight(Falloff::Constant, 1.001f), 0.0f);
+}
+
+// X-mirror erases at the mirrored point too; front-faces-only spares the far side of the sphere
+// even where the brush's radius reaches through it.
+TEST(EditSession, MirrorAndFrontFaces) {
+    edit::Session s(sphereScene(), editOptions(128));
+    const glm::vec2 at(84.0f, 64.0f); // right of the centre: x > 0 on the sphere
+    const std::optional<edit::Hit> hit = s.pick(at);
+    ASSERT_TRUE(hit);
+    EXPECT_GT(hit->position.x, 0.2f);
+    EXPECT_NEAR(glm::length(hit->position), 1.0f, 0.01f);
+    s.brush().kind = edit::BrushKind::DensityErase;
+    s.brush().falloff = edit::Falloff::Constant;
+    s.brush().radiusPx = 12.0f;
+    s.brush().mirrorX = true;
+    s.stroke({at});
+    const float radius = test::worldRadius(s, *hit, 12.0f);
+    const float reach = 2.0f * std::sqrt(3.0f) * s.grid(edit::Slot::Density)->voxelSize();
+    const glm::vec3 mirrored(-hit->position.x, hit->position.y, hit->position.z);
+    std::size_t under = 0, underMirror = 0, near = 0;
+    for (const noise::Impulse& i : s.generator().generate()) {
+        under += glm::length(anchorOf(i) - hit->position) < radius - reach;
+        underMirror += glm::length(anchorOf(i) - mirrored) < radius - reach;
+        near += glm::length(anchorOf(i) - hit->position) < radius + 0.5f;
+    }
+    EXPECT_EQ(under, 0u);
+    EXPECT_EQ(underMirror, 0u);
+    EXPECT_GT(near, 100u);
+
+    // A brush wider than the sphere at its centre: the front half is erased, the back half stays.
+    s.brush().mirrorX = false;
+    s.brush().radiusPx = 200.0f;
+    s.stroke({{64.0f, 64.0f}});
+    std::size_t front = 0, back = 0;
+    for (const noise::Impulse& i : s.generator().generate()) {
+        const glm::vec3 p = anchorOf(i);
+        front += p.z > 0.3f;
+        back += p.z < -0.3f;
+    }
+    std::printf("front faces: %zu impulses left on the front, %zu on the back\n", front, back);
+    EXPECT_EQ(front, 0u);
+    EXPECT_GT(back, 1000u);
+    test::expectNoValidationErrors(s.context());
+}
+
+} // namespace
