@@ -15,6 +15,8 @@
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 
 #include "noise/error.h"
 #include "noise/field.h"
@@ -279,6 +281,64 @@ TEST(PaintedGrid, BadFilesGiveOneClearInputError) {
             EXPECT_NE(std::string(e.what()).find("prefix.vdb"), std::string::npos);
         }
     }
+}
+
+/// Grids written with OpenVDB directly: what the editor never writes but a file may hold.
+TEST(PaintedGrid, RefusesTransformsNonFiniteValuesAndAbsurdSizes) {
+    openvdb::initialize();
+    const fs::path dir = tmpDir("openvdb");
+    const auto writeGrid = [&](const std::string& file, openvdb::GridBase::Ptr grid) {
+        openvdb::io::File f((dir / file).string());
+        f.write({grid});
+        f.close();
+        return dir / file;
+    };
+    const auto scalar = [](double voxel) {
+        auto g = openvdb::FloatGrid::create(1.0f);
+        g->setName("density");
+        g->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+        g->tree().setValueOn(openvdb::Coord(1, 2, 3), 0.5f);
+        return g;
+    };
+    const auto expectPhrase = [](const std::string& e, const std::string& phrase) {
+        EXPECT_NE(e.find(phrase), std::string::npos) << "expected '" << phrase << "' in: " << e;
+        EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 0) << e;
+    };
+
+    // Accepted: a plain uniform scale, read back at that voxel size.
+    const PaintedGrid ok = readPaintedGrid(writeGrid("ok.vdb", scalar(0.25)), "density", 1);
+    EXPECT_EQ(ok.voxelSize(), 0.25f);
+    EXPECT_EQ(ok.get(glm::ivec3(1, 2, 3)), glm::vec3(0.5f, 0.0f, 0.0f));
+
+    auto rotated = scalar(0.25);
+    rotated->transform().preRotate(0.3, openvdb::math::Y_AXIS);
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("rotated.vdb", rotated), "density", 1); }),
+                 "not a uniform scale");
+    auto stretched = scalar(0.25);
+    stretched->transform().preScale(openvdb::Vec3d(1.0, 2.0, 1.0));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("stretched.vdb", stretched), "density", 1); }),
+                 "not a uniform scale");
+    auto moved = scalar(0.25);
+    moved->transform().postTranslate(openvdb::Vec3d(0.1, 0.0, 0.0));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("moved.vdb", moved), "density", 1); }),
+                 "not a uniform scale");
+
+    auto nan = scalar(0.25);
+    nan->tree().setValueOn(openvdb::Coord(-5, 0, 0), std::nanf(""));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("nan.vdb", nan), "density", 1); }),
+                 "NaN or infinite");
+    auto inf = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    inf->setName("comb");
+    inf->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    inf->tree().setValueOn(openvdb::Coord(0), openvdb::Vec3s(0.0f, INFINITY, 0.0f));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("inf.vdb", inf), "comb", 3); }),
+                 "NaN or infinite");
+
+    // An active tile of 4096^3 voxels: a few bytes in the file, far more than a field may hold.
+    auto huge = scalar(0.25);
+    huge->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(4095)), 0.5f, true);
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("huge.vdb", huge), "density", 1); }),
+                 "active voxels are more than a painted field may hold");
 }
 
 /// A preset over a sphere of radius 1 with the given fields JSON.
