@@ -67,9 +67,13 @@ struct Comparison {
     std::size_t colorDiffer = 0;
 };
 
-/// CPU and GPU impulses of `generator`: the same count, cells, triangles and anchors; colours
-/// (which only the painted field and no trigonometry decide) equal bit for bit.
-Comparison compare(const ImpulseGenerator& generator, splat::GpuGenerator& gpuGenerator) {
+/// CPU and GPU impulses of `generator`: the same count, cells and triangles. Poisson (`exact`):
+/// the same anchors, and colours, scales and weights (which the painted fields decide with no
+/// trigonometry) bit for bit. Jittered: the lattice sites' barycentric coordinates may differ in
+/// their last bits between the two sides (as they do with constant fields: generate_test.cpp), so
+/// the painted values read there agree to a tolerance.
+Comparison compare(const ImpulseGenerator& generator, splat::GpuGenerator& gpuGenerator,
+                   bool exact) {
     const std::vector<Impulse> cpu = generator.generate();
     const splat::GpuImpulses gpu = gpuGenerator.generate();
     Comparison c;
@@ -82,9 +86,15 @@ Comparison compare(const ImpulseGenerator& generator, splat::GpuGenerator& gpuGe
         const Impulse m = gpu::fromGpu(g[i]);
         EXPECT_EQ(m.cell, cpu[i].cell) << i;
         EXPECT_EQ(m.triangle, cpu[i].triangle) << i;
-        EXPECT_EQ(m.barycentric, cpu[i].barycentric) << i;
-        EXPECT_EQ(m.scale, cpu[i].scale) << i;
-        EXPECT_EQ(m.weight, cpu[i].weight) << i;
+        if (exact) {
+            EXPECT_EQ(m.barycentric, cpu[i].barycentric) << i;
+            EXPECT_EQ(m.scale, cpu[i].scale) << i;
+            EXPECT_EQ(m.weight, cpu[i].weight) << i;
+        } else {
+            EXPECT_LE(glm::length(m.barycentric - cpu[i].barycentric), 1e-4f) << i;
+            EXPECT_LE(glm::length(m.position - cpu[i].position), 1e-5f) << i;
+            EXPECT_NEAR(m.weight, cpu[i].weight, 1e-4f) << i;
+        }
         EXPECT_GT(glm::dot(m.frame[0], cpu[i].frame[0]), 0.9999f) << i;
         EXPECT_GT(glm::dot(m.frame[2], cpu[i].frame[2]), 0.9999f) << i;
         c.colorDiffer += m.color != cpu[i].color;
@@ -92,16 +102,21 @@ Comparison compare(const ImpulseGenerator& generator, splat::GpuGenerator& gpuGe
         c.worstColor = std::max({c.worstColor, d.x, d.y, d.z});
         c.worstPosition = std::max(c.worstPosition, glm::length(m.position - cpu[i].position));
     }
-    EXPECT_EQ(c.colorDiffer, 0u) << "worst colour difference " << c.worstColor;
+    if (exact)
+        EXPECT_EQ(c.colorDiffer, 0u) << "worst colour difference " << c.worstColor;
+    else
+        EXPECT_LE(c.worstColor, 1e-4f);
     return c;
 }
 
-TEST(PaintedGpu, DensityCombAndColourGiveTheCpuImpulses) {
+class PaintedGpu : public ::testing::TestWithParam<DistributionType> {};
+
+TEST_P(PaintedGpu, DensityCombAndColourGiveTheCpuImpulses) {
     const Mesh mesh = makeSphere(1.0f, 32, 64);
     Grids grids;
     Rng rnd;
     grids.paint(rnd, 3000);
-    PresetDesc preset = test::uniformPreset(4000.0f, 0.01f);
+    PresetDesc preset = test::uniformPreset(4000.0f, 0.01f, GetParam());
     preset.density = paintedDesc(grids.density);
     preset.comb = paintedDesc(grids.comb);
     preset.color = paintedDesc(grids.color);
@@ -111,14 +126,15 @@ TEST(PaintedGpu, DensityCombAndColourGiveTheCpuImpulses) {
 
     splat::Context ctx(test::validated());
     splat::GpuGenerator gpuGenerator(ctx, mesh, generator);
-    const Comparison before = compare(generator, gpuGenerator);
+    const bool exact = GetParam() == DistributionType::Poisson;
+    const Comparison before = compare(generator, gpuGenerator, exact);
     EXPECT_GT(before.count, 5000u);
 
     // Paint more in place, refresh both sides: they still agree, on the new grids.
     grids.paint(rnd, 6000);
     generator.refreshFields();
     gpuGenerator.refreshFields();
-    const Comparison after = compare(generator, gpuGenerator);
+    const Comparison after = compare(generator, gpuGenerator, exact);
     EXPECT_NE(after.count, before.count);
 
     // A slot changing kind (constant -> painted weight) re-specializes the pipeline.
@@ -126,13 +142,22 @@ TEST(PaintedGpu, DensityCombAndColourGiveTheCpuImpulses) {
     weight->set(glm::ivec3(0, 12, 0), glm::vec3(2.0f));
     generator.setField(SPOT_FIELD_WEIGHT, paintedDesc(weight));
     gpuGenerator.refreshFields();
-    compare(generator, gpuGenerator);
+    compare(generator, gpuGenerator, exact);
     test::expectNoValidationErrors(ctx);
-    std::printf("%zu then %zu impulses; worst position difference %.3g\n", before.count,
-                after.count, double(std::max(before.worstPosition, after.worstPosition)));
+    std::printf("%zu then %zu impulses; worst position difference %.3g, worst colour difference "
+                "%.3g\n",
+                before.count, after.count,
+                double(std::max(before.worstPosition, after.worstPosition)),
+                double(std::max(before.worstColor, after.worstColor)));
 }
 
-TEST(PaintedGpu, FrameShowsThePaintAfterFieldsChanged) {
+INSTANTIATE_TEST_SUITE_P(Distributions, PaintedGpu,
+                         ::testing::Values(DistributionType::Poisson, DistributionType::Jittered),
+                         [](const auto& info) {
+                             return info.param == DistributionType::Poisson ? "Poisson" : "Jittered";
+                         });
+
+TEST(PaintedGpuFrame, ShowsThePaintAfterFieldsChanged) {
     const Mesh mesh = makeSphere(1.0f, 32, 64);
     auto density = std::make_shared<PaintedGrid>("density", 1, 0.1f, glm::vec3(1.0f));
     PresetDesc preset = test::uniformPreset(3000.0f, 0.01f);
