@@ -3,6 +3,7 @@
 // painted in place and the fields refreshed; a frame shows the change on its next render.
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -185,6 +186,107 @@ TEST(PaintedGpuFrame, ShowsThePaintAfterFieldsChanged) {
     EXPECT_LT(second.kernelsGenerated, first.kernelsGenerated * 6 / 10);
     EXPECT_EQ(second.kernelsGenerated, generator.generate().size());
     test::expectNoValidationErrors(ctx);
+}
+
+/// The frame's last impulses, as the GPU wrote them.
+std::vector<gpu::SpotImpulse> frameImpulses(splat::Frame& frame) {
+    const splat::ImpulseSet set = frame.generator().impulses();
+    const auto* g = static_cast<const gpu::SpotImpulse*>(set.impulses->mapped());
+    return std::vector<gpu::SpotImpulse>(g, g + frame.generator().count());
+}
+
+bool sameBits(const std::vector<gpu::SpotImpulse>& a, const std::vector<gpu::SpotImpulse>& b) {
+    return a.size() == b.size() &&
+           std::memcmp(a.data(), b.data(), a.size() * sizeof(gpu::SpotImpulse)) == 0;
+}
+
+/// Paints the voxels within `radius` of `centre` with `value`; returns the model cells whose
+/// candidates can read one of them (the cell's box grown by a voxel holds it).
+std::vector<std::uint32_t> paintPatch(PaintedGrid& grid, const SurfaceCells& cells,
+                                      glm::vec3 centre, float radius, float value) {
+    const float v = grid.voxelSize();
+    const glm::ivec3 lo = grid.nearestVoxel(centre - radius), hi = grid.nearestVoxel(centre + radius);
+    std::vector<glm::vec3> changed;
+    for (int x = lo.x; x <= hi.x; ++x)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int z = lo.z; z <= hi.z; ++z)
+                if (glm::length(grid.voxelPosition({x, y, z}) - centre) <= radius) {
+                    grid.set({x, y, z}, glm::vec3(value));
+                    changed.push_back(grid.voxelPosition({x, y, z}));
+                }
+    std::vector<std::uint32_t> dirty;
+    const float h = cells.cellSize;
+    for (std::uint32_t i = 0; i < cells.cells.size(); ++i) {
+        const glm::vec3 boxLo = glm::vec3(cells.cells[i].ijk) * h - v;
+        const glm::vec3 boxHi = glm::vec3(cells.cells[i].ijk + 1) * h + v;
+        for (const glm::vec3& p : changed)
+            if (glm::all(glm::greaterThanEqual(p, boxLo)) && glm::all(glm::lessThanEqual(p, boxHi))) {
+                dirty.push_back(i);
+                break;
+            }
+    }
+    return dirty;
+}
+
+void regeneratesOnlyTheChangedCells(DistributionType type) {
+    const Mesh mesh = makeSphere(1.0f, 32, 64);
+    auto density = std::make_shared<PaintedGrid>("density", 1, 0.05f, glm::vec3(1.0f));
+    PresetDesc preset = test::uniformPreset(3000.0f, 0.01f, type);
+    preset.density = paintedDesc(density);
+    ImpulseGenerator generator(mesh, preset, GeneratorOptions{});
+    splat::Context ctx(test::validated());
+    splat::Frame frame(ctx, mesh, generator);
+    splat::View view;
+    view.camera.eye = glm::dvec3(0.0, 0.0, 4.0);
+    view.camera.target = glm::dvec3(0.0);
+    view.camera.width = view.camera.height = 32;
+    const splat::RenderSettings settings;
+    frame.render("oit", view, settings);
+    const std::vector<gpu::SpotImpulse> first = frameImpulses(frame);
+    const noise::CameraRays rays(view.camera);
+    const auto visible = [&](const SurfaceCell& c) { return frame.cellVisible(rays, c); };
+    EXPECT_EQ(first.size(), generator.generate(visible).size());
+
+    // A patch painted out, its cells listed: only they are generated again, and the result is
+    // the full generation's, bit for bit.
+    const std::vector<std::uint32_t> dirty =
+        paintPatch(*density, generator.cells(), glm::vec3(0.0f, 0.0f, 1.0f), 0.3f, 0.0f);
+    ASSERT_FALSE(dirty.empty());
+    EXPECT_LT(dirty.size(), generator.cells().cells.size() / 4);
+    generator.refreshFields();
+    frame.fieldsChanged(dirty);
+    const splat::FrameStats partial = frame.render("oit", view, settings);
+    EXPECT_TRUE(partial.regenerated);
+    const std::vector<gpu::SpotImpulse> afterPartial = frameImpulses(frame);
+    EXPECT_LT(afterPartial.size(), first.size());
+    EXPECT_EQ(afterPartial.size(), generator.generate(visible).size());
+    frame.fieldsChanged();
+    EXPECT_TRUE(frame.render("oit", view, settings).regenerated);
+    EXPECT_TRUE(sameBits(afterPartial, frameImpulses(frame)));
+
+    // Painting elsewhere without listing its cells changes nothing: the other cells are not
+    // decided again.
+    paintPatch(*density, generator.cells(), glm::vec3(1.0f, 0.0f, 0.0f), 0.3f, 0.0f);
+    generator.refreshFields();
+    frame.fieldsChanged(std::vector<std::uint32_t>{dirty.front()});
+    EXPECT_TRUE(frame.render("oit", view, settings).regenerated);
+    EXPECT_TRUE(sameBits(afterPartial, frameImpulses(frame)));
+    // A full refresh sees it.
+    frame.fieldsChanged();
+    frame.render("oit", view, settings);
+    EXPECT_LT(frame.generator().count(), afterPartial.size());
+    EXPECT_EQ(frame.generator().count(), generator.generate(visible).size());
+    test::expectNoValidationErrors(ctx);
+    std::printf("%zu cells of %zu regenerated; %zu then %zu impulses\n", dirty.size(),
+                generator.cells().cells.size(), first.size(), afterPartial.size());
+}
+
+TEST(PaintedGpuFrame, RegeneratesOnlyTheChangedCellsPoisson) {
+    regeneratesOnlyTheChangedCells(DistributionType::Poisson);
+}
+
+TEST(PaintedGpuFrame, RegeneratesOnlyTheChangedCellsJittered) {
+    regeneratesOnlyTheChangedCells(DistributionType::Jittered);
 }
 
 } // namespace
