@@ -1,6 +1,7 @@
 // The painted sparse grid (noise/painted.h): voxel access, the trilinear sample, .vdb files and
 // their errors, the `painted` field kind in presets and the generator, the command line.
 #include <algorithm>
+#include <chrono>
 #include <array>
 #include <cstring>
 #include <cmath>
@@ -15,6 +16,8 @@
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 
 #include "noise/error.h"
 #include "noise/field.h"
@@ -279,6 +282,122 @@ TEST(PaintedGrid, BadFilesGiveOneClearInputError) {
             EXPECT_NE(std::string(e.what()).find("prefix.vdb"), std::string::npos);
         }
     }
+}
+
+/// Grids written with OpenVDB directly: what the editor never writes but a file may hold.
+TEST(PaintedGrid, RefusesTransformsNonFiniteValuesAndAbsurdSizes) {
+    openvdb::initialize();
+    const fs::path dir = tmpDir("openvdb");
+    const auto writeGrid = [&](const std::string& file, openvdb::GridBase::Ptr grid) {
+        openvdb::io::File f((dir / file).string());
+        f.write({grid});
+        f.close();
+        return dir / file;
+    };
+    const auto scalar = [](double voxel) {
+        auto g = openvdb::FloatGrid::create(1.0f);
+        g->setName("density");
+        g->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+        g->tree().setValueOn(openvdb::Coord(1, 2, 3), 0.5f);
+        return g;
+    };
+    const auto expectPhrase = [](const std::string& e, const std::string& phrase) {
+        EXPECT_NE(e.find(phrase), std::string::npos) << "expected '" << phrase << "' in: " << e;
+        EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 0) << e;
+    };
+
+    // Accepted: a plain uniform scale, read back at that voxel size.
+    const PaintedGrid ok = readPaintedGrid(writeGrid("ok.vdb", scalar(0.25)), "density", 1);
+    EXPECT_EQ(ok.voxelSize(), 0.25f);
+    EXPECT_EQ(ok.get(glm::ivec3(1, 2, 3)), glm::vec3(0.5f, 0.0f, 0.0f));
+
+    auto rotated = scalar(0.25);
+    rotated->transform().preRotate(0.3, openvdb::math::Y_AXIS);
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("rotated.vdb", rotated), "density", 1); }),
+                 "not a uniform scale");
+    auto stretched = scalar(0.25);
+    stretched->transform().preScale(openvdb::Vec3d(1.0, 2.0, 1.0));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("stretched.vdb", stretched), "density", 1); }),
+                 "not a uniform scale");
+    auto moved = scalar(0.25);
+    moved->transform().postTranslate(openvdb::Vec3d(0.1, 0.0, 0.0));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("moved.vdb", moved), "density", 1); }),
+                 "not a uniform scale");
+
+    auto nan = scalar(0.25);
+    nan->tree().setValueOn(openvdb::Coord(-5, 0, 0), std::nanf(""));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("nan.vdb", nan), "density", 1); }),
+                 "NaN or infinite");
+    auto inf = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    inf->setName("comb");
+    inf->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    inf->tree().setValueOn(openvdb::Coord(0), openvdb::Vec3s(0.0f, INFINITY, 0.0f));
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("inf.vdb", inf), "comb", 3); }),
+                 "NaN or infinite");
+
+    // An active tile of 4096^3 voxels: a few bytes in the file, far more than a field may hold.
+    auto huge = scalar(0.25);
+    huge->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(4095)), 0.5f, true);
+    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("huge.vdb", huge), "density", 1); }),
+                 "active voxels are more than a painted field may hold");
+}
+
+/// The cost of the flattened form for a grid painted over the whole bunny at a quarter of the fur
+/// preset's cell size (docs/design.md section 3 quotes these numbers). Also writes the grid and a
+/// fur preset and scene that read it (build/tests/tmp/painted-bunny/), for timing renders.
+TEST(PaintedGrid, FlattenTheBunnyAtAQuarterCell) {
+    const fs::path dir = fs::path(SPOT_TEST_TMP_DIR) / "painted-bunny";
+    fs::create_directories(dir);
+    const fs::path presets = fs::path(SPOT_SOURCE_DIR) / "presets";
+    const Mesh bunny = loadMesh(presets / "meshes" / "bunny.ply");
+    const ImpulseGenerator fur(bunny, loadPreset(presets / "fur.json"), GeneratorOptions{});
+    const float voxel = fur.cellSize() / 4.0f;
+    PaintedGrid density("density", 1, voxel, glm::vec3(0.8f));
+    // Every voxel whose 8-voxel stencil a surface point reads: the corners around points spread
+    // over each triangle at under a voxel apart.
+    for (const glm::uvec3& t : bunny.triangles) {
+        const glm::vec3 p0 = bunny.positions[t.x], p1 = bunny.positions[t.y], p2 = bunny.positions[t.z];
+        const float edge = std::max({glm::length(p1 - p0), glm::length(p2 - p0), glm::length(p2 - p1)});
+        const int n = std::max(1, int(std::ceil(edge / (0.5f * voxel))));
+        for (int i = 0; i <= n; ++i)
+            for (int j = 0; i + j <= n; ++j) {
+                const glm::vec3 p = p0 + (p1 - p0) * (float(i) / n) + (p2 - p0) * (float(j) / n);
+                const glm::ivec3 b(glm::floor(p / voxel));
+                for (int c = 0; c < 8; ++c)
+                    density.set(b + glm::ivec3(c & 1, (c >> 1) & 1, c >> 2), glm::vec3(0.8f));
+            }
+    }
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<float> data;
+    const gpu::SpotField f = density.flatten(data);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const std::uint32_t leaves = std::uint32_t(data.size() - f.data.w) / 512u;
+    EXPECT_LT(f.data.z, 32u);
+    EXPECT_LE(data.size() * sizeof(float), kMaxPaintedBytes);
+    std::printf("bunny, voxel %.5g (cell %.5g / 4): %zu active voxels, %u leaves, table %u, "
+                "longest probe %u, %.1f MiB field data, OpenVDB tree %.1f MiB, flattened in %.1f ms\n",
+                voxel, fur.cellSize(), density.activeCount(), leaves, f.data.y, f.data.z,
+                double(data.size() * sizeof(float)) / (1 << 20),
+                double(density.memoryBytes()) / (1 << 20), ms);
+    writePaintedGrids(dir / "paint.vdb", {&density});
+    std::string preset = slurp(presets / "fur.json");
+    const std::size_t at = preset.find("\"density\"");
+    ASSERT_NE(at, std::string::npos);
+    const std::size_t end = preset.find('}', at);
+    const std::string constant = preset.substr(0, at) + "\"density\": 0.8" + preset.substr(end + 1);
+    write(dir / "fur-constant.json", constant);
+    write(dir / "fur-painted.json", preset.substr(0, at) +
+                                        R"("density": {"type": "painted", "file": "paint.vdb", "grid": "density"})" +
+                                        preset.substr(end + 1));
+    std::string scene = slurp(presets / "scenes" / "fur-bunny.json");
+    const std::string mesh = "../meshes/bunny.ply", furPath = "../fur.json";
+    scene.replace(scene.find(mesh), mesh.size(), (presets / "meshes" / "bunny.ply").string());
+    std::string painted = scene, constantScene = scene;
+    painted.replace(painted.find(furPath), furPath.size(), "fur-painted.json");
+    constantScene.replace(constantScene.find(furPath), furPath.size(), "fur-constant.json");
+    write(dir / "scene-painted.json", painted);
+    write(dir / "scene-constant.json", constantScene);
 }
 
 /// A preset over a sphere of radius 1 with the given fields JSON.
