@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "edit_test_support.h"
+#include "noise/error.h"
 #include "noise/preset.h"
 #include "noise/shared_data.h"
 #include "splat/generate_vk.h"
@@ -389,6 +390,40 @@ TEST(EditSession, MirrorAndFrontFaces) {
     std::printf("front faces: %zu impulses left on the front, %zu on the back\n", front, back);
     EXPECT_EQ(front, 0u);
     EXPECT_GT(back, 1000u);
+    test::expectNoValidationErrors(s.context());
+}
+
+} // namespace
+
+namespace {
+
+// Parameter edits: a rejected value leaves the session as it was; lobes can be added up to the
+// kernel's limit and removed down to one; each edit is one undo step.
+TEST(EditSession, ParameterEditsAreCheckedAndUndoable) {
+    edit::Session s(test::bunnyScene(), editOptions(64));
+    const nlohmann::json json0 = s.presetJson();
+    EXPECT_THROW(s.set("distribution.density_max", -5), InputError);
+    EXPECT_THROW(s.set("distribution.no_such_key", 1), InputError);
+    EXPECT_THROW(s.set("nowhere.at_all", 1), InputError);
+    EXPECT_THROW(s.setLobe(7, "sigma", {1, 1, 1}), InputError);
+    EXPECT_EQ(s.presetJson(), json0);
+    EXPECT_EQ(s.undoSteps(), 0u);
+    EXPECT_FALSE(s.dirty());
+
+    const edit::EditCost cost = s.set("variation.tilt_deg", 25);
+    EXPECT_TRUE(cost.generatorRebuilt);
+    EXPECT_EQ(s.preset().variation.tiltDeg, 25.0f);
+    while (s.preset().kernel.lobes.size() < std::size_t(noise::kMaxLobes))
+        s.addLobe(0);
+    EXPECT_THROW(s.addLobe(0), InputError);
+    s.removeLobe(1);
+    EXPECT_EQ(s.preset().kernel.lobes.size(), std::size_t(noise::kMaxLobes - 1));
+    s.render();
+    while (s.undo()) {
+    }
+    EXPECT_EQ(s.presetJson(), json0);
+    EXPECT_EQ(s.preset().kernel.lobes.size(), 3u);
+    EXPECT_FALSE(s.dirty());
     test::expectNoValidationErrors(s.context());
 }
 
