@@ -207,7 +207,8 @@ void applyDelta(noise::PaintedGrid& grid, const GridDelta& delta, bool after) {
 }
 
 std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
-                     noise::PaintedGrid& grid, GridDelta& delta) {
+                     noise::PaintedGrid& grid, GridDelta& delta,
+                     std::vector<glm::ivec3>* touched) {
     if (!(dab.radius > 0.0f))
         return 0;
     const std::vector<SurfaceVoxel> voxels =
@@ -237,6 +238,8 @@ std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIn
         grid.set(ijk, v);
         it->second.after = grid.get(ijk);
         it->second.activeAfter = true;
+        if (touched)
+            touched->push_back(ijk);
     }
     return writes.size();
 }

@@ -113,9 +113,11 @@ std::size_t deltaBytes(const GridDelta& delta);
 /// Set every voxel of `delta` to its `after` (redo) or `before` (undo) state.
 void applyDelta(noise::PaintedGrid& grid, const GridDelta& delta, bool after);
 
-/// Apply one dab of `brush` to `grid` (the brush's slot), recording every change in `delta`.
-/// Returns the number of voxels written.
+/// Apply one dab of `brush` to `grid` (the brush's slot), recording every change in `delta`
+/// and, when given, appending the voxels written to `touched`. Returns the number of voxels
+/// written.
 std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
-                     noise::PaintedGrid& grid, GridDelta& delta);
+                     noise::PaintedGrid& grid, GridDelta& delta,
+                     std::vector<glm::ivec3>* touched = nullptr);
 
 } // namespace spot::edit

@@ -251,7 +251,7 @@ void Session::rebuild() {
     m_windBase.clear();
 }
 
-void Session::refreshFields() {
+void Session::refreshFields(const std::vector<glm::vec3>* changed, float voxelSize) {
     // A length stroke may change the smallest valid cell size; the generator then starts over
     // with the cell size a fresh load of the preset picks, so the impulses match the saved file
     // and undo stays exact.
@@ -262,10 +262,32 @@ void Session::refreshFields() {
     } catch (const InputError&) {
         cellsChanged = true;
     }
-    if (cellsChanged)
+    if (cellsChanged) {
         rebuild();
-    else
+        return;
+    }
+    if (!changed || m_windOn) {
         m_frame->fieldsChanged();
+        return;
+    }
+    // An impulse reads the 8 voxels around its anchor (trilinear), so a voxel's change reaches
+    // the anchors within one voxel of it along each axis, in the cells that box overlaps.
+    const noise::SurfaceCells& cells = m_generator->cells();
+    const float h = cells.cellSize;
+    std::vector<std::uint32_t> touched;
+    for (const glm::vec3& p : *changed) {
+        const glm::ivec3 lo(glm::floor((p - voxelSize) / h)), hi(glm::floor((p + voxelSize) / h));
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    const std::int64_t c = cells.find(glm::ivec3(x, y, z));
+                    if (c >= 0)
+                        touched.push_back(std::uint32_t(c));
+                }
+    }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    m_frame->fieldsChanged(touched);
 }
 
 void Session::ensurePainted(Slot slot, Edit& edit) {
@@ -418,7 +440,7 @@ EditCost Session::beginStroke(glm::vec2 pixel) {
     // The first dab has no drag direction yet: comb waits for the pointer to move.
     if (m_brush.kind != BrushKind::Comb) {
         dab(pixel, glm::vec2(0.0f));
-        refreshFields();
+        refreshEvent();
         cost.fieldsRefreshed = true;
     }
     cost.dabs = m_strokeDabs;
@@ -444,7 +466,7 @@ EditCost Session::dragStroke(glm::vec2 pixel) {
         m_strokeCarry = length - (at - spacing);
         m_strokeLast = to;
         if (m_strokeDabs > dabs) {
-            refreshFields();
+            refreshEvent();
             cost.fieldsRefreshed = true;
         }
     }
@@ -486,6 +508,16 @@ EditCost Session::stroke(const std::vector<glm::vec2>& points) {
     return total;
 }
 
+void Session::refreshEvent() {
+    const float size = m_grids[int(brushSlot(m_brush))]->voxelSize();
+    std::vector<glm::vec3> changed;
+    changed.reserve(m_eventVoxels.size());
+    for (const glm::ivec3& v : m_eventVoxels)
+        changed.push_back(glm::vec3(v) * size);
+    m_eventVoxels.clear();
+    refreshFields(&changed, size);
+}
+
 void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
     const std::optional<Hit> hit = pick(pixel);
     if (!hit)
@@ -503,14 +535,14 @@ void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
     d.radius = float(m_brush.radiusPx * noise::CameraRays(m_camera).pixelFootprint(hit->distance));
     d.eye = glm::vec3(m_camera.eye);
     d.direction = screenToWorld(drag);
-    m_strokeVoxels += applyDab(m_brush, d, *m_surface, grid, it->second);
+    m_strokeVoxels += applyDab(m_brush, d, *m_surface, grid, it->second, &m_eventVoxels);
     if (m_brush.mirrorX) {
         // The mirrored dab sees the mirrored camera, so front faces stay front faces.
         Dab m = d;
         m.centre = mirrorX(d.centre);
         m.eye = mirrorX(d.eye);
         m.direction = mirrorX(d.direction);
-        m_strokeVoxels += applyDab(m_brush, m, *m_surface, grid, it->second);
+        m_strokeVoxels += applyDab(m_brush, m, *m_surface, grid, it->second, &m_eventVoxels);
     }
     ++m_strokeDabs;
 }
@@ -595,6 +627,18 @@ EditCost Session::removeLobe(int lobe) {
 
 // --- undo ---------------------------------------------------------------------------------------
 
+void Session::refreshDeltas(const Edit& edit) {
+    std::vector<glm::vec3> changed;
+    float size = 0.0f;
+    for (const auto& [slot, delta] : edit.grids) {
+        const float s = m_grids[int(slot)]->voxelSize();
+        size = std::max(size, s);
+        for (const auto& [ijk, change] : delta)
+            changed.push_back(glm::vec3(ijk) * s);
+    }
+    refreshFields(&changed, size);
+}
+
 bool Session::undo(EditCost* cost) {
     if (m_stroke)
         endStroke();
@@ -612,7 +656,7 @@ bool Session::undo(EditCost* cost) {
     if (full)
         rebuild();
     else
-        refreshFields();
+        refreshDeltas(e);
     m_current = m_undo.empty() ? 0 : m_undo.back().id;
     m_redo.push_back(std::move(e));
     if (cost) {
@@ -640,7 +684,7 @@ bool Session::redo(EditCost* cost) {
     if (full)
         rebuild();
     else
-        refreshFields();
+        refreshDeltas(e);
     m_current = e.id;
     m_undo.push_back(std::move(e));
     if (cost) {

@@ -177,7 +177,10 @@ private:
     };
 
     void rebuild();
-    void refreshFields();
+    /// After voxels of grids changed in place: the CPU generator re-flattens its fields, and
+    /// the frame regenerates only the cells whose impulses read the voxels `changed` (world
+    /// positions of voxels of size `voxelSize`), or every cell when `changed` is null.
+    void refreshFields(const std::vector<glm::vec3>* changed = nullptr, float voxelSize = 0.0f);
     bool painted(Slot slot) const;
     noise::FieldDesc* slotDesc(Slot slot);
     nlohmann::json paintedJson(Slot slot) const;
@@ -186,6 +189,8 @@ private:
     void push(Edit edit);
     EditCost dabsAlong(glm::vec2 from, glm::vec2 to);
     void dab(glm::vec2 pixel, glm::vec2 dragPixels);
+    void refreshEvent();
+    void refreshDeltas(const Edit& edit);
     glm::vec3 screenToWorld(glm::vec2 dragPixels) const;
     /// The voxels of the current voxel size near the whole surface.
     const std::vector<SurfaceVoxel>& surfaceVoxels();
@@ -216,6 +221,7 @@ private:
     glm::vec2 m_strokeLast{0.0f};
     float m_strokeCarry = 0.0f; ///< pixels travelled since the last dab
     std::size_t m_strokeDabs = 0, m_strokeVoxels = 0;
+    std::vector<glm::ivec3> m_eventVoxels; ///< written by the current pointer event's dabs
 
     std::deque<Edit> m_undo;
     std::vector<Edit> m_redo;
