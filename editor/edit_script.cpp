@@ -255,6 +255,9 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         } catch (const nlohmann::json::exception&) {
             line.fail(cat("value '", value, "' is not JSON"));
         }
+    } else if (verb == "seed") {
+        a.type = T::Seed;
+        a.seed = std::uint32_t(line.number("seed", 0.0, 4294967295.0));
     } else if (verb == "wind") {
         a.type = T::Wind;
         const std::string state = line.word("on or off");
@@ -283,7 +286,7 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         checkExtension(line, a.file, {".png", ".exr"});
     } else {
         line.fail(cat("unknown action '", verb,
-                      "' (camera, method, brush, stroke, undo, redo, lobe, set, wind, frames, "
+                      "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, frames, "
                       "save, screenshot)"));
     }
     line.end();
@@ -397,6 +400,12 @@ ScriptReport runScript(Session& session, const std::vector<ScriptAction>& action
             }
             case T::Set: {
                 const EditCost cost = session.set(a.name, a.value);
+                report.paramMs += cost.milliseconds;
+                note = cat("rebuilt in ", cost.milliseconds, " ms");
+                break;
+            }
+            case T::Seed: {
+                const EditCost cost = session.setSeed(a.seed);
                 report.paramMs += cost.milliseconds;
                 note = cat("rebuilt in ", cost.milliseconds, " ms");
                 break;

@@ -11,6 +11,7 @@
 ///     lobe I offset X Y Z | rotation X Y Z | sigma X Y Z | extinction A | color R G B
 ///     lobe add I | lobe remove I
 ///     set KEY.PATH JSON                  # any preset key path
+///     seed N                             # the impulse seed
 ///     wind on|off [amplitude DEG] [frequency HZ]   # animate the comb (Session::setWind)
 ///     frames N                           # render N frames, 1/30 s apart
 ///     save FILE.json                     # the preset, with its .vdb grids beside it
@@ -20,6 +21,7 @@
 /// "script FILE:LINE: message" before anything runs or is written.
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -39,7 +41,7 @@ class Session;
 
 struct ScriptAction {
     enum class Type {
-        Camera, Method, Brush, Stroke, Undo, Redo, Lobe, Set, Wind, Frames, Save, Screenshot
+        Camera, Method, Brush, Stroke, Undo, Redo, Lobe, Set, Seed, Wind, Frames, Save, Screenshot
     };
     Type type = Type::Frames;
     int line = 0;
@@ -54,6 +56,7 @@ struct ScriptAction {
     int index = 0;                    ///< Lobe
     nlohmann::json value;             ///< Lobe, Set
     int count = 0;                    ///< Frames
+    std::uint32_t seed = 0;           ///< Seed
     bool on = false;                  ///< Wind
     float amplitudeDeg = 20.0f, frequencyHz = 0.5f; ///< Wind
     std::filesystem::path file;       ///< Save, Screenshot

@@ -625,6 +625,18 @@ EditCost Session::removeLobe(int lobe) {
     return set("kernel.lobes", lobes);
 }
 
+EditCost Session::setSeed(std::uint32_t seed) {
+    if (m_stroke)
+        endStroke();
+    const auto start = Clock::now();
+    m_scene.seed = seed;
+    rebuild();
+    EditCost cost;
+    cost.generatorRebuilt = true;
+    cost.milliseconds = msSince(start);
+    return cost;
+}
+
 // --- undo ---------------------------------------------------------------------------------------
 
 void Session::refreshDeltas(const Edit& edit) {

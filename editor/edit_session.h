@@ -120,6 +120,11 @@ public:
     EditCost addLobe(int copyOf);
     EditCost removeLobe(int lobe);
 
+    /// The impulse seed (the scene's, not the preset's): rebuilds the generator and the frame.
+    /// Not an undo step; save writes the preset, which holds no seed.
+    EditCost setSeed(std::uint32_t seed);
+    std::uint32_t seed() const { return m_scene.seed; }
+
     /// Wind: while on, render() bends the comb directions by a travelling wave, the comb
     /// offset by tan(amplitude) sin(2 pi (f t - x / wavelength)) along world +x (then projected
     /// on the tangent plane by the generator), on the voxels near the surface. Deterministic for

@@ -112,6 +112,7 @@ TEST(EditScript, RunsAndSavesAndRejectsBadGrids) {
                             "brush tilt strength 0.5\nstroke 90,130 170,130\nundo\nredo\n"
                             "lobe 0 color 0.9 0.1 0.1\n"
                             "set distribution.density_max 6000\n"
+                            "seed 4\nwind on amplitude 25\n"
                             "frames 2\n"
                             "save " + saved.string() + "\n"
                             "screenshot " + (dir / "shot.png").string() + "\n");
