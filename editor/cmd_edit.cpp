@@ -28,8 +28,9 @@ int edit(int argc, char** argv) {
          false},
         {"report", "FILE", "write the script's timings and memory as JSON", false},
         cli::threadsOption()};
-    cli::Args args("edit", "Paint density, comb, tilt, length and colour on the surface and edit "
-                           "the kernel. Without a window yet: --script replays a session.",
+    cli::Args args("edit",
+                   "Paint density, comb, tilt, length and colour on the surface and edit "
+                   "the kernel. Without a window yet: --script replays a session.",
                    specs, argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);
@@ -50,13 +51,15 @@ int edit(int argc, char** argv) {
         screenshot = args.str("screenshot");
         const std::string ext = screenshot->extension().string();
         if (ext != ".png" && ext != ".exr")
-            throw InputError(cat("--screenshot '", screenshot->string(), "' must end in .png or .exr"));
+            throw InputError(
+                cat("--screenshot '", screenshot->string(), "' must end in .png or .exr"));
     }
     edit::SessionOptions options;
     if (args.has("size")) {
         const std::string size = args.str("size");
         char x = 0, extra = 0;
-        if (std::sscanf(size.c_str(), "%d%c%d%c", &options.width, &x, &options.height, &extra) != 3 ||
+        if (std::sscanf(size.c_str(), "%d%c%d%c", &options.width, &x, &options.height, &extra) !=
+                3 ||
             (x != 'x' && x != 'X') || options.width < 1 || options.height < 1 ||
             options.width > 16384 || options.height > 16384)
             throw InputError(cat("--size '", size, "' must be WxH with sides in [1, 16384]"));

@@ -40,7 +40,8 @@ glm::vec3 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& 
         if (glm::dot(d, d) < 1e-20f)
             return v;
         d = glm::normalize(d);
-        const glm::vec3 mixed = glm::dot(v, v) > 1e-20f ? glm::normalize(v) * (1.0f - w) + d * w : d;
+        const glm::vec3 mixed =
+            glm::dot(v, v) > 1e-20f ? glm::normalize(v) * (1.0f - w) + d * w : d;
         return glm::dot(mixed, mixed) > 1e-20f ? glm::normalize(mixed) : d;
     }
     case BrushKind::Tilt: {
@@ -58,8 +59,8 @@ glm::vec3 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& 
         return glm::mix(v, brush.color, w);
     case BrushKind::Smooth: {
         glm::vec3 sum(0.0f);
-        constexpr glm::ivec3 kSteps[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
-                                          {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        constexpr glm::ivec3 kSteps[6] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                          {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
         for (const glm::ivec3& o : kSteps)
             sum += grid.get(sv.ijk + o);
         return glm::mix(v, sum / 6.0f, w);
@@ -72,11 +73,16 @@ glm::vec3 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& 
 
 const char* slotKey(Slot slot) {
     switch (slot) {
-    case Slot::Density: return "density";
-    case Slot::Comb: return "comb";
-    case Slot::Tilt: return "tilt_deg";
-    case Slot::Scale: return "scale";
-    case Slot::Color: return "color";
+    case Slot::Density:
+        return "density";
+    case Slot::Comb:
+        return "comb";
+    case Slot::Tilt:
+        return "tilt_deg";
+    case Slot::Scale:
+        return "scale";
+    case Slot::Color:
+        return "color";
     }
     return "?";
 }
@@ -101,7 +107,9 @@ BrushKind parseBrushKind(std::string_view name) {
 }
 
 const char* falloffName(Falloff falloff) {
-    return falloff == Falloff::Smooth ? "smooth" : falloff == Falloff::Linear ? "linear" : "constant";
+    return falloff == Falloff::Smooth   ? "smooth"
+           : falloff == Falloff::Linear ? "linear"
+                                        : "constant";
 }
 
 Falloff parseFalloff(std::string_view name) {
@@ -117,12 +125,18 @@ Falloff parseFalloff(std::string_view name) {
 Slot brushSlot(const BrushSettings& brush) {
     switch (brush.kind) {
     case BrushKind::DensityAdd:
-    case BrushKind::DensityErase: return Slot::Density;
-    case BrushKind::Comb: return Slot::Comb;
-    case BrushKind::Tilt: return Slot::Tilt;
-    case BrushKind::Length: return Slot::Scale;
-    case BrushKind::Color: return Slot::Color;
-    case BrushKind::Smooth: return brush.smoothTarget;
+    case BrushKind::DensityErase:
+        return Slot::Density;
+    case BrushKind::Comb:
+        return Slot::Comb;
+    case BrushKind::Tilt:
+        return Slot::Tilt;
+    case BrushKind::Length:
+        return Slot::Scale;
+    case BrushKind::Color:
+        return Slot::Color;
+    case BrushKind::Smooth:
+        return brush.smoothTarget;
     }
     return Slot::Density;
 }
@@ -132,9 +146,12 @@ float falloffWeight(Falloff falloff, float t) {
         return 0.0f;
     t = std::max(t, 0.0f);
     switch (falloff) {
-    case Falloff::Smooth: return 1.0f - t * t * (3.0f - 2.0f * t);
-    case Falloff::Linear: return 1.0f - t;
-    case Falloff::Constant: return 1.0f;
+    case Falloff::Smooth:
+        return 1.0f - t * t * (3.0f - 2.0f * t);
+    case Falloff::Linear:
+        return 1.0f - t;
+    case Falloff::Constant:
+        return 1.0f;
     }
     return 0.0f;
 }
@@ -207,8 +224,7 @@ void applyDelta(noise::PaintedGrid& grid, const GridDelta& delta, bool after) {
 }
 
 std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
-                     noise::PaintedGrid& grid, GridDelta& delta,
-                     std::vector<glm::ivec3>* touched) {
+                     noise::PaintedGrid& grid, GridDelta& delta, std::vector<glm::ivec3>* touched) {
     if (!(dab.radius > 0.0f))
         return 0;
     const std::vector<SurfaceVoxel> voxels =

@@ -50,9 +50,9 @@ struct BrushSettings {
     /// [-1, 1]; negative inverts where it means something (length shrinks, tilt lifts towards 0).
     float strength = 1.0f;
     Falloff falloff = Falloff::Smooth;
-    bool mirrorX = false;         ///< also paint the dab mirrored about x = 0 (mesh space)
-    bool frontFacesOnly = true;   ///< skip voxels whose surface faces away from the camera
-    glm::vec3 color{1.0f};        ///< Color: linear RGB
+    bool mirrorX = false;       ///< also paint the dab mirrored about x = 0 (mesh space)
+    bool frontFacesOnly = true; ///< skip voxels whose surface faces away from the camera
+    glm::vec3 color{1.0f};      ///< Color: linear RGB
     /// Smooth: the slot it averages (the other kinds imply theirs).
     Slot smoothTarget = Slot::Density;
 };

@@ -226,7 +226,7 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
             a.index = int(i);
             const std::string what = line.word("lobe property");
             if (what == "offset" || what == "sigma" || what == "color" || what == "rotation") {
-                const glm::dvec3 v = what == "color" ? line.vec3("color", 0.0, 1.0)
+                const glm::dvec3 v = what == "color"   ? line.vec3("color", 0.0, 1.0)
                                      : what == "sigma" ? line.vec3("sigma", 0.0, kBig)
                                                        : line.vec3(what.c_str(), -kBig, kBig);
                 a.name = what == "rotation" ? "rotation_deg" : what;
@@ -285,9 +285,10 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         a.file = line.word("file");
         checkExtension(line, a.file, {".png", ".exr"});
     } else {
-        line.fail(cat("unknown action '", verb,
-                      "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, frames, "
-                      "save, screenshot)"));
+        line.fail(
+            cat("unknown action '", verb,
+                "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, frames, "
+                "save, screenshot)"));
     }
     line.end();
     return a;
@@ -377,9 +378,9 @@ ScriptReport runScript(Session& session, const std::vector<ScriptAction>& action
                 report.strokeMs += cost.milliseconds;
                 ++report.strokes;
                 note = cat(end.dabs, " dabs, ", end.voxelsWritten, " voxels, ", cost.milliseconds,
-                           " ms painting; frame ", frame.kernelsGenerated, " kernels, ",
-                           toFrame, " ms event-to-frame (event ", eventMs, " ms, frame ",
-                           frame.wallMs, " ms of which generate ", generateMs, " ms GPU)");
+                           " ms painting; frame ", frame.kernelsGenerated, " kernels, ", toFrame,
+                           " ms event-to-frame (event ", eventMs, " ms, frame ", frame.wallMs,
+                           " ms of which generate ", generateMs, " ms GPU)");
                 break;
             }
             case T::Undo:
@@ -391,9 +392,10 @@ ScriptReport runScript(Session& session, const std::vector<ScriptAction>& action
                 break;
             }
             case T::Lobe: {
-                const EditCost cost = a.name == "add"      ? session.addLobe(a.index)
-                                      : a.name == "remove" ? session.removeLobe(a.index)
-                                                           : session.setLobe(a.index, a.name, a.value);
+                const EditCost cost = a.name == "add" ? session.addLobe(a.index)
+                                      : a.name == "remove"
+                                          ? session.removeLobe(a.index)
+                                          : session.setLobe(a.index, a.name, a.value);
                 report.paramMs += cost.milliseconds;
                 note = cat("rebuilt in ", cost.milliseconds, " ms");
                 break;

@@ -5,7 +5,8 @@
 ///     camera eye X Y Z target X Y Z [fov DEG]
 ///     method NAME [key value ...]        # keys of `render`: steps, supersample, ewa, lod, ...
 ///     brush KIND [radius PX] [strength S] [falloff smooth|linear|constant] [mirror x]
-///                [color R G B] [target SLOT]      # SLOT (smooth): density, comb, tilt, length, color
+///                [color R G B] [backfaces] [target SLOT]
+///                # target (smooth): density, comb, tilt, length or color
 ///     stroke X,Y X,Y ...                 # a drag through these window points
 ///     undo | redo
 ///     lobe I offset X Y Z | rotation X Y Z | sigma X Y Z | extinction A | color R G B
@@ -41,7 +42,19 @@ class Session;
 
 struct ScriptAction {
     enum class Type {
-        Camera, Method, Brush, Stroke, Undo, Redo, Lobe, Set, Seed, Wind, Frames, Save, Screenshot
+        Camera,
+        Method,
+        Brush,
+        Stroke,
+        Undo,
+        Redo,
+        Lobe,
+        Set,
+        Seed,
+        Wind,
+        Frames,
+        Save,
+        Screenshot
     };
     Type type = Type::Frames;
     int line = 0;
@@ -49,17 +62,17 @@ struct ScriptAction {
 
     glm::dvec3 eye{0.0}, target{0.0}; ///< Camera
     std::optional<double> fovDeg;     ///< Camera
-    std::string name;                 ///< Method: method; Lobe: property or add/remove; Set: key path
-    splat::RenderSettings settings;   ///< Method
-    BrushSettings brush;              ///< Brush
-    std::vector<glm::vec2> points;    ///< Stroke
-    int index = 0;                    ///< Lobe
-    nlohmann::json value;             ///< Lobe, Set
-    int count = 0;                    ///< Frames
-    std::uint32_t seed = 0;           ///< Seed
-    bool on = false;                  ///< Wind
+    std::string name;               ///< Method: method; Lobe: property or add/remove; Set: key path
+    splat::RenderSettings settings; ///< Method
+    BrushSettings brush;            ///< Brush
+    std::vector<glm::vec2> points;  ///< Stroke
+    int index = 0;                  ///< Lobe
+    nlohmann::json value;           ///< Lobe, Set
+    int count = 0;                  ///< Frames
+    std::uint32_t seed = 0;         ///< Seed
+    bool on = false;                ///< Wind
     float amplitudeDeg = 20.0f, frequencyHz = 0.5f; ///< Wind
-    std::filesystem::path file;       ///< Save, Screenshot
+    std::filesystem::path file;                     ///< Save, Screenshot
 };
 
 /// Parse a script's text; `name` (the file) is used in messages. Throws InputError
@@ -71,8 +84,8 @@ std::vector<ScriptAction> loadScript(const std::filesystem::path& file);
 /// What a run measured.
 struct ScriptReport {
     int strokes = 0, frames = 0;
-    double strokeMs = 0.0;      ///< summed dab + field refresh time of the strokes
-    double paramMs = 0.0;       ///< summed rebuild time of set / lobe / undo / redo
+    double strokeMs = 0.0;               ///< summed dab + field refresh time of the strokes
+    double paramMs = 0.0;                ///< summed rebuild time of set / lobe / undo / redo
     std::vector<double> strokeToFrameMs; ///< per stroke: last drag event to its frame's pixels
     std::vector<double> eventMs;    ///< per stroke: the last drag event's dabs and field refresh
     std::vector<double> frameMs;    ///< per stroke: the frame after it (host wall time)

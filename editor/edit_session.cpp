@@ -23,7 +23,8 @@ double msSince(Clock::time_point start) {
 }
 
 /// Moller-Trumbore in double; the distance along the ray, or a negative value for a miss.
-double intersect(const noise::Ray& ray, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c, glm::dvec3& bary) {
+double intersect(const noise::Ray& ray, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c,
+                 glm::dvec3& bary) {
     const glm::dvec3 e1 = b - a, e2 = c - a;
     const glm::dvec3 p = glm::cross(ray.dir, e2);
     const double det = glm::dot(e1, p);
@@ -42,7 +43,9 @@ double intersect(const noise::Ray& ray, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c
     return glm::dot(e2, q) * inv;
 }
 
-glm::vec3 mirrorX(glm::vec3 v) { return glm::vec3(-v.x, v.y, v.z); }
+glm::vec3 mirrorX(glm::vec3 v) {
+    return glm::vec3(-v.x, v.y, v.z);
+}
 
 } // namespace
 
@@ -57,7 +60,8 @@ nlohmann::json::json_pointer keyPathPointer(const std::string& keyPath) {
     std::size_t start = 0;
     while (true) {
         const std::size_t dot = keyPath.find('.', start);
-        const std::string part = keyPath.substr(start, dot == std::string::npos ? dot : dot - start);
+        const std::string part =
+            keyPath.substr(start, dot == std::string::npos ? dot : dot - start);
         if (part.empty() || part.find_first_of("/~") != std::string::npos)
             throw InputError(cat("key path '", keyPath, "' must be names separated by dots"));
         pointer += "/" + part;
@@ -106,11 +110,21 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
         const Slot slot = Slot(s);
         const noise::FieldDesc* d = nullptr;
         switch (slot) {
-        case Slot::Density: d = &loaded.density; break;
-        case Slot::Comb: d = loaded.comb ? &*loaded.comb : nullptr; break;
-        case Slot::Tilt: d = &loaded.tiltDeg; break;
-        case Slot::Scale: d = &loaded.scale; break;
-        case Slot::Color: d = &loaded.color; break;
+        case Slot::Density:
+            d = &loaded.density;
+            break;
+        case Slot::Comb:
+            d = loaded.comb ? &*loaded.comb : nullptr;
+            break;
+        case Slot::Tilt:
+            d = &loaded.tiltDeg;
+            break;
+        case Slot::Scale:
+            d = &loaded.scale;
+            break;
+        case Slot::Color:
+            d = &loaded.color;
+            break;
         }
         if (d && d->kind == noise::FieldDesc::Kind::Painted) {
             const std::filesystem::path file = loaded.baseDir / d->file;
@@ -207,11 +221,16 @@ const noise::PaintedGrid* Session::grid(Slot slot) const {
 
 noise::FieldDesc* Session::slotDesc(Slot slot) {
     switch (slot) {
-    case Slot::Density: return &m_preset.density;
-    case Slot::Comb: return m_preset.comb ? &*m_preset.comb : nullptr;
-    case Slot::Tilt: return &m_preset.tiltDeg;
-    case Slot::Scale: return &m_preset.scale;
-    case Slot::Color: return &m_preset.color;
+    case Slot::Density:
+        return &m_preset.density;
+    case Slot::Comb:
+        return m_preset.comb ? &*m_preset.comb : nullptr;
+    case Slot::Tilt:
+        return &m_preset.tiltDeg;
+    case Slot::Scale:
+        return &m_preset.scale;
+    case Slot::Color:
+        return &m_preset.color;
     }
     return nullptr;
 }
@@ -220,7 +239,9 @@ nlohmann::json Session::paintedJson(Slot slot) const {
     return {{"type", "painted"}, {"file", m_vdbName}, {"grid", slotKey(slot)}};
 }
 
-float Session::voxelSize() const { return m_generator->cellSize() * m_voxelScale; }
+float Session::voxelSize() const {
+    return m_generator->cellSize() * m_voxelScale;
+}
 
 void Session::setVoxelScale(float fraction) {
     if (!(fraction > 0.0f && fraction <= 1.0f))
@@ -299,9 +320,8 @@ void Session::ensurePainted(Slot slot, Edit& edit) {
         old = *d;
     const bool absentComb = slot == Slot::Comb && !m_preset.comb;
     const bool constant = !absentComb && old.kind == noise::FieldDesc::Kind::Constant;
-    auto grid = std::make_shared<noise::PaintedGrid>(slotKey(slot), slotComponents(slot),
-                                                     voxelSize(),
-                                                     constant ? old.value : glm::vec3(0.0f));
+    auto grid = std::make_shared<noise::PaintedGrid>(
+        slotKey(slot), slotComponents(slot), voxelSize(), constant ? old.value : glm::vec3(0.0f));
     if (!constant) {
         // Sample the old field into every voxel near the surface, so painting starts from what
         // was there.
@@ -354,14 +374,14 @@ void Session::applyWind() {
     const float wavelength = std::max(glm::length(b.size()), 1e-6f);
     const float gain = std::tan(glm::radians(std::clamp(m_windAmplitudeDeg, 0.0f, 80.0f)));
     const float twoPi = 6.28318530718f;
-    auto wind = std::make_shared<noise::PaintedGrid>(slotKey(Slot::Comb), 3, voxelSize(),
-                                                     glm::vec3(0.0f));
+    auto wind =
+        std::make_shared<noise::PaintedGrid>(slotKey(Slot::Comb), 3, voxelSize(), glm::vec3(0.0f));
     for (std::size_t i = 0; i < voxels.size(); ++i) {
         const glm::vec3 p = glm::vec3(voxels[i].ijk) * voxelSize();
         const glm::vec3 base = comb ? comb->get(voxels[i].ijk) : m_windBase[i];
         const float phase = twoPi * (m_windFrequencyHz * float(m_time) - p.x / wavelength);
-        wind->set(voxels[i].ijk, base + gain * glm::length(base) * std::sin(phase) *
-                                            glm::vec3(1.0f, 0.0f, 0.0f));
+        wind->set(voxels[i].ijk,
+                  base + gain * glm::length(base) * std::sin(phase) * glm::vec3(1.0f, 0.0f, 0.0f));
     }
     noise::FieldDesc desc;
     desc.kind = noise::FieldDesc::Kind::Painted;
@@ -757,6 +777,8 @@ void Session::setWind(bool on, float amplitudeDeg, float frequencyHz) {
         rebuild(); // the document's comb again
 }
 
-void Session::setTime(double seconds) { m_time = seconds; }
+void Session::setTime(double seconds) {
+    m_time = seconds;
+}
 
 } // namespace spot::edit

@@ -43,12 +43,12 @@ namespace spot::edit {
 inline constexpr std::size_t kMinUndoSteps = 100;
 
 struct SessionOptions {
-    int width = 0, height = 0;     ///< window size in pixels; 0: the scene's image size
-    std::filesystem::path preset;  ///< override the scene's preset (empty: the scene's)
-    float voxelScale = 0.25f;      ///< painted voxel size as a fraction of the cell size
-    std::size_t undoSteps = 256;   ///< at most this many edits are kept (>= kMinUndoSteps)
+    int width = 0, height = 0;    ///< window size in pixels; 0: the scene's image size
+    std::filesystem::path preset; ///< override the scene's preset (empty: the scene's)
+    float voxelScale = 0.25f;     ///< painted voxel size as a fraction of the cell size
+    std::size_t undoSteps = 256;  ///< at most this many edits are kept (>= kMinUndoSteps)
     std::size_t undoBytes = std::size_t(256) << 20; ///< ... and at most this many bytes beyond
-                                                     ///< the last kMinUndoSteps
+                                                    ///< the last kMinUndoSteps
     splat::ContextOptions context = splat::contextOptionsFromEnvironment();
 };
 
@@ -177,7 +177,8 @@ private:
         std::vector<std::pair<Slot, GridDelta>> grids;
         /// Grids a stroke created (before: the slot's grid until then, usually null).
         std::vector<std::tuple<Slot, std::shared_ptr<noise::PaintedGrid>,
-                               std::shared_ptr<noise::PaintedGrid>>> created;
+                               std::shared_ptr<noise::PaintedGrid>>>
+            created;
         std::size_t bytes() const;
     };
 

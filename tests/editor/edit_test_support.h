@@ -41,9 +41,9 @@ inline void expectNoValidationErrors(const splat::Context& ctx) {
 /// Bitwise equality of everything an impulse carries.
 inline bool sameImpulse(const noise::Impulse& a, const noise::Impulse& b) {
     return a.position == b.position && a.normal == b.normal && a.comb == b.comb &&
-           a.frame == b.frame && a.scale == b.scale && a.color == b.color &&
-           a.weight == b.weight && a.bend == b.bend && a.height == b.height &&
-           a.triangle == b.triangle && a.barycentric == b.barycentric && a.cell == b.cell;
+           a.frame == b.frame && a.scale == b.scale && a.color == b.color && a.weight == b.weight &&
+           a.bend == b.bend && a.height == b.height && a.triangle == b.triangle &&
+           a.barycentric == b.barycentric && a.cell == b.cell;
 }
 
 inline void expectSameImpulses(const std::vector<noise::Impulse>& a,
@@ -71,8 +71,8 @@ inline float worldRadius(const edit::Session& s, const edit::Hit& hit, float rad
 /// Run spotshell with `args`; the exit code, stderr in `err`.
 inline int spotshell(const std::string& args, std::string* err = nullptr) {
     const std::filesystem::path errFile = tmpPath("spotshell_stderr.txt");
-    const std::string command = std::string(SPOT_SPOTSHELL) + " " + args + " >/dev/null 2>" +
-                                errFile.string();
+    const std::string command =
+        std::string(SPOT_SPOTSHELL) + " " + args + " >/dev/null 2>" + errFile.string();
     const int status = std::system(command.c_str());
     if (err) {
         std::ifstream in(errFile);

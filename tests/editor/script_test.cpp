@@ -37,7 +37,8 @@ TEST(EditScript, ParsesEveryAction) {
         "undo\nredo\n"
         "lobe 1 offset 0 0 1\nlobe 0 sigma 0.1 0.1 0.3\nlobe 2 extinction 500\nlobe 0 color 1 1 1\n"
         "lobe add 0\nlobe remove 3\n"
-        "set distribution.density_max 4000\nset fields.tilt_deg {\"type\":\"constant\",\"value\":20}\n"
+        "set distribution.density_max 4000\nset fields.tilt_deg "
+        "{\"type\":\"constant\",\"value\":20}\n"
         "frames 3\nsave out.json\nscreenshot out.png\n",
         "t.script");
     ASSERT_EQ(actions.size(), 19u);
@@ -61,7 +62,8 @@ TEST(EditScript, ParsesEveryAction) {
 }
 
 TEST(EditScript, BadLinesNameTheirLine) {
-    EXPECT_EQ(parseError("frames 2\nbrush fluff\n").rfind("script t.script:2: unknown brush", 0), 0u)
+    EXPECT_EQ(parseError("frames 2\nbrush fluff\n").rfind("script t.script:2: unknown brush", 0),
+              0u)
         << parseError("frames 2\nbrush fluff\n");
     EXPECT_NE(parseError("\n\nstroke 10;20\n").find("t.script:3:"), std::string::npos);
     EXPECT_NE(parseError("method warp\n").find("t.script:1: unknown method"), std::string::npos);
@@ -114,8 +116,11 @@ TEST(EditScript, RunsAndSavesAndRejectsBadGrids) {
                             "set distribution.density_max 6000\n"
                             "seed 4\nwind on amplitude 25\n"
                             "frames 2\n"
-                            "save " + saved.string() + "\n"
-                            "screenshot " + (dir / "shot.png").string() + "\n");
+                            "save " +
+                                saved.string() +
+                                "\n"
+                                "screenshot " +
+                                (dir / "shot.png").string() + "\n");
     std::string err;
     ASSERT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --size 256x256 " +
                                   "--script " + script.string() + " --screenshot " +
@@ -172,7 +177,8 @@ TEST(EditScript, RunsAndSavesAndRejectsBadGrids) {
     expectFails(variant("wrongname.json", "\"grid\": \"density\"", "\"grid\": \"nothing\""),
                 "nothing");
     // The density grid (scalar) where the comb (3 components) is expected.
-    expectFails(variant("wrongtype.json", "\"grid\": \"comb\"", "\"grid\": \"density\""), "density");
+    expectFails(variant("wrongtype.json", "\"grid\": \"comb\"", "\"grid\": \"density\""),
+                "density");
 }
 
 } // namespace

@@ -26,7 +26,9 @@ bool facing(const noise::Impulse& i, glm::vec3 eye) {
     return glm::dot(i.normal, glm::normalize(eye - anchor)) > 0.3f;
 }
 
-glm::vec3 anchorOf(const noise::Impulse& i) { return i.position - i.height * i.normal; }
+glm::vec3 anchorOf(const noise::Impulse& i) {
+    return i.position - i.height * i.normal;
+}
 
 // An erase stroke (strength 1, constant falloff) leaves no impulse under the brush; beyond its
 // radius plus the trilinear lookup's reach the impulses are bit-identical.
@@ -55,7 +57,8 @@ TEST(EditSession, EraseLeavesNoImpulseUnderTheBrush) {
 
     const float radius = test::worldRadius(s, *hit, 20.0f);
     const float voxel = s.grid(edit::Slot::Density)->voxelSize();
-    const float reach = 2.0f * std::sqrt(3.0f) * voxel; // trilinear lookup plus the near-surface band
+    const float reach =
+        2.0f * std::sqrt(3.0f) * voxel; // trilinear lookup plus the near-surface band
     const glm::vec3 eye(s.camera().eye);
     std::size_t under = 0, underBefore = 0;
     std::vector<noise::Impulse> outsideBefore, outsideAfter;
@@ -201,7 +204,8 @@ TEST(EditSession, SaveAndLoadRoundTrip) {
     o.preset = file;
     edit::Session again(test::bunnyScene(), o);
     EXPECT_NE(again.grid(edit::Slot::Density), nullptr);
-    test::expectSameImpulses(again.generator().generate(), painted, "a session on the saved preset");
+    test::expectSameImpulses(again.generator().generate(), painted,
+                             "a session on the saved preset");
     EXPECT_FALSE(again.dirty());
 }
 
