@@ -30,17 +30,33 @@ void initializeOpenVdb() {
     std::call_once(once, [] { openvdb::initialize(); });
 }
 
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
-glm::vec3 toGlm(float v) { return glm::vec3(v, 0.0f, 0.0f); }
-glm::vec3 toGlm(const openvdb::Vec3s& v) { return glm::vec3(v.x(), v.y(), v.z()); }
-void fromGlm(glm::vec3 v, float& out) { out = v.x; }
-void fromGlm(glm::vec3 v, openvdb::Vec3s& out) { out = openvdb::Vec3s(v.x, v.y, v.z); }
+glm::vec3 toGlm(float v) {
+    return glm::vec3(v, 0.0f, 0.0f);
+}
+glm::vec3 toGlm(const openvdb::Vec3s& v) {
+    return glm::vec3(v.x(), v.y(), v.z());
+}
+void fromGlm(glm::vec3 v, float& out) {
+    out = v.x;
+}
+void fromGlm(glm::vec3 v, openvdb::Vec3s& out) {
+    out = openvdb::Vec3s(v.x, v.y, v.z);
+}
 
-openvdb::Coord coord(glm::ivec3 v) { return openvdb::Coord(v.x, v.y, v.z); }
-glm::ivec3 ivec(const openvdb::Coord& c) { return glm::ivec3(c.x(), c.y(), c.z()); }
+openvdb::Coord coord(glm::ivec3 v) {
+    return openvdb::Coord(v.x, v.y, v.z);
+}
+glm::ivec3 ivec(const openvdb::Coord& c) {
+    return glm::ivec3(c.x(), c.y(), c.z());
+}
 
-float asFloat(std::int32_t i) { return std::bit_cast<float>(i); }
+float asFloat(std::int32_t i) {
+    return std::bit_cast<float>(i);
+}
 
 /// A uniform scale with no rotation or translation: index ijk at world ijk x voxelSize.
 openvdb::math::Transform::Ptr uniformTransform(float voxelSize) {
@@ -78,8 +94,8 @@ PaintedGrid::PaintedGrid(std::string name, int components, float voxelSize, glm:
     : m_impl(std::make_unique<Impl>()) {
     initializeOpenVdb();
     if (components != 1 && components != 3)
-        throw InputError(cat("painted grid \"", name, "\": a grid has 1 or 3 components, not ",
-                             components));
+        throw InputError(
+            cat("painted grid \"", name, "\": a grid has 1 or 3 components, not ", components));
     if (!(std::isfinite(voxelSize) && voxelSize > 0.0f))
         throw InputError(
             cat("painted grid \"", name, "\": voxel size ", voxelSize, " is not finite and > 0"));
@@ -105,10 +121,18 @@ PaintedGrid::PaintedGrid(PaintedGrid&&) noexcept = default;
 PaintedGrid& PaintedGrid::operator=(PaintedGrid&&) noexcept = default;
 PaintedGrid::~PaintedGrid() = default;
 
-const std::string& PaintedGrid::name() const { return m_impl->name; }
-int PaintedGrid::components() const { return m_impl->components; }
-float PaintedGrid::voxelSize() const { return m_impl->voxelSize; }
-glm::vec3 PaintedGrid::background() const { return m_impl->background; }
+const std::string& PaintedGrid::name() const {
+    return m_impl->name;
+}
+int PaintedGrid::components() const {
+    return m_impl->components;
+}
+float PaintedGrid::voxelSize() const {
+    return m_impl->voxelSize;
+}
+glm::vec3 PaintedGrid::background() const {
+    return m_impl->background;
+}
 
 glm::ivec3 PaintedGrid::nearestVoxel(glm::vec3 world) const {
     return glm::ivec3(glm::round(world / m_impl->voxelSize));
@@ -178,7 +202,9 @@ void PaintedGrid::forEachActive(const std::function<void(glm::ivec3, glm::vec3)>
     });
 }
 
-std::uint64_t PaintedGrid::memoryBytes() const { return m_impl->grid().memUsage(); }
+std::uint64_t PaintedGrid::memoryBytes() const {
+    return m_impl->grid().memUsage();
+}
 
 std::shared_ptr<PaintedGrid> PaintedGrid::clone() const {
     auto impl = std::make_unique<Impl>();
@@ -208,8 +234,8 @@ void PaintedGrid::valueRange(glm::vec3& lo, glm::vec3& hi) const {
 gpu::SpotField PaintedGrid::flatten(std::vector<float>& data) const {
     const Impl& m = *m_impl;
     const int n = m.components;
-    const std::uint32_t perBlock = std::uint32_t(shared::f32::SharedGenerator::kPaintedLeafVoxels) *
-                                   std::uint32_t(n);
+    const std::uint32_t perBlock =
+        std::uint32_t(shared::f32::SharedGenerator::kPaintedLeafVoxels) * std::uint32_t(n);
 
     // The leaves holding an active voxel, in tree order, and their blocks of values.
     std::vector<glm::ivec3> leaves;
@@ -413,10 +439,10 @@ void writePaintedGrids(const std::filesystem::path& file,
     std::vector<std::string> names;
     for (const PaintedGrid* g : grids) {
         SPOT_CHECK(g != nullptr);
-        if (g->name().empty() ||
-            std::find(names.begin(), names.end(), g->name()) != names.end())
-            throw InputError(cat(file.string(), ": painted grids need distinct, non-empty names "
-                                                "(\"",
+        if (g->name().empty() || std::find(names.begin(), names.end(), g->name()) != names.end())
+            throw InputError(cat(file.string(),
+                                 ": painted grids need distinct, non-empty names "
+                                 "(\"",
                                  g->name(), "\")"));
         names.push_back(g->name());
         openvdb::GridBase::Ptr copy = g->m_impl->grid().copyGrid(); // shares the tree
@@ -424,8 +450,8 @@ void writePaintedGrids(const std::filesystem::path& file,
         out.push_back(copy);
     }
     static std::atomic<unsigned> counter{0};
-    const std::filesystem::path tmp =
-        file.parent_path() / cat(".", file.filename().string(), ".tmp-", ::getpid(), "-", counter++);
+    const std::filesystem::path tmp = file.parent_path() / cat(".", file.filename().string(),
+                                                               ".tmp-", ::getpid(), "-", counter++);
     std::error_code ec;
     try {
         openvdb::io::File f(tmp.string());
@@ -433,7 +459,8 @@ void writePaintedGrids(const std::filesystem::path& file,
         f.close();
     } catch (const std::exception& e) {
         std::filesystem::remove(tmp, ec);
-        throw InputError(cat(file.string(), ": cannot write painted grids (", oneLine(e.what()), ")"));
+        throw InputError(
+            cat(file.string(), ": cannot write painted grids (", oneLine(e.what()), ")"));
     }
     std::filesystem::rename(tmp, file, ec);
     if (ec) {

@@ -117,9 +117,8 @@ SPOT_FN int spotPaintedBlock(SpotField f, ivec3 leaf) {
     return -1;
 }
 
-/* Voxel v's value, the background when its leaf is not stored. */
-SPOT_FN rvec3 spotPaintedVoxel(SpotField f, ivec3 v, int components) {
-    int block = spotPaintedBlock(f, ivec3(v.x >> 3, v.y >> 3, v.z >> 3));
+/* Voxel v's value in block `block` (-1: the leaf is not stored, the background). */
+SPOT_FN rvec3 spotPaintedValue(SpotField f, int block, ivec3 v, int components) {
     rvec3 value = rvec3(f.value);
     if (block < 0)
         return value;
@@ -130,6 +129,15 @@ SPOT_FN rvec3 spotPaintedVoxel(SpotField f, ivec3 v, int components) {
     return value;
 }
 
+/* Corner i + d of a trilinear stencil: the first corner's block `block0` is reused when the
+ * corner lies in the same leaf (7 stencils in 8 along each axis), else its leaf is looked up. */
+SPOT_FN rvec3 spotPaintedCorner(SpotField f, ivec3 i, ivec3 d, int block0, int components) {
+    ivec3 v = i + d;
+    ivec3 leaf = ivec3(v.x >> 3, v.y >> 3, v.z >> 3);
+    int block = leaf == ivec3(i.x >> 3, i.y >> 3, i.z >> 3) ? block0 : spotPaintedBlock(f, leaf);
+    return spotPaintedValue(f, block, v, components);
+}
+
 /* Trilinear interpolation of the 8 voxels around world point p (index space = p / voxel size),
  * clamped to the bounds of the values (a convex combination leaves them only by rounding). */
 SPOT_FN rvec3 spotPaintedSample(SpotField f, rvec3 p, int components) {
@@ -138,14 +146,15 @@ SPOT_FN rvec3 spotPaintedSample(SpotField f, rvec3 p, int components) {
     rvec3 b = floor(q);
     rvec3 t = q - b;
     ivec3 i = ivec3(b);
-    rvec3 c000 = spotPaintedVoxel(f, i, components);
-    rvec3 c100 = spotPaintedVoxel(f, i + ivec3(1, 0, 0), components);
-    rvec3 c010 = spotPaintedVoxel(f, i + ivec3(0, 1, 0), components);
-    rvec3 c110 = spotPaintedVoxel(f, i + ivec3(1, 1, 0), components);
-    rvec3 c001 = spotPaintedVoxel(f, i + ivec3(0, 0, 1), components);
-    rvec3 c101 = spotPaintedVoxel(f, i + ivec3(1, 0, 1), components);
-    rvec3 c011 = spotPaintedVoxel(f, i + ivec3(0, 1, 1), components);
-    rvec3 c111 = spotPaintedVoxel(f, i + ivec3(1, 1, 1), components);
+    int block0 = spotPaintedBlock(f, ivec3(i.x >> 3, i.y >> 3, i.z >> 3));
+    rvec3 c000 = spotPaintedValue(f, block0, i, components);
+    rvec3 c100 = spotPaintedCorner(f, i, ivec3(1, 0, 0), block0, components);
+    rvec3 c010 = spotPaintedCorner(f, i, ivec3(0, 1, 0), block0, components);
+    rvec3 c110 = spotPaintedCorner(f, i, ivec3(1, 1, 0), block0, components);
+    rvec3 c001 = spotPaintedCorner(f, i, ivec3(0, 0, 1), block0, components);
+    rvec3 c101 = spotPaintedCorner(f, i, ivec3(1, 0, 1), block0, components);
+    rvec3 c011 = spotPaintedCorner(f, i, ivec3(0, 1, 1), block0, components);
+    rvec3 c111 = spotPaintedCorner(f, i, ivec3(1, 1, 1), block0, components);
     rvec3 c00 = c000 + (c100 - c000) * t.x;
     rvec3 c10 = c010 + (c110 - c010) * t.x;
     rvec3 c01 = c001 + (c101 - c001) * t.x;

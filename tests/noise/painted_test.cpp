@@ -1,11 +1,11 @@
 // The painted sparse grid (noise/painted.h): voxel access, the trilinear sample, .vdb files and
 // their errors, the `painted` field kind in presets and the generator, the command line.
 #include <algorithm>
-#include <chrono>
 #include <array>
-#include <cstring>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -34,7 +34,8 @@ using namespace spot::noise;
 namespace fs = std::filesystem;
 
 fs::path tmpDir(const std::string& name) {
-    const fs::path dir = fs::path(SPOT_TEST_TMP_DIR) / ("painted-" + std::to_string(::getpid())) / name;
+    const fs::path dir =
+        fs::path(SPOT_TEST_TMP_DIR) / ("painted-" + std::to_string(::getpid())) / name;
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
@@ -71,8 +72,8 @@ glm::vec3 trilinear(const PaintedGrid& g, glm::vec3 world) {
     for (int dz = 0; dz < 2; ++dz)
         for (int dy = 0; dy < 2; ++dy)
             for (int dx = 0; dx < 2; ++dx) {
-                const float w = (dx ? t.x : 1.0f - t.x) * (dy ? t.y : 1.0f - t.y) *
-                                (dz ? t.z : 1.0f - t.z);
+                const float w =
+                    (dx ? t.x : 1.0f - t.x) * (dy ? t.y : 1.0f - t.y) * (dz ? t.z : 1.0f - t.z);
                 sum += w * g.get(i + glm::ivec3(dx, dy, dz));
             }
     return sum;
@@ -217,7 +218,9 @@ TEST(PaintedGrid, FailedWriteLeavesTheOldFile) {
 
     // Two grids of one name: refused before anything is written.
     PaintedGrid b("density", 1, 0.05f, glm::vec3(0.0f));
-    EXPECT_NE(inputError([&] { writePaintedGrids(file, {&a, &b}); }).find("distinct"),
+    EXPECT_NE(inputError([&] {
+                  writePaintedGrids(file, {&a, &b});
+              }).find("distinct"),
               std::string::npos);
     EXPECT_EQ(slurp(file), before);
 
@@ -250,11 +253,13 @@ TEST(PaintedGrid, BadFilesGiveOneClearInputError) {
     writePaintedGrids(good, {&density, &colour});
     const std::string bytes = slurp(good);
 
-    const auto expectError = [](const std::string& message, const std::vector<std::string>& phrases) {
+    const auto expectError = [](const std::string& message,
+                                const std::vector<std::string>& phrases) {
         EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 0) << message;
         std::printf("%s\n", message.c_str());
         for (const std::string& p : phrases)
-            EXPECT_NE(message.find(p), std::string::npos) << "expected '" << p << "' in: " << message;
+            EXPECT_NE(message.find(p), std::string::npos)
+                << "expected '" << p << "' in: " << message;
     };
     expectError(inputError([&] { readPaintedGrid(dir / "missing.vdb", "density", 1); }),
                 {"missing.vdb", "\"density\"", "no such file"});
@@ -313,12 +318,14 @@ TEST(PaintedGrid, RefusesTransformsNonFiniteValuesAndAbsurdSizes) {
 
     auto rotated = scalar(0.25);
     rotated->transform().preRotate(0.3, openvdb::math::Y_AXIS);
-    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("rotated.vdb", rotated), "density", 1); }),
-                 "not a uniform scale");
+    expectPhrase(
+        inputError([&] { readPaintedGrid(writeGrid("rotated.vdb", rotated), "density", 1); }),
+        "not a uniform scale");
     auto stretched = scalar(0.25);
     stretched->transform().preScale(openvdb::Vec3d(1.0, 2.0, 1.0));
-    expectPhrase(inputError([&] { readPaintedGrid(writeGrid("stretched.vdb", stretched), "density", 1); }),
-                 "not a uniform scale");
+    expectPhrase(
+        inputError([&] { readPaintedGrid(writeGrid("stretched.vdb", stretched), "density", 1); }),
+        "not a uniform scale");
     auto moved = scalar(0.25);
     moved->transform().postTranslate(openvdb::Vec3d(0.1, 0.0, 0.0));
     expectPhrase(inputError([&] { readPaintedGrid(writeGrid("moved.vdb", moved), "density", 1); }),
@@ -356,8 +363,10 @@ TEST(PaintedGrid, FlattenTheBunnyAtAQuarterCell) {
     // Every voxel whose 8-voxel stencil a surface point reads: the corners around points spread
     // over each triangle at under a voxel apart.
     for (const glm::uvec3& t : bunny.triangles) {
-        const glm::vec3 p0 = bunny.positions[t.x], p1 = bunny.positions[t.y], p2 = bunny.positions[t.z];
-        const float edge = std::max({glm::length(p1 - p0), glm::length(p2 - p0), glm::length(p2 - p1)});
+        const glm::vec3 p0 = bunny.positions[t.x], p1 = bunny.positions[t.y],
+                        p2 = bunny.positions[t.z];
+        const float edge =
+            std::max({glm::length(p1 - p0), glm::length(p2 - p0), glm::length(p2 - p1)});
         const int n = std::max(1, int(std::ceil(edge / (0.5f * voxel))));
         for (int i = 0; i <= n; ++i)
             for (int j = 0; i + j <= n; ++j) {
@@ -375,11 +384,12 @@ TEST(PaintedGrid, FlattenTheBunnyAtAQuarterCell) {
     const std::uint32_t leaves = std::uint32_t(data.size() - f.data.w) / 512u;
     EXPECT_LT(f.data.z, 32u);
     EXPECT_LE(data.size() * sizeof(float), kMaxPaintedBytes);
-    std::printf("bunny, voxel %.5g (cell %.5g / 4): %zu active voxels, %u leaves, table %u, "
-                "longest probe %u, %.1f MiB field data, OpenVDB tree %.1f MiB, flattened in %.1f ms\n",
-                voxel, fur.cellSize(), density.activeCount(), leaves, f.data.y, f.data.z,
-                double(data.size() * sizeof(float)) / (1 << 20),
-                double(density.memoryBytes()) / (1 << 20), ms);
+    std::printf(
+        "bunny, voxel %.5g (cell %.5g / 4): %zu active voxels, %u leaves, table %u, "
+        "longest probe %u, %.1f MiB field data, OpenVDB tree %.1f MiB, flattened in %.1f ms\n",
+        voxel, fur.cellSize(), density.activeCount(), leaves, f.data.y, f.data.z,
+        double(data.size() * sizeof(float)) / (1 << 20), double(density.memoryBytes()) / (1 << 20),
+        ms);
     writePaintedGrids(dir / "paint.vdb", {&density});
     std::string preset = slurp(presets / "fur.json");
     const std::size_t at = preset.find("\"density\"");
@@ -387,9 +397,10 @@ TEST(PaintedGrid, FlattenTheBunnyAtAQuarterCell) {
     const std::size_t end = preset.find('}', at);
     const std::string constant = preset.substr(0, at) + "\"density\": 0.8" + preset.substr(end + 1);
     write(dir / "fur-constant.json", constant);
-    write(dir / "fur-painted.json", preset.substr(0, at) +
-                                        R"("density": {"type": "painted", "file": "paint.vdb", "grid": "density"})" +
-                                        preset.substr(end + 1));
+    write(dir / "fur-painted.json",
+          preset.substr(0, at) +
+              R"("density": {"type": "painted", "file": "paint.vdb", "grid": "density"})" +
+              preset.substr(end + 1));
     std::string scene = slurp(presets / "scenes" / "fur-bunny.json");
     const std::string mesh = "../meshes/bunny.ply", furPath = "../fur.json";
     scene.replace(scene.find(mesh), mesh.size(), (presets / "meshes" / "bunny.ply").string());
@@ -404,7 +415,8 @@ TEST(PaintedGrid, FlattenTheBunnyAtAQuarterCell) {
 std::string presetJson(const std::string& fields) {
     return R"({"version": 1, "kernel": {"lobes": [{"sigma": [1, 1, 1], "extinction": 50}]},
               "distribution": {"type": "poisson", "density_max": 3000},
-              "fields": )" + fields + "}";
+              "fields": )" +
+           fields + "}";
 }
 
 TEST(PaintedField, PresetParsesAndRejectsBadForms) {
@@ -546,7 +558,8 @@ TEST(PaintedField, GeneratorSetFieldAndRefresh) {
     FieldDesc vec = d;
     vec.components = 3;
     EXPECT_NE(inputError([&] { gen.setField(SPOT_FIELD_DENSITY, vec); }), "");
-    EXPECT_NE(inputError([&] { gen.setField(SPOT_FIELD_SCALE, test::constantField(glm::vec3(1.0f), 3)); }),
+    EXPECT_NE(inputError(
+                  [&] { gen.setField(SPOT_FIELD_SCALE, test::constantField(glm::vec3(1.0f), 3)); }),
               "");
     EXPECT_EQ(gen.generate().size(), painted);
     // A comb set where there was none.
@@ -564,8 +577,8 @@ struct Result {
 
 Result run(const std::string& args, const fs::path& dir) {
     const fs::path errFile = dir / "stderr.txt";
-    const std::string cmd = "SPOT_VALIDATION=1 " + std::string(SPOT_SPOTSHELL) + " " + args +
-                            " 2>" + errFile.string();
+    const std::string cmd =
+        "SPOT_VALIDATION=1 " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile.string();
     Result r;
     FILE* pipe = popen(cmd.c_str(), "r");
     if (!pipe)
@@ -595,9 +608,10 @@ TEST(PaintedCli, ImpulsesAndRenderReadAPaintedPreset) {
               "camera": {"eye": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 40},
               "image": {"width": 48, "height": 48}})");
 
-    const Result i = run("impulses --mesh generated:sphere --preset " + (dir / "painted.json").string() +
-                             " --out " + (dir / "imp.ply").string(),
-                         dir);
+    const Result i =
+        run("impulses --mesh generated:sphere --preset " + (dir / "painted.json").string() +
+                " --out " + (dir / "imp.ply").string(),
+            dir);
     ASSERT_EQ(i.code, 0) << i.err;
     EXPECT_TRUE(fs::is_regular_file(dir / "imp.ply"));
     const Result r = run("render --scene " + (dir / "scene.json").string() +

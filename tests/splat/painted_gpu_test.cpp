@@ -155,7 +155,8 @@ TEST_P(PaintedGpu, DensityCombAndColourGiveTheCpuImpulses) {
 INSTANTIATE_TEST_SUITE_P(Distributions, PaintedGpu,
                          ::testing::Values(DistributionType::Poisson, DistributionType::Jittered),
                          [](const auto& info) {
-                             return info.param == DistributionType::Poisson ? "Poisson" : "Jittered";
+                             return info.param == DistributionType::Poisson ? "Poisson"
+                                                                            : "Jittered";
                          });
 
 TEST(PaintedGpuFrame, ShowsThePaintAfterFieldsChanged) {
@@ -205,7 +206,8 @@ bool sameBits(const std::vector<gpu::SpotImpulse>& a, const std::vector<gpu::Spo
 std::vector<std::uint32_t> paintPatch(PaintedGrid& grid, const SurfaceCells& cells,
                                       glm::vec3 centre, float radius, float value) {
     const float v = grid.voxelSize();
-    const glm::ivec3 lo = grid.nearestVoxel(centre - radius), hi = grid.nearestVoxel(centre + radius);
+    const glm::ivec3 lo = grid.nearestVoxel(centre - radius),
+                     hi = grid.nearestVoxel(centre + radius);
     std::vector<glm::vec3> changed;
     for (int x = lo.x; x <= hi.x; ++x)
         for (int y = lo.y; y <= hi.y; ++y)
@@ -220,7 +222,8 @@ std::vector<std::uint32_t> paintPatch(PaintedGrid& grid, const SurfaceCells& cel
         const glm::vec3 boxLo = glm::vec3(cells.cells[i].ijk) * h - v;
         const glm::vec3 boxHi = glm::vec3(cells.cells[i].ijk + 1) * h + v;
         for (const glm::vec3& p : changed)
-            if (glm::all(glm::greaterThanEqual(p, boxLo)) && glm::all(glm::lessThanEqual(p, boxHi))) {
+            if (glm::all(glm::greaterThanEqual(p, boxLo)) &&
+                glm::all(glm::lessThanEqual(p, boxHi))) {
                 dirty.push_back(i);
                 break;
             }
