@@ -442,9 +442,10 @@ std::size_t Session::memoryBytes() const {
 
 // --- strokes ------------------------------------------------------------------------------------
 
-EditCost Session::beginStroke(glm::vec2 pixel) {
+EditCost Session::beginStroke(glm::vec2 pixel, bool invert) {
     if (m_stroke)
         endStroke();
+    m_strokeInvert = invert;
     const auto start = Clock::now();
     m_stroke = std::make_unique<Edit>();
     m_stroke->id = m_nextId++;
@@ -510,6 +511,36 @@ EditCost Session::endStroke() {
     return cost;
 }
 
+EditCost Session::pointer(PointerPhase phase, glm::vec2 pixel, const noise::Camera& view,
+                          bool invert) {
+    if (phase != PointerPhase::Release)
+        setCamera(view);
+    switch (phase) {
+    case PointerPhase::Press: {
+        EditCost cost = beginStroke(pixel, invert);
+        return cost;
+    }
+    case PointerPhase::Drag:
+        return dragStroke(pixel);
+    case PointerPhase::Release:
+        return endStroke();
+    }
+    return {};
+}
+
+BrushSettings Session::strokeBrush() const {
+    BrushSettings b = m_brush;
+    if (!m_strokeInvert)
+        return b;
+    if (b.kind == BrushKind::DensityAdd)
+        b.kind = BrushKind::DensityErase;
+    else if (b.kind == BrushKind::DensityErase)
+        b.kind = BrushKind::DensityAdd;
+    else if (b.kind == BrushKind::Length || b.kind == BrushKind::Tilt)
+        b.strength = -b.strength;
+    return b;
+}
+
 EditCost Session::stroke(const std::vector<glm::vec2>& points) {
     EditCost total;
     auto add = [&](const EditCost& c) {
@@ -555,14 +586,15 @@ void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
     d.radius = float(m_brush.radiusPx * noise::CameraRays(m_camera).pixelFootprint(hit->distance));
     d.eye = glm::vec3(m_camera.eye);
     d.direction = screenToWorld(drag);
-    m_strokeVoxels += applyDab(m_brush, d, *m_surface, grid, it->second, &m_eventVoxels);
-    if (m_brush.mirrorX) {
+    const BrushSettings brush = strokeBrush();
+    m_strokeVoxels += applyDab(brush, d, *m_surface, grid, it->second, &m_eventVoxels);
+    if (brush.mirrorX) {
         // The mirrored dab sees the mirrored camera, so front faces stay front faces.
         Dab m = d;
         m.centre = mirrorX(d.centre);
         m.eye = mirrorX(d.eye);
         m.direction = mirrorX(d.direction);
-        m_strokeVoxels += applyDab(m_brush, m, *m_surface, grid, it->second, &m_eventVoxels);
+        m_strokeVoxels += applyDab(brush, m, *m_surface, grid, it->second, &m_eventVoxels);
     }
     ++m_strokeDabs;
 }

@@ -98,10 +98,17 @@ public:
     const BrushSettings& brush() const { return m_brush; }
     /// Pointer pressed / moved / released. Dabs are spaced radius/4 pixels along the drag; each
     /// drag event's dabs are visible in the next render(). endStroke records the undo step.
-    EditCost beginStroke(glm::vec2 pixel);
+    EditCost beginStroke(glm::vec2 pixel, bool invert = false);
     EditCost dragStroke(glm::vec2 pixel);
     EditCost endStroke();
     bool stroking() const { return m_stroke != nullptr; }
+    /// One pointer event of the window (its onBrush hook): takes the event's view as the camera,
+    /// then begins, continues or ends the stroke. `invert` (a modifier held at the press) inverts
+    /// the brush for the whole stroke: density-add erases and density-erase adds, length
+    /// shrinks, tilt lifts; comb, colour and smooth are unchanged.
+    enum class PointerPhase { Press, Drag, Release };
+    EditCost pointer(PointerPhase phase, glm::vec2 pixel, const noise::Camera& view,
+                     bool invert = false);
     /// A whole stroke through `points` (the script's `stroke`).
     EditCost stroke(const std::vector<glm::vec2>& points);
 
@@ -196,6 +203,8 @@ private:
     EditCost dabsAlong(glm::vec2 from, glm::vec2 to);
     void dab(glm::vec2 pixel, glm::vec2 dragPixels);
     void refreshEvent();
+    /// The brush as the current stroke applies it (m_strokeInvert).
+    BrushSettings strokeBrush() const;
     void refreshDeltas(const Edit& edit);
     glm::vec3 screenToWorld(glm::vec2 dragPixels) const;
     /// The voxels of the current voxel size near the whole surface.
@@ -227,6 +236,7 @@ private:
     glm::vec2 m_strokeLast{0.0f};
     float m_strokeCarry = 0.0f; ///< pixels travelled since the last dab
     std::size_t m_strokeDabs = 0, m_strokeVoxels = 0;
+    bool m_strokeInvert = false;
     std::vector<glm::ivec3> m_eventVoxels; ///< written by the current pointer event's dabs
 
     std::deque<Edit> m_undo;

@@ -476,3 +476,37 @@ TEST(EditSession, PartialRegenerationMatchesTheCpu) {
 }
 
 } // namespace
+
+namespace {
+
+// The window's pointer events: press, drags and release make one stroke in the event's view; a
+// modifier at the press inverts the length brush (shrink).
+TEST(EditSession, PointerEventsWithAModifierShrink) {
+    edit::Session s(test::bunnyScene(), editOptions(128));
+    noise::Camera view = s.camera();
+    view.width = view.height = 256; // the window is larger than the session's image
+    s.brush().kind = edit::BrushKind::Length;
+    s.brush().radiusPx = 30.0f;
+    s.brush().strength = 1.0f;
+    s.brush().falloff = edit::Falloff::Constant;
+    using P = edit::Session::PointerPhase;
+    s.pointer(P::Press, {120.0f, 120.0f}, view, true);
+    s.pointer(P::Drag, {130.0f, 124.0f}, view, true);
+    s.pointer(P::Drag, {140.0f, 128.0f}, view, true);
+    EXPECT_TRUE(s.stroking());
+    s.pointer(P::Release, {140.0f, 128.0f}, view, true);
+    EXPECT_FALSE(s.stroking());
+    EXPECT_EQ(s.camera().width, 256);
+    EXPECT_EQ(s.undoSteps(), 1u);
+    const noise::PaintedGrid* scale = s.grid(edit::Slot::Scale);
+    ASSERT_NE(scale, nullptr);
+    std::size_t shrunk = 0, grown = 0;
+    scale->forEachActive([&](glm::ivec3, glm::vec3 v) {
+        shrunk += v.x < 0.02f * 0.999f;
+        grown += v.x > 0.02f * 1.001f;
+    });
+    EXPECT_GT(shrunk, 10u);
+    EXPECT_EQ(grown, 0u);
+}
+
+} // namespace
