@@ -11,6 +11,7 @@
 
 #include "noise/error.h"
 #include "noise/mesh.h"
+#include "noise/painted.h"
 #include "noise/system.h"
 #include "shaders/spot_layout.hpp"
 #include "shaders/spot_shared.hpp"
@@ -268,6 +269,45 @@ private:
     FieldRange m_range;
 };
 
+/// The trilinear interpolation of a painted sparse grid at the surface point's position. Shares
+/// the grid (the editor's live one, or one read from a file).
+class PaintedField final : public Field {
+public:
+    explicit PaintedField(std::shared_ptr<const PaintedGrid> grid) : m_grid(std::move(grid)) {}
+    glm::vec3 eval(const SurfacePoint& p) const override { return m_grid->sample(p.position); }
+    FieldRange range() const override {
+        FieldRange r;
+        m_grid->valueRange(r.lo, r.hi);
+        return r;
+    }
+    gpu::SpotField shared(std::vector<float>& data) const override { return m_grid->flatten(data); }
+
+private:
+    std::shared_ptr<const PaintedGrid> m_grid;
+};
+
+std::unique_ptr<Field> makePaintedField(const FieldDesc& desc, const std::filesystem::path& baseDir,
+                                        const std::string& context) {
+    std::shared_ptr<const PaintedGrid> grid = desc.painted;
+    if (!grid) {
+        if (desc.file.empty())
+            throw InputError(cat(context, ": painted field has no file"));
+        const std::filesystem::path file = std::filesystem::path(desc.file).is_absolute()
+                                               ? std::filesystem::path(desc.file)
+                                               : baseDir / desc.file;
+        try {
+            grid = std::make_shared<const PaintedGrid>(
+                readPaintedGrid(file, desc.grid, desc.components));
+        } catch (const InputError& e) {
+            throw InputError(cat(context, ": ", e.what()));
+        }
+    }
+    if (grid->components() != desc.components)
+        throw InputError(cat(context, ": painted grid \"", grid->name(), "\" has ",
+                             grid->components(), " components, the slot needs ", desc.components));
+    return std::make_unique<PaintedField>(std::move(grid));
+}
+
 std::unique_ptr<Field> makeImageField(const FieldDesc& desc, const Mesh& mesh,
                                       const std::filesystem::path& baseDir,
                                       const std::string& context) {
@@ -421,6 +461,8 @@ std::unique_ptr<Field> makeField(const FieldDesc& desc, const Mesh& mesh,
         if (!finite(desc.lo) || !finite(desc.hi))
             throw InputError(cat(context, ": image range is not finite"));
         return makeImageField(desc, mesh, baseDir, context);
+    case FieldDesc::Kind::Painted:
+        return makePaintedField(desc, baseDir, context);
     }
     throw InputError(cat(context, ": unknown field kind ", static_cast<int>(desc.kind)));
 }

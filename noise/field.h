@@ -5,8 +5,8 @@
 /// A field is described by data (`FieldDesc`, parsed from a preset, no I/O) and bound to a mesh
 /// by `makeField`, which loads what it needs (an image) and checks what it refers to (a vertex
 /// attribute). Kinds: constant, linear gradient, smooth value noise, vertex attribute, image map
-/// through uv. The painted sparse grid of the editor is one more `Field` subclass that reads
-/// `SurfacePoint::position` (it needs no uv), so nothing here has to change for it.
+/// through uv, and the editor's painted sparse grid (noise/painted.h), which reads
+/// `SurfacePoint::position` (it needs no uv).
 #pragma once
 
 #include <cstdint>
@@ -24,6 +24,7 @@ struct SpotField;
 namespace spot::noise {
 
 struct Mesh;
+class PaintedGrid;
 
 /// Where a field is evaluated: a point on the mesh surface, world units.
 struct SurfacePoint {
@@ -38,7 +39,7 @@ struct SurfacePoint {
 /// Parsed description of a field. Values are 1 or 3 components (`components`, fixed by the slot
 /// the field fills: density is scalar, colour is RGB); scalars are stored in `.x`.
 struct FieldDesc {
-    enum class Kind { Constant, Gradient, Noise, Vertex, Image };
+    enum class Kind { Constant, Gradient, Noise, Vertex, Image, Painted };
     Kind kind = Kind::Constant;
     int components = 1;
 
@@ -57,9 +58,15 @@ struct FieldDesc {
 
     std::vector<std::string> attributes; ///< Vertex: one attribute name per component
 
-    std::string file;     ///< Image: path, relative paths resolved against the preset's folder
+    std::string file;     ///< Image, Painted: path, relative paths resolved against the preset's folder
     int channel = 0;      ///< Image: first channel read
     bool repeat = true;   ///< Image: wrap mode for uv outside [0,1] (else clamp)
+
+    std::string grid;     ///< Painted: the grid's name in the .vdb file
+    /// Painted: when set, the grid in memory (the editor's live grid) instead of the file. The
+    /// bound field shares it: after changing the grid, rebuild the shared form
+    /// (ImpulseGenerator::refreshFields).
+    std::shared_ptr<const PaintedGrid> painted;
 };
 
 /// Inclusive bounds of every value a field can return (componentwise).
@@ -82,8 +89,9 @@ public:
 };
 
 /// Bind a description to a mesh. Throws InputError naming `context` (e.g. "preset fur.json,
-/// fields.density") for a missing attribute, a mesh without uv under an image field, or an
-/// unreadable, corrupt or oversized image.
+/// fields.density") for a missing attribute, a mesh without uv under an image field, an
+/// unreadable, corrupt or oversized image, or a painted grid that cannot be read
+/// (readPaintedGrid) or has the wrong component count.
 std::unique_ptr<Field> makeField(const FieldDesc& desc, const Mesh& mesh,
                                  const std::filesystem::path& baseDir, const std::string& context);
 

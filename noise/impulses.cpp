@@ -43,11 +43,7 @@ ImpulseGenerator::ImpulseGenerator(const Mesh& mesh, const PresetDesc& preset,
     m_fields.weight = bind(preset.weight, mesh, preset, "weight");
     m_kernel = buildKernel(preset.kernel);
 
-    const FieldRange scaleRange = m_fields.scale->range();
-    const float maxScale = std::max({scaleRange.hi.x, scaleRange.hi.y, scaleRange.hi.z}) *
-                           (1.0f + preset.variation.scale);
-    m_minCellSize = m_kernel.supportRadius() * maxScale +
-                    std::abs(preset.distribution.heightOffset) + preset.distribution.heightJitter;
+    m_minCellSize = minimumCellSizeFor(*m_fields.scale);
     if (!(m_minCellSize > 0.0f) || !std::isfinite(m_minCellSize))
         throw InputError(cat("preset ", preset.name, ": kernel support radius ", m_minCellSize,
                              " world units is not a usable cell size"));
@@ -97,9 +93,97 @@ double ImpulseGenerator::expectedCandidates() const {
     return m_preset.distribution.densityMax * m_cells.totalArea;
 }
 
+float ImpulseGenerator::minimumCellSizeFor(const Field& scale) const {
+    const FieldRange scaleRange = scale.range();
+    const float maxScale = std::max({scaleRange.hi.x, scaleRange.hi.y, scaleRange.hi.z}) *
+                           (1.0f + m_preset.variation.scale);
+    return m_kernel.supportRadius() * maxScale + std::abs(m_preset.distribution.heightOffset) +
+           m_preset.distribution.heightJitter;
+}
+
+std::unique_ptr<Field>& ImpulseGenerator::boundField(int slot) {
+    switch (slot) {
+    case SPOT_FIELD_DENSITY: return m_fields.density;
+    case SPOT_FIELD_COMB: return m_fields.comb;
+    case SPOT_FIELD_TILT: return m_fields.tiltDeg;
+    case SPOT_FIELD_SPIN: return m_fields.spinDeg;
+    case SPOT_FIELD_BEND: return m_fields.bendDeg;
+    case SPOT_FIELD_SCALE: return m_fields.scale;
+    case SPOT_FIELD_COLOR: return m_fields.color;
+    case SPOT_FIELD_WEIGHT: return m_fields.weight;
+    }
+    throw InputError(cat("field slot ", slot, " is not one of 0..", SPOT_FIELD_COUNT - 1));
+}
+
+const FieldDesc* ImpulseGenerator::fieldDesc(int slot) const {
+    switch (slot) {
+    case SPOT_FIELD_DENSITY: return &m_preset.density;
+    case SPOT_FIELD_COMB: return m_preset.comb ? &*m_preset.comb : nullptr;
+    case SPOT_FIELD_TILT: return &m_preset.tiltDeg;
+    case SPOT_FIELD_SPIN: return &m_preset.spinDeg;
+    case SPOT_FIELD_BEND: return &m_preset.bendDeg;
+    case SPOT_FIELD_SCALE: return &m_preset.scale;
+    case SPOT_FIELD_COLOR: return &m_preset.color;
+    case SPOT_FIELD_WEIGHT: return &m_preset.weight;
+    }
+    throw InputError(cat("field slot ", slot, " is not one of 0..", SPOT_FIELD_COUNT - 1));
+}
+
+void ImpulseGenerator::setField(int slot, const FieldDesc& desc) {
+    static const char* const kNames[SPOT_FIELD_COUNT] = {
+        "density", "comb", "tilt_deg", "spin_deg", "bend_deg", "scale", "color", "weight"};
+    std::unique_ptr<Field>& bound = boundField(slot);
+    const int components =
+        slot == SPOT_FIELD_COMB || slot == SPOT_FIELD_SCALE || slot == SPOT_FIELD_COLOR ? 3 : 1;
+    if (desc.components != components)
+        throw InputError(cat("fields.", kNames[slot], " has ", components,
+                             components == 1 ? " component" : " components", ", not ",
+                             desc.components));
+    std::unique_ptr<Field> field = bind(desc, m_mesh, m_preset, kNames[slot]);
+    if (slot == SPOT_FIELD_SCALE) {
+        const float need = minimumCellSizeFor(*field);
+        if (!(need <= m_cells.cellSize * (1.0f + 1e-6f)))
+            throw InputError(cat("preset ", m_preset.name, ", fields.scale: the scale needs cells of ",
+                                 need, " world units, larger than the generator's ",
+                                 m_cells.cellSize));
+    }
+    std::swap(bound, field);
+    try {
+        buildFieldData();
+    } catch (...) {
+        std::swap(bound, field); // the previous fields flatten as before
+        buildFieldData();
+        throw;
+    }
+    switch (slot) {
+    case SPOT_FIELD_DENSITY: m_preset.density = desc; break;
+    case SPOT_FIELD_COMB: m_preset.comb = desc; break;
+    case SPOT_FIELD_TILT: m_preset.tiltDeg = desc; break;
+    case SPOT_FIELD_SPIN: m_preset.spinDeg = desc; break;
+    case SPOT_FIELD_BEND: m_preset.bendDeg = desc; break;
+    case SPOT_FIELD_SCALE: m_preset.scale = desc; m_minCellSize = minimumCellSizeFor(*bound); break;
+    case SPOT_FIELD_COLOR: m_preset.color = desc; break;
+    case SPOT_FIELD_WEIGHT: m_preset.weight = desc; break;
+    }
+}
+
+void ImpulseGenerator::refreshFields() {
+    const float need = minimumCellSizeFor(*m_fields.scale);
+    if (!(need <= m_cells.cellSize * (1.0f + 1e-6f)))
+        throw InputError(cat("preset ", m_preset.name, ", fields.scale: the scale needs cells of ",
+                             need, " world units, larger than the generator's ",
+                             m_cells.cellSize));
+    buildFieldData();
+    m_minCellSize = need;
+}
+
 void ImpulseGenerator::buildSharedData() {
     m_sharedPieces = gpu::piecesToGpu(m_cells);
-    m_fieldData.clear();
+    buildFieldData();
+}
+
+void ImpulseGenerator::buildFieldData() {
+    std::vector<float> data;
     const DistributionDesc& d = m_preset.distribution;
     const VariationDesc& v = m_preset.variation;
     m_params.distribution = glm::vec4(d.densityMax, d.jitter, d.heightOffset, d.heightJitter);
@@ -113,8 +197,12 @@ void ImpulseGenerator::buildSharedData() {
                                             m_fields.tiltDeg.get(), m_fields.spinDeg.get(),
                                             m_fields.bendDeg.get(), m_fields.scale.get(),
                                             m_fields.color.get(),   m_fields.weight.get()};
+    gpu::SpotField fields[SPOT_FIELD_COUNT];
     for (int i = 0; i < SPOT_FIELD_COUNT; ++i)
-        m_params.fields[i] = slots[i] ? slots[i]->shared(m_fieldData) : gpu::SpotField{};
+        fields[i] = slots[i] ? slots[i]->shared(data) : gpu::SpotField{};
+    // Nothing changes until every field is flattened (a painted grid may refuse).
+    m_fieldData = std::move(data);
+    std::copy(std::begin(fields), std::end(fields), std::begin(m_params.fields));
 }
 
 shared::f32::GeneratorArrays ImpulseGenerator::arrays() const {

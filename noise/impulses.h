@@ -86,12 +86,29 @@ public:
     const std::vector<gpu::SpotPiece>& sharedPieces() const { return m_sharedPieces; }
     const std::vector<float>& sharedFieldData() const { return m_fieldData; }
     const gpu::SpotGenParams& sharedParams() const { return m_params; }
+    /// Live field edits (the editor). Slots are numbered as SPOT_FIELD_* (shaders/spot_layout.h).
+    /// The description bound to `slot`; null for an unset comb (the surface tangent).
+    const FieldDesc* fieldDesc(int slot) const;
+    /// Bind `desc` to `slot` (its component count must be the slot's: 3 for comb, scale and
+    /// colour, 1 otherwise) and rebuild the shared field data and parameters. Throws InputError,
+    /// leaving the generator as it was, when the field cannot be bound or a scale field would
+    /// need a larger cell size than the generator's. Cells (and so a GpuGenerator's candidate
+    /// counts) do not change; a GpuGenerator of this generator needs refreshFields() after it.
+    void setField(int slot, const FieldDesc& desc);
+    /// Rebuild the shared field data after a bound painted grid changed in place (same checks
+    /// as setField).
+    void refreshFields();
+
     /// Impulses of the cells accepted by `keep` (all cells when empty), concatenated in cell
     /// order; parallel over cells, identical for any thread count. Checks the memory budget first.
     std::vector<Impulse> generate(const std::function<bool(const SurfaceCell&)>& keep = {}) const;
 
 private:
     void buildSharedData();
+    void buildFieldData();
+    std::unique_ptr<Field>& boundField(int slot);
+    /// Smallest valid cell size with `scale` as the scale field.
+    float minimumCellSizeFor(const Field& scale) const;
     shared::f32::GeneratorArrays arrays() const;
 
     const Mesh& m_mesh;

@@ -152,10 +152,16 @@ public:
                 desc.repeat = wrap == "repeat";
             }
             fieldRange(require(j, path, "range"), join(path, "range"), components, r, desc);
+        } else if (type == "painted") {
+            // The values are read with the grid (makeField), so they are not checked here.
+            requireObject(j, path, {"type", "file", "grid"});
+            desc.kind = FieldDesc::Kind::Painted;
+            desc.file = string(require(j, path, "file"), join(path, "file"), false);
+            desc.grid = string(require(j, path, "grid"), join(path, "grid"), false);
         } else {
             fail(cat(join(path, "type"), " = \"", printable(type),
                      "\" is not one of \"constant\", \"gradient\", \"noise\", \"vertex\", "
-                     "\"image\""));
+                     "\"image\", \"painted\""));
         }
         return desc;
     }

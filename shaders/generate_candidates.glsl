@@ -31,6 +31,7 @@ layout(std430, binding = kGenBindFieldData) readonly buffer FieldData { float fi
 layout(std430, binding = kGenBindScratch) writeonly buffer Scratch { SpotImpulse scratch[]; };
 layout(std430, binding = kGenBindFlags) writeonly buffer Flags { uint flags[]; };
 layout(std430, binding = kGenBindSites) readonly buffer Sites { uint sites[]; };
+layout(std430, binding = kGenBindDirty) readonly buffer Dirty { uint dirtyOffsets[]; };
 
 const bool kJittered = SPOT_GEN_JITTERED != 0;
 // Set by splat/generate_vk.cpp from the generator's parameters; the defaults are never used.
@@ -114,10 +115,13 @@ void main() {
     }
     SpotCell cell = cells[lo];
     SpotImpulse imp;
+    // The candidate's place in the whole generation (a partial one lists only some cells).
+    uint rank = id - cell.info.z;
+    uint g = push.counts.z != 0u ? dirtyOffsets[lo] + rank : id;
     // Poisson: every candidate is examined; jittered: those the host listed.
-    uint m = kJittered ? sites[id] : id - cell.info.z;
+    uint m = kJittered ? sites[g] : rank;
     bool accepted = spotCandidate(cell, m, imp);
     if (accepted)
-        scratch[id] = imp;
-    flags[id] = accepted ? 1u : 0u;
+        scratch[g] = imp;
+    flags[g] = accepted ? 1u : 0u;
 }

@@ -1,7 +1,9 @@
 #version 450
 // Impulse generation, pass 2 of 3 (spot_generate_layout.h): the accepted flags become 1-based
 // output indices in candidate order (0 for a rejected candidate), and the impulse count is
-// written. One workgroup: each thread counts a contiguous chunk, a shared-memory scan gives the
+// written. Any non-zero flag counts as accepted, so a generation that decides only some cells'
+// candidates again (GpuGenerator::refreshFields(cells)) scans the others' indices as they stand.
+// One workgroup: each thread counts a contiguous chunk, a shared-memory scan gives the
 // chunk's first index, then each thread numbers its chunk in order. No atomics: the order is the
 // candidates' order on every run. Loop iterations per thread: 2 x chunk + 8.
 #extension GL_GOOGLE_include_directive : require
@@ -24,7 +26,7 @@ void main() {
     uint end = min(begin + chunk, n);
     uint count = 0u;
     for (uint i = begin; i < end; ++i)
-        count += flags[i];
+        count += flags[i] != 0u ? 1u : 0u;
     sums[t] = count;
     barrier();
     // Inclusive Hillis-Steele scan over the chunk totals.

@@ -84,6 +84,87 @@ SPOT_FN real spotImageTexel(SpotField f, int x, int y, int c) {
     return spotFieldData(f.data.x + (uint(y) * f.data.y + uint(x)) * uint(f.kind.y) + uint(c));
 }
 
+/* ---- Painted sparse grid (kind 5, noise/painted.h; docs/design.md section 3) ---------------- */
+/* The grid flattened into the field data: each OpenVDB leaf (8^3 voxels) is a block of 512 x
+ * components values (voxel n = (x & 7) << 6 | (y & 7) << 3 | (z & 7), components interleaved;
+ * inactive voxels hold the background), found through an open-addressing hash table of the
+ * leaves' coordinates (voxel index >> 3), linear probing. A table entry is 4 floats carrying
+ * integer bits: the leaf's x, y, z and 1 + its block (0: empty). SpotField: data.x the table's
+ * offset, data.y its size (a power of two), data.z the longest probe any stored leaf needs (the
+ * lookup loop's bound, at most kPaintedMaxProbe), data.w the blocks' offset; from.w 1 / voxel
+ * size; value the background; clampLo, clampHi the bounds of the values. */
+
+SPOT_CONST uint kPaintedMaxProbe = 32u;
+SPOT_CONST int kPaintedLeafVoxels = 512;
+
+SPOT_FN uint spotPaintedHash(ivec3 leaf) {
+    return spotHash(uint(leaf.x) * 73856093u ^ uint(leaf.y) * 19349663u ^ uint(leaf.z) * 83492791u);
+}
+
+/* The block of the leaf with coordinates `leaf`, or -1 when the grid has no such leaf. */
+SPOT_FN int spotPaintedBlock(SpotField f, ivec3 leaf) {
+    uint mask = f.data.y - 1u;
+    uint home = spotPaintedHash(leaf) & mask;
+    for (uint probe = 0u; probe < kPaintedMaxProbe && probe <= f.data.z; ++probe) {
+        uint e = f.data.x + 4u * ((home + probe) & mask);
+        int block = floatBitsToInt(spotFieldData(e + 3u)) - 1;
+        if (block < 0)
+            return -1;
+        if (floatBitsToInt(spotFieldData(e)) == leaf.x && floatBitsToInt(spotFieldData(e + 1u)) == leaf.y &&
+            floatBitsToInt(spotFieldData(e + 2u)) == leaf.z)
+            return block;
+    }
+    return -1;
+}
+
+/* Voxel v's value in block `block` (-1: the leaf is not stored, the background). */
+SPOT_FN rvec3 spotPaintedValue(SpotField f, int block, ivec3 v, int components) {
+    rvec3 value = rvec3(f.value);
+    if (block < 0)
+        return value;
+    uint n = uint(((v.x & 7) << 6) | ((v.y & 7) << 3) | (v.z & 7));
+    uint at = f.data.w + (uint(block) * uint(kPaintedLeafVoxels) + n) * uint(components);
+    for (int c = 0; c < components; ++c)
+        value[c] = spotFieldData(at + uint(c));
+    return value;
+}
+
+/* Corner i + d of a trilinear stencil: the first corner's block `block0` is reused when the
+ * corner lies in the same leaf (7 stencils in 8 along each axis), else its leaf is looked up. */
+SPOT_FN rvec3 spotPaintedCorner(SpotField f, ivec3 i, ivec3 d, int block0, int components) {
+    ivec3 v = i + d;
+    ivec3 leaf = ivec3(v.x >> 3, v.y >> 3, v.z >> 3);
+    int block = leaf == ivec3(i.x >> 3, i.y >> 3, i.z >> 3) ? block0 : spotPaintedBlock(f, leaf);
+    return spotPaintedValue(f, block, v, components);
+}
+
+/* Trilinear interpolation of the 8 voxels around world point p (index space = p / voxel size),
+ * clamped to the bounds of the values (a convex combination leaves them only by rounding). */
+SPOT_FN rvec3 spotPaintedSample(SpotField f, rvec3 p, int components) {
+    /* Far outside any grid the index stays well inside int range (and reads the background). */
+    rvec3 q = clamp(p * f.from.w, rvec3(real(-1e8)), rvec3(real(1e8)));
+    rvec3 b = floor(q);
+    rvec3 t = q - b;
+    ivec3 i = ivec3(b);
+    int block0 = spotPaintedBlock(f, ivec3(i.x >> 3, i.y >> 3, i.z >> 3));
+    rvec3 c000 = spotPaintedValue(f, block0, i, components);
+    rvec3 c100 = spotPaintedCorner(f, i, ivec3(1, 0, 0), block0, components);
+    rvec3 c010 = spotPaintedCorner(f, i, ivec3(0, 1, 0), block0, components);
+    rvec3 c110 = spotPaintedCorner(f, i, ivec3(1, 1, 0), block0, components);
+    rvec3 c001 = spotPaintedCorner(f, i, ivec3(0, 0, 1), block0, components);
+    rvec3 c101 = spotPaintedCorner(f, i, ivec3(1, 0, 1), block0, components);
+    rvec3 c011 = spotPaintedCorner(f, i, ivec3(0, 1, 1), block0, components);
+    rvec3 c111 = spotPaintedCorner(f, i, ivec3(1, 1, 1), block0, components);
+    rvec3 c00 = c000 + (c100 - c000) * t.x;
+    rvec3 c10 = c010 + (c110 - c010) * t.x;
+    rvec3 c01 = c001 + (c101 - c001) * t.x;
+    rvec3 c11 = c011 + (c111 - c011) * t.x;
+    rvec3 c0 = c00 + (c10 - c00) * t.y;
+    rvec3 c1 = c01 + (c11 - c01) * t.y;
+    rvec3 v = c0 + (c1 - c0) * t.z;
+    return spotKeepComponents(clamp(v, rvec3(f.clampLo), rvec3(f.clampHi)), components);
+}
+
 /* A field's value at a surface point (scalars in .x). */
 SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
     SpotField f = spotParamField(slot);
@@ -146,6 +227,8 @@ SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
         }
         return spotKeepComponents(spotFieldMap(f, t), components);
     }
+    if (kind == 5)
+        return spotPaintedSample(f, s.position, components);
     return rvec3(f.value);
 }
 

@@ -28,7 +28,10 @@
 
 /* Push constants of every generator pipeline (32 bytes). */
 struct SpotGenPush {
-    uvec4 counts; /* x: cells; y: candidates examined; z, w: unused */
+    uvec4 counts; /* x: cells; y: candidates examined; z: 1 when the candidates pass decides only
+                     some cells' candidates again (the others' scratch and flags stand): its
+                     cells' info.z are offsets among those candidates, kGenBindDirty gives each
+                     one's offset in the whole generation; w: unused */
     vec4 lod;     /* SpotGenParams::lod of this generation (w = 0: off) */
 };
 
@@ -48,6 +51,8 @@ SPOT_CONST uint kGenBindImpulses = 11u;  /* SpotImpulse[]: the output (scatter) 
 SPOT_CONST uint kGenBindCount = 12u;     /* uint: the impulse count (scan) */
 SPOT_CONST uint kGenBindSites = 13u;     /* uint[examined]: each one's index in its cell
                                             (jittered candidates) */
+SPOT_CONST uint kGenBindDirty = 14u;     /* uint[cells]: with counts.z, each cell's offset in the
+                                            whole generation (candidates) */
 
 /* Specialization constants of the candidates pass, compiled for one preset's generator: lavapipe
  * compiles a shader at its first use and pays for every path it carries, so only the field kinds

@@ -51,16 +51,20 @@ struct SpotWorldLobe {
 
 /* A bound field in the shared form (144 bytes): what the generator evaluates, on either side. */
 struct SpotField {
-    ivec4 kind;    /* x: 0 constant, 1 gradient, 2 noise, 3 vertex, 4 image; y: components (1|3);
-                      z: noise octaves; w: noise seed (bits) */
-    vec4 value;    /* constant value */
+    ivec4 kind;    /* x: 0 constant, 1 gradient, 2 noise, 3 vertex, 4 image, 5 painted;
+                      y: components (1|3); z: noise octaves; w: noise seed (bits) */
+    vec4 value;    /* constant value; painted: the background */
     vec4 lo;       /* mapped kinds: output at t = 0 (per component) */
     vec4 hi;       /* output at t = 1 */
-    vec4 from;     /* gradient: xyz start point; noise: w frequency (cells per world unit) */
+    vec4 from;     /* gradient: xyz start point; noise: w frequency (cells per world unit);
+                      painted: w 1 / voxel size */
     vec4 axis;     /* gradient: (to - from) / |to - from|^2 */
     uvec4 data;    /* vertex: xyz offsets of the attribute columns in the field data array;
-                      image: x offset, y width, z height, w repeat (1) or clamp (0) */
-    vec4 clampLo;  /* vertex: bounds of the attribute values; image: bounds of the texels */
+                      image: x offset, y width, z height, w repeat (1) or clamp (0);
+                      painted: x hash table offset, y its size, z longest probe, w blocks'
+                      offset (spot_generate.h) */
+    vec4 clampLo;  /* vertex: bounds of the attribute values; image: bounds of the texels;
+                      painted: bounds of the values */
     vec4 clampHi;
 };
 

@@ -71,6 +71,14 @@ public:
     Renderer& renderer(std::string_view method);
     const SceneGpu& scene() const { return m_scene; }
     GpuGenerator& generator() { return m_generator; }
+    /// The generator's fields changed (noise::ImpulseGenerator::setField or refreshFields after
+    /// painting): the next render() uploads nothing stale and regenerates the impulses.
+    void fieldsChanged() { m_generator.refreshFields(); }
+    /// fieldsChanged() when only the model cells `cells` (indices into the generator's cells)
+    /// read what changed: if the next render() sees the cells of the last one at the same level
+    /// of detail, only those cells' impulses are generated again, every other cell's impulses
+    /// stay bit for bit (GpuGenerator::refreshFields(cells)).
+    void fieldsChanged(const std::vector<std::uint32_t>& cells) { m_generator.refreshFields(cells); }
     /// Whether a cell may be seen by the camera (its box grown by one cell: kernels reach the
     /// neighbouring cells).
     bool cellVisible(const noise::CameraRays& rays, const noise::SurfaceCell& cell) const;

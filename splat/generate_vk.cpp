@@ -103,7 +103,7 @@ glm::vec4 lodParameters(const noise::Camera& camera, double pixels) {
 
 GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
                            const noise::ImpulseGenerator& generator)
-    : m_ctx(ctx), m_generator(generator), m_shared(arraysOf(mesh, generator)),
+    : m_ctx(ctx), m_mesh(mesh), m_generator(generator), m_shared(arraysOf(mesh, generator)),
       m_jittered(generator.sharedParams().flags.y == 1u),
       m_cellCandidates(generator.cells().cells.size()) {
     m_scanPipeline = makeComputePipeline(
@@ -131,10 +131,92 @@ GpuGenerator::GpuGenerator(Context& ctx, const noise::Mesh& mesh,
     *static_cast<std::uint32_t*>(m_count.mapped()) = 0;
 }
 
+std::vector<std::int32_t> GpuGenerator::specializationKey() const {
+    const gpu::SpotGenParams& params = m_generator.sharedParams();
+    std::vector<std::int32_t> key = {std::int32_t(params.flags.z != 0u)};
+    for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
+        key.insert(key.end(), {params.fields[slot].kind.x, params.fields[slot].kind.y});
+    return key;
+}
+
+void GpuGenerator::refreshFields() {
+    const std::vector<float>& data = m_generator.sharedFieldData();
+    reserve(m_ctx, m_fieldData, data.size(), sizeof(float), kStorage, Buffer::Memory::HostVisible,
+            "field data");
+    if (!data.empty())
+        m_fieldData.upload(data.data(), data.size() * sizeof(float));
+    const gpu::SpotGenParams& params = m_generator.sharedParams();
+    m_params.upload(&params, sizeof(params));
+    // The host twin reads the generator's arrays, which may have moved.
+    m_shared = shared::f32::SharedGenerator(arraysOf(m_mesh, m_generator));
+    if (m_candidatePipeline.handle() && specializationKey() != m_candidateKey)
+        m_candidatePipeline = Pipeline();
+    m_valid = false;
+    m_dirtyPending = false;
+}
+
+void GpuGenerator::refreshFields(const std::vector<std::uint32_t>& cells) {
+    const bool valid = m_valid;
+    refreshFields();
+    if (!valid || m_candidateKey.empty())
+        return; // nothing generated yet to keep: a full generation
+    const std::size_t modelCells = m_generator.cells().cells.size();
+    // Cells changed by an earlier refresh and not generated since stay dirty.
+    for (const std::uint32_t c : cells) {
+        if (c >= modelCells)
+            throw InputError(cat("cell ", c, " is not a cell of the model (it has ", modelCells, ")"));
+        m_dirty.push_back(c);
+    }
+    std::sort(m_dirty.begin(), m_dirty.end());
+    m_dirty.erase(std::unique(m_dirty.begin(), m_dirty.end()), m_dirty.end());
+    m_valid = true;
+    m_dirtyPending = true;
+}
+
+void GpuGenerator::choosePartial() {
+    const auto& all = m_generator.cells().cells;
+    std::vector<gpu::SpotCell> cells;
+    std::vector<std::uint32_t> offsets;
+    std::uint32_t offset = 0, local = 0;
+    auto dirty = m_dirty.begin();
+    for (const std::uint32_t c : m_cellKey) {
+        const std::uint32_t n = examined(cellCandidates(c));
+        while (dirty != m_dirty.end() && *dirty < c)
+            ++dirty;
+        if (n > 0 && dirty != m_dirty.end() && *dirty == c) {
+            gpu::SpotCell cell = gpu::toGpu(all[c]);
+            cell.info.z = local;
+            cell.info.w = n;
+            cells.push_back(cell);
+            offsets.push_back(offset);
+            local += n;
+        }
+        offset += n;
+    }
+    SPOT_CHECK_EQ(offset, m_examined);
+    reserve(m_ctx, m_dirtyCells, cells.size(), sizeof(gpu::SpotCell), kStorage,
+            Buffer::Memory::HostVisible, "changed cells");
+    reserve(m_ctx, m_dirtyOffsets, offsets.size(), sizeof(std::uint32_t), kStorage,
+            Buffer::Memory::HostVisible, "changed cells' offsets");
+    if (!cells.empty()) {
+        m_dirtyCells.upload(cells.data(), cells.size() * sizeof(gpu::SpotCell));
+        m_dirtyOffsets.upload(offsets.data(), offsets.size() * sizeof(std::uint32_t));
+    }
+    m_dirtyCellCount = std::uint32_t(cells.size());
+    m_dirtyExamined = local;
+    if (local > 0)
+        candidatePipeline();
+    m_dirty.clear();
+    m_dirtyPending = false;
+    m_partial = true;
+    ++m_version;
+}
+
 const Pipeline& GpuGenerator::candidatePipeline() {
     Pipeline& p = m_candidatePipeline;
     if (p.handle())
         return p;
+    m_candidateKey = specializationKey();
     const gpu::SpotGenParams& params = m_generator.sharedParams();
     Specialization spec;
     spec.set(kGenSpecComb, params.flags.z != 0u)
@@ -148,7 +230,8 @@ const Pipeline& GpuGenerator::candidatePipeline() {
                                storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
                                storageBuffer(kGenBindTangents),  storageBuffer(kGenBindUvs),
                                storageBuffer(kGenBindFieldData), storageBuffer(kGenBindScratch),
-                               storageBuffer(kGenBindFlags),     storageBuffer(kGenBindSites)};
+                               storageBuffer(kGenBindFlags),     storageBuffer(kGenBindSites),
+                               storageBuffer(kGenBindDirty)};
     p = makeComputePipeline(
         m_ctx, m_jittered ? spirv(spv_generate_jittered_comp) : spirv(spv_generate_poisson_comp),
         bindings, sizeof(SpotGenPush), spec);
@@ -174,12 +257,19 @@ bool GpuGenerator::choose(const std::function<bool(const noise::SurfaceCell&)>& 
     for (std::uint32_t i = 0; i < all.size(); ++i)
         if (!keep || keep(all[i]))
             key.push_back(i);
-    if (!force && m_valid && key == m_cellKey && lod == m_lod)
-        return false;
+    if (!force && m_valid && key == m_cellKey && lod == m_lod) {
+        if (!m_dirtyPending)
+            return false;
+        choosePartial();
+        return true;
+    }
 
     // Each cell's candidates, counted on the host with the shared code (as the CPU generator
     // does), those the GPU examines and their offsets.
     m_valid = false;
+    m_partial = false;
+    m_dirtyPending = false;
+    m_dirty.clear();
     std::uint64_t total = 0, examinedTotal = 0;
     std::uint32_t withCandidates = 0;
     for (const std::uint32_t c : key) {
@@ -240,13 +330,18 @@ bool GpuGenerator::prepare(const std::function<bool(const noise::SurfaceCell&)>&
 void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
     SPOT_CHECK(m_valid);
     const SpotGenPush push{glm::uvec4(m_uploadedCells, m_examined, 0u, 0u), m_lod};
+    // A partial generation decides only the changed cells' candidates; the others' impulses and
+    // flags (0, or their index: non-zero) stand in scratch and flags.
+    const SpotGenPush candidatePush =
+        m_partial ? SpotGenPush{glm::uvec4(m_dirtyCellCount, m_dirtyExamined, 1u, 0u), m_lod} : push;
     // 1. Every candidate decided.
-    if (m_examined > 0) {
+    if (candidatePush.counts.y > 0) {
         const Pipeline& candidates = m_candidatePipeline;
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, candidates.handle());
         Descriptors()
             .buffer(kGenBindParams, m_params)
-            .buffer(kGenBindCells, m_cells)
+            .buffer(kGenBindCells, m_partial ? m_dirtyCells : m_cells)
+            .buffer(kGenBindDirty, m_partial ? m_dirtyOffsets : m_cells)
             .buffer(kGenBindPieces, m_pieces)
             .buffer(kGenBindTriangles, m_triangles)
             .buffer(kGenBindPositions, m_positions)
@@ -258,8 +353,8 @@ void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kGenBindFlags, m_flags)
             .buffer(kGenBindSites, m_sites)
             .push(m_ctx, cmd, candidates);
-        pushConstants(cmd, candidates, push);
-        dispatch(cmd, m_examined);
+        pushConstants(cmd, candidates, candidatePush);
+        dispatch(cmd, candidatePush.counts.y);
         memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
     }
     // 2. The flags become output indices, and the count is written (0 without candidates).

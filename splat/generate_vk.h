@@ -66,6 +66,20 @@ public:
     std::uint32_t candidates() const { return m_candidates; }
     std::uint32_t cells() const { return m_cellCount; }
 
+    /// After the generator's fields changed (noise::ImpulseGenerator::setField, refreshFields):
+    /// uploads the field data and parameters again (growing the buffer when needed, within the
+    /// memory budget), remakes the candidates pipeline when a slot's kind, component count or the
+    /// comb's presence changed (they are specialization constants), and makes the next prepare()
+    /// regenerate. The cells' candidate counts stay (they depend on no field). No frame that
+    /// reads this generator may be in flight.
+    void refreshFields();
+    /// refreshFields() when the fields changed only where the model cells `cells` (indices into
+    /// the generator's cells) read them: the next prepare(), if it chooses the cells and level of
+    /// detail of the last generation, decides only those cells' candidates again and keeps every
+    /// other cell's impulses as they were (bit for bit); otherwise it regenerates everything.
+    /// The last generation must have run (its frame submitted).
+    void refreshFields(const std::vector<std::uint32_t>& cells);
+
     /// One-shot generation, waited for (tests and host-side users): prepare() (regenerating even
     /// when the cells and lod are those of the last generation), record(), submit, wait; the
     /// impulses copied into a host-visible buffer of the caller's. The generation also becomes
@@ -76,6 +90,8 @@ public:
 private:
     bool choose(const std::function<bool(const noise::SurfaceCell&)>& keep, glm::vec4 lod,
                 bool force);
+    /// The host side of a partial generation over the cells of the last one.
+    void choosePartial();
     /// What the host knows of one model cell, found on first use (it depends on neither the view
     /// nor the level of detail).
     struct CellCandidates {
@@ -88,14 +104,19 @@ private:
         return m_jittered ? std::uint32_t(c.inside.size()) : c.candidates;
     }
     const Pipeline& candidatePipeline();
+    /// What the candidates pipeline is specialized for: the comb flag, each slot's kind and
+    /// component count.
+    std::vector<std::int32_t> specializationKey() const;
 
     Context& m_ctx;
+    const noise::Mesh& m_mesh;
     const noise::ImpulseGenerator& m_generator;
     /// The CPU twin of the shared code, over the same arrays the GPU reads (host-side counts).
     shared::f32::SharedGenerator m_shared;
     bool m_jittered = false;
     std::vector<CellCandidates> m_cellCandidates; ///< per model cell
     Pipeline m_candidatePipeline;                 ///< specialized for the preset; made on first use
+    std::vector<std::int32_t> m_candidateKey;     ///< specializationKey() it was made for
     Pipeline m_scanPipeline, m_scatterPipeline;
     Buffer m_params, m_pieces, m_triangles, m_positions, m_normals, m_tangents, m_uvs, m_fieldData;
 
@@ -107,6 +128,13 @@ private:
     Buffer m_impulses; ///< SpotImpulse[examined]: the impulses, compacted (host-visible)
     Buffer m_count;    ///< uint: the impulse count (host-visible)
     std::vector<std::uint32_t> m_cellKey; ///< indices of the cells last generated
+    /// A partial generation (refreshFields(cells)): the model cells to decide again, pending
+    /// until the next prepare(); then the chosen ones, as SpotCell[] with offsets among their own
+    /// candidates (m_dirtyCells) and each one's offset in the whole generation (m_dirtyOffsets).
+    std::vector<std::uint32_t> m_dirty;
+    bool m_dirtyPending = false, m_partial = false;
+    Buffer m_dirtyCells, m_dirtyOffsets;
+    std::uint32_t m_dirtyCellCount = 0, m_dirtyExamined = 0;
     glm::vec4 m_lod{0.0f};
     bool m_valid = false; ///< a generation is prepared (false after a failed prepare)
     std::uint64_t m_version = 0;

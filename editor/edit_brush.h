@@ -1,0 +1,123 @@
+/// @file edit_brush.h
+/// @brief The editor's brushes: what a dab of each kind does to the voxels of a painted grid
+/// near the surface, and the sparse record of what it changed (the undo delta).
+///
+/// Units: the brush radius is in window pixels (converted to world units at the hit depth by the
+/// session), a dab's centre and radius in world units, the tilt in degrees, the colour linear
+/// RGB. A dab only touches voxels whose lattice point lies within the dab's world radius of its
+/// centre and within one voxel diagonal of the surface (the 8 voxels the trilinear lookup of any
+/// surface point reads: noise/painted.h).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+#include <tuple>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "noise/field.h"
+#include "noise/mesh.h"
+#include "noise/painted.h"
+
+namespace spot::edit {
+
+enum class BrushKind { DensityAdd, DensityErase, Comb, Tilt, Length, Color, Smooth };
+enum class Falloff { Smooth, Linear, Constant };
+
+/// The painted slots of a preset, in the order the preset's `fields` lists them.
+enum class Slot { Density, Comb, Tilt, Scale, Color };
+inline constexpr int kSlotCount = 5;
+
+/// `density`, `comb`, `tilt_deg`, `scale`, `color`: the slot's key under the preset's `fields`
+/// (also the grid's name in the .vdb file).
+const char* slotKey(Slot slot);
+/// 1 or 3.
+int slotComponents(Slot slot);
+
+/// "density-add", ...; parse throws InputError listing the kinds.
+const char* brushKindName(BrushKind kind);
+BrushKind parseBrushKind(std::string_view name);
+const char* falloffName(Falloff falloff);
+Falloff parseFalloff(std::string_view name);
+
+struct BrushSettings {
+    BrushKind kind = BrushKind::DensityAdd;
+    float radiusPx = 30.0f; ///< window pixels
+    /// [-1, 1]; negative inverts where it means something (length shrinks, tilt lifts towards 0).
+    float strength = 1.0f;
+    Falloff falloff = Falloff::Smooth;
+    bool mirrorX = false;       ///< also paint the dab mirrored about x = 0 (mesh space)
+    bool frontFacesOnly = true; ///< skip voxels whose surface faces away from the camera
+    glm::vec3 color{1.0f};      ///< Color: linear RGB
+    /// Smooth: the slot it averages (the other kinds imply theirs).
+    Slot smoothTarget = Slot::Density;
+};
+
+/// The slot a brush paints.
+Slot brushSlot(const BrushSettings& brush);
+
+/// Weight of a dab at relative distance t = d / radius in [0, 1]: smooth 1 - (3t^2 - 2t^3),
+/// linear 1 - t, constant 1; 0 beyond the radius.
+float falloffWeight(Falloff falloff, float t);
+
+/// One dab in world units.
+struct Dab {
+    glm::vec3 centre{0.0f};
+    float radius = 0.0f;
+    glm::vec3 eye{0.0f};       ///< camera position, for the front-face test
+    glm::vec3 direction{0.0f}; ///< Comb: the drag direction in world units (any length)
+};
+
+/// A voxel near the surface: its index and the closest surface point (position, normal,
+/// tangent, uv: what a field is evaluated at).
+struct SurfaceVoxel {
+    glm::ivec3 ijk{0};
+    noise::SurfacePoint point;
+    float distance = 0.0f; ///< lattice point to the surface, world units
+};
+
+/// The mesh's triangles as boxes, for the voxel queries.
+class SurfaceIndex {
+public:
+    explicit SurfaceIndex(const noise::Mesh& mesh);
+    /// Voxels of the lattice `voxelSize` within `radius` of `centre` and within one voxel
+    /// diagonal of the surface, each with its closest surface point. Sorted by ijk
+    /// (deterministic).
+    std::vector<SurfaceVoxel> voxelsNear(glm::vec3 centre, float radius, float voxelSize) const;
+    const noise::Mesh& mesh() const { return m_mesh; }
+
+private:
+    const noise::Mesh& m_mesh;
+    std::vector<glm::vec3> m_lo, m_hi;
+};
+
+/// What a stroke changed in one grid: per voxel the state before its first change and after its
+/// last one.
+struct VoxelChange {
+    glm::vec3 before{0.0f}, after{0.0f};
+    bool activeBefore = false, activeAfter = false;
+};
+struct IjkLess {
+    bool operator()(const glm::ivec3& a, const glm::ivec3& b) const {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    }
+};
+using GridDelta = std::map<glm::ivec3, VoxelChange, IjkLess>;
+
+/// Bytes a delta holds (the undo budget counts these).
+std::size_t deltaBytes(const GridDelta& delta);
+/// Set every voxel of `delta` to its `after` (redo) or `before` (undo) state.
+void applyDelta(noise::PaintedGrid& grid, const GridDelta& delta, bool after);
+
+/// Apply one dab of `brush` to `grid` (the brush's slot), recording every change in `delta`
+/// and, when given, appending the voxels written to `touched`. Returns the number of voxels
+/// written.
+std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
+                     noise::PaintedGrid& grid, GridDelta& delta,
+                     std::vector<glm::ivec3>* touched = nullptr);
+
+} // namespace spot::edit

@@ -1,0 +1,444 @@
+#include "edit_script.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "cli.h"
+#include "edit_session.h"
+#include "noise/error.h"
+#include "noise/system.h"
+#include "render_options.h"
+
+namespace spot::edit {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+/// The tokens of one line, with the failure message's prefix.
+class Line {
+public:
+    Line(std::vector<std::string> tokens, std::string where)
+        : m_tokens(std::move(tokens)), m_where(std::move(where)) {}
+
+    [[noreturn]] void fail(const std::string& message) const {
+        throw InputError(cat(m_where, ": ", message));
+    }
+    bool done() const { return m_next >= m_tokens.size(); }
+    const std::string& peek() const { return m_tokens[m_next]; }
+    std::string word(const char* what) {
+        if (done())
+            fail(cat("missing ", what));
+        return m_tokens[m_next++];
+    }
+    double number(const char* what, double lo, double hi) {
+        const std::string t = word(what);
+        char* end = nullptr;
+        const double v = std::strtod(t.c_str(), &end);
+        if (end != t.c_str() + t.size() || t.empty() || !std::isfinite(v))
+            fail(cat(what, " '", t, "' is not a number"));
+        if (v < lo || v > hi)
+            fail(cat(what, " ", v, " is outside [", lo, ", ", hi, "]"));
+        return v;
+    }
+    int integer(const char* what, int lo, int hi) {
+        const std::string t = peekWord(what);
+        const double v = number(what, lo, hi);
+        if (v != std::floor(v))
+            fail(cat(what, " '", t, "' is not an integer"));
+        return int(v);
+    }
+    glm::dvec3 vec3(const char* what, double lo, double hi) {
+        const double x = number(what, lo, hi), y = number(what, lo, hi), z = number(what, lo, hi);
+        return {x, y, z};
+    }
+    std::string rest() {
+        std::string s;
+        while (!done())
+            s += (s.empty() ? "" : " ") + m_tokens[m_next++];
+        return s;
+    }
+    void end() const {
+        if (!done())
+            fail(cat("unexpected '", m_tokens[m_next], "'"));
+    }
+
+private:
+    std::string peekWord(const char* what) const {
+        if (done())
+            fail(cat("missing ", what));
+        return m_tokens[m_next];
+    }
+    std::vector<std::string> m_tokens;
+    std::string m_where;
+    std::size_t m_next = 0;
+};
+
+constexpr double kBig = 1e9;
+
+splat::RenderSettings methodSettings(Line& line, const std::string& method) {
+    std::vector<std::string> args;
+    while (!line.done()) {
+        const std::string key = line.word("setting");
+        const std::string value = line.word(cat("value of ", key).c_str());
+        if (key == "count-fragments") {
+            if (value != "on" && value != "off")
+                line.fail("count-fragments must be on or off");
+            if (value == "on")
+                args.push_back("--count-fragments");
+            continue;
+        }
+        args.push_back("--" + key);
+        args.push_back(value);
+    }
+    std::vector<char*> argv;
+    for (std::string& a : args)
+        argv.push_back(a.data());
+    try {
+        const cli::Args parsed("method " + method, "", cli::renderOptions(), int(argv.size()),
+                               argv.data());
+        return cli::renderSettings(parsed);
+    } catch (const InputError& e) {
+        line.fail(e.what());
+    }
+}
+
+void parseBrush(Line& line, BrushSettings& b) {
+    try {
+        b.kind = parseBrushKind(line.word("brush kind"));
+    } catch (const InputError& e) {
+        line.fail(e.what());
+    }
+    while (!line.done()) {
+        const std::string key = line.word("brush option");
+        if (key == "radius") {
+            b.radiusPx = float(line.number("radius", 0.5, 4096.0));
+        } else if (key == "strength") {
+            b.strength = float(line.number("strength", -1.0, 1.0));
+        } else if (key == "falloff") {
+            try {
+                b.falloff = parseFalloff(line.word("falloff"));
+            } catch (const InputError& e) {
+                line.fail(e.what());
+            }
+        } else if (key == "mirror") {
+            if (line.word("mirror axis") != "x")
+                line.fail("only 'mirror x' is supported");
+            b.mirrorX = true;
+        } else if (key == "color") {
+            b.color = glm::vec3(line.vec3("color", 0.0, 1.0));
+        } else if (key == "backfaces") {
+            b.frontFacesOnly = false;
+        } else if (key == "target") {
+            const std::string slot = line.word("target");
+            if (slot == "density")
+                b.smoothTarget = Slot::Density;
+            else if (slot == "comb")
+                b.smoothTarget = Slot::Comb;
+            else if (slot == "tilt")
+                b.smoothTarget = Slot::Tilt;
+            else if (slot == "length")
+                b.smoothTarget = Slot::Scale;
+            else if (slot == "color")
+                b.smoothTarget = Slot::Color;
+            else
+                line.fail(cat("target '", slot, "' is not density, comb, tilt, length or color"));
+        } else {
+            line.fail(cat("unknown brush option '", key,
+                          "' (radius, strength, falloff, mirror, color, backfaces, target)"));
+        }
+    }
+}
+
+void checkExtension(Line& line, const std::filesystem::path& file,
+                    std::initializer_list<const char*> extensions) {
+    std::string ext = file.extension().string();
+    for (char& c : ext)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    std::string list;
+    for (const char* e : extensions) {
+        if (ext == e)
+            return;
+        list += (list.empty() ? "" : ", ") + std::string(e);
+    }
+    line.fail(cat("'", file.string(), "' must end in ", list));
+}
+
+ScriptAction parseLine(Line& line, const std::string& verb) {
+    using T = ScriptAction::Type;
+    ScriptAction a;
+    if (verb == "camera") {
+        a.type = T::Camera;
+        if (line.word("'eye'") != "eye")
+            line.fail("expected 'camera eye X Y Z target X Y Z [fov DEG]'");
+        a.eye = line.vec3("eye", -kBig, kBig);
+        if (line.word("'target'") != "target")
+            line.fail("expected 'camera eye X Y Z target X Y Z [fov DEG]'");
+        a.target = line.vec3("target", -kBig, kBig);
+        if (!line.done()) {
+            if (line.word("'fov'") != "fov")
+                line.fail("expected 'fov DEG'");
+            a.fovDeg = line.number("fov", 1.0, 179.0);
+        }
+        if (glm::length(a.eye - a.target) == 0.0)
+            line.fail("eye and target coincide");
+    } else if (verb == "method") {
+        a.type = T::Method;
+        a.name = line.word("method name");
+        if (!splat::findGpuMethod(a.name))
+            line.fail(cat("unknown method '", a.name, "' (", splat::gpuMethodNames(), ")"));
+        a.settings = methodSettings(line, a.name);
+    } else if (verb == "brush") {
+        a.type = T::Brush;
+        parseBrush(line, a.brush);
+    } else if (verb == "stroke") {
+        a.type = T::Stroke;
+        while (!line.done()) {
+            const std::string p = line.word("point");
+            float x = 0.0f, y = 0.0f;
+            char extra = 0;
+            if (std::sscanf(p.c_str(), "%f,%f%c", &x, &y, &extra) != 2 || !std::isfinite(x) ||
+                !std::isfinite(y))
+                line.fail(cat("point '", p, "' must be X,Y (window pixels)"));
+            a.points.emplace_back(x, y);
+        }
+        if (a.points.empty())
+            line.fail("a stroke needs at least one point X,Y");
+    } else if (verb == "undo" || verb == "redo") {
+        a.type = verb == "undo" ? T::Undo : T::Redo;
+    } else if (verb == "lobe") {
+        a.type = T::Lobe;
+        const std::string first = line.word("lobe index, add or remove");
+        if (first == "add" || first == "remove") {
+            a.name = first;
+            a.index = line.integer("lobe index", 0, noise::kMaxLobes - 1);
+        } else {
+            char* end = nullptr;
+            const long i = std::strtol(first.c_str(), &end, 10);
+            if (end != first.c_str() + first.size() || i < 0 || i >= noise::kMaxLobes)
+                line.fail(cat("lobe index '", first, "' must be 0..", noise::kMaxLobes - 1));
+            a.index = int(i);
+            const std::string what = line.word("lobe property");
+            if (what == "offset" || what == "sigma" || what == "color" || what == "rotation") {
+                const glm::dvec3 v = what == "color"   ? line.vec3("color", 0.0, 1.0)
+                                     : what == "sigma" ? line.vec3("sigma", 0.0, kBig)
+                                                       : line.vec3(what.c_str(), -kBig, kBig);
+                a.name = what == "rotation" ? "rotation_deg" : what;
+                a.value = {v.x, v.y, v.z};
+            } else if (what == "extinction") {
+                a.name = what;
+                a.value = line.number("extinction", 0.0, kBig);
+            } else {
+                line.fail(cat("lobe property '", what,
+                              "' is not offset, rotation, sigma, extinction or color"));
+            }
+        }
+    } else if (verb == "set") {
+        a.type = T::Set;
+        a.name = line.word("key path");
+        try {
+            (void)keyPathPointer(a.name);
+        } catch (const InputError& e) {
+            line.fail(e.what());
+        }
+        const std::string value = line.rest();
+        if (value.empty())
+            line.fail("missing value");
+        try {
+            a.value = nlohmann::json::parse(value);
+        } catch (const nlohmann::json::exception&) {
+            line.fail(cat("value '", value, "' is not JSON"));
+        }
+    } else if (verb == "seed") {
+        a.type = T::Seed;
+        a.seed = std::uint32_t(line.number("seed", 0.0, 4294967295.0));
+    } else if (verb == "wind") {
+        a.type = T::Wind;
+        const std::string state = line.word("on or off");
+        if (state != "on" && state != "off")
+            line.fail(cat("wind '", state, "' must be on or off"));
+        a.on = state == "on";
+        while (!line.done()) {
+            const std::string key = line.word("wind option");
+            if (key == "amplitude")
+                a.amplitudeDeg = float(line.number("amplitude", 0.0, 80.0));
+            else if (key == "frequency")
+                a.frequencyHz = float(line.number("frequency", 0.0, 100.0));
+            else
+                line.fail(cat("unknown wind option '", key, "' (amplitude, frequency)"));
+        }
+    } else if (verb == "frames") {
+        a.type = T::Frames;
+        a.count = line.integer("frame count", 1, 100000);
+    } else if (verb == "save") {
+        a.type = T::Save;
+        a.file = line.word("file");
+        checkExtension(line, a.file, {".json"});
+    } else if (verb == "screenshot") {
+        a.type = T::Screenshot;
+        a.file = line.word("file");
+        checkExtension(line, a.file, {".png", ".exr"});
+    } else {
+        line.fail(
+            cat("unknown action '", verb,
+                "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, frames, "
+                "save, screenshot)"));
+    }
+    line.end();
+    return a;
+}
+
+} // namespace
+
+std::vector<ScriptAction> parseScript(std::string_view text, const std::string& name) {
+    std::vector<ScriptAction> actions;
+    std::istringstream in{std::string(text)};
+    std::string raw;
+    int number = 0;
+    while (std::getline(in, raw)) {
+        ++number;
+        std::string content = raw.substr(0, raw.find('#'));
+        if (!content.empty() && content.back() == '\r')
+            content.pop_back();
+        std::istringstream words(content);
+        std::vector<std::string> tokens;
+        for (std::string w; words >> w;)
+            tokens.push_back(w);
+        if (tokens.empty())
+            continue;
+        Line line(tokens, cat("script ", name, ":", number));
+        const std::string verb = line.word("action");
+        ScriptAction a = parseLine(line, verb);
+        a.line = number;
+        const std::size_t first = content.find_first_not_of(" \t");
+        const std::size_t last = content.find_last_not_of(" \t");
+        a.text = content.substr(first, last - first + 1);
+        actions.push_back(std::move(a));
+    }
+    return actions;
+}
+
+std::vector<ScriptAction> loadScript(const std::filesystem::path& file) {
+    return parseScript(readFileCapped(file, 16ull << 20), file.string());
+}
+
+ScriptReport runScript(Session& session, const std::vector<ScriptAction>& actions,
+                       const std::string& name, std::FILE* log) {
+    using T = ScriptAction::Type;
+    ScriptReport report;
+    for (const ScriptAction& a : actions) {
+        const auto start = Clock::now();
+        std::string note;
+        try {
+            switch (a.type) {
+            case T::Camera: {
+                noise::Camera c = session.camera();
+                c.eye = a.eye;
+                c.target = a.target;
+                if (a.fovDeg)
+                    c.fovYDeg = *a.fovDeg;
+                session.setCamera(c);
+                break;
+            }
+            case T::Method:
+                session.setMethod(a.name, a.settings);
+                break;
+            case T::Brush:
+                session.brush() = a.brush;
+                break;
+            case T::Stroke: {
+                // The last pointer event to the frame that shows it: the dabs of that event, the
+                // fields' refresh, the regeneration and the render, pixels read back.
+                EditCost cost = session.beginStroke(a.points.front());
+                Clock::time_point lastEvent = start;
+                double eventMs = cost.milliseconds;
+                for (std::size_t i = 1; i < a.points.size(); ++i) {
+                    lastEvent = Clock::now();
+                    const EditCost c = session.dragStroke(a.points[i]);
+                    cost.milliseconds += c.milliseconds;
+                    eventMs = c.milliseconds;
+                }
+                const EditCost end = session.endStroke();
+                noise::Image image;
+                const splat::FrameStats frame = session.render(&image);
+                const double toFrame = msSince(lastEvent);
+                report.strokeToFrameMs.push_back(toFrame);
+                report.eventMs.push_back(eventMs);
+                report.frameMs.push_back(frame.wallMs);
+                double generateMs = 0.0;
+                for (const auto& [pass, ms] : frame.passMs)
+                    generateMs += pass == "generate" ? ms : 0.0;
+                report.generateMs.push_back(generateMs);
+                report.strokeMs += cost.milliseconds;
+                ++report.strokes;
+                note = cat(end.dabs, " dabs, ", end.voxelsWritten, " voxels, ", cost.milliseconds,
+                           " ms painting; frame ", frame.kernelsGenerated, " kernels, ", toFrame,
+                           " ms event-to-frame (event ", eventMs, " ms, frame ", frame.wallMs,
+                           " ms of which generate ", generateMs, " ms GPU)");
+                break;
+            }
+            case T::Undo:
+            case T::Redo: {
+                EditCost cost;
+                const bool done = a.type == T::Undo ? session.undo(&cost) : session.redo(&cost);
+                report.paramMs += cost.milliseconds;
+                note = done ? cat(cost.milliseconds, " ms") : "nothing to do";
+                break;
+            }
+            case T::Lobe: {
+                const EditCost cost = a.name == "add" ? session.addLobe(a.index)
+                                      : a.name == "remove"
+                                          ? session.removeLobe(a.index)
+                                          : session.setLobe(a.index, a.name, a.value);
+                report.paramMs += cost.milliseconds;
+                note = cat("rebuilt in ", cost.milliseconds, " ms");
+                break;
+            }
+            case T::Set: {
+                const EditCost cost = session.set(a.name, a.value);
+                report.paramMs += cost.milliseconds;
+                note = cat("rebuilt in ", cost.milliseconds, " ms");
+                break;
+            }
+            case T::Seed: {
+                const EditCost cost = session.setSeed(a.seed);
+                report.paramMs += cost.milliseconds;
+                note = cat("rebuilt in ", cost.milliseconds, " ms");
+                break;
+            }
+            case T::Wind:
+                session.setWind(a.on, a.amplitudeDeg, a.frequencyHz);
+                break;
+            case T::Frames:
+                for (int i = 0; i < a.count; ++i) {
+                    session.setTime(session.time() + 1.0 / 30.0);
+                    session.render();
+                }
+                report.frames += a.count;
+                break;
+            case T::Save:
+                session.save(a.file);
+                note = cat("wrote ", a.file.string());
+                break;
+            case T::Screenshot:
+                session.exportImage(a.file);
+                note = cat("wrote ", a.file.string());
+                break;
+            }
+        } catch (const InputError& e) {
+            throw InputError(cat("script ", name, ":", a.line, ": ", e.what()));
+        }
+        if (log)
+            std::fprintf(log, "%4d  %-40s %s%s%.1f ms\n", a.line, a.text.substr(0, 40).c_str(),
+                         note.c_str(), note.empty() ? "" : "; ", msSince(start));
+    }
+    return report;
+}
+
+} // namespace spot::edit

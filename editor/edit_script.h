@@ -1,0 +1,100 @@
+/// @file edit_script.h
+/// @brief The editor's scripts: one action per line, what a user's session does, replayed without
+/// a window (`spotshell edit --script FILE`). Window coordinates are pixels from the top left.
+///
+///     camera eye X Y Z target X Y Z [fov DEG]
+///     method NAME [key value ...]        # keys of `render`: steps, supersample, ewa, lod, ...
+///     brush KIND [radius PX] [strength S] [falloff smooth|linear|constant] [mirror x]
+///                [color R G B] [backfaces] [target SLOT]
+///                # target (smooth): density, comb, tilt, length or color
+///     stroke X,Y X,Y ...                 # a drag through these window points
+///     undo | redo
+///     lobe I offset X Y Z | rotation X Y Z | sigma X Y Z | extinction A | color R G B
+///     lobe add I | lobe remove I
+///     set KEY.PATH JSON                  # any preset key path
+///     seed N                             # the impulse seed
+///     wind on|off [amplitude DEG] [frequency HZ]   # animate the comb (Session::setWind)
+///     frames N                           # render N frames, 1/30 s apart
+///     save FILE.json                     # the preset, with its .vdb grids beside it
+///     screenshot FILE.png|FILE.exr
+///
+/// `#` starts a comment. The whole script is parsed first; a bad line throws InputError
+/// "script FILE:LINE: message" before anything runs or is written.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include "edit_brush.h"
+#include "splat/method_vk.h"
+
+namespace spot::edit {
+
+class Session;
+
+struct ScriptAction {
+    enum class Type {
+        Camera,
+        Method,
+        Brush,
+        Stroke,
+        Undo,
+        Redo,
+        Lobe,
+        Set,
+        Seed,
+        Wind,
+        Frames,
+        Save,
+        Screenshot
+    };
+    Type type = Type::Frames;
+    int line = 0;
+    std::string text; ///< the line, for the log
+
+    glm::dvec3 eye{0.0}, target{0.0}; ///< Camera
+    std::optional<double> fovDeg;     ///< Camera
+    std::string name;               ///< Method: method; Lobe: property or add/remove; Set: key path
+    splat::RenderSettings settings; ///< Method
+    BrushSettings brush;            ///< Brush
+    std::vector<glm::vec2> points;  ///< Stroke
+    int index = 0;                  ///< Lobe
+    nlohmann::json value;           ///< Lobe, Set
+    int count = 0;                  ///< Frames
+    std::uint32_t seed = 0;         ///< Seed
+    bool on = false;                ///< Wind
+    float amplitudeDeg = 20.0f, frequencyHz = 0.5f; ///< Wind
+    std::filesystem::path file;                     ///< Save, Screenshot
+};
+
+/// Parse a script's text; `name` (the file) is used in messages. Throws InputError
+/// "script NAME:LINE: message" for the first bad line.
+std::vector<ScriptAction> parseScript(std::string_view text, const std::string& name);
+/// Read (size-capped) and parse a script file.
+std::vector<ScriptAction> loadScript(const std::filesystem::path& file);
+
+/// What a run measured.
+struct ScriptReport {
+    int strokes = 0, frames = 0;
+    double strokeMs = 0.0;               ///< summed dab + field refresh time of the strokes
+    double paramMs = 0.0;                ///< summed rebuild time of set / lobe / undo / redo
+    std::vector<double> strokeToFrameMs; ///< per stroke: last drag event to its frame's pixels
+    std::vector<double> eventMs;    ///< per stroke: the last drag event's dabs and field refresh
+    std::vector<double> frameMs;    ///< per stroke: the frame after it (host wall time)
+    std::vector<double> generateMs; ///< per stroke: that frame's impulse regeneration (GPU)
+};
+
+/// Run the actions on `session`, printing one line per action to `log` (null: silent). Errors
+/// carry the line: "script NAME:LINE: message".
+ScriptReport runScript(Session& session, const std::vector<ScriptAction>& actions,
+                       const std::string& name, std::FILE* log);
+
+} // namespace spot::edit

@@ -1,0 +1,816 @@
+#include "edit_session.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include <sys/resource.h>
+
+#include "noise/error.h"
+#include "noise/field.h"
+#include "noise/surface.h"
+#include "noise/system.h"
+
+namespace spot::edit {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+/// Moller-Trumbore in double; the distance along the ray, or a negative value for a miss.
+double intersect(const noise::Ray& ray, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c,
+                 glm::dvec3& bary) {
+    const glm::dvec3 e1 = b - a, e2 = c - a;
+    const glm::dvec3 p = glm::cross(ray.dir, e2);
+    const double det = glm::dot(e1, p);
+    if (std::abs(det) < 1e-300)
+        return -1.0;
+    const double inv = 1.0 / det;
+    const glm::dvec3 s = ray.origin - a;
+    const double u = glm::dot(s, p) * inv;
+    if (u < 0.0 || u > 1.0)
+        return -1.0;
+    const glm::dvec3 q = glm::cross(s, e1);
+    const double v = glm::dot(ray.dir, q) * inv;
+    if (v < 0.0 || u + v > 1.0)
+        return -1.0;
+    bary = glm::dvec3(1.0 - u - v, u, v);
+    return glm::dot(e2, q) * inv;
+}
+
+glm::vec3 mirrorX(glm::vec3 v) {
+    return glm::vec3(-v.x, v.y, v.z);
+}
+
+} // namespace
+
+std::uint64_t peakResidentBytes() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return std::uint64_t(usage.ru_maxrss) * 1024; // kilobytes on Linux
+}
+
+nlohmann::json::json_pointer keyPathPointer(const std::string& keyPath) {
+    std::string pointer;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t dot = keyPath.find('.', start);
+        const std::string part =
+            keyPath.substr(start, dot == std::string::npos ? dot : dot - start);
+        if (part.empty() || part.find_first_of("/~") != std::string::npos)
+            throw InputError(cat("key path '", keyPath, "' must be names separated by dots"));
+        pointer += "/" + part;
+        if (dot == std::string::npos)
+            break;
+        start = dot + 1;
+    }
+    return nlohmann::json::json_pointer(pointer);
+}
+
+std::size_t Session::Edit::bytes() const {
+    std::size_t n = sizeof(Edit);
+    for (const JsonChange& c : json)
+        n += sizeof(JsonChange) + c.path.to_string().size() +
+             (c.before ? c.before->dump().size() : 0) + (c.after ? c.after->dump().size() : 0);
+    for (const auto& [slot, delta] : grids)
+        n += deltaBytes(delta);
+    for (const auto& [slot, before, after] : created)
+        n += before ? std::size_t(before->memoryBytes()) : 0;
+    return n;
+}
+
+Session::Session(const std::filesystem::path& scene, const SessionOptions& options)
+    : m_scene(noise::loadScene(scene)), m_voxelScale(options.voxelScale),
+      m_undoSteps(std::max(options.undoSteps, kMinUndoSteps)), m_undoBytes(options.undoBytes) {
+    if (!(options.voxelScale > 0.0f && options.voxelScale <= 1.0f))
+        throw InputError(cat("voxel scale ", options.voxelScale, " must be in (0, 1]"));
+    if (options.width > 0 && options.height > 0) {
+        m_scene.camera.width = options.width;
+        m_scene.camera.height = options.height;
+    }
+    m_camera = m_scene.camera;
+    (void)noise::CameraRays(m_camera); // checks the camera
+    m_mesh = noise::loadMeshOrGenerated(m_scene.mesh);
+    m_presetFile = options.preset.empty() ? m_scene.preset : options.preset;
+    const std::string text = readFileCapped(m_presetFile, 64ull << 20);
+    try {
+        m_presetJson = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(cat("preset ", m_presetFile.string(), ": ", e.what()));
+    }
+    m_vdbName = m_presetFile.stem().string() + ".vdb";
+    // Painted fields of a saved preset are read once and then edited in memory.
+    const noise::PresetDesc loaded = noise::loadPreset(m_presetFile);
+    for (int s = 0; s < kSlotCount; ++s) {
+        const Slot slot = Slot(s);
+        const noise::FieldDesc* d = nullptr;
+        switch (slot) {
+        case Slot::Density:
+            d = &loaded.density;
+            break;
+        case Slot::Comb:
+            d = loaded.comb ? &*loaded.comb : nullptr;
+            break;
+        case Slot::Tilt:
+            d = &loaded.tiltDeg;
+            break;
+        case Slot::Scale:
+            d = &loaded.scale;
+            break;
+        case Slot::Color:
+            d = &loaded.color;
+            break;
+        }
+        if (d && d->kind == noise::FieldDesc::Kind::Painted) {
+            const std::filesystem::path file = loaded.baseDir / d->file;
+            m_grids[s] = std::make_shared<noise::PaintedGrid>(
+                noise::readPaintedGrid(file, d->grid, slotComponents(slot)));
+            m_vdbName = d->file;
+        }
+    }
+    m_ctx = std::make_unique<splat::Context>(options.context);
+    rebuild();
+    m_surface = std::make_unique<SurfaceIndex>(m_mesh);
+    std::vector<noise::Aabb> boxes;
+    boxes.reserve(m_mesh.triangles.size());
+    for (const glm::uvec3& t : m_mesh.triangles) {
+        noise::Aabb b;
+        b.grow(glm::dvec3(m_mesh.positions[t.x]));
+        b.grow(glm::dvec3(m_mesh.positions[t.y]));
+        b.grow(glm::dvec3(m_mesh.positions[t.z]));
+        boxes.push_back(b);
+    }
+    m_bvh.build(boxes);
+}
+
+Session::~Session() {
+    // The frame refers to the generator, the generator to the mesh.
+    m_frame.reset();
+    m_generator.reset();
+}
+
+void Session::setCamera(const noise::Camera& camera) {
+    (void)noise::CameraRays(camera);
+    m_camera = camera;
+}
+
+void Session::setMethod(const std::string& method, const splat::RenderSettings& settings) {
+    m_method = splat::gpuMethod(method).name;
+    m_settings = settings;
+}
+
+splat::FrameStats Session::render(noise::Image* out) {
+    if (m_windOn)
+        applyWind();
+    const splat::View view{m_camera, m_scene.shading, m_scene.background, m_scene.baseColor};
+    return m_frame->render(m_method, view, m_settings, out);
+}
+
+void Session::exportImage(const std::filesystem::path& file) {
+    noise::Image image;
+    const splat::FrameStats stats = render(&image);
+    noise::writeImage(file, image,
+                      {{"method", m_method},
+                       {"scene", m_scene.name},
+                       {"kernels", std::to_string(stats.kernelsGenerated)},
+                       {"preset", m_presetJson.dump()}});
+}
+
+std::optional<Hit> Session::pick(glm::vec2 pixel) const {
+    const noise::Ray ray = noise::CameraRays(m_camera).ray(pixel.x, pixel.y);
+    double tMax = std::numeric_limits<double>::infinity();
+    std::optional<Hit> best;
+    m_bvh.traverse(ray, 0.0, tMax, [&](std::uint32_t t, double& limit) {
+        const glm::uvec3 tri = m_mesh.triangles[t];
+        glm::dvec3 bary;
+        const double d = intersect(ray, m_mesh.positions[tri.x], m_mesh.positions[tri.y],
+                                   m_mesh.positions[tri.z], bary);
+        if (d <= 0.0 || d >= limit)
+            return;
+        limit = d;
+        const noise::SurfacePoint sp = noise::surfacePoint(m_mesh, t, bary);
+        best = Hit{sp.position, sp.normal, d, t};
+    });
+    return best;
+}
+
+glm::vec3 Session::screenToWorld(glm::vec2 drag) const {
+    const glm::dvec3 forward = glm::normalize(m_camera.target - m_camera.eye);
+    const glm::dvec3 right = glm::normalize(glm::cross(forward, m_camera.up));
+    const glm::dvec3 up = glm::cross(right, forward);
+    // Window y grows downwards.
+    return glm::vec3(right * double(drag.x) - up * double(drag.y));
+}
+
+bool Session::painted(Slot slot) const {
+    const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
+    if (!m_presetJson.contains(ptr))
+        return false;
+    const nlohmann::json& j = m_presetJson.at(ptr);
+    return j.is_object() && j.value("type", std::string()) == "painted";
+}
+
+const noise::PaintedGrid* Session::grid(Slot slot) const {
+    return painted(slot) ? m_grids[int(slot)].get() : nullptr;
+}
+
+noise::FieldDesc* Session::slotDesc(Slot slot) {
+    switch (slot) {
+    case Slot::Density:
+        return &m_preset.density;
+    case Slot::Comb:
+        return m_preset.comb ? &*m_preset.comb : nullptr;
+    case Slot::Tilt:
+        return &m_preset.tiltDeg;
+    case Slot::Scale:
+        return &m_preset.scale;
+    case Slot::Color:
+        return &m_preset.color;
+    }
+    return nullptr;
+}
+
+nlohmann::json Session::paintedJson(Slot slot) const {
+    return {{"type", "painted"}, {"file", m_vdbName}, {"grid", slotKey(slot)}};
+}
+
+float Session::voxelSize() const {
+    return m_generator->cellSize() * m_voxelScale;
+}
+
+void Session::setVoxelScale(float fraction) {
+    if (!(fraction > 0.0f && fraction <= 1.0f))
+        throw InputError(cat("voxel scale ", fraction, " must be in (0, 1]"));
+    m_voxelScale = fraction;
+}
+
+void Session::rebuild() {
+    noise::PresetDesc preset = noise::parsePreset(m_presetJson.dump(), m_presetFile.string());
+    preset.baseDir = m_presetFile.parent_path();
+    m_preset = std::move(preset);
+    for (int s = 0; s < kSlotCount; ++s) {
+        if (!painted(Slot(s)))
+            continue;
+        if (!m_grids[s])
+            throw InputError(cat("preset ", m_presetFile.string(), ": fields.", slotKey(Slot(s)),
+                                 " is painted but its grid is not loaded"));
+        noise::FieldDesc* d = slotDesc(Slot(s));
+        SPOT_CHECK(d != nullptr);
+        d->painted = m_grids[s];
+    }
+    noise::GeneratorOptions options;
+    options.seed = m_scene.seed;
+    auto generator = std::make_unique<noise::ImpulseGenerator>(m_mesh, m_preset, options);
+    m_frame.reset();
+    m_generator = std::move(generator);
+    m_frame = std::make_unique<splat::Frame>(*m_ctx, m_mesh, *m_generator);
+    m_windBase.clear();
+}
+
+void Session::refreshFields(const std::vector<glm::vec3>* changed, float voxelSize) {
+    // A length stroke may change the smallest valid cell size; the generator then starts over
+    // with the cell size a fresh load of the preset picks, so the impulses match the saved file
+    // and undo stays exact.
+    bool cellsChanged = false;
+    try {
+        m_generator->refreshFields();
+        cellsChanged = m_generator->minimumCellSize() != m_generator->cellSize();
+    } catch (const InputError&) {
+        cellsChanged = true;
+    }
+    if (cellsChanged) {
+        rebuild();
+        return;
+    }
+    if (!changed || m_windOn) {
+        m_frame->fieldsChanged();
+        return;
+    }
+    // An impulse reads the 8 voxels around its anchor (trilinear), so a voxel's change reaches
+    // the anchors within one voxel of it along each axis, in the cells that box overlaps.
+    const noise::SurfaceCells& cells = m_generator->cells();
+    const float h = cells.cellSize;
+    std::vector<std::uint32_t> touched;
+    for (const glm::vec3& p : *changed) {
+        const glm::ivec3 lo(glm::floor((p - voxelSize) / h)), hi(glm::floor((p + voxelSize) / h));
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    const std::int64_t c = cells.find(glm::ivec3(x, y, z));
+                    if (c >= 0)
+                        touched.push_back(std::uint32_t(c));
+                }
+    }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    m_frame->fieldsChanged(touched);
+}
+
+void Session::ensurePainted(Slot slot, Edit& edit) {
+    if (painted(slot))
+        return;
+    const int s = int(slot);
+    noise::FieldDesc old;
+    if (const noise::FieldDesc* d = slotDesc(slot))
+        old = *d;
+    const bool absentComb = slot == Slot::Comb && !m_preset.comb;
+    const bool constant = !absentComb && old.kind == noise::FieldDesc::Kind::Constant;
+    auto grid = std::make_shared<noise::PaintedGrid>(
+        slotKey(slot), slotComponents(slot), voxelSize(), constant ? old.value : glm::vec3(0.0f));
+    if (!constant) {
+        // Sample the old field into every voxel near the surface, so painting starts from what
+        // was there.
+        const std::vector<glm::vec3> values = sampleSlot(slot);
+        const std::vector<SurfaceVoxel>& voxels = surfaceVoxels();
+        for (std::size_t i = 0; i < voxels.size(); ++i)
+            grid->set(voxels[i].ijk, values[i]);
+    }
+    const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
+    JsonChange change{ptr, std::nullopt, paintedJson(slot)};
+    if (m_presetJson.contains(ptr))
+        change.before = m_presetJson.at(ptr);
+    edit.created.emplace_back(slot, m_grids[s], grid);
+    edit.json.push_back(change);
+    m_grids[s] = grid;
+    m_presetJson[ptr] = *change.after;
+    rebuild();
+}
+
+const std::vector<SurfaceVoxel>& Session::surfaceVoxels() {
+    if (m_surfaceVoxelSize != voxelSize()) {
+        const noise::Bounds b = m_mesh.bounds();
+        const glm::vec3 centre = 0.5f * (b.lo + b.hi);
+        const float radius = 0.5f * glm::length(b.size()) + 2.0f * voxelSize();
+        m_surfaceVoxels = m_surface->voxelsNear(centre, radius, voxelSize());
+        m_surfaceVoxelSize = voxelSize();
+    }
+    return m_surfaceVoxels;
+}
+
+std::vector<glm::vec3> Session::sampleSlot(Slot slot) {
+    const noise::FieldDesc* desc = slotDesc(slot);
+    std::unique_ptr<noise::Field> field;
+    if (desc)
+        field = noise::makeField(*desc, m_mesh, m_preset.baseDir,
+                                 cat("preset ", m_presetFile.string(), ", fields.", slotKey(slot)));
+    std::vector<glm::vec3> values;
+    values.reserve(surfaceVoxels().size());
+    for (const SurfaceVoxel& v : surfaceVoxels())
+        values.push_back(field ? field->eval(v.point) : v.point.tangent);
+    return values;
+}
+
+void Session::applyWind() {
+    const std::vector<SurfaceVoxel>& voxels = surfaceVoxels();
+    const noise::PaintedGrid* comb = grid(Slot::Comb);
+    if (!comb && m_windBase.size() != voxels.size())
+        m_windBase = sampleSlot(Slot::Comb);
+    const noise::Bounds b = m_mesh.bounds();
+    const float wavelength = std::max(glm::length(b.size()), 1e-6f);
+    const float gain = std::tan(glm::radians(std::clamp(m_windAmplitudeDeg, 0.0f, 80.0f)));
+    const float twoPi = 6.28318530718f;
+    auto wind =
+        std::make_shared<noise::PaintedGrid>(slotKey(Slot::Comb), 3, voxelSize(), glm::vec3(0.0f));
+    for (std::size_t i = 0; i < voxels.size(); ++i) {
+        const glm::vec3 p = glm::vec3(voxels[i].ijk) * voxelSize();
+        const glm::vec3 base = comb ? comb->get(voxels[i].ijk) : m_windBase[i];
+        const float phase = twoPi * (m_windFrequencyHz * float(m_time) - p.x / wavelength);
+        wind->set(voxels[i].ijk,
+                  base + gain * glm::length(base) * std::sin(phase) * glm::vec3(1.0f, 0.0f, 0.0f));
+    }
+    noise::FieldDesc desc;
+    desc.kind = noise::FieldDesc::Kind::Painted;
+    desc.components = 3;
+    desc.file = m_vdbName;
+    desc.grid = slotKey(Slot::Comb);
+    desc.painted = wind;
+    m_generator->setField(SPOT_FIELD_COMB, desc);
+    m_frame->fieldsChanged();
+}
+
+void Session::applyJson(const std::vector<JsonChange>& changes, bool after) {
+    auto apply = [&](const JsonChange& c) {
+        const std::optional<nlohmann::json>& v = after ? c.after : c.before;
+        if (v) {
+            m_presetJson[c.path] = *v;
+        } else if (m_presetJson.contains(c.path)) {
+            nlohmann::json& parent = m_presetJson.at(c.path.parent_pointer());
+            if (parent.is_object())
+                parent.erase(c.path.back());
+            else
+                parent.erase(std::size_t(std::stoul(c.path.back())));
+        }
+    };
+    if (after)
+        for (const JsonChange& c : changes)
+            apply(c);
+    else
+        for (auto it = changes.rbegin(); it != changes.rend(); ++it)
+            apply(*it);
+}
+
+void Session::push(Edit edit) {
+    m_redo.clear();
+    m_current = edit.id;
+    m_undo.push_back(std::move(edit));
+    while (m_undo.size() > m_undoSteps)
+        m_undo.pop_front();
+    while (m_undo.size() > kMinUndoSteps && undoBytes() > m_undoBytes)
+        m_undo.pop_front();
+}
+
+std::size_t Session::undoBytes() const {
+    std::size_t n = 0;
+    for (const Edit& e : m_undo)
+        n += e.bytes();
+    for (const Edit& e : m_redo)
+        n += e.bytes();
+    return n;
+}
+
+std::size_t Session::memoryBytes() const {
+    std::size_t n = undoBytes();
+    for (const auto& g : m_grids)
+        n += g ? std::size_t(g->memoryBytes()) : 0;
+    return n;
+}
+
+// --- strokes ------------------------------------------------------------------------------------
+
+EditCost Session::beginStroke(glm::vec2 pixel, bool invert) {
+    if (m_stroke)
+        endStroke();
+    m_strokeInvert = invert;
+    const auto start = Clock::now();
+    m_stroke = std::make_unique<Edit>();
+    m_stroke->id = m_nextId++;
+    EditCost cost;
+    const Slot slot = brushSlot(m_brush);
+    if (!painted(slot)) {
+        ensurePainted(slot, *m_stroke);
+        cost.generatorRebuilt = true;
+    }
+    m_strokeLast = pixel;
+    m_strokeCarry = 0.0f;
+    m_strokeDabs = m_strokeVoxels = 0;
+    // The first dab has no drag direction yet: comb waits for the pointer to move.
+    if (m_brush.kind != BrushKind::Comb) {
+        dab(pixel, glm::vec2(0.0f));
+        refreshEvent();
+        cost.fieldsRefreshed = true;
+    }
+    cost.dabs = m_strokeDabs;
+    cost.voxelsWritten = m_strokeVoxels;
+    cost.milliseconds = msSince(start);
+    return cost;
+}
+
+EditCost Session::dragStroke(glm::vec2 pixel) {
+    if (!m_stroke)
+        return beginStroke(pixel);
+    const auto start = Clock::now();
+    const std::size_t dabs = m_strokeDabs, voxels = m_strokeVoxels;
+    const glm::vec2 from = m_strokeLast, to = pixel;
+    const float length = glm::length(to - from);
+    EditCost cost;
+    if (length > 0.0f) {
+        const glm::vec2 dir = (to - from) / length;
+        const float spacing = std::max(m_brush.radiusPx * 0.25f, 1.0f);
+        float at = spacing - m_strokeCarry;
+        for (; at <= length; at += spacing)
+            dab(from + dir * at, dir);
+        m_strokeCarry = length - (at - spacing);
+        m_strokeLast = to;
+        if (m_strokeDabs > dabs) {
+            refreshEvent();
+            cost.fieldsRefreshed = true;
+        }
+    }
+    cost.dabs = m_strokeDabs - dabs;
+    cost.voxelsWritten = m_strokeVoxels - voxels;
+    cost.milliseconds = msSince(start);
+    return cost;
+}
+
+EditCost Session::endStroke() {
+    EditCost cost;
+    if (!m_stroke)
+        return cost;
+    cost.dabs = m_strokeDabs;
+    cost.voxelsWritten = m_strokeVoxels;
+    Edit edit = std::move(*m_stroke);
+    m_stroke.reset();
+    if (edit.grids.empty() && edit.created.empty())
+        return cost;
+    push(std::move(edit));
+    return cost;
+}
+
+EditCost Session::pointer(PointerPhase phase, glm::vec2 pixel, const noise::Camera& view,
+                          bool invert) {
+    if (phase != PointerPhase::Release)
+        setCamera(view);
+    switch (phase) {
+    case PointerPhase::Press: {
+        EditCost cost = beginStroke(pixel, invert);
+        return cost;
+    }
+    case PointerPhase::Drag:
+        return dragStroke(pixel);
+    case PointerPhase::Release:
+        return endStroke();
+    }
+    return {};
+}
+
+BrushSettings Session::strokeBrush() const {
+    BrushSettings b = m_brush;
+    if (!m_strokeInvert)
+        return b;
+    if (b.kind == BrushKind::DensityAdd)
+        b.kind = BrushKind::DensityErase;
+    else if (b.kind == BrushKind::DensityErase)
+        b.kind = BrushKind::DensityAdd;
+    else if (b.kind == BrushKind::Length || b.kind == BrushKind::Tilt)
+        b.strength = -b.strength;
+    return b;
+}
+
+EditCost Session::stroke(const std::vector<glm::vec2>& points) {
+    EditCost total;
+    auto add = [&](const EditCost& c) {
+        total.milliseconds += c.milliseconds;
+        total.generatorRebuilt |= c.generatorRebuilt;
+        total.fieldsRefreshed |= c.fieldsRefreshed;
+    };
+    if (points.empty())
+        return total;
+    add(beginStroke(points.front()));
+    for (std::size_t i = 1; i < points.size(); ++i)
+        add(dragStroke(points[i]));
+    const EditCost end = endStroke();
+    total.dabs = end.dabs;
+    total.voxelsWritten = end.voxelsWritten;
+    return total;
+}
+
+void Session::refreshEvent() {
+    const float size = m_grids[int(brushSlot(m_brush))]->voxelSize();
+    std::vector<glm::vec3> changed;
+    changed.reserve(m_eventVoxels.size());
+    for (const glm::ivec3& v : m_eventVoxels)
+        changed.push_back(glm::vec3(v) * size);
+    m_eventVoxels.clear();
+    refreshFields(&changed, size);
+}
+
+void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
+    const std::optional<Hit> hit = pick(pixel);
+    if (!hit)
+        return;
+    const Slot slot = brushSlot(m_brush);
+    noise::PaintedGrid& grid = *m_grids[int(slot)];
+    auto it = std::find_if(m_stroke->grids.begin(), m_stroke->grids.end(),
+                           [&](const auto& g) { return g.first == slot; });
+    if (it == m_stroke->grids.end()) {
+        m_stroke->grids.emplace_back(slot, GridDelta{});
+        it = std::prev(m_stroke->grids.end());
+    }
+    Dab d;
+    d.centre = hit->position;
+    d.radius = float(m_brush.radiusPx * noise::CameraRays(m_camera).pixelFootprint(hit->distance));
+    d.eye = glm::vec3(m_camera.eye);
+    d.direction = screenToWorld(drag);
+    const BrushSettings brush = strokeBrush();
+    m_strokeVoxels += applyDab(brush, d, *m_surface, grid, it->second, &m_eventVoxels);
+    if (brush.mirrorX) {
+        // The mirrored dab sees the mirrored camera, so front faces stay front faces.
+        Dab m = d;
+        m.centre = mirrorX(d.centre);
+        m.eye = mirrorX(d.eye);
+        m.direction = mirrorX(d.direction);
+        m_strokeVoxels += applyDab(brush, m, *m_surface, grid, it->second, &m_eventVoxels);
+    }
+    ++m_strokeDabs;
+}
+
+// --- parameters ---------------------------------------------------------------------------------
+
+nlohmann::json Session::get(const std::string& keyPath) const {
+    const auto ptr = keyPathPointer(keyPath);
+    return m_presetJson.contains(ptr) ? m_presetJson.at(ptr) : nlohmann::json();
+}
+
+EditCost Session::set(const std::string& keyPath, const nlohmann::json& value) {
+    return set(std::vector<std::pair<std::string, nlohmann::json>>{{keyPath, value}});
+}
+
+EditCost Session::set(const std::vector<std::pair<std::string, nlohmann::json>>& changes) {
+    if (m_stroke)
+        endStroke();
+    const auto start = Clock::now();
+    Edit edit;
+    edit.id = m_nextId++;
+    for (const auto& [path, value] : changes) {
+        JsonChange c{keyPathPointer(path), std::nullopt, value};
+        if (m_presetJson.contains(c.path))
+            c.before = m_presetJson.at(c.path);
+        edit.json.push_back(std::move(c));
+    }
+    const nlohmann::json saved = m_presetJson;
+    try {
+        for (const JsonChange& c : edit.json) {
+            // Only an existing array element or a key of an existing object may be set.
+            const nlohmann::json& parent = m_presetJson.contains(c.path.parent_pointer())
+                                               ? m_presetJson.at(c.path.parent_pointer())
+                                               : nlohmann::json();
+            if (!parent.is_object() && !(parent.is_array() && c.before))
+                throw InputError(cat("'", c.path.to_string(), "' is not a key of the preset"));
+            m_presetJson[c.path] = *c.after;
+        }
+        rebuild();
+    } catch (const std::exception& e) {
+        m_presetJson = saved;
+        rebuild();
+        throw InputError(cat("set ", changes.front().first, ": ", e.what()));
+    }
+    push(std::move(edit));
+    EditCost cost;
+    cost.generatorRebuilt = true;
+    cost.milliseconds = msSince(start);
+    return cost;
+}
+
+EditCost Session::setLobe(int lobe, const std::string& what, const nlohmann::json& value) {
+    const int count = int(m_presetJson["kernel"]["lobes"].size());
+    if (lobe < 0 || lobe >= count)
+        throw InputError(cat("lobe ", lobe, " does not exist (the kernel has ", count, ")"));
+    if (what != "offset" && what != "rotation_deg" && what != "sigma" && what != "extinction" &&
+        what != "color")
+        throw InputError(cat("lobe property '", what,
+                             "' is not one of offset, rotation_deg, sigma, extinction, color"));
+    return set(cat("kernel.lobes.", lobe, ".", what), value);
+}
+
+EditCost Session::addLobe(int copyOf) {
+    nlohmann::json lobes = m_presetJson["kernel"]["lobes"];
+    if (int(lobes.size()) >= noise::kMaxLobes)
+        throw InputError(cat("a kernel has at most ", noise::kMaxLobes, " lobes"));
+    if (copyOf < 0 || copyOf >= int(lobes.size()))
+        throw InputError(cat("lobe ", copyOf, " does not exist"));
+    lobes.push_back(lobes[std::size_t(copyOf)]);
+    return set("kernel.lobes", lobes);
+}
+
+EditCost Session::removeLobe(int lobe) {
+    nlohmann::json lobes = m_presetJson["kernel"]["lobes"];
+    if (lobes.size() <= 1)
+        throw InputError("a kernel needs at least one lobe");
+    if (lobe < 0 || lobe >= int(lobes.size()))
+        throw InputError(cat("lobe ", lobe, " does not exist"));
+    lobes.erase(std::size_t(lobe));
+    return set("kernel.lobes", lobes);
+}
+
+EditCost Session::setSeed(std::uint32_t seed) {
+    if (m_stroke)
+        endStroke();
+    const auto start = Clock::now();
+    m_scene.seed = seed;
+    rebuild();
+    EditCost cost;
+    cost.generatorRebuilt = true;
+    cost.milliseconds = msSince(start);
+    return cost;
+}
+
+// --- undo ---------------------------------------------------------------------------------------
+
+void Session::refreshDeltas(const Edit& edit) {
+    std::vector<glm::vec3> changed;
+    float size = 0.0f;
+    for (const auto& [slot, delta] : edit.grids) {
+        const float s = m_grids[int(slot)]->voxelSize();
+        size = std::max(size, s);
+        for (const auto& [ijk, change] : delta)
+            changed.push_back(glm::vec3(ijk) * s);
+    }
+    refreshFields(&changed, size);
+}
+
+bool Session::undo(EditCost* cost) {
+    if (m_stroke)
+        endStroke();
+    if (m_undo.empty())
+        return false;
+    const auto start = Clock::now();
+    Edit e = std::move(m_undo.back());
+    m_undo.pop_back();
+    for (auto it = e.grids.rbegin(); it != e.grids.rend(); ++it)
+        applyDelta(*m_grids[int(it->first)], it->second, false);
+    for (auto it = e.created.rbegin(); it != e.created.rend(); ++it)
+        m_grids[int(std::get<0>(*it))] = std::get<1>(*it);
+    applyJson(e.json, false);
+    const bool full = !e.json.empty();
+    if (full)
+        rebuild();
+    else
+        refreshDeltas(e);
+    m_current = m_undo.empty() ? 0 : m_undo.back().id;
+    m_redo.push_back(std::move(e));
+    if (cost) {
+        cost->generatorRebuilt = full;
+        cost->fieldsRefreshed = !full;
+        cost->milliseconds = msSince(start);
+    }
+    return true;
+}
+
+bool Session::redo(EditCost* cost) {
+    if (m_stroke)
+        endStroke();
+    if (m_redo.empty())
+        return false;
+    const auto start = Clock::now();
+    Edit e = std::move(m_redo.back());
+    m_redo.pop_back();
+    for (const auto& [slot, before, after] : e.created)
+        m_grids[int(slot)] = after;
+    applyJson(e.json, true);
+    for (const auto& [slot, delta] : e.grids)
+        applyDelta(*m_grids[int(slot)], delta, true);
+    const bool full = !e.json.empty();
+    if (full)
+        rebuild();
+    else
+        refreshDeltas(e);
+    m_current = e.id;
+    m_undo.push_back(std::move(e));
+    if (cost) {
+        cost->generatorRebuilt = full;
+        cost->fieldsRefreshed = !full;
+        cost->milliseconds = msSince(start);
+    }
+    return true;
+}
+
+// --- files --------------------------------------------------------------------------------------
+
+void Session::save(const std::filesystem::path& file) {
+    if (m_stroke)
+        endStroke();
+    std::filesystem::path vdb = file;
+    vdb.replace_extension(".vdb");
+    const std::string vdbName = vdb.filename().string();
+    nlohmann::json out = m_presetJson;
+    std::vector<const noise::PaintedGrid*> grids;
+    const std::filesystem::path from = std::filesystem::absolute(m_presetFile).parent_path();
+    const std::filesystem::path to = std::filesystem::absolute(file).parent_path();
+    if (out.contains("fields"))
+        for (auto& [key, field] : out["fields"].items()) {
+            if (!field.is_object())
+                continue;
+            const std::string type = field.value("type", std::string());
+            if (type == "painted") {
+                field["file"] = vdbName;
+                for (int s = 0; s < kSlotCount; ++s)
+                    if (key == slotKey(Slot(s)))
+                        grids.push_back(m_grids[s].get());
+            } else if (type == "image" && from != to) {
+                // Keep the image reachable from the new folder.
+                const std::filesystem::path image(field.value("file", std::string()));
+                if (image.is_relative())
+                    field["file"] = std::filesystem::relative(from / image, to).generic_string();
+            }
+        }
+    // The grids first: a preset on disk never names a .vdb that is not there yet.
+    if (!grids.empty())
+        noise::writePaintedGrids(vdb, grids);
+    writeFileAtomic(file, [&](std::ostream& o) { o << out.dump(2) << "\n"; });
+    m_presetJson = out;
+    m_presetFile = file;
+    m_vdbName = vdbName;
+    m_preset.baseDir = file.parent_path();
+    m_saved = m_current;
+}
+
+void Session::setWind(bool on, float amplitudeDeg, float frequencyHz) {
+    const bool wasOn = m_windOn;
+    m_windOn = on;
+    m_windAmplitudeDeg = amplitudeDeg;
+    m_windFrequencyHz = frequencyHz;
+    m_windBase.clear();
+    if (wasOn && !on)
+        rebuild(); // the document's comb again
+}
+
+void Session::setTime(double seconds) {
+    m_time = seconds;
+}
+
+} // namespace spot::edit

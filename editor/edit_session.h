@@ -1,0 +1,261 @@
+/// @file edit_session.h
+/// @brief The editor's document and its edits: a scene's mesh and camera, the preset (as JSON
+/// and parsed), its painted grids, the impulse generator and the persistent GPU frame; strokes,
+/// parameter edits, undo/redo, saving.
+///
+/// The window (or the script runner) drives it: pointer events become beginStroke / dragStroke /
+/// endStroke in window pixels (top-left origin, noise/camera.h), panels call set() and the lobe
+/// edits, and every frame calls render(). A stroke's dabs update the painted grids and refresh
+/// the generator's field data, so the next render() regenerates the impulses and shows them.
+///
+/// Undo keeps at least kMinUndoSteps edits within a byte budget: a stroke stores per touched grid
+/// a sparse delta (voxel, value and activity before and after), a parameter edit the JSON before
+/// and after at its key path. Undo restores a bit-identical state (grids and preset).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "edit_brush.h"
+#include "noise/bvh.h"
+#include "noise/camera.h"
+#include "noise/image.h"
+#include "noise/impulses.h"
+#include "noise/mesh.h"
+#include "noise/painted.h"
+#include "noise/preset.h"
+#include "noise/scene.h"
+#include "splat/context_vk.h"
+#include "splat/frame_vk.h"
+#include "splat/method_vk.h"
+
+namespace spot::edit {
+
+inline constexpr std::size_t kMinUndoSteps = 100;
+
+struct SessionOptions {
+    int width = 0, height = 0;    ///< window size in pixels; 0: the scene's image size
+    std::filesystem::path preset; ///< override the scene's preset (empty: the scene's)
+    float voxelScale = 0.25f;     ///< painted voxel size as a fraction of the cell size
+    std::size_t undoSteps = 256;  ///< at most this many edits are kept (>= kMinUndoSteps)
+    std::size_t undoBytes = std::size_t(256) << 20; ///< ... and at most this many bytes beyond
+                                                    ///< the last kMinUndoSteps
+    splat::ContextOptions context = splat::contextOptionsFromEnvironment();
+};
+
+/// Where a window pixel's ray meets the mesh.
+struct Hit {
+    glm::vec3 position{0.0f}; ///< world units
+    glm::vec3 normal{0.0f};   ///< interpolated, unit
+    double distance = 0.0;    ///< along the ray, world units
+    std::uint32_t triangle = 0;
+};
+
+/// What an edit cost: milliseconds spent rebuilding, and what was rebuilt.
+struct EditCost {
+    double milliseconds = 0.0;
+    bool generatorRebuilt = false; ///< a new ImpulseGenerator and Frame (kernel, distribution,...)
+    bool fieldsRefreshed = false;  ///< only the fields' data re-flattened and re-uploaded
+    std::size_t voxelsWritten = 0; ///< strokes
+    std::size_t dabs = 0;          ///< strokes
+};
+
+class Session {
+public:
+    /// Loads the scene (mesh, preset, camera, look), builds the generator, the Vulkan context
+    /// and the frame. Throws InputError for anything the files get wrong.
+    Session(const std::filesystem::path& scene, const SessionOptions& options = {});
+    ~Session();
+    Session(const Session&) = delete;
+    Session& operator=(const Session&) = delete;
+
+    // --- view -------------------------------------------------------------------------------
+    const noise::Camera& camera() const { return m_camera; }
+    /// Keeps the window size unless `camera` carries another one (a resize).
+    void setCamera(const noise::Camera& camera);
+    /// `method` from the registry (splat::gpuMethods()); InputError otherwise.
+    void setMethod(const std::string& method, const splat::RenderSettings& settings);
+    const std::string& method() const { return m_method; }
+    const splat::RenderSettings& settings() const { return m_settings; }
+    /// One frame through splat::Frame::render; `out` receives the pixels when given.
+    splat::FrameStats render(noise::Image* out = nullptr);
+    /// Render and write the view (.png or .exr, noise::writeImage).
+    void exportImage(const std::filesystem::path& file);
+
+    // --- picking and strokes ------------------------------------------------------------------
+    /// The closest mesh hit of the ray through window pixel (x, y), top-left origin.
+    std::optional<Hit> pick(glm::vec2 pixel) const;
+    BrushSettings& brush() { return m_brush; }
+    const BrushSettings& brush() const { return m_brush; }
+    /// Pointer pressed / moved / released. Dabs are spaced radius/4 pixels along the drag; each
+    /// drag event's dabs are visible in the next render(). endStroke records the undo step.
+    EditCost beginStroke(glm::vec2 pixel, bool invert = false);
+    EditCost dragStroke(glm::vec2 pixel);
+    EditCost endStroke();
+    bool stroking() const { return m_stroke != nullptr; }
+    /// One pointer event of the window (its onBrush hook): takes the event's view as the camera,
+    /// then begins, continues or ends the stroke. `invert` (a modifier held at the press) inverts
+    /// the brush for the whole stroke: density-add erases and density-erase adds, length
+    /// shrinks, tilt lifts; comb, colour and smooth are unchanged.
+    enum class PointerPhase { Press, Drag, Release };
+    EditCost pointer(PointerPhase phase, glm::vec2 pixel, const noise::Camera& view,
+                     bool invert = false);
+    /// A whole stroke through `points` (the script's `stroke`).
+    EditCost stroke(const std::vector<glm::vec2>& points);
+
+    // --- parameters ---------------------------------------------------------------------------
+    /// Set any preset key path ("distribution.density_max", "kernel.lobes.0.sigma") to a JSON
+    /// value; checked by parsing the whole preset (InputError with the path, state unchanged).
+    /// Rebuilds the generator and the frame.
+    EditCost set(const std::string& keyPath, const nlohmann::json& value);
+    /// Several key paths as one undo step (a panel's slider drag ends in one of these).
+    EditCost set(const std::vector<std::pair<std::string, nlohmann::json>>& changes);
+    /// The JSON at a key path (null when absent).
+    nlohmann::json get(const std::string& keyPath) const;
+    /// Lobe edits: `what` is offset, rotation_deg, sigma, extinction or color.
+    EditCost setLobe(int lobe, const std::string& what, const nlohmann::json& value);
+    /// Append a copy of lobe `copyOf` (at most noise::kMaxLobes), or remove one (at least 1).
+    EditCost addLobe(int copyOf);
+    EditCost removeLobe(int lobe);
+
+    /// The impulse seed (the scene's, not the preset's): rebuilds the generator and the frame.
+    /// Not an undo step; save writes the preset, which holds no seed.
+    EditCost setSeed(std::uint32_t seed);
+    std::uint32_t seed() const { return m_scene.seed; }
+
+    /// Wind: while on, render() bends the comb directions by a travelling wave, the comb
+    /// offset by tan(amplitude) sin(2 pi (f t - x / wavelength)) along world +x (then projected
+    /// on the tangent plane by the generator), on the voxels near the surface. Deterministic for
+    /// a time `t` (seconds, setTime). Not part of the document: turning it off restores the
+    /// document's comb; saving writes the document's comb.
+    void setWind(bool on, float amplitudeDeg = 20.0f, float frequencyHz = 0.5f);
+    bool wind() const { return m_windOn; }
+    void setTime(double seconds);
+    double time() const { return m_time; }
+
+    // --- undo ---------------------------------------------------------------------------------
+    bool canUndo() const { return !m_undo.empty(); }
+    bool canRedo() const { return !m_redo.empty(); }
+    /// Returns false when there was nothing to undo / redo.
+    bool undo(EditCost* cost = nullptr);
+    bool redo(EditCost* cost = nullptr);
+    std::size_t undoSteps() const { return m_undo.size(); }
+    std::size_t undoBytes() const;
+
+    // --- document -----------------------------------------------------------------------------
+    /// The preset as JSON; painted fields read {"type":"painted","file":...,"grid":...}.
+    const nlohmann::json& presetJson() const { return m_presetJson; }
+    const noise::PresetDesc& preset() const { return m_preset; }
+    const noise::SceneDesc& scene() const { return m_scene; }
+    const noise::Mesh& mesh() const { return m_mesh; }
+    const noise::ImpulseGenerator& generator() const { return *m_generator; }
+    splat::Frame& frame() { return *m_frame; }
+    splat::Context& context() { return *m_ctx; }
+    /// The painted grid of `slot`, or null when the slot's field is not painted.
+    const noise::PaintedGrid* grid(Slot slot) const;
+    /// Voxel size of grids created from now on, world units.
+    float voxelSize() const;
+    void setVoxelScale(float fractionOfCell);
+    /// Unsaved changes since the load or the last save.
+    bool dirty() const { return m_current != m_saved; }
+    /// Write the preset to `file` and its painted grids to `file` with the extension .vdb (both
+    /// atomically, the grids first). Loading `file` back gives the same impulses.
+    void save(const std::filesystem::path& file);
+    /// Painted grids plus the undo history, bytes.
+    std::size_t memoryBytes() const;
+
+private:
+    struct JsonChange {
+        nlohmann::json::json_pointer path;
+        std::optional<nlohmann::json> before, after; ///< absent: the key does not exist
+    };
+    struct Edit {
+        std::uint64_t id = 0;
+        std::vector<JsonChange> json;
+        std::vector<std::pair<Slot, GridDelta>> grids;
+        /// Grids a stroke created (before: the slot's grid until then, usually null).
+        std::vector<std::tuple<Slot, std::shared_ptr<noise::PaintedGrid>,
+                               std::shared_ptr<noise::PaintedGrid>>>
+            created;
+        std::size_t bytes() const;
+    };
+
+    void rebuild();
+    /// After voxels of grids changed in place: the CPU generator re-flattens its fields, and
+    /// the frame regenerates only the cells whose impulses read the voxels `changed` (world
+    /// positions of voxels of size `voxelSize`), or every cell when `changed` is null.
+    void refreshFields(const std::vector<glm::vec3>* changed = nullptr, float voxelSize = 0.0f);
+    bool painted(Slot slot) const;
+    noise::FieldDesc* slotDesc(Slot slot);
+    nlohmann::json paintedJson(Slot slot) const;
+    void ensurePainted(Slot slot, Edit& edit);
+    void applyJson(const std::vector<JsonChange>& changes, bool after);
+    void push(Edit edit);
+    EditCost dabsAlong(glm::vec2 from, glm::vec2 to);
+    void dab(glm::vec2 pixel, glm::vec2 dragPixels);
+    void refreshEvent();
+    /// The brush as the current stroke applies it (m_strokeInvert).
+    BrushSettings strokeBrush() const;
+    void refreshDeltas(const Edit& edit);
+    glm::vec3 screenToWorld(glm::vec2 dragPixels) const;
+    /// The voxels of the current voxel size near the whole surface.
+    const std::vector<SurfaceVoxel>& surfaceVoxels();
+    /// `slot`'s current field (or the surface tangent for an unset comb) at the surface voxels.
+    std::vector<glm::vec3> sampleSlot(Slot slot);
+    void applyWind();
+
+    noise::SceneDesc m_scene;
+    noise::Mesh m_mesh;
+    noise::Camera m_camera;
+    std::filesystem::path m_presetFile;
+    std::string m_vdbName; ///< file name the painted fields reference
+    nlohmann::json m_presetJson;
+    noise::PresetDesc m_preset;
+    std::array<std::shared_ptr<noise::PaintedGrid>, kSlotCount> m_grids;
+    float m_voxelScale = 0.25f;
+
+    std::unique_ptr<splat::Context> m_ctx;
+    std::unique_ptr<noise::ImpulseGenerator> m_generator;
+    std::unique_ptr<splat::Frame> m_frame;
+    std::string m_method = "hybrid";
+    splat::RenderSettings m_settings;
+
+    noise::Bvh m_bvh;
+    std::unique_ptr<SurfaceIndex> m_surface;
+    BrushSettings m_brush;
+    std::unique_ptr<Edit> m_stroke;
+    glm::vec2 m_strokeLast{0.0f};
+    float m_strokeCarry = 0.0f; ///< pixels travelled since the last dab
+    std::size_t m_strokeDabs = 0, m_strokeVoxels = 0;
+    bool m_strokeInvert = false;
+    std::vector<glm::ivec3> m_eventVoxels; ///< written by the current pointer event's dabs
+
+    std::deque<Edit> m_undo;
+    std::vector<Edit> m_redo;
+    std::size_t m_undoSteps, m_undoBytes;
+    std::uint64_t m_nextId = 1, m_current = 0, m_saved = 0;
+
+    bool m_windOn = false;
+    float m_windAmplitudeDeg = 20.0f, m_windFrequencyHz = 0.5f;
+    double m_time = 0.0;
+    std::vector<SurfaceVoxel> m_surfaceVoxels; ///< cache of surfaceVoxels()
+    float m_surfaceVoxelSize = 0.0f;           ///< ... for this voxel size
+    std::vector<glm::vec3> m_windBase;         ///< unpainted comb at the surface voxels
+};
+
+/// The process's peak resident memory, bytes (getrusage).
+std::uint64_t peakResidentBytes();
+
+/// "a.b.0.c" as a JSON pointer; InputError for an empty component.
+nlohmann::json::json_pointer keyPathPointer(const std::string& keyPath);
+
+} // namespace spot::edit

@@ -1,0 +1,184 @@
+// Editor scripts: the parser names the bad line; `spotshell edit` fails with exit 2 before it
+// writes anything, on a malformed script and on a corrupt or mismatched .vdb; a good script runs
+// and writes its files.
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "edit_test_support.h"
+#include "editor/edit_script.h"
+#include "noise/error.h"
+
+namespace {
+
+using namespace spot;
+namespace fs = std::filesystem;
+
+std::string parseError(const std::string& text) {
+    try {
+        edit::parseScript(text, "t.script");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(EditScript, ParsesEveryAction) {
+    const auto actions = edit::parseScript(
+        "# a comment\n"
+        "camera eye 1 0.7 2.3 target 0 0.45 0 fov 30\n"
+        "method raymarch steps 16 supersample 2\n"
+        "method hybrid\n"
+        "brush comb radius 25 strength 0.5 falloff linear mirror x\n"
+        "brush color color 1 0 0   # red\n"
+        "stroke 10,20 30,40.5\n"
+        "\n"
+        "undo\nredo\n"
+        "lobe 1 offset 0 0 1\nlobe 0 sigma 0.1 0.1 0.3\nlobe 2 extinction 500\nlobe 0 color 1 1 1\n"
+        "lobe add 0\nlobe remove 3\n"
+        "set distribution.density_max 4000\nset fields.tilt_deg "
+        "{\"type\":\"constant\",\"value\":20}\n"
+        "frames 3\nsave out.json\nscreenshot out.png\n",
+        "t.script");
+    ASSERT_EQ(actions.size(), 19u);
+    using T = edit::ScriptAction::Type;
+    EXPECT_EQ(actions[0].type, T::Camera);
+    EXPECT_EQ(actions[0].line, 2);
+    EXPECT_EQ(*actions[0].fovDeg, 30.0);
+    EXPECT_EQ(actions[1].settings.steps, 16);
+    EXPECT_EQ(actions[1].settings.supersample, 2);
+    EXPECT_EQ(actions[3].brush.kind, edit::BrushKind::Comb);
+    EXPECT_TRUE(actions[3].brush.mirrorX);
+    EXPECT_EQ(actions[3].brush.falloff, edit::Falloff::Linear);
+    EXPECT_EQ(actions[4].brush.color, glm::vec3(1.0f, 0.0f, 0.0f));
+    EXPECT_EQ(actions[5].points.size(), 2u);
+    EXPECT_EQ(actions[5].points[1], glm::vec2(30.0f, 40.5f));
+    EXPECT_EQ(actions[5].line, 7);
+    EXPECT_EQ(actions[8].name, "offset");
+    EXPECT_EQ(actions[13].name, "remove");
+    EXPECT_EQ(actions[15].value["value"], 20);
+    EXPECT_EQ(actions[16].count, 3);
+}
+
+TEST(EditScript, BadLinesNameTheirLine) {
+    EXPECT_EQ(parseError("frames 2\nbrush fluff\n").rfind("script t.script:2: unknown brush", 0),
+              0u)
+        << parseError("frames 2\nbrush fluff\n");
+    EXPECT_NE(parseError("\n\nstroke 10;20\n").find("t.script:3:"), std::string::npos);
+    EXPECT_NE(parseError("method warp\n").find("t.script:1: unknown method"), std::string::npos);
+    EXPECT_NE(parseError("method raymarch steps 0\n").find("t.script:1:"), std::string::npos);
+    EXPECT_NE(parseError("frames many\n").find("t.script:1: frame count"), std::string::npos);
+    EXPECT_NE(parseError("frames 2 3\n").find("unexpected '3'"), std::string::npos);
+    EXPECT_NE(parseError("lobe 9 sigma 1 1 1\n").find("t.script:1:"), std::string::npos);
+    EXPECT_NE(parseError("set a..b 1\n").find("t.script:1:"), std::string::npos);
+    EXPECT_NE(parseError("set a.b {oops\n").find("not JSON"), std::string::npos);
+    EXPECT_NE(parseError("screenshot x.tiff\n").find("must end in .png, .exr"), std::string::npos);
+    EXPECT_NE(parseError("brush comb strength 2\n").find("outside [-1, 1]"), std::string::npos);
+    EXPECT_NE(parseError("jump\n").find("unknown action 'jump'"), std::string::npos);
+}
+
+// A malformed script fails with its line and exit 2 before anything is written, even the files
+// of the good lines before it.
+TEST(EditScript, MalformedScriptWritesNothing) {
+    const fs::path dir = test::tmpPath("edit_malformed");
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path script = dir / "bad.script";
+    test::writeText(script, "save " + (dir / "p.json").string() + "\nscreenshot " +
+                                (dir / "a.png").string() + "\nbrush comb radius -3\n");
+    std::string err;
+    EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --script " +
+                                  script.string() + " --screenshot " + (dir / "b.png").string(),
+                              &err),
+              2);
+    EXPECT_NE(err.find("bad.script:3: radius"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "p.json"));
+    EXPECT_FALSE(fs::exists(dir / "a.png"));
+    EXPECT_FALSE(fs::exists(dir / "b.png"));
+}
+
+// A script that paints, edits, undoes and saves; the saved preset renders with `spotshell render`
+// and a corrupt .vdb, a grid of the wrong name and one of the wrong type fail with exit 2.
+TEST(EditScript, RunsAndSavesAndRejectsBadGrids) {
+    const fs::path dir = test::tmpPath("edit_run");
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path script = dir / "good.script";
+    const fs::path saved = dir / "painted.json";
+    test::writeText(script, "method hybrid\n"
+                            "brush density-erase radius 20 strength 1 falloff constant\n"
+                            "stroke 110,110 150,130\n"
+                            "brush comb radius 25 mirror x\n"
+                            "stroke 100,150 160,140\n"
+                            "brush tilt strength 0.5\nstroke 90,130 170,130\nundo\nredo\n"
+                            "lobe 0 color 0.9 0.1 0.1\n"
+                            "set distribution.density_max 6000\n"
+                            "seed 4\nwind on amplitude 25\n"
+                            "frames 2\n"
+                            "save " +
+                                saved.string() +
+                                "\n"
+                                "screenshot " +
+                                (dir / "shot.png").string() + "\n");
+    std::string err;
+    ASSERT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --size 256x256 " +
+                                  "--script " + script.string() + " --screenshot " +
+                                  (dir / "end.exr").string(),
+                              &err),
+              0)
+        << err;
+    EXPECT_TRUE(fs::exists(saved));
+    EXPECT_TRUE(fs::exists(dir / "painted.vdb"));
+    EXPECT_TRUE(fs::exists(dir / "shot.png"));
+    EXPECT_TRUE(fs::exists(dir / "end.exr"));
+    EXPECT_EQ(test::spotshell("render --scene " + test::bunnyScene().string() + " --preset " +
+                                  saved.string() + " --method hybrid --size 64x64 --out " +
+                                  (dir / "render.png").string(),
+                              &err),
+              0)
+        << err;
+
+    const std::string text = [&] {
+        std::ifstream in(saved);
+        return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }();
+    auto variant = [&](const std::string& name, const std::string& from, const std::string& to) {
+        std::string t = text;
+        const std::size_t at = t.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        if (at != std::string::npos)
+            t.replace(at, from.size(), to);
+        const fs::path file = dir / name;
+        test::writeText(file, t);
+        return file;
+    };
+    const fs::path empty = dir / "empty.script";
+    test::writeText(empty, "frames 1\n");
+    auto expectFails = [&](const fs::path& preset, const std::string& message) {
+        std::string e;
+        EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --preset " +
+                                      preset.string() + " --script " + empty.string(),
+                                  &e),
+                  2)
+            << e;
+        EXPECT_NE(e.find(message), std::string::npos) << e;
+        EXPECT_EQ(e.find('\n'), e.size() - 1) << "one line: " << e;
+        EXPECT_EQ(test::spotshell("render --scene " + test::bunnyScene().string() + " --preset " +
+                                      preset.string() + " --method hybrid --size 32x32 --out " +
+                                      (dir / "never.png").string(),
+                                  &e),
+                  2)
+            << e;
+        EXPECT_FALSE(fs::exists(dir / "never.png"));
+    };
+    test::writeText(dir / "corrupt.vdb", "this is not a vdb file at all");
+    expectFails(variant("corrupt.json", "painted.vdb", "corrupt.vdb"), "corrupt.vdb");
+    expectFails(variant("wrongname.json", "\"grid\": \"density\"", "\"grid\": \"nothing\""),
+                "nothing");
+    // The density grid (scalar) where the comb (3 components) is expected.
+    expectFails(variant("wrongtype.json", "\"grid\": \"comb\"", "\"grid\": \"density\""),
+                "density");
+}
+
+} // namespace
