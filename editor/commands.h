@@ -10,5 +10,6 @@ int impulses(int argc, char** argv);
 int render(int argc, char** argv);
 int compare(int argc, char** argv);
 int bench(int argc, char** argv);
+int edit(int argc, char** argv); ///< the editor's window (cmd_edit_window.cpp)
 
 } // namespace spot::cmd

@@ -25,6 +25,7 @@ const Command kCommands[] = {
     {"compare", spot::cmd::compare, "PSNR, SSIM and FLIP of an image against a reference"},
     {"bench", spot::cmd::bench, "speed against accuracy of every method, with charts"},
     {"info", spot::cmd::info, "print a mesh's counts, bounds and dropped triangles"},
+    {"edit", spot::cmd::edit, "open the editor's window on a scene (needs a display or xvfb-run)"},
 };
 
 void printUsage(std::FILE* out) {
