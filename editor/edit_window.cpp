@@ -230,6 +230,10 @@ public:
         sci.imageExtent = e;
         sci.imageArrayLayers = 1;
         sci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+        // Read back for --window-screenshot where the surface allows it.
+        readable = caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+        if (readable)
+            sci.imageUsage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
         sci.imageSharingMode = VK_SHARING_MODE_EXCLUSIVE;
         sci.preTransform = caps.currentTransform;
         sci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
@@ -281,6 +285,7 @@ public:
     VkSwapchainKHR handle = VK_NULL_HANDLE;
     VkSurfaceFormatKHR format{};
     bool srgb = false;
+    bool readable = false; ///< the images can be copied from (--window-screenshot)
     VkPresentModeKHR presentMode = VK_PRESENT_MODE_FIFO_KHR;
     std::uint32_t minImageCount = 2;
     VkExtent2D extent{0, 0};
@@ -622,9 +627,61 @@ void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windo
 
 // --- the frame's presentation --------------------------------------------------------------
 
-/// Blit the scene into the swapchain image, draw ImGui over it, present. Returns false when the
-/// swapchain is out of date (then recreated by the caller).
-bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync, const splat::Image& scene) {
+/// The presented image (scene and panels) copied back for --window-screenshot.
+struct WindowGrab {
+    splat::Buffer buffer;
+    std::uint32_t width = 0, height = 0;
+    VkFormat format = VK_FORMAT_UNDEFINED;
+
+    void record(splat::Context& ctx, VkCommandBuffer cmd, VkImage image, VkExtent2D extent,
+                VkFormat imageFormat) {
+        const VkDeviceSize bytes = VkDeviceSize(extent.width) * extent.height * 4;
+        if (buffer.size() < bytes)
+            buffer = splat::Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                   splat::Buffer::Memory::HostVisible, "window screenshot");
+        width = extent.width;
+        height = extent.height;
+        format = imageFormat;
+        splat::transitionImage(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+                               VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                               VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                               VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                               VK_ACCESS_2_TRANSFER_READ_BIT);
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        region.imageExtent = {width, height, 1};
+        vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1,
+                               &region);
+        splat::transitionImage(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT,
+                               VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+                               VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
+                               VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE);
+        splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                             VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+    }
+
+    /// Linear RGB; the 8-bit values are sRGB-encoded when the swapchain is sRGB.
+    noise::Image read(bool srgb) const {
+        noise::Image image(static_cast<int>(width), static_cast<int>(height));
+        const auto* p = static_cast<const std::uint8_t*>(buffer.mapped());
+        const bool bgr = format == VK_FORMAT_B8G8R8A8_SRGB || format == VK_FORMAT_B8G8R8A8_UNORM;
+        for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+            glm::vec3 c(p[4 * i] / 255.0f, p[4 * i + 1] / 255.0f, p[4 * i + 2] / 255.0f);
+            if (bgr)
+                std::swap(c.x, c.z);
+            image.pixels[i] = srgb ? glm::vec3(noise::srgbDecode(c.x), noise::srgbDecode(c.y),
+                                               noise::srgbDecode(c.z))
+                                   : c;
+        }
+        return image;
+    }
+};
+
+/// Blit the scene into the swapchain image, draw ImGui over it, present; with `grab`, also copy
+/// the presented image back. Returns false when the swapchain is out of date (then recreated by
+/// the caller).
+bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync, const splat::Image& scene,
+             WindowGrab* grab = nullptr) {
     std::uint32_t index = 0;
     const VkResult acquired = vkAcquireNextImageKHR(ctx.device(), swapchain.handle, UINT64_MAX,
                                                     sync.acquired, VK_NULL_HANDLE, &index);
@@ -666,6 +723,8 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync, const
     vkCmdBeginRenderPass(cmd, &rp, VK_SUBPASS_CONTENTS_INLINE);
     ImGui_ImplVulkan_RenderDrawData(ImGui::GetDrawData(), cmd);
     vkCmdEndRenderPass(cmd);
+    if (grab)
+        grab->record(ctx, cmd, target, swapchain.extent, swapchain.format.format);
     splat::vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
 
     const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
@@ -741,7 +800,8 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
     std::vector<double> frameMs, renderMs, presentMs, overlayMs; // warm frames
     EditWindowReport report;
     double lastFrameMs = 0.0, lastPresentMs = 0.0;
-    std::optional<noise::Image> screenshot;
+    std::optional<noise::Image> screenshot, windowImage;
+    WindowGrab windowGrab;
 
     while (!glfwWindowShouldClose(window.handle)) {
         if (options.frames > 0 && report.frames >= options.frames)
@@ -814,8 +874,14 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
                 renderMs.push_back(renderWall);
         }
         const auto presentStart = Clock::now();
-        if (!present(ctx, swapchain, sync, *scene))
+        const bool grab = last && !options.windowScreenshot.empty();
+        if (grab && !swapchain.readable)
+            throw std::runtime_error("--window-screenshot: the window's images cannot be read back "
+                                     "on this surface");
+        if (!present(ctx, swapchain, sync, *scene, grab ? &windowGrab : nullptr))
             input.resized = true;
+        if (grab)
+            windowImage = windowGrab.read(swapchain.srgb);
         lastPresentMs = msSince(presentStart);
         lastFrameMs = msSince(frameStart);
         if (warm && report.frames > 0) {
@@ -841,6 +907,8 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
                           {{"method", methods[std::size_t(panel.method)].name},
                            {"scene", job.scene.name}});
     }
+    if (windowImage)
+        noise::writeImage(options.windowScreenshot, *windowImage, {{"scene", job.scene.name}});
     const splat::ValidationCounts v = ctx.validation();
     if (v.errors > 0)
         throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
@@ -858,6 +926,8 @@ std::vector<cli::OptionSpec> editWindowOptions() {
              false},
             {"screenshot", "FILE", "write the last rendered scene (without the panels) as .png or "
                                    ".exr when the window closes", false},
+            {"window-screenshot", "FILE", "with --frames: write the last frame as the window "
+                                          "showed it, panels included", false},
             {"resize", "WxH", "after the first frame, resize the window (scripted checks)", false},
             {"cycle-methods", "", "frame i shows method i of the registry, in turn (scripted "
                                   "checks)", false}};
@@ -883,6 +953,11 @@ EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& 
             throw InputError(cat("--resize '", size, "' must be WxH with sides in [1, 16384]"));
     }
     o.cycleMethods = args.has("cycle-methods");
+    if (args.has("window-screenshot")) {
+        if (o.frames == 0)
+            throw InputError("--window-screenshot needs --frames");
+        o.windowScreenshot = args.str("window-screenshot");
+    }
     return o;
 }
 

@@ -50,6 +50,9 @@ struct EditWindowOptions {
     /// Write the last rendered scene image here when the window closes (.png or .exr; the scene
     /// only, without the ImGui overlay), atomically.
     std::filesystem::path screenshot;
+    /// With `frames`: write the last frame as presented (scene and panels), read back from the
+    /// swapchain image.
+    std::filesystem::path windowScreenshot;
     /// Scripted checks: after the first frame, resize the window to this size (0: no resize).
     int resizeWidth = 0, resizeHeight = 0;
     /// Scripted checks: frame i uses method i modulo the registry's count.
@@ -80,7 +83,8 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
 
 /// The window's command-line options (besides the scene options and the render settings).
 std::vector<cli::OptionSpec> editWindowOptions();
-/// Options from the command line: --method, --frames, --screenshot, --resize, --cycle-methods,
+/// Options from the command line: --method, --frames, --screenshot, --window-screenshot,
+/// --resize, --cycle-methods,
 /// and the render settings; window size from the scene's image size (--size).
 EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& job);
 
