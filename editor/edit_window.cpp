@@ -537,6 +537,7 @@ struct PanelState {
     bool continuous = false;
     /// While the camera moves, render at 1/kNavigationScales[i] of the window's size.
     int navigationScale = 1;
+    std::string error; ///< why the last render failed (shown until one succeeds)
 };
 
 std::string megabytes(std::uint64_t bytes) {
@@ -550,8 +551,9 @@ bool methodPanel(PanelState& p) {
     bool changed = false;
     const auto& methods = splat::gpuMethods();
     ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(260, 0), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
     ImGui::Begin("Render");
+    ImGui::PushItemWidth(150);
     if (ImGui::BeginCombo("method", methods[std::size_t(p.method)].name.c_str())) {
         for (int i = 0; i < int(methods.size()); ++i) {
             if (ImGui::Selectable(methods[std::size_t(i)].name.c_str(), i == p.method)) {
@@ -594,6 +596,9 @@ bool methodPanel(PanelState& p) {
                  "full resolution\0half resolution\0quarter resolution\0");
     ImGui::TextDisabled("orbit: middle drag (alt+left)\npan: shift+middle\nzoom: wheel\n"
                         "frame the mesh: F or Home");
+    if (!p.error.empty())
+        ImGui::TextColored(ImVec4(1.0f, 0.3f, 0.2f, 1.0f), "%s", p.error.c_str());
+    ImGui::PopItemWidth();
     ImGui::End();
     return changed;
 }
@@ -858,7 +863,18 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
             noise::Image image;
             const bool capture = last && !options.screenshot.empty();
             const auto renderStart = Clock::now();
-            stats = frame.render(method, v, panel.settings, capture ? &image : nullptr);
+            try {
+                stats = frame.render(method, v, panel.settings, capture ? &image : nullptr);
+                panel.error.clear();
+            } catch (const InputError& e) {
+                // Interactively, a setting the method refuses (or a frame beyond the memory
+                // budget) is shown in the panel and the last image stays; scripted, it fails.
+                if (!scene || options.frames > 0)
+                    throw;
+                panel.error = e.what();
+                input.sceneDirty = false;
+                continue;
+            }
             renderWall = msSince(renderStart);
             if (capture)
                 screenshot = std::move(image);
