@@ -457,8 +457,6 @@ void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
             s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Release, mods));
             s.sceneDirty = true;
         }
-        if (s.drag != InputState::Drag::None)
-            s.moved(); // back to the full resolution
         s.drag = InputState::Drag::None;
         return;
     }
@@ -528,15 +526,17 @@ void onFramebufferSize(GLFWwindow* window, int, int) {
 
 // --- panels -------------------------------------------------------------------------------
 
-constexpr int kNavigationScales[] = {1, 2, 4};
+/// Render at 1/kScales[i] of the window's size (the blit scales up).
+constexpr int kScales[] = {1, 2, 4};
+constexpr const char* kScaleNames = "full resolution\0half resolution\0quarter resolution\0";
 
 /// What the panels edit.
 struct PanelState {
     int method = 0;
     splat::RenderSettings settings;
     bool continuous = false;
-    /// While the camera moves, render at 1/kNavigationScales[i] of the window's size.
-    int navigationScale = 1;
+    int scale = 0;           ///< index into kScales: always
+    int navigationScale = 1; ///< index into kScales: while the camera moves
     std::string error; ///< why the last render failed (shown until one succeeds)
 };
 
@@ -592,8 +592,8 @@ bool methodPanel(PanelState& p) {
     }
     ImGui::Separator();
     changed |= ImGui::Checkbox("render every frame", &p.continuous);
-    ImGui::Combo("while navigating", &p.navigationScale,
-                 "full resolution\0half resolution\0quarter resolution\0");
+    changed |= ImGui::Combo("resolution", &p.scale, kScaleNames);
+    ImGui::Combo("while navigating", &p.navigationScale, kScaleNames);
     ImGui::TextDisabled("orbit: middle drag (alt+left)\npan: shift+middle\nzoom: wheel\n"
                         "frame the mesh: F or Home");
     if (!p.error.empty())
@@ -767,6 +767,10 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
     panel.method = int(&splat::gpuMethod(options.method) - methods.data());
     panel.settings = options.settings;
     panel.continuous = options.frames > 0;
+    panel.scale = int(std::find(std::begin(kScales), std::end(kScales), options.renderScale) -
+                      std::begin(kScales));
+    if (panel.scale == int(std::size(kScales)))
+        throw InputError(cat("render scale ", options.renderScale, " must be 1, 2 or 4"));
 
     // Destroyed in reverse: ImGui, the swapchain, the surface, the frame, the context, the
     // window, GLFW. The display is checked before anything else is made.
@@ -845,16 +849,22 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
             std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;
         statsPanel(stats, renderW, renderH, int(swapchain.extent.width),
                    int(swapchain.extent.height), lastFrameMs, lastPresentMs,
-                   navigating && panel.navigationScale > 0, swapchain.srgb);
+                   navigating && panel.navigationScale > panel.scale, swapchain.srgb);
         ImGui::Render();
         const double overlay = msSince(overlayStart);
 
+        // Navigation ended: back to the resolution chosen.
+        if (!navigating && scene &&
+            (renderW != std::max(1, int(swapchain.extent.width) / kScales[panel.scale]) ||
+             renderH != std::max(1, int(swapchain.extent.height) / kScales[panel.scale])))
+            input.sceneDirty = true;
         const bool last = options.frames > 0 && report.frames + 1 == options.frames;
         const bool render = !scene || input.sceneDirty || panel.continuous;
         bool warm = true;
         double renderWall = 0.0;
         if (render) {
-            const int scale = navigating ? kNavigationScales[panel.navigationScale] : 1;
+            const int scale = kScales[navigating ? std::max(panel.scale, panel.navigationScale)
+                                                 : panel.scale];
             renderW = std::max(1, int(swapchain.extent.width) / scale);
             renderH = std::max(1, int(swapchain.extent.height) / scale);
             splat::View v = look;
@@ -944,6 +954,8 @@ std::vector<cli::OptionSpec> editWindowOptions() {
                                    ".exr when the window closes", false},
             {"window-screenshot", "FILE", "with --frames: write the last frame as the window "
                                           "showed it, panels included", false},
+            {"render-scale", "N", "render at 1/N of the window's size, scaled up: 1 (default), 2 "
+                                  "or 4", false},
             {"resize", "WxH", "after the first frame, resize the window (scripted checks)", false},
             {"cycle-methods", "", "frame i shows method i of the registry, in turn (scripted "
                                   "checks)", false}};
@@ -969,6 +981,9 @@ EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& 
             throw InputError(cat("--resize '", size, "' must be WxH with sides in [1, 16384]"));
     }
     o.cycleMethods = args.has("cycle-methods");
+    o.renderScale = int(args.integer("render-scale", 1, 1, 4));
+    if (o.renderScale == 3)
+        throw InputError("--render-scale must be 1, 2 or 4, not 3");
     if (args.has("window-screenshot")) {
         if (o.frames == 0)
             throw InputError("--window-screenshot needs --frames");

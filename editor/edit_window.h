@@ -53,6 +53,9 @@ struct EditWindowOptions {
     /// With `frames`: write the last frame as presented (scene and panels), read back from the
     /// swapchain image.
     std::filesystem::path windowScreenshot;
+    /// Render the scene at 1/renderScale of the window's size (1, 2 or 4) and let the blit scale
+    /// it up; the Render panel changes it.
+    int renderScale = 1;
     /// Scripted checks: after the first frame, resize the window to this size (0: no resize).
     int resizeWidth = 0, resizeHeight = 0;
     /// Scripted checks: frame i uses method i modulo the registry's count.
@@ -84,7 +87,7 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
 /// The window's command-line options (besides the scene options and the render settings).
 std::vector<cli::OptionSpec> editWindowOptions();
 /// Options from the command line: --method, --frames, --screenshot, --window-screenshot,
-/// --resize, --cycle-methods,
+/// --render-scale, --resize, --cycle-methods,
 /// and the render settings; window size from the scene's image size (--size).
 EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& job);
 

@@ -130,6 +130,20 @@ TEST(EditWindow, EveryMethodAndAResize) {
     EXPECT_EQ(last.height, 200);
 }
 
+TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
+    const std::string shot = tmp("half.png"), window = tmp("half-window.png");
+    const Result e = run(kXvfb, "edit --scene " + scene() + " --size 320x240 --frames 2 "
+                                "--render-scale 2 --screenshot " + shot + " --window-screenshot " + window);
+    ASSERT_EQ(e.code, 0) << e.err;
+    EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
+    const spot::noise::Image scene = spot::noise::readImage(shot);
+    EXPECT_EQ(scene.width, 160);
+    EXPECT_EQ(scene.height, 120);
+    const spot::noise::Image shown = spot::noise::readImage(window);
+    EXPECT_EQ(shown.width, 320);
+    EXPECT_EQ(shown.height, 240);
+}
+
 TEST(EditWindow, WithoutADisplayOneErrorLine) {
     const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --frames 1");
     EXPECT_EQ(e.code, 2) << e.err;
