@@ -844,6 +844,8 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
         input.sceneDirty |= methodPanel(panel);
         if (options.extraPanels)
             options.extraPanels();
+        if (options.needsRedraw && options.needsRedraw())
+            input.sceneDirty = true;
         const bool navigating =
             input.drag == InputState::Drag::Orbit || input.drag == InputState::Drag::Pan ||
             std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;

@@ -66,6 +66,9 @@ struct EditWindowOptions {
     std::function<void(const PointerEvent&)> onBrush;
     /// Called every frame between ImGui::NewFrame() and ImGui::Render(): the session's panels.
     std::function<void()> extraPanels;
+    /// Polled once per frame, after the panels: true renders the scene again (the session
+    /// changed what it shows, e.g. from a panel or a script).
+    std::function<bool()> needsRedraw;
 };
 
 /// Timings of the frames a window showed (milliseconds, medians over the warm frames: all but
