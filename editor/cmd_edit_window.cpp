@@ -1,10 +1,12 @@
 // `spotshell edit`: the editor's window on a scene (edit_window.h). The painting session's
 // options and hooks join here as they arrive.
 #include <cstdio>
+#include <string>
 
 #include "cli.h"
 #include "commands.h"
 #include "edit_window.h"
+#include "noise/error.h"
 #include "render_options.h"
 #include "scene_job.h"
 
@@ -28,11 +30,16 @@ int edit(int argc, char** argv) {
     cli::SceneJob job = cli::prepareScene(args, false);
     const editor::EditWindowOptions options = editor::editWindowOptions(args, job);
     const editor::EditWindowReport r = editor::runEditWindow(job, options);
-    std::printf("edit: %d frames (%d rendered) of %s; warm frames: median %.2f ms (render %.2f ms, "
-                "present with ImGui %.2f ms, panels %.2f ms)%s%s\n",
-                r.frames, r.rendered, job.scene.name.c_str(), r.frameMs, r.renderMs, r.presentMs,
-                r.overlayMs, options.screenshot.empty() ? "" : "; wrote ",
+    const std::string timing =
+        r.warmFrames == 0
+            ? std::string("no warm frames (each changed method or size)")
+            : cat("warm frames: median ", r.frameMs, " ms (render ", r.renderMs,
+                  " ms, present with ImGui ", r.presentMs, " ms, panels ", r.overlayMs, " ms)");
+    std::printf("edit: %d frames (%d rendered) of %s; %s%s%s\n", r.frames, r.rendered,
+                job.scene.name.c_str(), timing.c_str(), options.screenshot.empty() ? "" : "; wrote ",
                 options.screenshot.string().c_str());
+    if (r.validation)
+        std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
     return 0;
 }
 

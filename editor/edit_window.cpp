@@ -700,9 +700,10 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync, const
     bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     splat::vkCheck(vkBeginCommandBuffer(cmd, &bi), "vkBeginCommandBuffer");
     const VkImage target = swapchain.images[index];
-    // The renderer's last pass (a compute shader, in an earlier submit) wrote the scene.
+    // The renderer's last pass (a compute shader, in an earlier submit) wrote the scene; the
+    // renderers keep it in the general layout, the blit reads it best as a transfer source.
     splat::transitionImage(cmd, scene.handle(), VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
-                           VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                            VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_BLIT_BIT,
                            VK_ACCESS_2_TRANSFER_READ_BIT);
     splat::transitionImage(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
@@ -718,9 +719,14 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync, const
     VkFormatProperties fp;
     vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), scene.format(), &fp);
     const bool linear = scaled && (fp.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
-    vkCmdBlitImage(cmd, scene.handle(), VK_IMAGE_LAYOUT_GENERAL, target,
+    vkCmdBlitImage(cmd, scene.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
                    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
                    linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST);
+    splat::transitionImage(cmd, scene.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
+                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_NONE,
+                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                           VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
     VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
     rp.renderPass = swapchain.renderPass;
     rp.framebuffer = swapchain.framebuffers[index];
@@ -940,6 +946,9 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
     const splat::ValidationCounts v = ctx.validation();
     if (v.errors > 0)
         throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
+    report.validation = ctx.validationEnabled();
+    report.validationWarnings = v.warnings;
+    report.warmFrames = int(frameMs.size());
     report.frameMs = median(frameMs);
     report.renderMs = median(renderMs);
     report.presentMs = median(presentMs);

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <filesystem>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -76,10 +77,13 @@ struct EditWindowOptions {
 struct EditWindowReport {
     int frames = 0;          ///< frames presented
     int rendered = 0;        ///< of which the scene was rendered (not just the overlay)
+    int warmFrames = 0;      ///< the frames the medians are over
     double frameMs = 0.0;    ///< wall time of a whole frame: events, render, overlay, present
     double renderMs = 0.0;   ///< splat::Frame::render() wall time
     double presentMs = 0.0;  ///< acquire, blit, ImGui, submit, present, wait
     double overlayMs = 0.0;  ///< building the ImGui panels on the host (included in frameMs)
+    bool validation = false;           ///< the validation layer was on (SPOT_VALIDATION=1)
+    std::uint32_t validationWarnings = 0; ///< its warnings (errors throw)
 };
 
 /// Open the window on `job`'s scene and run until it closes (or options.frames ran out).
