@@ -90,8 +90,7 @@ TEST(EditWindow, ShowsWhatRenderRenders) {
     ASSERT_EQ(e.code, 0) << e.err;
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
     EXPECT_NE(e.out.find("edit: 3 frames"), std::string::npos) << e.out;
-    // Not even a warning (the blit once read the scene in the general layout: a performance one).
-    EXPECT_NE(e.out.find("validation on: no errors, 0 warnings"), std::string::npos) << e.out;
+    EXPECT_NE(e.out.find("validation on: no errors"), std::string::npos) << e.out;
     const Result r = run("SPOT_VALIDATION=1", "render --scene " + scene() +
                                                   " --size 320x240 --method instanced --out " + ref);
     ASSERT_EQ(r.code, 0) << r.err;
@@ -123,9 +122,13 @@ TEST(EditWindow, EveryMethodAndAResize) {
     const std::string shot = tmp("cycle.png");
     // Two frames per method, in registry order; the window is resized after the first frame.
     const Result e = run(kXvfb, "edit --scene " + scene() + " --size 240x180 --frames 10 "
-                                "--cycle-methods --resize 300x200 --steps 8 --screenshot " + shot);
+                                "--cycle-methods --resize 300x200 --steps 8 --window-screenshot " +
+                                    shot);
     ASSERT_EQ(e.code, 0) << e.err;
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
+    // Not even a warning from the window's own work (the scene's readback for --screenshot, in
+    // splat::Frame, reads the general layout: a performance warning, hence not checked there).
+    EXPECT_NE(e.out.find("validation on: no errors, 0 warnings"), std::string::npos) << e.out;
     EXPECT_NE(e.out.find("(10 rendered)"), std::string::npos) << e.out;
     const spot::noise::Image last = spot::noise::readImage(shot);
     EXPECT_EQ(last.width, 300);
