@@ -19,6 +19,7 @@
 #include "noise/camera.h"
 #include "noise/image.h"
 #include "noise/mesh.h"
+#include "splat/context_vk.h"
 #include "splat/image_compare.h"
 
 namespace {
@@ -162,6 +163,47 @@ TEST(EditWindow, UnknownMethodIsAnInputError) {
     const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --method nope");
     EXPECT_EQ(e.code, 2) << e.err;
     EXPECT_NE(e.err.find("instanced"), std::string::npos) << e.err;
+}
+
+// --- the context's presentation options ---------------------------------------------------
+
+TEST(WindowContext, SwapchainAndSurfaceExtensionsWithoutAWindow) {
+    spot::splat::ContextOptions o;
+    o.validation = true;
+    o.instanceExtensions = {"VK_KHR_surface"};
+    o.swapchain = true;
+    std::uint32_t asked = 0;
+    o.canPresent = [&](VkInstance, VkPhysicalDevice, std::uint32_t) {
+        ++asked;
+        return true;
+    };
+    spot::splat::Context ctx(o);
+    EXPECT_GT(asked, 0u);
+    EXPECT_NE(vkGetDeviceProcAddr(ctx.device(), "vkCreateSwapchainKHR"), nullptr);
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+TEST(WindowContext, NoQueueThatCanPresentIsAClearError) {
+    spot::splat::ContextOptions o;
+    o.canPresent = [](VkInstance, VkPhysicalDevice, std::uint32_t) { return false; };
+    try {
+        spot::splat::Context ctx(o);
+        FAIL() << "a context without a queue that can present";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("can present"), std::string::npos) << e.what();
+    }
+}
+
+TEST(WindowContext, AMissingInstanceExtensionIsNamed) {
+    spot::splat::ContextOptions o;
+    o.instanceExtensions = {"VK_SPOT_no_such_extension"};
+    try {
+        spot::splat::Context ctx(o);
+        FAIL() << "an instance with an extension that does not exist";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("instance extension is missing"), std::string::npos)
+            << e.what();
+    }
 }
 
 // --- navigation --------------------------------------------------------------------------
