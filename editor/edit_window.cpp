@@ -552,6 +552,8 @@ bool methodPanel(PanelState& p) {
     const auto& methods = splat::gpuMethods();
     ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
+    // A small window shows the scene first: the panel starts folded.
+    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
     ImGui::Begin("Render");
     ImGui::PushItemWidth(150);
     if (ImGui::BeginCombo("method", methods[std::size_t(p.method)].name.c_str())) {
@@ -606,15 +608,18 @@ bool methodPanel(PanelState& p) {
 void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windowW, int windowH,
                 double frameMs, double presentMs, bool navigating, bool srgb) {
     const ImGuiIO& io = ImGui::GetIO();
-    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8, 8), ImGuiCond_Always, ImVec2(1, 0));
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8, io.DisplaySize.y - 8), ImGuiCond_Always,
+                            ImVec2(1, 1));
+    ImGui::SetNextWindowCollapsed(io.DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowBgAlpha(0.6f);
     ImGui::Begin("Stats", nullptr,
                  ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoMove |
                      ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
-    ImGui::Text("%s  %dx%d%s", st.method.c_str(), renderW, renderH,
-                renderW != windowW || renderH != windowH
-                    ? (navigating ? " (lower while navigating, scaled up)" : " (scaled)")
-                    : "");
+    if (renderW != windowW || renderH != windowH)
+        ImGui::Text("%s  %dx%d scaled up%s", st.method.c_str(), renderW, renderH,
+                    navigating ? " while moving" : "");
+    else
+        ImGui::Text("%s  %dx%d", st.method.c_str(), renderW, renderH);
     for (const auto& [pass, ms] : st.passMs)
         ImGui::Text("  %-12s %8.2f ms GPU", pass.c_str(), ms);
     ImGui::Text("total GPU      %8.2f ms", st.gpuMs);
@@ -843,6 +848,10 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
             panel.method = next;
         }
 
+        if (options.orbitDegreesPerFrame != 0.0 && report.frames > 0) {
+            view.orbit(options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
+            input.moved();
+        }
         const auto overlayStart = Clock::now();
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
@@ -967,6 +976,8 @@ std::vector<cli::OptionSpec> editWindowOptions() {
                                           "showed it, panels included", false},
             {"render-scale", "N", "render at 1/N of the window's size, scaled up: 1 (default), 2 "
                                   "or 4", false},
+            {"orbit", "DEG", "scripted navigation: orbit by DEG degrees per frame from the second "
+                             "frame on (times a moving camera)", false},
             {"resize", "WxH", "after the first frame, resize the window (scripted checks)", false},
             {"cycle-methods", "", "frame i shows method i of the registry, in turn (scripted "
                                   "checks)", false}};
@@ -992,6 +1003,7 @@ EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& 
             throw InputError(cat("--resize '", size, "' must be WxH with sides in [1, 16384]"));
     }
     o.cycleMethods = args.has("cycle-methods");
+    o.orbitDegreesPerFrame = args.number("orbit", 0.0, -180.0, 180.0);
     o.renderScale = int(args.integer("render-scale", 1, 1, 4));
     if (o.renderScale == 3)
         throw InputError("--render-scale must be 1, 2 or 4, not 3");

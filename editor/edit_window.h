@@ -59,6 +59,9 @@ struct EditWindowOptions {
     int renderScale = 1;
     /// Scripted checks: after the first frame, resize the window to this size (0: no resize).
     int resizeWidth = 0, resizeHeight = 0;
+    /// Scripted navigation: from the second frame on, orbit by this many degrees per frame (as a
+    /// middle drag to the right would), so the frames time a moving camera.
+    double orbitDegreesPerFrame = 0.0;
     /// Scripted checks: frame i uses method i modulo the registry's count.
     bool cycleMethods = false;
 
@@ -94,7 +97,7 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
 /// The window's command-line options (besides the scene options and the render settings).
 std::vector<cli::OptionSpec> editWindowOptions();
 /// Options from the command line: --method, --frames, --screenshot, --window-screenshot,
-/// --render-scale, --resize, --cycle-methods,
+/// --render-scale, --orbit, --resize, --cycle-methods,
 /// and the render settings; window size from the scene's image size (--size).
 EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& job);
 

@@ -150,6 +150,21 @@ TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
     EXPECT_EQ(shown.height, 240);
 }
 
+TEST(EditWindow, ScriptedOrbitRendersAtHalfResolutionWhileMoving) {
+    const std::string still = tmp("still.png"), moving = tmp("moving.png");
+    const Result a = run(kXvfb, "edit --scene " + scene() + " --size 200x160 --frames 2 --screenshot " + still);
+    ASSERT_EQ(a.code, 0) << a.err;
+    const Result b = run(kXvfb, "edit --scene " + scene() + " --size 200x160 --frames 4 --orbit 30 "
+                                "--screenshot " + moving);
+    ASSERT_EQ(b.code, 0) << b.err;
+    EXPECT_EQ(b.err.find("validation error"), std::string::npos) << b.err;
+    const spot::noise::Image s = spot::noise::readImage(still), m = spot::noise::readImage(moving);
+    EXPECT_EQ(s.width, 200);
+    // The camera moved 90 degrees around the bunny, rendered at half the size while moving.
+    EXPECT_EQ(m.width, 100);
+    EXPECT_EQ(m.height, 80);
+}
+
 TEST(EditWindow, WithoutADisplayOneErrorLine) {
     const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --frames 1");
     EXPECT_EQ(e.code, 2) << e.err;
