@@ -36,8 +36,8 @@ int edit(int argc, char** argv) {
             : cat("warm frames: median ", r.frameMs, " ms (render ", r.renderMs,
                   " ms, present with ImGui ", r.presentMs, " ms, panels ", r.overlayMs, " ms)");
     std::printf("edit: %d frames (%d rendered) of %s; %s%s%s\n", r.frames, r.rendered,
-                job.scene.name.c_str(), timing.c_str(), options.screenshot.empty() ? "" : "; wrote ",
-                options.screenshot.string().c_str());
+                job.scene.name.c_str(), timing.c_str(),
+                options.screenshot.empty() ? "" : "; wrote ", options.screenshot.string().c_str());
     if (r.validation)
         std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
     return 0;

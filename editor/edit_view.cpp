@@ -18,7 +18,8 @@ constexpr double kMinDistance = 1e-4;
 constexpr double kPoleMargin = 1e-3;
 
 glm::dvec3 rotate(glm::dvec3 v, glm::dvec3 axis, double angle) {
-    return glm::dvec3(glm::rotate(glm::dmat4(1.0), angle, glm::normalize(axis)) * glm::dvec4(v, 0.0));
+    return glm::dvec3(glm::rotate(glm::dmat4(1.0), angle, glm::normalize(axis)) *
+                      glm::dvec4(v, 0.0));
 }
 
 } // namespace
@@ -51,7 +52,9 @@ noise::Camera OrbitView::camera(int width, int height) const {
     return c;
 }
 
-double OrbitView::distance() const { return glm::length(m_eye - m_target); }
+double OrbitView::distance() const {
+    return glm::length(m_eye - m_target);
+}
 
 void OrbitView::orbit(double dx, double dy, double viewHeight) {
     const double perPixel = std::numbers::pi / std::max(viewHeight, 1.0);
@@ -60,7 +63,8 @@ void OrbitView::orbit(double dx, double dy, double viewHeight) {
     // Elevation: the angle between the offset and up, kept away from both poles.
     const double r = glm::length(offset);
     const double polar = std::acos(std::clamp(glm::dot(offset / r, m_up), -1.0, 1.0));
-    const double wanted = std::clamp(polar - dy * perPixel, kPoleMargin, std::numbers::pi - kPoleMargin);
+    const double wanted =
+        std::clamp(polar - dy * perPixel, kPoleMargin, std::numbers::pi - kPoleMargin);
     const glm::dvec3 right = glm::cross(m_up, offset);
     if (glm::length(right) > 0.0)
         offset = rotate(offset, right, wanted - polar); // a positive turn moves away from up

@@ -52,10 +52,11 @@ struct GlfwLibrary {
         if (!display || !*display)
             throw InputError("spotshell edit: no display (DISPLAY is not set); run it in a desktop "
                              "session, or headless under xvfb-run");
-        glfwSetErrorCallback([](int, const char* message) { g_glfwError = message ? message : ""; });
+        glfwSetErrorCallback(
+            [](int, const char* message) { g_glfwError = message ? message : ""; });
         if (!glfwInit())
-            throw InputError(cat("spotshell edit: cannot open the display '", display,
-                                 "': ", g_glfwError));
+            throw InputError(
+                cat("spotshell edit: cannot open the display '", display, "': ", g_glfwError));
         if (!glfwVulkanSupported()) {
             glfwTerminate();
             throw std::runtime_error("GLFW: no Vulkan loader with window-system support");
@@ -71,8 +72,8 @@ struct GlfwWindow {
         glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
         handle = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
         if (!handle)
-            throw std::runtime_error(cat("GLFW: cannot create a ", width, "x", height,
-                                         " window: ", g_glfwError));
+            throw std::runtime_error(
+                cat("GLFW: cannot create a ", width, "x", height, " window: ", g_glfwError));
     }
     ~GlfwWindow() { glfwDestroyWindow(handle); }
     GlfwWindow(const GlfwWindow&) = delete;
@@ -215,10 +216,10 @@ public:
         vkGetPhysicalDeviceSurfacePresentModesKHR(m_ctx.physicalDevice(), m_surface, &n,
                                                   modes.data());
         // MAILBOX never blocks on the display's refresh; FIFO is always there.
-        presentMode = std::find(modes.begin(), modes.end(), VK_PRESENT_MODE_MAILBOX_KHR) !=
-                              modes.end()
-                          ? VK_PRESENT_MODE_MAILBOX_KHR
-                          : VK_PRESENT_MODE_FIFO_KHR;
+        presentMode =
+            std::find(modes.begin(), modes.end(), VK_PRESENT_MODE_MAILBOX_KHR) != modes.end()
+                ? VK_PRESENT_MODE_MAILBOX_KHR
+                : VK_PRESENT_MODE_FIFO_KHR;
         minImageCount = std::max(2u, caps.minImageCount);
         if (caps.maxImageCount > 0)
             minImageCount = std::min(minImageCount, caps.maxImageCount);
@@ -276,7 +277,8 @@ public:
         while (renderDone.size() < images.size()) {
             VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
             VkSemaphore s = VK_NULL_HANDLE;
-            splat::vkCheck(vkCreateSemaphore(m_ctx.device(), &si, nullptr, &s), "vkCreateSemaphore");
+            splat::vkCheck(vkCreateSemaphore(m_ctx.device(), &si, nullptr, &s),
+                           "vkCreateSemaphore");
             renderDone.push_back(s);
         }
         return true;
@@ -315,11 +317,13 @@ struct PresentSync {
         ai.commandPool = ctx.commandPool();
         ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
         ai.commandBufferCount = 1;
-        splat::vkCheck(vkAllocateCommandBuffers(ctx.device(), &ai, &cmd), "vkAllocateCommandBuffers");
+        splat::vkCheck(vkAllocateCommandBuffers(ctx.device(), &ai, &cmd),
+                       "vkAllocateCommandBuffers");
         VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
         splat::vkCheck(vkCreateFence(ctx.device(), &fci, nullptr, &fence), "vkCreateFence");
         VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-        splat::vkCheck(vkCreateSemaphore(ctx.device(), &si, nullptr, &acquired), "vkCreateSemaphore");
+        splat::vkCheck(vkCreateSemaphore(ctx.device(), &si, nullptr, &acquired),
+                       "vkCreateSemaphore");
     }
     ~PresentSync() {
         vkDeviceWaitIdle(m_ctx.device());
@@ -354,7 +358,8 @@ public:
         // the panels would come out washed out.
         if (swapchain.srgb)
             for (ImVec4& c : ImGui::GetStyle().Colors)
-                c = ImVec4(noise::srgbDecode(c.x), noise::srgbDecode(c.y), noise::srgbDecode(c.z), c.w);
+                c = ImVec4(noise::srgbDecode(c.x), noise::srgbDecode(c.y), noise::srgbDecode(c.z),
+                           c.w);
         // Chains to the callbacks the window installed before (navigation and the brush).
         ImGui_ImplGlfw_InitForVulkan(window, true);
         m_glfw = true;
@@ -440,11 +445,14 @@ InputState& state(GLFWwindow* window) {
 
 int currentMods(GLFWwindow* w) {
     int mods = 0;
-    if (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS)
+    if (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
+        glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS)
         mods |= GLFW_MOD_SHIFT;
-    if (glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS)
+    if (glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+        glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS)
         mods |= GLFW_MOD_CONTROL;
-    if (glfwGetKey(w, GLFW_KEY_LEFT_ALT) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_ALT) == GLFW_PRESS)
+    if (glfwGetKey(w, GLFW_KEY_LEFT_ALT) == GLFW_PRESS ||
+        glfwGetKey(w, GLFW_KEY_RIGHT_ALT) == GLFW_PRESS)
         mods |= GLFW_MOD_ALT;
     return mods;
 }
@@ -453,7 +461,8 @@ void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
     InputState& s = state(window);
     glfwGetCursorPos(window, &s.lastX, &s.lastY);
     if (action == GLFW_RELEASE) {
-        if (s.drag == InputState::Drag::Brush && s.options->onBrush && button == GLFW_MOUSE_BUTTON_LEFT) {
+        if (s.drag == InputState::Drag::Brush && s.options->onBrush &&
+            button == GLFW_MOUSE_BUTTON_LEFT) {
             s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Release, mods));
             s.sceneDirty = true;
         }
@@ -537,7 +546,7 @@ struct PanelState {
     bool continuous = false;
     int scale = 0;           ///< index into kScales: always
     int navigationScale = 1; ///< index into kScales: while the camera moves
-    std::string error; ///< why the last render failed (shown until one succeeds)
+    std::string error;       ///< why the last render failed (shown until one succeeds)
 };
 
 std::string megabytes(std::uint64_t bytes) {
@@ -625,7 +634,8 @@ void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windo
     ImGui::Text("total GPU      %8.2f ms", st.gpuMs);
     ImGui::Text("render wall    %8.2f ms", st.wallMs);
     ImGui::Text("present+ImGui  %8.2f ms", presentMs);
-    ImGui::Text("frame          %8.2f ms (%.1f fps)", frameMs, frameMs > 0 ? 1000.0 / frameMs : 0.0);
+    ImGui::Text("frame          %8.2f ms (%.1f fps)", frameMs,
+                frameMs > 0 ? 1000.0 / frameMs : 0.0);
     ImGui::Text("kernels %u generated%s, %u drawn", st.kernelsGenerated,
                 st.regenerated ? " (new)" : "", st.counters.kernelsDrawn);
     ImGui::Text("cells %u of %u visible", st.cellsGenerated, st.visibleCells);
@@ -652,20 +662,20 @@ struct WindowGrab {
         width = extent.width;
         height = extent.height;
         format = imageFormat;
-        splat::transitionImage(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
-                               VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                               VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                               VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
-                               VK_ACCESS_2_TRANSFER_READ_BIT);
+        splat::transitionImage(
+            cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+            VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+            VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+            VK_ACCESS_2_TRANSFER_READ_BIT);
         VkBufferImageCopy region{};
         region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
         region.imageExtent = {width, height, 1};
         vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1,
                                &region);
-        splat::transitionImage(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT,
-                               VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
-                               VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
-                               VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE);
+        splat::transitionImage(
+            cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+            VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
+            VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE);
         splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                              VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
     }
@@ -690,8 +700,8 @@ struct WindowGrab {
 /// Blit the scene into the swapchain image, draw ImGui over it, present; with `grab`, also copy
 /// the presented image back. Returns false when the swapchain is out of date (then recreated by
 /// the caller).
-bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync, const splat::Image& scene,
-             WindowGrab* grab = nullptr) {
+bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
+             const splat::Image& scene, WindowGrab* grab = nullptr) {
     std::uint32_t index = 0;
     const VkResult acquired = vkAcquireNextImageKHR(ctx.device(), swapchain.handle, UINT64_MAX,
                                                     sync.acquired, VK_NULL_HANDLE, &index);
@@ -708,22 +718,25 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync, const
     // The renderer's last pass (a compute shader, in an earlier submit) wrote the scene; the
     // renderers keep it in the general layout, the blit reads it best as a transfer source.
     splat::transitionImage(cmd, scene.handle(), VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
-                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                           VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_BLIT_BIT,
-                           VK_ACCESS_2_TRANSFER_READ_BIT);
+                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
     splat::transitionImage(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                           VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                           VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_BLIT_BIT,
-                           VK_ACCESS_2_TRANSFER_WRITE_BIT);
+                           VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE,
+                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
     VkImageBlit blit{};
     blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     blit.srcOffsets[1] = {std::int32_t(scene.width()), std::int32_t(scene.height()), 1};
     blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    blit.dstOffsets[1] = {std::int32_t(swapchain.extent.width), std::int32_t(swapchain.extent.height), 1};
-    const bool scaled = scene.width() != swapchain.extent.width || scene.height() != swapchain.extent.height;
+    blit.dstOffsets[1] = {std::int32_t(swapchain.extent.width),
+                          std::int32_t(swapchain.extent.height), 1};
+    const bool scaled =
+        scene.width() != swapchain.extent.width || scene.height() != swapchain.extent.height;
     VkFormatProperties fp;
     vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), scene.format(), &fp);
-    const bool linear = scaled && (fp.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
+    const bool linear =
+        scaled && (fp.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
     vkCmdBlitImage(cmd, scene.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
                    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
                    linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST);
@@ -880,8 +893,8 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
         bool warm = true;
         double renderWall = 0.0;
         if (render) {
-            const int scale = kScales[navigating ? std::max(panel.scale, panel.navigationScale)
-                                                 : panel.scale];
+            const int scale =
+                kScales[navigating ? std::max(panel.scale, panel.navigationScale) : panel.scale];
             renderW = std::max(1, int(swapchain.extent.width) / scale);
             renderH = std::max(1, int(swapchain.extent.height) / scale);
             splat::View v = look;
@@ -946,9 +959,9 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
             frame.render(methods[std::size_t(panel.method)].name, v, panel.settings, &image);
             screenshot = std::move(image);
         }
-        noise::writeImage(options.screenshot, *screenshot,
-                          {{"method", methods[std::size_t(panel.method)].name},
-                           {"scene", job.scene.name}});
+        noise::writeImage(
+            options.screenshot, *screenshot,
+            {{"method", methods[std::size_t(panel.method)].name}, {"scene", job.scene.name}});
     }
     if (windowImage)
         noise::writeImage(options.windowScreenshot, *windowImage, {{"scene", job.scene.name}});
@@ -966,21 +979,31 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
 }
 
 std::vector<cli::OptionSpec> editWindowOptions() {
-    return {{"method", "NAME", "the method shown first: " + splat::gpuMethodNames() +
-                                   " (default instanced)", false},
-            {"frames", "N", "render N frames, then close (default: until the window is closed)",
-             false},
-            {"screenshot", "FILE", "write the last rendered scene (without the panels) as .png or "
-                                   ".exr when the window closes", false},
-            {"window-screenshot", "FILE", "with --frames: write the last frame as the window "
-                                          "showed it, panels included", false},
-            {"render-scale", "N", "render at 1/N of the window's size, scaled up: 1 (default), 2 "
-                                  "or 4", false},
-            {"orbit", "DEG", "scripted navigation: orbit by DEG degrees per frame from the second "
-                             "frame on (times a moving camera)", false},
-            {"resize", "WxH", "after the first frame, resize the window (scripted checks)", false},
-            {"cycle-methods", "", "frame i shows method i of the registry, in turn (scripted "
-                                  "checks)", false}};
+    return {
+        {"method", "NAME",
+         "the method shown first: " + splat::gpuMethodNames() + " (default instanced)", false},
+        {"frames", "N", "render N frames, then close (default: until the window is closed)", false},
+        {"screenshot", "FILE",
+         "write the last rendered scene (without the panels) as .png or "
+         ".exr when the window closes",
+         false},
+        {"window-screenshot", "FILE",
+         "with --frames: write the last frame as the window "
+         "showed it, panels included",
+         false},
+        {"render-scale", "N",
+         "render at 1/N of the window's size, scaled up: 1 (default), 2 "
+         "or 4",
+         false},
+        {"orbit", "DEG",
+         "scripted navigation: orbit by DEG degrees per frame from the second "
+         "frame on (times a moving camera)",
+         false},
+        {"resize", "WxH", "after the first frame, resize the window (scripted checks)", false},
+        {"cycle-methods", "",
+         "frame i shows method i of the registry, in turn (scripted "
+         "checks)",
+         false}};
 }
 
 EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& job) {
@@ -997,7 +1020,8 @@ EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& 
     if (args.has("resize")) {
         const std::string size = args.str("resize");
         char x = 0, extra = 0;
-        if (std::sscanf(size.c_str(), "%d%c%d%c", &o.resizeWidth, &x, &o.resizeHeight, &extra) != 3 ||
+        if (std::sscanf(size.c_str(), "%d%c%d%c", &o.resizeWidth, &x, &o.resizeHeight, &extra) !=
+                3 ||
             (x != 'x' && x != 'X') || o.resizeWidth < 1 || o.resizeHeight < 1 ||
             o.resizeWidth > 16384 || o.resizeHeight > 16384)
             throw InputError(cat("--resize '", size, "' must be WxH with sides in [1, 16384]"));

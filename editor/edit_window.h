@@ -11,8 +11,8 @@
 /// present's submit before the next frame (lavapipe runs both on the same CPU cores anyway).
 #pragma once
 
-#include <filesystem>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
@@ -85,7 +85,7 @@ struct EditWindowReport {
     double renderMs = 0.0;   ///< splat::Frame::render() wall time
     double presentMs = 0.0;  ///< acquire, blit, ImGui, submit, present, wait
     double overlayMs = 0.0;  ///< building the ImGui panels on the host (included in frameMs)
-    bool validation = false;           ///< the validation layer was on (SPOT_VALIDATION=1)
+    bool validation = false; ///< the validation layer was on (SPOT_VALIDATION=1)
     std::uint32_t validationWarnings = 0; ///< its warnings (errors throw)
 };
 

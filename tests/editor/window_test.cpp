@@ -48,7 +48,8 @@ std::string slurp(const std::string& file) {
 Result run(const std::string& prefix, const std::string& args) {
     static int counter = 0;
     const std::string errFile = tmp("stderr-" + std::to_string(counter++) + ".txt");
-    const std::string cmd = prefix + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
+    const std::string cmd =
+        prefix + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
     Result r;
     FILE* pipe = popen(cmd.c_str(), "r");
     if (!pipe)
@@ -63,10 +64,11 @@ Result run(const std::string& prefix, const std::string& args) {
 }
 
 /// Validation on: any error fails the command (exit 1) and is printed.
-const std::string kXvfb =
-    "SPOT_VALIDATION=1 xvfb-run -a -s '-screen 0 1024x768x24'";
+const std::string kXvfb = "SPOT_VALIDATION=1 xvfb-run -a -s '-screen 0 1024x768x24'";
 
-std::string scene() { return std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json"; }
+std::string scene() {
+    return std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+}
 
 /// Fraction of pixels whose display values (8-bit sRGB) differ by more than `tolerance` levels
 /// in some channel.
@@ -74,8 +76,10 @@ double fractionDiffering(const spot::noise::Image& a, const spot::noise::Image& 
     std::size_t differing = 0;
     for (std::size_t i = 0; i < a.pixels.size(); ++i)
         for (int c = 0; c < 3; ++c) {
-            const long da = std::lround(spot::noise::srgbEncode(std::clamp(a.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
-            const long db = std::lround(spot::noise::srgbEncode(std::clamp(b.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            const long da = std::lround(
+                spot::noise::srgbEncode(std::clamp(a.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            const long db = std::lround(
+                spot::noise::srgbEncode(std::clamp(b.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
             if (std::abs(da - db) > tolerance) {
                 ++differing;
                 break;
@@ -86,14 +90,16 @@ double fractionDiffering(const spot::noise::Image& a, const spot::noise::Image& 
 
 TEST(EditWindow, ShowsWhatRenderRenders) {
     const std::string shot = tmp("edit.png"), window = tmp("window.png"), ref = tmp("render.png");
-    const Result e = run(kXvfb, "edit --scene " + scene() + " --size 320x240 --frames 3 --screenshot " +
-                                    shot + " --window-screenshot " + window);
+    const Result e =
+        run(kXvfb, "edit --scene " + scene() + " --size 320x240 --frames 3 --screenshot " + shot +
+                       " --window-screenshot " + window);
     ASSERT_EQ(e.code, 0) << e.err;
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
     EXPECT_NE(e.out.find("edit: 3 frames"), std::string::npos) << e.out;
     EXPECT_NE(e.out.find("validation on: no errors"), std::string::npos) << e.out;
-    const Result r = run("SPOT_VALIDATION=1", "render --scene " + scene() +
-                                                  " --size 320x240 --method instanced --out " + ref);
+    const Result r =
+        run("SPOT_VALIDATION=1",
+            "render --scene " + scene() + " --size 320x240 --method instanced --out " + ref);
     ASSERT_EQ(r.code, 0) << r.err;
 
     const spot::noise::Image edited = spot::noise::readImage(shot);
@@ -122,9 +128,11 @@ TEST(EditWindow, ShowsWhatRenderRenders) {
 TEST(EditWindow, EveryMethodAndAResize) {
     const std::string shot = tmp("cycle.png");
     // Two frames per method, in registry order; the window is resized after the first frame.
-    const Result e = run(kXvfb, "edit --scene " + scene() + " --size 240x180 --frames 10 "
-                                "--cycle-methods --resize 300x200 --steps 8 --window-screenshot " +
-                                    shot);
+    const Result e =
+        run(kXvfb, "edit --scene " + scene() +
+                       " --size 240x180 --frames 10 "
+                       "--cycle-methods --resize 300x200 --steps 8 --window-screenshot " +
+                       shot);
     ASSERT_EQ(e.code, 0) << e.err;
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
     // Not even a warning from the window's own work (the scene's readback for --screenshot, in
@@ -138,8 +146,10 @@ TEST(EditWindow, EveryMethodAndAResize) {
 
 TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
     const std::string shot = tmp("half.png"), window = tmp("half-window.png");
-    const Result e = run(kXvfb, "edit --scene " + scene() + " --size 320x240 --frames 2 "
-                                "--render-scale 2 --screenshot " + shot + " --window-screenshot " + window);
+    const Result e = run(kXvfb, "edit --scene " + scene() +
+                                    " --size 320x240 --frames 2 "
+                                    "--render-scale 2 --screenshot " +
+                                    shot + " --window-screenshot " + window);
     ASSERT_EQ(e.code, 0) << e.err;
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
     const spot::noise::Image scene = spot::noise::readImage(shot);
@@ -152,10 +162,13 @@ TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
 
 TEST(EditWindow, ScriptedOrbitRendersAtHalfResolutionWhileMoving) {
     const std::string still = tmp("still.png"), moving = tmp("moving.png");
-    const Result a = run(kXvfb, "edit --scene " + scene() + " --size 200x160 --frames 2 --screenshot " + still);
+    const Result a =
+        run(kXvfb, "edit --scene " + scene() + " --size 200x160 --frames 2 --screenshot " + still);
     ASSERT_EQ(a.code, 0) << a.err;
-    const Result b = run(kXvfb, "edit --scene " + scene() + " --size 200x160 --frames 4 --orbit 30 "
-                                "--screenshot " + moving);
+    const Result b = run(kXvfb, "edit --scene " + scene() +
+                                    " --size 200x160 --frames 4 --orbit 30 "
+                                    "--screenshot " +
+                                    moving);
     ASSERT_EQ(b.code, 0) << b.err;
     EXPECT_EQ(b.err.find("validation error"), std::string::npos) << b.err;
     const spot::noise::Image s = spot::noise::readImage(still), m = spot::noise::readImage(moving);
