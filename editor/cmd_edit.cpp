@@ -16,6 +16,12 @@
 namespace spot::cmd {
 
 int edit(int argc, char** argv) {
+    // Without --script the window opens (cmd_edit_window.cpp).
+    bool script = false;
+    for (int i = 1; i < argc; ++i)
+        script |= std::string(argv[i]) == "--script" || std::string(argv[i]).rfind("--script=", 0) == 0;
+    if (!script)
+        return editWindow(argc, argv);
     std::vector<cli::OptionSpec> specs = {
         {"scene", "FILE", "scene JSON to edit (presets/scenes/*.json)", true},
         {"preset", "FILE", "edit this preset instead of the scene's (e.g. one saved by the editor)",

@@ -23,7 +23,7 @@ const Command kCommands[] = {
     {"impulses", spot::cmd::impulses, "generate the impulses of a preset on a mesh, write a PLY"},
     {"render", spot::cmd::render, "render a scene (reference: the converged CPU ground truth)"},
     {"compare", spot::cmd::compare, "PSNR, SSIM and FLIP of an image against a reference"},
-    {"edit", spot::cmd::edit, "paint and edit a preset on a scene (for now: --script, no window)"},
+    {"edit", spot::cmd::edit, "paint and edit a preset on a scene: a window, or --script without one"},
     {"bench", spot::cmd::bench, "speed against accuracy of every method, with charts"},
     {"info", spot::cmd::info, "print a mesh's counts, bounds and dropped triangles"},
 };

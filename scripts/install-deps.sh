@@ -13,6 +13,8 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   # tests
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the editor's window: GLFW, Dear ImGui (core and backend sources), a virtual display for tests
+  libglfw3-dev libimgui-dev xvfb xauth
   # the benchmark's charts
   python3 python3-matplotlib
 )

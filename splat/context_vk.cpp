@@ -58,6 +58,16 @@ bool hasLayer(const char* name) {
                        [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
 }
 
+bool hasDeviceExtension(VkPhysicalDevice device, const char* name) {
+    std::uint32_t n = 0;
+    vkEnumerateDeviceExtensionProperties(device, nullptr, &n, nullptr);
+    std::vector<VkExtensionProperties> extensions(n);
+    vkEnumerateDeviceExtensionProperties(device, nullptr, &n, extensions.data());
+    return std::any_of(extensions.begin(), extensions.end(), [&](const VkExtensionProperties& e) {
+        return std::strcmp(e.extensionName, name) == 0;
+    });
+}
+
 bool containsIgnoringCase(std::string_view text, std::string_view part) {
     // ASCII case folding: device names are ASCII.
     const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? char(c - 'A' + 'a') : c; };
@@ -122,6 +132,8 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
         layers.push_back(validationLayer);
     }
+    for (const std::string& e : options.instanceExtensions)
+        extensions.push_back(e.c_str());
     VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
     ici.pApplicationInfo = &app;
     ici.enabledExtensionCount = std::uint32_t(extensions.size());
@@ -133,7 +145,10 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
     const VkResult created = vkCreateInstance(&ici, nullptr, &m_instance);
     if (created != VK_SUCCESS)
         throw std::runtime_error(cat("Vulkan: no instance (VkResult ", int(created),
-                                     "); is the Vulkan loader (libvulkan1) installed?"));
+                                     created == VK_ERROR_EXTENSION_NOT_PRESENT
+                                         ? "; an instance extension is missing"
+                                         : "; is the Vulkan loader (libvulkan1) installed?",
+                                     ")"));
     if (m_validation) {
         auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
             vkGetInstanceProcAddr(m_instance, "vkCreateDebugUtilsMessengerEXT"));
@@ -159,13 +174,18 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
             rejected += cat(" ", p.deviceName, " (Vulkan < 1.3)");
             continue;
         }
+        if (options.swapchain && !hasDeviceExtension(d, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
+            rejected += cat(" ", p.deviceName, " (no VK_KHR_swapchain)");
+            continue;
+        }
         std::uint32_t families = 0;
         vkGetPhysicalDeviceQueueFamilyProperties(d, &families, nullptr);
         std::vector<VkQueueFamilyProperties> fam(families);
         vkGetPhysicalDeviceQueueFamilyProperties(d, &families, fam.data());
         for (std::uint32_t f = 0; f < families; ++f)
             if ((fam[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (fam[f].queueFlags & VK_QUEUE_COMPUTE_BIT) &&
-                fam[f].timestampValidBits > 0) {
+                fam[f].timestampValidBits > 0 &&
+                (!options.canPresent || options.canPresent(m_instance, d, f))) {
                 // Prefer a real GPU when there is one (the device tool's machines), else lavapipe.
                 if (!m_physical || p.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU) {
                     m_physical = d;
@@ -178,6 +198,7 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
     if (!m_physical) {
         const std::string message =
             cat("Vulkan: no usable device (need Vulkan 1.3 with a graphics and compute queue",
+                options.canPresent ? " that can present to the window" : "",
                 options.device.empty() ? "" : cat(", a name containing '", options.device, "' (SPOT_DEVICE)"),
                 "; install mesa-vulkan-drivers for lavapipe)", rejected.empty() ? "" : "; rejected:",
                 rejected);
@@ -223,13 +244,15 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
     qci.queueFamilyIndex = m_queueFamily;
     qci.queueCount = 1;
     qci.pQueuePriorities = &priority;
-    const char* deviceExtensions[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+    std::vector<const char*> deviceExtensions = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+    if (options.swapchain)
+        deviceExtensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
     dci.pNext = &want;
     dci.queueCreateInfoCount = 1;
     dci.pQueueCreateInfos = &qci;
-    dci.enabledExtensionCount = 1;
-    dci.ppEnabledExtensionNames = deviceExtensions;
+    dci.enabledExtensionCount = std::uint32_t(deviceExtensions.size());
+    dci.ppEnabledExtensionNames = deviceExtensions.data();
     vkCheck(vkCreateDevice(m_physical, &dci, nullptr, &m_device), "vkCreateDevice");
     vkGetDeviceQueue(m_device, m_queueFamily, 0, &m_queue);
     pushDescriptorSet = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(

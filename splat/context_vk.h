@@ -1,6 +1,7 @@
 /// @file context_vk.h
 /// @brief Vulkan plumbing: instance, device, queue, memory, buffers, images, pipelines,
-/// timestamps. Headless (no window); the editor's window will drive the same context.
+/// timestamps. Headless by default; the editor's window asks for the presentation extensions
+/// through ContextOptions and drives the same context.
 ///
 /// Everything is RAII: handles are destroyed in reverse order of creation when their owner goes
 /// away. Validation: when enabled, VK_LAYER_KHRONOS_validation is loaded and a debug messenger
@@ -31,6 +32,15 @@ struct ContextOptions {
     /// Use only a device whose name contains this, ignoring case (e.g. "llvmpipe" for lavapipe
     /// on a machine with a GPU); empty: any, a discrete GPU preferred. Default: SPOT_DEVICE.
     std::string device;
+    /// Extra instance extensions (the editor: VK_KHR_surface and what GLFW needs for its window
+    /// system); vkCreateInstance fails with VK_ERROR_EXTENSION_NOT_PRESENT when one is missing.
+    std::vector<std::string> instanceExtensions;
+    /// Enable VK_KHR_swapchain on the device (the editor's window); only devices that have it
+    /// are chosen.
+    bool swapchain = false;
+    /// When set, only a queue family for which this returns true is chosen (the editor: whether
+    /// the family can present to its window system). Called after the instance exists.
+    std::function<bool(VkInstance, VkPhysicalDevice, std::uint32_t family)> canPresent;
 };
 
 /// ContextOptions with `validation` taken from SPOT_VALIDATION and `device` from SPOT_DEVICE.

@@ -1,0 +1,57 @@
+/// @file edit_view.h
+/// @brief The editor window's navigation, Blender-like: orbit around a target (turntable about
+/// the scene's up vector), pan in the view plane, dolly towards the target, and framing a
+/// bounding sphere. Pure camera math, no window system: the window feeds it pointer motion in
+/// window pixels and reads the camera back.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include "noise/camera.h"
+
+namespace spot::noise {
+struct Mesh;
+}
+
+namespace spot::editor {
+
+/// A sphere around every vertex of a mesh (world units): the centre of the bounding box and the
+/// largest distance from it.
+struct BoundingSphere {
+    glm::dvec3 center{0.0};
+    double radius = 1.0;
+};
+BoundingSphere boundingSphere(const noise::Mesh& mesh);
+
+class OrbitView {
+public:
+    /// Starts at `camera` (its eye, target, up, projection and field of view).
+    explicit OrbitView(const noise::Camera& camera);
+
+    /// The camera now, with the given image size in pixels (the aspect ratio follows it).
+    noise::Camera camera(int width, int height) const;
+
+    /// Turntable orbit by a pointer motion in window pixels: dragging right turns the scene to
+    /// the right (the eye goes left around the target), dragging down shows it from higher up.
+    /// `viewHeight` (pixels) sets the rate: a drag over the whole height turns by pi.
+    void orbit(double dx, double dy, double viewHeight);
+    /// Move eye and target in the view plane so that the point under the pointer follows it
+    /// (exactly at the target's depth). `viewHeight` in pixels.
+    void pan(double dx, double dy, double viewHeight);
+    /// Dolly towards the target by wheel steps (positive: closer); each step scales the
+    /// distance (or the orthographic height) by 0.85. Never closer than 1e-4 world units.
+    void dolly(double steps);
+    /// Look at the sphere's centre from the current direction, from the distance at which the
+    /// sphere fits the narrower of the two fields of view with 5% margin.
+    void frame(const BoundingSphere& sphere, double aspect);
+
+    glm::dvec3 eye() const { return m_eye; }
+    glm::dvec3 target() const { return m_target; }
+    double distance() const;
+
+private:
+    noise::Camera m_base; ///< projection and field of view
+    glm::dvec3 m_eye, m_target, m_up;
+};
+
+} // namespace spot::editor

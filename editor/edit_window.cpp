@@ -1,0 +1,1042 @@
+#include "edit_window.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <stdexcept>
+#include <utility>
+
+#include <vulkan/vulkan.h>
+// After vulkan.h: GLFW then declares glfwCreateWindowSurface and the presentation queries.
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_vulkan.h>
+
+#include "edit_view.h"
+#include "noise/error.h"
+#include "noise/image.h"
+#include "render_options.h"
+#include "scene_job.h"
+#include "splat/context_vk.h"
+#include "splat/frame_vk.h"
+
+namespace spot::editor {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+double median(std::vector<double> v) {
+    if (v.empty())
+        return 0.0;
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// --- GLFW ----------------------------------------------------------------------------------
+
+std::string g_glfwError; ///< the last message of GLFW's error callback
+
+/// glfwInit() and glfwTerminate(), with a clear InputError when there is no display.
+struct GlfwLibrary {
+    GlfwLibrary() {
+        const char* display = std::getenv("DISPLAY");
+        if (!display || !*display)
+            throw InputError("spotshell edit: no display (DISPLAY is not set); run it in a desktop "
+                             "session, or headless under xvfb-run");
+        glfwSetErrorCallback(
+            [](int, const char* message) { g_glfwError = message ? message : ""; });
+        if (!glfwInit())
+            throw InputError(
+                cat("spotshell edit: cannot open the display '", display, "': ", g_glfwError));
+        if (!glfwVulkanSupported()) {
+            glfwTerminate();
+            throw std::runtime_error("GLFW: no Vulkan loader with window-system support");
+        }
+    }
+    ~GlfwLibrary() { glfwTerminate(); }
+    GlfwLibrary(const GlfwLibrary&) = delete;
+    GlfwLibrary& operator=(const GlfwLibrary&) = delete;
+};
+
+struct GlfwWindow {
+    GlfwWindow(int width, int height, const std::string& title) {
+        glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+        handle = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+        if (!handle)
+            throw std::runtime_error(
+                cat("GLFW: cannot create a ", width, "x", height, " window: ", g_glfwError));
+    }
+    ~GlfwWindow() { glfwDestroyWindow(handle); }
+    GlfwWindow(const GlfwWindow&) = delete;
+    GlfwWindow& operator=(const GlfwWindow&) = delete;
+    GLFWwindow* handle = nullptr;
+};
+
+splat::ContextOptions windowContextOptions() {
+    splat::ContextOptions o = splat::contextOptionsFromEnvironment();
+    std::uint32_t count = 0;
+    const char** names = glfwGetRequiredInstanceExtensions(&count);
+    if (!names)
+        throw std::runtime_error(cat("GLFW: no Vulkan surface extensions: ", g_glfwError));
+    for (std::uint32_t i = 0; i < count; ++i)
+        o.instanceExtensions.emplace_back(names[i]);
+    o.swapchain = true;
+    o.canPresent = [](VkInstance instance, VkPhysicalDevice device, std::uint32_t family) {
+        return glfwGetPhysicalDevicePresentationSupport(instance, device, family) == GLFW_TRUE;
+    };
+    return o;
+}
+
+// --- Vulkan presentation ------------------------------------------------------------------
+
+struct Surface {
+    Surface(splat::Context& ctx, GLFWwindow* window) : m_ctx(ctx) {
+        splat::vkCheck(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &handle),
+                       "glfwCreateWindowSurface");
+        VkBool32 supported = VK_FALSE;
+        vkGetPhysicalDeviceSurfaceSupportKHR(ctx.physicalDevice(), ctx.queueFamily(), handle,
+                                             &supported);
+        if (!supported) {
+            vkDestroySurfaceKHR(ctx.instance(), handle, nullptr);
+            throw std::runtime_error(cat("Vulkan: queue family ", ctx.queueFamily(), " of ",
+                                         ctx.deviceName(), " cannot present to the window"));
+        }
+    }
+    ~Surface() { vkDestroySurfaceKHR(m_ctx.instance(), handle, nullptr); }
+    Surface(const Surface&) = delete;
+    Surface& operator=(const Surface&) = delete;
+    splat::Context& m_ctx;
+    VkSurfaceKHR handle = VK_NULL_HANDLE;
+};
+
+bool canBlitTo(VkPhysicalDevice device, VkFormat format) {
+    VkFormatProperties p;
+    vkGetPhysicalDeviceFormatProperties(device, format, &p);
+    return (p.optimalTilingFeatures & VK_FORMAT_FEATURE_BLIT_DST_BIT) != 0;
+}
+
+/// An sRGB format the blit can write (it then encodes linear to sRGB), else the first format.
+VkSurfaceFormatKHR chooseFormat(VkPhysicalDevice device, VkSurfaceKHR surface, bool& srgb) {
+    std::uint32_t n = 0;
+    vkGetPhysicalDeviceSurfaceFormatsKHR(device, surface, &n, nullptr);
+    std::vector<VkSurfaceFormatKHR> formats(n);
+    vkGetPhysicalDeviceSurfaceFormatsKHR(device, surface, &n, formats.data());
+    if (formats.empty())
+        throw std::runtime_error("Vulkan: the window surface has no formats");
+    for (VkFormat wanted : {VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_SRGB})
+        for (const VkSurfaceFormatKHR& f : formats)
+            if (f.format == wanted && f.colorSpace == VK_COLOR_SPACE_SRGB_NONLINEAR_KHR &&
+                canBlitTo(device, f.format)) {
+                srgb = true;
+                return f;
+            }
+    srgb = false;
+    for (const VkSurfaceFormatKHR& f : formats)
+        if (canBlitTo(device, f.format))
+            return f;
+    throw std::runtime_error("Vulkan: no window surface format can be a blit destination");
+}
+
+/// The swapchain with its images' views and the ImGui render pass's framebuffers, recreated
+/// when the window's size changes.
+class Swapchain {
+public:
+    Swapchain(splat::Context& ctx, VkSurfaceKHR surface) : m_ctx(ctx), m_surface(surface) {
+        format = chooseFormat(ctx.physicalDevice(), surface, srgb);
+        VkAttachmentDescription color{};
+        color.format = format.format;
+        color.samples = VK_SAMPLE_COUNT_1_BIT;
+        color.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD; // the blitted scene
+        color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+        color.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+        color.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        color.initialLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+        color.finalLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
+        VkAttachmentReference ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+        VkSubpassDescription subpass{};
+        subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+        subpass.colorAttachmentCount = 1;
+        subpass.pColorAttachments = &ref;
+        // The blit's writes before ImGui's blending reads and writes.
+        VkSubpassDependency dependency{};
+        dependency.srcSubpass = VK_SUBPASS_EXTERNAL;
+        dependency.dstSubpass = 0;
+        dependency.srcStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT;
+        dependency.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        dependency.dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+        dependency.dstAccessMask =
+            VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+        VkRenderPassCreateInfo rpi{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+        rpi.attachmentCount = 1;
+        rpi.pAttachments = &color;
+        rpi.subpassCount = 1;
+        rpi.pSubpasses = &subpass;
+        rpi.dependencyCount = 1;
+        rpi.pDependencies = &dependency;
+        splat::vkCheck(vkCreateRenderPass(ctx.device(), &rpi, nullptr, &renderPass),
+                       "vkCreateRenderPass");
+    }
+    ~Swapchain() {
+        destroyViews();
+        for (VkSemaphore s : renderDone)
+            vkDestroySemaphore(m_ctx.device(), s, nullptr);
+        vkDestroySwapchainKHR(m_ctx.device(), handle, nullptr);
+        vkDestroyRenderPass(m_ctx.device(), renderPass, nullptr);
+    }
+    Swapchain(const Swapchain&) = delete;
+    Swapchain& operator=(const Swapchain&) = delete;
+
+    /// (Re)create for the framebuffer size; false when the window is minimized (size 0).
+    bool recreate(int fbWidth, int fbHeight) {
+        VkSurfaceCapabilitiesKHR caps;
+        splat::vkCheck(
+            vkGetPhysicalDeviceSurfaceCapabilitiesKHR(m_ctx.physicalDevice(), m_surface, &caps),
+            "vkGetPhysicalDeviceSurfaceCapabilitiesKHR");
+        VkExtent2D e = caps.currentExtent;
+        if (e.width == 0xffffffffu)
+            e = {std::uint32_t(fbWidth), std::uint32_t(fbHeight)};
+        e.width = std::clamp(e.width, caps.minImageExtent.width, caps.maxImageExtent.width);
+        e.height = std::clamp(e.height, caps.minImageExtent.height, caps.maxImageExtent.height);
+        if (e.width == 0 || e.height == 0 || fbWidth == 0 || fbHeight == 0)
+            return false;
+        vkDeviceWaitIdle(m_ctx.device());
+        destroyViews();
+        std::uint32_t n = 0;
+        vkGetPhysicalDeviceSurfacePresentModesKHR(m_ctx.physicalDevice(), m_surface, &n, nullptr);
+        std::vector<VkPresentModeKHR> modes(n);
+        vkGetPhysicalDeviceSurfacePresentModesKHR(m_ctx.physicalDevice(), m_surface, &n,
+                                                  modes.data());
+        // MAILBOX never blocks on the display's refresh; FIFO is always there.
+        presentMode =
+            std::find(modes.begin(), modes.end(), VK_PRESENT_MODE_MAILBOX_KHR) != modes.end()
+                ? VK_PRESENT_MODE_MAILBOX_KHR
+                : VK_PRESENT_MODE_FIFO_KHR;
+        minImageCount = std::max(2u, caps.minImageCount);
+        if (caps.maxImageCount > 0)
+            minImageCount = std::min(minImageCount, caps.maxImageCount);
+        VkSwapchainCreateInfoKHR sci{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
+        sci.surface = m_surface;
+        sci.minImageCount = minImageCount;
+        sci.imageFormat = format.format;
+        sci.imageColorSpace = format.colorSpace;
+        sci.imageExtent = e;
+        sci.imageArrayLayers = 1;
+        sci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+        // Read back for --window-screenshot where the surface allows it.
+        readable = caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+        if (readable)
+            sci.imageUsage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+        sci.imageSharingMode = VK_SHARING_MODE_EXCLUSIVE;
+        sci.preTransform = caps.currentTransform;
+        sci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
+        sci.presentMode = presentMode;
+        sci.clipped = VK_TRUE;
+        sci.oldSwapchain = handle;
+        VkSwapchainKHR created = VK_NULL_HANDLE;
+        splat::vkCheck(vkCreateSwapchainKHR(m_ctx.device(), &sci, nullptr, &created),
+                       "vkCreateSwapchainKHR");
+        vkDestroySwapchainKHR(m_ctx.device(), handle, nullptr);
+        handle = created;
+        extent = e;
+        vkGetSwapchainImagesKHR(m_ctx.device(), handle, &n, nullptr);
+        images.resize(n);
+        vkGetSwapchainImagesKHR(m_ctx.device(), handle, &n, images.data());
+        for (VkImage image : images) {
+            VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+            vi.image = image;
+            vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
+            vi.format = format.format;
+            vi.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+            VkImageView view = VK_NULL_HANDLE;
+            splat::vkCheck(vkCreateImageView(m_ctx.device(), &vi, nullptr, &view),
+                           "vkCreateImageView");
+            views.push_back(view);
+            VkFramebufferCreateInfo fi{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+            fi.renderPass = renderPass;
+            fi.attachmentCount = 1;
+            fi.pAttachments = &view;
+            fi.width = e.width;
+            fi.height = e.height;
+            fi.layers = 1;
+            VkFramebuffer fb = VK_NULL_HANDLE;
+            splat::vkCheck(vkCreateFramebuffer(m_ctx.device(), &fi, nullptr, &fb),
+                           "vkCreateFramebuffer");
+            framebuffers.push_back(fb);
+        }
+        // One "rendering done" semaphore per image: the present of an image waits on its own,
+        // so a semaphore is only signalled again after its image came back from the presenter.
+        while (renderDone.size() < images.size()) {
+            VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+            VkSemaphore s = VK_NULL_HANDLE;
+            splat::vkCheck(vkCreateSemaphore(m_ctx.device(), &si, nullptr, &s),
+                           "vkCreateSemaphore");
+            renderDone.push_back(s);
+        }
+        return true;
+    }
+
+    VkSwapchainKHR handle = VK_NULL_HANDLE;
+    VkSurfaceFormatKHR format{};
+    bool srgb = false;
+    bool readable = false; ///< the images can be copied from (--window-screenshot)
+    VkPresentModeKHR presentMode = VK_PRESENT_MODE_FIFO_KHR;
+    std::uint32_t minImageCount = 2;
+    VkExtent2D extent{0, 0};
+    VkRenderPass renderPass = VK_NULL_HANDLE;
+    std::vector<VkImage> images;
+    std::vector<VkImageView> views;
+    std::vector<VkFramebuffer> framebuffers;
+    std::vector<VkSemaphore> renderDone;
+
+private:
+    void destroyViews() {
+        for (VkFramebuffer fb : framebuffers)
+            vkDestroyFramebuffer(m_ctx.device(), fb, nullptr);
+        for (VkImageView v : views)
+            vkDestroyImageView(m_ctx.device(), v, nullptr);
+        framebuffers.clear();
+        views.clear();
+    }
+    splat::Context& m_ctx;
+    VkSurfaceKHR m_surface;
+};
+
+/// The present's command buffer, its fence and the acquire semaphore (one frame in flight).
+struct PresentSync {
+    explicit PresentSync(splat::Context& ctx) : m_ctx(ctx) {
+        VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+        ai.commandPool = ctx.commandPool();
+        ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+        ai.commandBufferCount = 1;
+        splat::vkCheck(vkAllocateCommandBuffers(ctx.device(), &ai, &cmd),
+                       "vkAllocateCommandBuffers");
+        VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+        splat::vkCheck(vkCreateFence(ctx.device(), &fci, nullptr, &fence), "vkCreateFence");
+        VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+        splat::vkCheck(vkCreateSemaphore(ctx.device(), &si, nullptr, &acquired),
+                       "vkCreateSemaphore");
+    }
+    ~PresentSync() {
+        vkDeviceWaitIdle(m_ctx.device());
+        vkDestroySemaphore(m_ctx.device(), acquired, nullptr);
+        vkDestroyFence(m_ctx.device(), fence, nullptr);
+        vkFreeCommandBuffers(m_ctx.device(), m_ctx.commandPool(), 1, &cmd);
+    }
+    PresentSync(const PresentSync&) = delete;
+    PresentSync& operator=(const PresentSync&) = delete;
+    splat::Context& m_ctx;
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    VkFence fence = VK_NULL_HANDLE;
+    VkSemaphore acquired = VK_NULL_HANDLE;
+};
+
+// --- Dear ImGui ----------------------------------------------------------------------------
+
+void checkImGuiVk(VkResult r) {
+    if (r != VK_SUCCESS)
+        throw std::runtime_error(cat("Vulkan (Dear ImGui backend): VkResult ", int(r)));
+}
+
+/// The ImGui context, its GLFW and Vulkan backends, their descriptor pool and font texture.
+class ImGuiLayer {
+public:
+    ImGuiLayer(splat::Context& ctx, GLFWwindow* window, const Swapchain& swapchain) : m_ctx(ctx) {
+        IMGUI_CHECKVERSION();
+        ImGui::CreateContext();
+        ImGui::GetIO().IniFilename = nullptr; // no imgui.ini beside the user's files
+        ImGui::StyleColorsDark();
+        // The swapchain is sRGB: ImGui's colours are sRGB values, so decode them to linear or
+        // the panels would come out washed out.
+        if (swapchain.srgb)
+            for (ImVec4& c : ImGui::GetStyle().Colors)
+                c = ImVec4(noise::srgbDecode(c.x), noise::srgbDecode(c.y), noise::srgbDecode(c.z),
+                           c.w);
+        // Chains to the callbacks the window installed before (navigation and the brush).
+        ImGui_ImplGlfw_InitForVulkan(window, true);
+        m_glfw = true;
+        const VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 16};
+        VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+        pi.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
+        pi.maxSets = 16;
+        pi.poolSizeCount = 1;
+        pi.pPoolSizes = &size;
+        splat::vkCheck(vkCreateDescriptorPool(ctx.device(), &pi, nullptr, &m_pool),
+                       "vkCreateDescriptorPool");
+        ImGui_ImplVulkan_InitInfo info{};
+        info.Instance = ctx.instance();
+        info.PhysicalDevice = ctx.physicalDevice();
+        info.Device = ctx.device();
+        info.QueueFamily = ctx.queueFamily();
+        info.Queue = ctx.queue();
+        info.DescriptorPool = m_pool;
+        info.MinImageCount = swapchain.minImageCount;
+        info.ImageCount = std::uint32_t(swapchain.images.size());
+        info.MSAASamples = VK_SAMPLE_COUNT_1_BIT;
+        info.CheckVkResultFn = checkImGuiVk;
+        if (!ImGui_ImplVulkan_Init(&info, swapchain.renderPass))
+            throw std::runtime_error("Dear ImGui: the Vulkan backend did not initialize");
+        m_vulkan = true;
+        ctx.submitAndWait([](VkCommandBuffer cmd) { ImGui_ImplVulkan_CreateFontsTexture(cmd); });
+        ImGui_ImplVulkan_DestroyFontUploadObjects();
+    }
+    ~ImGuiLayer() {
+        vkDeviceWaitIdle(m_ctx.device());
+        if (m_vulkan)
+            ImGui_ImplVulkan_Shutdown();
+        if (m_glfw)
+            ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+        vkDestroyDescriptorPool(m_ctx.device(), m_pool, nullptr);
+    }
+    ImGuiLayer(const ImGuiLayer&) = delete;
+    ImGuiLayer& operator=(const ImGuiLayer&) = delete;
+
+private:
+    splat::Context& m_ctx;
+    VkDescriptorPool m_pool = VK_NULL_HANDLE;
+    bool m_glfw = false, m_vulkan = false;
+};
+
+// --- the window's state and input -----------------------------------------------------------
+
+/// What the GLFW callbacks change (through the window's user pointer).
+struct InputState {
+    enum class Drag { None, Orbit, Pan, Brush };
+    OrbitView* view = nullptr;
+    const EditWindowOptions* options = nullptr;
+    BoundingSphere sphere;
+    Drag drag = Drag::None;
+    double lastX = 0.0, lastY = 0.0;
+    bool sceneDirty = true;       ///< render the scene again
+    bool resized = true;          ///< recreate the swapchain
+    Clock::time_point lastMotion; ///< of the camera (for the lower resolution while navigating)
+
+    PointerEvent brushEvent(GLFWwindow* window, PointerEvent::Phase phase, int mods) const {
+        int w = 0, h = 0;
+        glfwGetWindowSize(window, &w, &h);
+        PointerEvent e;
+        e.phase = phase;
+        e.x = lastX;
+        e.y = lastY;
+        e.camera = view->camera(std::max(w, 1), std::max(h, 1));
+        e.shift = mods & GLFW_MOD_SHIFT;
+        e.control = mods & GLFW_MOD_CONTROL;
+        e.alt = mods & GLFW_MOD_ALT;
+        return e;
+    }
+    void moved() {
+        sceneDirty = true;
+        lastMotion = Clock::now();
+    }
+};
+
+InputState& state(GLFWwindow* window) {
+    return *static_cast<InputState*>(glfwGetWindowUserPointer(window));
+}
+
+int currentMods(GLFWwindow* w) {
+    int mods = 0;
+    if (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
+        glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS)
+        mods |= GLFW_MOD_SHIFT;
+    if (glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+        glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS)
+        mods |= GLFW_MOD_CONTROL;
+    if (glfwGetKey(w, GLFW_KEY_LEFT_ALT) == GLFW_PRESS ||
+        glfwGetKey(w, GLFW_KEY_RIGHT_ALT) == GLFW_PRESS)
+        mods |= GLFW_MOD_ALT;
+    return mods;
+}
+
+void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
+    InputState& s = state(window);
+    glfwGetCursorPos(window, &s.lastX, &s.lastY);
+    if (action == GLFW_RELEASE) {
+        if (s.drag == InputState::Drag::Brush && s.options->onBrush &&
+            button == GLFW_MOUSE_BUTTON_LEFT) {
+            s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Release, mods));
+            s.sceneDirty = true;
+        }
+        s.drag = InputState::Drag::None;
+        return;
+    }
+    if (action != GLFW_PRESS || ImGui::GetIO().WantCaptureMouse || s.drag != InputState::Drag::None)
+        return;
+    const bool shift = mods & GLFW_MOD_SHIFT, alt = mods & GLFW_MOD_ALT;
+    if (button == GLFW_MOUSE_BUTTON_MIDDLE || (button == GLFW_MOUSE_BUTTON_LEFT && alt)) {
+        s.drag = shift ? InputState::Drag::Pan : InputState::Drag::Orbit;
+    } else if (button == GLFW_MOUSE_BUTTON_LEFT && s.options->onBrush) {
+        s.drag = InputState::Drag::Brush;
+        s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Press, mods));
+        s.sceneDirty = true;
+    }
+}
+
+void onCursor(GLFWwindow* window, double x, double y) {
+    InputState& s = state(window);
+    const double dx = x - s.lastX, dy = y - s.lastY;
+    s.lastX = x;
+    s.lastY = y;
+    int w = 0, h = 0;
+    glfwGetWindowSize(window, &w, &h);
+    switch (s.drag) {
+    case InputState::Drag::Orbit:
+        s.view->orbit(dx, dy, h);
+        s.moved();
+        break;
+    case InputState::Drag::Pan:
+        s.view->pan(dx, dy, h);
+        s.moved();
+        break;
+    case InputState::Drag::Brush:
+        s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Drag, currentMods(window)));
+        s.sceneDirty = true;
+        break;
+    case InputState::Drag::None:
+        break;
+    }
+}
+
+void onScroll(GLFWwindow* window, double, double dy) {
+    if (ImGui::GetIO().WantCaptureMouse)
+        return;
+    InputState& s = state(window);
+    s.view->dolly(dy);
+    s.moved();
+}
+
+void frameMesh(GLFWwindow* window, InputState& s) {
+    int w = 0, h = 0;
+    glfwGetWindowSize(window, &w, &h);
+    s.view->frame(s.sphere, h > 0 ? double(w) / double(h) : 1.0);
+    s.moved();
+}
+
+void onKey(GLFWwindow* window, int key, int, int action, int) {
+    if (action != GLFW_PRESS || ImGui::GetIO().WantCaptureKeyboard)
+        return;
+    if (key == GLFW_KEY_F || key == GLFW_KEY_HOME)
+        frameMesh(window, state(window));
+}
+
+void onFramebufferSize(GLFWwindow* window, int, int) {
+    state(window).resized = true;
+    state(window).sceneDirty = true;
+}
+
+// --- panels -------------------------------------------------------------------------------
+
+/// Render at 1/kScales[i] of the window's size (the blit scales up).
+constexpr int kScales[] = {1, 2, 4};
+constexpr const char* kScaleNames = "full resolution\0half resolution\0quarter resolution\0";
+
+/// What the panels edit.
+struct PanelState {
+    int method = 0;
+    splat::RenderSettings settings;
+    bool continuous = false;
+    int scale = 0;           ///< index into kScales: always
+    int navigationScale = 1; ///< index into kScales: while the camera moves
+    std::string error;       ///< why the last render failed (shown until one succeeds)
+};
+
+std::string megabytes(std::uint64_t bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / (1024.0 * 1024.0));
+    return text;
+}
+
+/// Returns whether a setting changed (the scene is then rendered again).
+bool methodPanel(PanelState& p) {
+    bool changed = false;
+    const auto& methods = splat::gpuMethods();
+    ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
+    // A small window shows the scene first: the panel starts folded.
+    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
+    ImGui::Begin("Render");
+    ImGui::PushItemWidth(150);
+    if (ImGui::BeginCombo("method", methods[std::size_t(p.method)].name.c_str())) {
+        for (int i = 0; i < int(methods.size()); ++i) {
+            if (ImGui::Selectable(methods[std::size_t(i)].name.c_str(), i == p.method)) {
+                changed |= i != p.method;
+                p.method = i;
+            }
+            if (ImGui::IsItemHovered())
+                ImGui::SetTooltip("%s", methods[std::size_t(i)].summary.c_str());
+        }
+        ImGui::EndCombo();
+    }
+    const splat::MethodInfo& m = methods[std::size_t(p.method)];
+    splat::RenderSettings& s = p.settings;
+    if (m.splatting) {
+        changed |= ImGui::Checkbox("EWA filtering", &s.ewa);
+        changed |= ImGui::SliderInt("kernel samples", &s.kernelSamples, 0, 64);
+        int weight = int(s.weight);
+        if (ImGui::Combo("OIT weight", &weight, "constant\0mcguire-bavoil\0")) {
+            s.weight = splat::OitWeight(weight);
+            changed = true;
+        }
+        int closest = int(s.closest);
+        if (ImGui::Combo("closest", &closest, "atomic\0depth-pass\0")) {
+            s.closest = splat::ClosestKernel(closest);
+            changed = true;
+        }
+    }
+    if (m.marching) {
+        changed |= ImGui::SliderInt("steps", &s.steps, 1, 256);
+        changed |= ImGui::SliderInt("supersample", &s.supersample, 1, 4);
+    }
+    float lod = float(s.lodPixels);
+    if (ImGui::SliderFloat("LOD pixels", &lod, 0.0f, 16.0f, "%.1f")) {
+        s.lodPixels = lod;
+        changed = true;
+    }
+    ImGui::Separator();
+    changed |= ImGui::Checkbox("render every frame", &p.continuous);
+    changed |= ImGui::Combo("resolution", &p.scale, kScaleNames);
+    ImGui::Combo("while navigating", &p.navigationScale, kScaleNames);
+    ImGui::TextDisabled("orbit: middle drag (alt+left)\npan: shift+middle\nzoom: wheel\n"
+                        "frame the mesh: F or Home");
+    if (!p.error.empty())
+        ImGui::TextColored(ImVec4(1.0f, 0.3f, 0.2f, 1.0f), "%s", p.error.c_str());
+    ImGui::PopItemWidth();
+    ImGui::End();
+    return changed;
+}
+
+void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windowW, int windowH,
+                double frameMs, double presentMs, bool navigating, bool srgb) {
+    const ImGuiIO& io = ImGui::GetIO();
+    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8, io.DisplaySize.y - 8), ImGuiCond_Always,
+                            ImVec2(1, 1));
+    ImGui::SetNextWindowCollapsed(io.DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowBgAlpha(0.6f);
+    ImGui::Begin("Stats", nullptr,
+                 ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoMove |
+                     ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
+    if (renderW != windowW || renderH != windowH)
+        ImGui::Text("%s  %dx%d scaled up%s", st.method.c_str(), renderW, renderH,
+                    navigating ? " while moving" : "");
+    else
+        ImGui::Text("%s  %dx%d", st.method.c_str(), renderW, renderH);
+    for (const auto& [pass, ms] : st.passMs)
+        ImGui::Text("  %-12s %8.2f ms GPU", pass.c_str(), ms);
+    ImGui::Text("total GPU      %8.2f ms", st.gpuMs);
+    ImGui::Text("render wall    %8.2f ms", st.wallMs);
+    ImGui::Text("present+ImGui  %8.2f ms", presentMs);
+    ImGui::Text("frame          %8.2f ms (%.1f fps)", frameMs,
+                frameMs > 0 ? 1000.0 / frameMs : 0.0);
+    ImGui::Text("kernels %u generated%s, %u drawn", st.kernelsGenerated,
+                st.regenerated ? " (new)" : "", st.counters.kernelsDrawn);
+    ImGui::Text("cells %u of %u visible", st.cellsGenerated, st.visibleCells);
+    ImGui::Text("GPU memory %s (peak)", megabytes(st.gpuMemoryBytes).c_str());
+    if (!srgb)
+        ImGui::TextColored(ImVec4(1, 0.5f, 0.2f, 1), "no sRGB swapchain: shown linear (dark)");
+    ImGui::End();
+}
+
+// --- the frame's presentation --------------------------------------------------------------
+
+/// The presented image (scene and panels) copied back for --window-screenshot.
+struct WindowGrab {
+    splat::Buffer buffer;
+    std::uint32_t width = 0, height = 0;
+    VkFormat format = VK_FORMAT_UNDEFINED;
+
+    void record(splat::Context& ctx, VkCommandBuffer cmd, VkImage image, VkExtent2D extent,
+                VkFormat imageFormat) {
+        const VkDeviceSize bytes = VkDeviceSize(extent.width) * extent.height * 4;
+        if (buffer.size() < bytes)
+            buffer = splat::Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                   splat::Buffer::Memory::HostVisible, "window screenshot");
+        width = extent.width;
+        height = extent.height;
+        format = imageFormat;
+        splat::transitionImage(
+            cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+            VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+            VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+            VK_ACCESS_2_TRANSFER_READ_BIT);
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        region.imageExtent = {width, height, 1};
+        vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1,
+                               &region);
+        splat::transitionImage(
+            cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+            VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
+            VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE);
+        splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                             VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+    }
+
+    /// Linear RGB; the 8-bit values are sRGB-encoded when the swapchain is sRGB.
+    noise::Image read(bool srgb) const {
+        noise::Image image(static_cast<int>(width), static_cast<int>(height));
+        const auto* p = static_cast<const std::uint8_t*>(buffer.mapped());
+        const bool bgr = format == VK_FORMAT_B8G8R8A8_SRGB || format == VK_FORMAT_B8G8R8A8_UNORM;
+        for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+            glm::vec3 c(p[4 * i] / 255.0f, p[4 * i + 1] / 255.0f, p[4 * i + 2] / 255.0f);
+            if (bgr)
+                std::swap(c.x, c.z);
+            image.pixels[i] = srgb ? glm::vec3(noise::srgbDecode(c.x), noise::srgbDecode(c.y),
+                                               noise::srgbDecode(c.z))
+                                   : c;
+        }
+        return image;
+    }
+};
+
+/// Blit the scene into the swapchain image, draw ImGui over it, present; with `grab`, also copy
+/// the presented image back. Returns false when the swapchain is out of date (then recreated by
+/// the caller).
+bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
+             const splat::Image& scene, WindowGrab* grab = nullptr) {
+    std::uint32_t index = 0;
+    const VkResult acquired = vkAcquireNextImageKHR(ctx.device(), swapchain.handle, UINT64_MAX,
+                                                    sync.acquired, VK_NULL_HANDLE, &index);
+    if (acquired == VK_ERROR_OUT_OF_DATE_KHR)
+        return false;
+    if (acquired != VK_SUBOPTIMAL_KHR)
+        splat::vkCheck(acquired, "vkAcquireNextImageKHR");
+    VkCommandBuffer cmd = sync.cmd;
+    splat::vkCheck(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
+    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    splat::vkCheck(vkBeginCommandBuffer(cmd, &bi), "vkBeginCommandBuffer");
+    const VkImage target = swapchain.images[index];
+    // The renderer's last pass (a compute shader, in an earlier submit) wrote the scene; the
+    // renderers keep it in the general layout, the blit reads it best as a transfer source.
+    splat::transitionImage(cmd, scene.handle(), VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
+                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    splat::transitionImage(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                           VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE,
+                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    VkImageBlit blit{};
+    blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    blit.srcOffsets[1] = {std::int32_t(scene.width()), std::int32_t(scene.height()), 1};
+    blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    blit.dstOffsets[1] = {std::int32_t(swapchain.extent.width),
+                          std::int32_t(swapchain.extent.height), 1};
+    const bool scaled =
+        scene.width() != swapchain.extent.width || scene.height() != swapchain.extent.height;
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), scene.format(), &fp);
+    const bool linear =
+        scaled && (fp.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
+    vkCmdBlitImage(cmd, scene.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
+                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
+                   linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST);
+    splat::transitionImage(cmd, scene.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
+                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_NONE,
+                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                           VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    rp.renderPass = swapchain.renderPass;
+    rp.framebuffer = swapchain.framebuffers[index];
+    rp.renderArea.extent = swapchain.extent;
+    vkCmdBeginRenderPass(cmd, &rp, VK_SUBPASS_CONTENTS_INLINE);
+    ImGui_ImplVulkan_RenderDrawData(ImGui::GetDrawData(), cmd);
+    vkCmdEndRenderPass(cmd);
+    if (grab)
+        grab->record(ctx, cmd, target, swapchain.extent, swapchain.format.format);
+    splat::vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+
+    const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
+    VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.waitSemaphoreCount = 1;
+    si.pWaitSemaphores = &sync.acquired;
+    si.pWaitDstStageMask = &waitStage;
+    si.commandBufferCount = 1;
+    si.pCommandBuffers = &cmd;
+    si.signalSemaphoreCount = 1;
+    si.pSignalSemaphores = &swapchain.renderDone[index];
+    splat::vkCheck(vkResetFences(ctx.device(), 1, &sync.fence), "vkResetFences");
+    splat::vkCheck(vkQueueSubmit(ctx.queue(), 1, &si, sync.fence), "vkQueueSubmit");
+    VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
+    pi.waitSemaphoreCount = 1;
+    pi.pWaitSemaphores = &swapchain.renderDone[index];
+    pi.swapchainCount = 1;
+    pi.pSwapchains = &swapchain.handle;
+    pi.pImageIndices = &index;
+    const VkResult presented = vkQueuePresentKHR(ctx.queue(), &pi);
+    // One frame in flight: the next frame's renderer writes the image the blit reads.
+    splat::vkCheck(vkWaitForFences(ctx.device(), 1, &sync.fence, VK_TRUE, UINT64_MAX),
+                   "vkWaitForFences");
+    if (presented == VK_ERROR_OUT_OF_DATE_KHR || presented == VK_SUBOPTIMAL_KHR)
+        return false;
+    splat::vkCheck(presented, "vkQueuePresentKHR");
+    return true;
+}
+
+} // namespace
+
+EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& options) {
+    const auto& methods = splat::gpuMethods();
+    PanelState panel;
+    panel.method = int(&splat::gpuMethod(options.method) - methods.data());
+    panel.settings = options.settings;
+    panel.continuous = options.frames > 0;
+    panel.scale = int(std::find(std::begin(kScales), std::end(kScales), options.renderScale) -
+                      std::begin(kScales));
+    if (panel.scale == int(std::size(kScales)))
+        throw InputError(cat("render scale ", options.renderScale, " must be 1, 2 or 4"));
+
+    // Destroyed in reverse: ImGui, the swapchain, the surface, the frame, the context, the
+    // window, GLFW. The display is checked before anything else is made.
+    GlfwLibrary glfw;
+    GlfwWindow window(options.width, options.height, options.title);
+    splat::Context ctx(windowContextOptions());
+    splat::Frame frame(ctx, job.mesh, *job.generator);
+    Surface surface(ctx, window.handle);
+    Swapchain swapchain(ctx, surface.handle);
+    PresentSync sync(ctx);
+
+    OrbitView view(job.scene.camera);
+    InputState input;
+    input.view = &view;
+    input.options = &options;
+    input.sphere = boundingSphere(job.mesh);
+    glfwSetWindowUserPointer(window.handle, &input);
+    glfwSetMouseButtonCallback(window.handle, onMouseButton);
+    glfwSetCursorPosCallback(window.handle, onCursor);
+    glfwSetScrollCallback(window.handle, onScroll);
+    glfwSetKeyCallback(window.handle, onKey);
+    glfwSetFramebufferSizeCallback(window.handle, onFramebufferSize);
+
+    int fbW = 0, fbH = 0;
+    glfwGetFramebufferSize(window.handle, &fbW, &fbH);
+    swapchain.recreate(fbW, fbH);
+    input.resized = false;
+    ImGuiLayer imgui(ctx, window.handle, swapchain);
+
+    const splat::View look{job.scene.camera, job.scene.shading, job.scene.background,
+                           job.scene.baseColor};
+    splat::FrameStats stats;
+    const splat::Image* scene = nullptr;
+    int renderW = 0, renderH = 0;
+    std::string renderedWith; ///< method and size of the last render (warm-frame bookkeeping)
+    std::vector<double> frameMs, renderMs, presentMs, overlayMs; // warm frames
+    EditWindowReport report;
+    double lastFrameMs = 0.0, lastPresentMs = 0.0;
+    std::optional<noise::Image> screenshot, windowImage;
+    WindowGrab windowGrab;
+
+    while (!glfwWindowShouldClose(window.handle)) {
+        if (options.frames > 0 && report.frames >= options.frames)
+            break;
+        const auto frameStart = Clock::now();
+        if (panel.continuous || input.drag != InputState::Drag::None)
+            glfwPollEvents();
+        else
+            glfwWaitEventsTimeout(0.25); // idle: redraw the overlay a few times a second
+        glfwGetFramebufferSize(window.handle, &fbW, &fbH);
+        if (fbW == 0 || fbH == 0) { // minimized
+            glfwWaitEvents();
+            continue;
+        }
+        if (input.resized) {
+            if (!swapchain.recreate(fbW, fbH))
+                continue;
+            ImGui_ImplVulkan_SetMinImageCount(swapchain.minImageCount);
+            input.resized = false;
+        }
+        if (options.cycleMethods) {
+            const int next = report.frames % int(methods.size());
+            input.sceneDirty |= next != panel.method;
+            panel.method = next;
+        }
+
+        if (options.orbitDegreesPerFrame != 0.0 && report.frames > 0) {
+            view.orbit(options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
+            input.moved();
+        }
+        const auto overlayStart = Clock::now();
+        ImGui_ImplVulkan_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        input.sceneDirty |= methodPanel(panel);
+        if (options.extraPanels)
+            options.extraPanels();
+        if (options.needsRedraw && options.needsRedraw())
+            input.sceneDirty = true;
+        const bool navigating =
+            input.drag == InputState::Drag::Orbit || input.drag == InputState::Drag::Pan ||
+            std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;
+        statsPanel(stats, renderW, renderH, int(swapchain.extent.width),
+                   int(swapchain.extent.height), lastFrameMs, lastPresentMs,
+                   navigating && panel.navigationScale > panel.scale, swapchain.srgb);
+        ImGui::Render();
+        const double overlay = msSince(overlayStart);
+
+        // Navigation ended: back to the resolution chosen.
+        if (!navigating && scene &&
+            (renderW != std::max(1, int(swapchain.extent.width) / kScales[panel.scale]) ||
+             renderH != std::max(1, int(swapchain.extent.height) / kScales[panel.scale])))
+            input.sceneDirty = true;
+        const bool last = options.frames > 0 && report.frames + 1 == options.frames;
+        const bool render = !scene || input.sceneDirty || panel.continuous;
+        bool warm = true;
+        double renderWall = 0.0;
+        if (render) {
+            const int scale =
+                kScales[navigating ? std::max(panel.scale, panel.navigationScale) : panel.scale];
+            renderW = std::max(1, int(swapchain.extent.width) / scale);
+            renderH = std::max(1, int(swapchain.extent.height) / scale);
+            splat::View v = look;
+            v.camera = view.camera(renderW, renderH);
+            const std::string& method = methods[std::size_t(panel.method)].name;
+            noise::Image image;
+            const bool capture = last && !options.screenshot.empty();
+            const auto renderStart = Clock::now();
+            try {
+                stats = frame.render(method, v, panel.settings, capture ? &image : nullptr);
+                panel.error.clear();
+            } catch (const InputError& e) {
+                // Interactively, a setting the method refuses (or a frame beyond the memory
+                // budget) is shown in the panel and the last image stays; scripted, it fails.
+                if (!scene || options.frames > 0)
+                    throw;
+                panel.error = e.what();
+                input.sceneDirty = false;
+                continue;
+            }
+            renderWall = msSince(renderStart);
+            if (capture)
+                screenshot = std::move(image);
+            scene = &frame.renderer(method).result();
+            input.sceneDirty = false;
+            ++report.rendered;
+            // Warm: the same method at the same size as the last render (the first frame after
+            // a change creates targets and compiles pipelines).
+            const std::string key = cat(method, " ", renderW, "x", renderH);
+            warm = key == renderedWith;
+            renderedWith = key;
+            if (warm)
+                renderMs.push_back(renderWall);
+        }
+        const auto presentStart = Clock::now();
+        const bool grab = last && !options.windowScreenshot.empty();
+        if (grab && !swapchain.readable)
+            throw std::runtime_error("--window-screenshot: the window's images cannot be read back "
+                                     "on this surface");
+        if (!present(ctx, swapchain, sync, *scene, grab ? &windowGrab : nullptr))
+            input.resized = true;
+        if (grab)
+            windowImage = windowGrab.read(swapchain.srgb);
+        lastPresentMs = msSince(presentStart);
+        lastFrameMs = msSince(frameStart);
+        if (warm && report.frames > 0) {
+            presentMs.push_back(lastPresentMs);
+            frameMs.push_back(lastFrameMs);
+            overlayMs.push_back(overlay);
+        }
+        ++report.frames;
+        if (report.frames == 1 && options.resizeWidth > 0 && options.resizeHeight > 0)
+            glfwSetWindowSize(window.handle, options.resizeWidth, options.resizeHeight);
+    }
+    vkDeviceWaitIdle(ctx.device());
+
+    if (!options.screenshot.empty()) {
+        if (!screenshot) { // closed by the user: the view as it was last shown
+            splat::View v = look;
+            v.camera = view.camera(int(swapchain.extent.width), int(swapchain.extent.height));
+            noise::Image image;
+            frame.render(methods[std::size_t(panel.method)].name, v, panel.settings, &image);
+            screenshot = std::move(image);
+        }
+        noise::writeImage(
+            options.screenshot, *screenshot,
+            {{"method", methods[std::size_t(panel.method)].name}, {"scene", job.scene.name}});
+    }
+    if (windowImage)
+        noise::writeImage(options.windowScreenshot, *windowImage, {{"scene", job.scene.name}});
+    const splat::ValidationCounts v = ctx.validation();
+    if (v.errors > 0)
+        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
+    report.validation = ctx.validationEnabled();
+    report.validationWarnings = v.warnings;
+    report.warmFrames = int(frameMs.size());
+    report.frameMs = median(frameMs);
+    report.renderMs = median(renderMs);
+    report.presentMs = median(presentMs);
+    report.overlayMs = median(overlayMs);
+    return report;
+}
+
+std::vector<cli::OptionSpec> editWindowOptions() {
+    return {
+        {"method", "NAME",
+         "the method shown first: " + splat::gpuMethodNames() + " (default instanced)", false},
+        {"frames", "N", "render N frames, then close (default: until the window is closed)", false},
+        {"screenshot", "FILE",
+         "write the last rendered scene (without the panels) as .png or "
+         ".exr when the window closes",
+         false},
+        {"window-screenshot", "FILE",
+         "with --frames: write the last frame as the window "
+         "showed it, panels included",
+         false},
+        {"render-scale", "N",
+         "render at 1/N of the window's size, scaled up: 1 (default), 2 "
+         "or 4",
+         false},
+        {"orbit", "DEG",
+         "scripted navigation: orbit by DEG degrees per frame from the second "
+         "frame on (times a moving camera)",
+         false},
+        {"resize", "WxH", "after the first frame, resize the window (scripted checks)", false},
+        {"cycle-methods", "",
+         "frame i shows method i of the registry, in turn (scripted "
+         "checks)",
+         false}};
+}
+
+EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& job) {
+    EditWindowOptions o;
+    o.title = cat("spotshell edit - ", job.scene.name);
+    o.width = job.scene.camera.width;
+    o.height = job.scene.camera.height;
+    o.method = args.str("method", "instanced");
+    splat::gpuMethod(o.method); // InputError naming the methods
+    o.settings = cli::renderSettings(args);
+    o.frames = int(args.integer("frames", 0, 0, 1000000));
+    if (args.has("screenshot"))
+        o.screenshot = args.str("screenshot");
+    if (args.has("resize")) {
+        const std::string size = args.str("resize");
+        char x = 0, extra = 0;
+        if (std::sscanf(size.c_str(), "%d%c%d%c", &o.resizeWidth, &x, &o.resizeHeight, &extra) !=
+                3 ||
+            (x != 'x' && x != 'X') || o.resizeWidth < 1 || o.resizeHeight < 1 ||
+            o.resizeWidth > 16384 || o.resizeHeight > 16384)
+            throw InputError(cat("--resize '", size, "' must be WxH with sides in [1, 16384]"));
+    }
+    o.cycleMethods = args.has("cycle-methods");
+    o.orbitDegreesPerFrame = args.number("orbit", 0.0, -180.0, 180.0);
+    o.renderScale = int(args.integer("render-scale", 1, 1, 4));
+    if (o.renderScale == 3)
+        throw InputError("--render-scale must be 1, 2 or 4, not 3");
+    if (args.has("window-screenshot")) {
+        if (o.frames == 0)
+            throw InputError("--window-screenshot needs --frames");
+        o.windowScreenshot = args.str("window-screenshot");
+    }
+    return o;
+}
+
+} // namespace spot::editor

@@ -1,0 +1,297 @@
+// The editor's window (`spotshell edit`) as a user runs it, under a virtual display (xvfb-run):
+// validation on, the scene it shows identical to `spotshell render`'s, the panels drawn over it,
+// every registry method and a resize in one scripted run, and one clear error without a display.
+// Also the navigation's camera math (edit_view.h), which needs no window.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "edit_view.h"
+#include "noise/camera.h"
+#include "noise/image.h"
+#include "noise/mesh.h"
+#include "splat/context_vk.h"
+#include "splat/image_compare.h"
+
+namespace {
+
+using spot::editor::OrbitView;
+
+struct Result {
+    int code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string tmp(const std::string& name) {
+    // Per process: ctest runs these tests in parallel processes.
+    return std::string(SPOT_TEST_TMP_DIR) + "/window-" + std::to_string(::getpid()) + "-" + name;
+}
+
+std::string slurp(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+/// `prefix` goes before the command (environment changes, xvfb-run).
+Result run(const std::string& prefix, const std::string& args) {
+    static int counter = 0;
+    const std::string errFile = tmp("stderr-" + std::to_string(counter++) + ".txt");
+    const std::string cmd =
+        prefix + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
+    Result r;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe)
+        return r;
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), int(buf.size()), pipe))
+        r.out += buf.data();
+    const int status = pclose(pipe);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.err = slurp(errFile);
+    return r;
+}
+
+/// Validation on: any error fails the command (exit 1) and is printed.
+const std::string kXvfb = "SPOT_VALIDATION=1 xvfb-run -a -s '-screen 0 1024x768x24'";
+
+std::string scene() {
+    return std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+}
+
+/// Fraction of pixels whose display values (8-bit sRGB) differ by more than `tolerance` levels
+/// in some channel.
+double fractionDiffering(const spot::noise::Image& a, const spot::noise::Image& b, int tolerance) {
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const long da = std::lround(
+                spot::noise::srgbEncode(std::clamp(a.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            const long db = std::lround(
+                spot::noise::srgbEncode(std::clamp(b.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            if (std::abs(da - db) > tolerance) {
+                ++differing;
+                break;
+            }
+        }
+    return double(differing) / double(std::max<std::size_t>(a.pixels.size(), 1));
+}
+
+TEST(EditWindow, ShowsWhatRenderRenders) {
+    const std::string shot = tmp("edit.png"), window = tmp("window.png"), ref = tmp("render.png");
+    const Result e =
+        run(kXvfb, "edit --scene " + scene() + " --size 320x240 --frames 3 --screenshot " + shot +
+                       " --window-screenshot " + window);
+    ASSERT_EQ(e.code, 0) << e.err;
+    EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
+    EXPECT_NE(e.out.find("edit: 3 frames"), std::string::npos) << e.out;
+    EXPECT_NE(e.out.find("validation on: no errors"), std::string::npos) << e.out;
+    const Result r =
+        run("SPOT_VALIDATION=1",
+            "render --scene " + scene() + " --size 320x240 --method instanced --out " + ref);
+    ASSERT_EQ(r.code, 0) << r.err;
+
+    const spot::noise::Image edited = spot::noise::readImage(shot);
+    const spot::noise::Image rendered = spot::noise::readImage(ref);
+    ASSERT_EQ(edited.width, 320);
+    ASSERT_EQ(edited.height, 240);
+    // The same renderer, view and size: the same pixels (PSNR +inf when identical).
+    const double psnr = spot::splat::psnr(rendered, edited);
+    EXPECT_GT(psnr, 60.0);
+    // Fur, not an empty frame: most pixels away from the background colour (the scene's
+    // [0.02, 0.02, 0.03]) where the bunny is, about a third of the frame.
+    const spot::noise::Image background(320, 240, glm::vec3(0.02f, 0.02f, 0.03f));
+    const double covered = fractionDiffering(background, edited, 4);
+    EXPECT_GT(covered, 0.25) << "the bunny covers too little of the screenshot";
+    EXPECT_LT(covered, 0.9);
+
+    // The window as shown: the scene, sRGB-encoded by the blit, with the panels over part of it.
+    const spot::noise::Image shown = spot::noise::readImage(window);
+    ASSERT_EQ(shown.width, 320);
+    ASSERT_EQ(shown.height, 240);
+    const double overlaid = fractionDiffering(edited, shown, 1);
+    EXPECT_GT(overlaid, 0.05) << "no panels drawn over the scene";
+    EXPECT_LT(overlaid, 0.95) << "the scene does not show through";
+}
+
+TEST(EditWindow, EveryMethodAndAResize) {
+    const std::string shot = tmp("cycle.png");
+    // Two frames per method, in registry order; the window is resized after the first frame.
+    const Result e =
+        run(kXvfb, "edit --scene " + scene() +
+                       " --size 240x180 --frames 10 "
+                       "--cycle-methods --resize 300x200 --steps 8 --window-screenshot " +
+                       shot);
+    ASSERT_EQ(e.code, 0) << e.err;
+    EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
+    // Not even a warning from the window's own work (the scene's readback for --screenshot, in
+    // splat::Frame, reads the general layout: a performance warning, hence not checked there).
+    EXPECT_NE(e.out.find("validation on: no errors, 0 warnings"), std::string::npos) << e.out;
+    EXPECT_NE(e.out.find("(10 rendered)"), std::string::npos) << e.out;
+    const spot::noise::Image last = spot::noise::readImage(shot);
+    EXPECT_EQ(last.width, 300);
+    EXPECT_EQ(last.height, 200);
+}
+
+TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
+    const std::string shot = tmp("half.png"), window = tmp("half-window.png");
+    const Result e = run(kXvfb, "edit --scene " + scene() +
+                                    " --size 320x240 --frames 2 "
+                                    "--render-scale 2 --screenshot " +
+                                    shot + " --window-screenshot " + window);
+    ASSERT_EQ(e.code, 0) << e.err;
+    EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
+    const spot::noise::Image scene = spot::noise::readImage(shot);
+    EXPECT_EQ(scene.width, 160);
+    EXPECT_EQ(scene.height, 120);
+    const spot::noise::Image shown = spot::noise::readImage(window);
+    EXPECT_EQ(shown.width, 320);
+    EXPECT_EQ(shown.height, 240);
+}
+
+TEST(EditWindow, ScriptedOrbitRendersAtHalfResolutionWhileMoving) {
+    const std::string still = tmp("still.png"), moving = tmp("moving.png");
+    const Result a =
+        run(kXvfb, "edit --scene " + scene() + " --size 200x160 --frames 2 --screenshot " + still);
+    ASSERT_EQ(a.code, 0) << a.err;
+    const Result b = run(kXvfb, "edit --scene " + scene() +
+                                    " --size 200x160 --frames 4 --orbit 30 "
+                                    "--screenshot " +
+                                    moving);
+    ASSERT_EQ(b.code, 0) << b.err;
+    EXPECT_EQ(b.err.find("validation error"), std::string::npos) << b.err;
+    const spot::noise::Image s = spot::noise::readImage(still), m = spot::noise::readImage(moving);
+    EXPECT_EQ(s.width, 200);
+    // The camera moved 90 degrees around the bunny, rendered at half the size while moving.
+    EXPECT_EQ(m.width, 100);
+    EXPECT_EQ(m.height, 80);
+}
+
+TEST(EditWindow, WithoutADisplayOneErrorLine) {
+    const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --frames 1");
+    EXPECT_EQ(e.code, 2) << e.err;
+    EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
+    EXPECT_EQ(e.err.rfind("spotshell: error: ", 0), 0u) << e.err;
+    EXPECT_NE(e.err.find("DISPLAY"), std::string::npos) << e.err;
+    EXPECT_NE(e.err.find("xvfb-run"), std::string::npos) << e.err;
+}
+
+TEST(EditWindow, UnknownMethodIsAnInputError) {
+    const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --method nope");
+    EXPECT_EQ(e.code, 2) << e.err;
+    EXPECT_NE(e.err.find("instanced"), std::string::npos) << e.err;
+}
+
+// --- the context's presentation options ---------------------------------------------------
+
+TEST(WindowContext, SwapchainAndSurfaceExtensionsWithoutAWindow) {
+    spot::splat::ContextOptions o;
+    o.validation = true;
+    o.instanceExtensions = {"VK_KHR_surface"};
+    o.swapchain = true;
+    std::uint32_t asked = 0;
+    o.canPresent = [&](VkInstance, VkPhysicalDevice, std::uint32_t) {
+        ++asked;
+        return true;
+    };
+    spot::splat::Context ctx(o);
+    EXPECT_GT(asked, 0u);
+    EXPECT_NE(vkGetDeviceProcAddr(ctx.device(), "vkCreateSwapchainKHR"), nullptr);
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+TEST(WindowContext, NoQueueThatCanPresentIsAClearError) {
+    spot::splat::ContextOptions o;
+    o.canPresent = [](VkInstance, VkPhysicalDevice, std::uint32_t) { return false; };
+    try {
+        spot::splat::Context ctx(o);
+        FAIL() << "a context without a queue that can present";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("can present"), std::string::npos) << e.what();
+    }
+}
+
+TEST(WindowContext, AMissingInstanceExtensionIsNamed) {
+    spot::splat::ContextOptions o;
+    o.instanceExtensions = {"VK_SPOT_no_such_extension"};
+    try {
+        spot::splat::Context ctx(o);
+        FAIL() << "an instance with an extension that does not exist";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("instance extension is missing"), std::string::npos)
+            << e.what();
+    }
+}
+
+// --- navigation --------------------------------------------------------------------------
+
+spot::noise::Camera startCamera() {
+    spot::noise::Camera c;
+    c.eye = glm::dvec3(0.0, 0.0, 4.0);
+    c.target = glm::dvec3(0.0);
+    c.fovYDeg = 30.0;
+    return c;
+}
+
+TEST(OrbitNavigation, OrbitKeepsTargetAndDistance) {
+    OrbitView v(startCamera());
+    v.orbit(37.0, -12.0, 600.0);
+    v.orbit(-5.0, 80.0, 600.0);
+    EXPECT_NEAR(v.distance(), 4.0, 1e-9);
+    EXPECT_NEAR(glm::length(v.target()), 0.0, 1e-12);
+    // Dragging right by half the view height turns the eye a quarter turn to the left (-x).
+    OrbitView w(startCamera());
+    w.orbit(300.0, 0.0, 600.0);
+    EXPECT_NEAR(w.eye().x, -4.0, 1e-9);
+    EXPECT_NEAR(w.eye().z, 0.0, 1e-9);
+    // Dragging down shows the scene from higher up, and never past the pole.
+    OrbitView u(startCamera());
+    u.orbit(0.0, 100.0, 600.0);
+    EXPECT_GT(u.eye().y, 0.0);
+    u.orbit(0.0, 5000.0, 600.0);
+    EXPECT_LT(u.eye().y, 4.0);
+    EXPECT_GT(std::hypot(u.eye().x, u.eye().z), 0.0);
+    spot::noise::CameraRays rays(u.camera(64, 64)); // still a valid camera
+    (void)rays;
+}
+
+TEST(OrbitNavigation, PanFollowsThePointerAtTheTargetDepth) {
+    OrbitView v(startCamera());
+    // The view is 2 * 4 * tan(15 deg) world units tall over 600 pixels.
+    const double perPixel = 8.0 * std::tan(std::numbers::pi / 12.0) / 600.0;
+    v.pan(60.0, -30.0, 600.0);
+    EXPECT_NEAR(v.target().x, -60.0 * perPixel, 1e-12);
+    EXPECT_NEAR(v.target().y, -30.0 * perPixel, 1e-12);
+    EXPECT_NEAR(v.distance(), 4.0, 1e-12);
+}
+
+TEST(OrbitNavigation, DollyAndFrame) {
+    OrbitView v(startCamera());
+    v.dolly(2.0);
+    EXPECT_NEAR(v.distance(), 4.0 * 0.85 * 0.85, 1e-12);
+    v.dolly(-2.0);
+    EXPECT_NEAR(v.distance(), 4.0, 1e-12);
+    // A unit sphere at (1, 2, 3) in a 4:3 view: the vertical field of view is the narrower.
+    v.frame({glm::dvec3(1.0, 2.0, 3.0), 1.0}, 4.0 / 3.0);
+    EXPECT_NEAR(glm::length(v.target() - glm::dvec3(1.0, 2.0, 3.0)), 0.0, 1e-12);
+    EXPECT_NEAR(v.distance(), 1.05 / std::sin(std::numbers::pi / 12.0), 1e-9);
+    // The bounding sphere of a mesh holds every vertex.
+    spot::noise::Mesh mesh = spot::noise::loadMeshOrGenerated("generated:torus");
+    const spot::editor::BoundingSphere s = spot::editor::boundingSphere(mesh);
+    for (const glm::vec3& p : mesh.positions)
+        EXPECT_LE(glm::length(glm::dvec3(p) - s.center), s.radius + 1e-9);
+    EXPECT_NEAR(s.radius, 1.35, 0.01);
+}
+
+} // namespace
