@@ -1,4 +1,8 @@
+// `spotshell edit`: the editor. One option set for both ways to run it: the window (GLFW,
+// Vulkan, Dear ImGui; edit_window.h) on an edit::Session, or a script replayed on the session
+// without a window (--script), or replayed in the window (--script with --window).
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -9,49 +13,67 @@
 #include "commands.h"
 #include "edit_script.h"
 #include "edit_session.h"
+#include "edit_window.h"
 #include "noise/error.h"
+#include "noise/scene.h"
 #include "noise/system.h"
-#include "scene_job.h"
+#include "render_options.h"
 
 namespace spot::cmd {
 
+namespace {
+
+void writeReport(const std::string& file, const nlohmann::json& j) {
+    writeFileAtomic(file, [&](std::ostream& o) { o << j.dump(2) << "\n"; });
+}
+
+} // namespace
+
 int edit(int argc, char** argv) {
-    // Without --script the window opens (cmd_edit_window.cpp).
-    bool script = false;
-    for (int i = 1; i < argc; ++i)
-        script |= std::string(argv[i]) == "--script" || std::string(argv[i]).rfind("--script=", 0) == 0;
-    if (!script)
-        return editWindow(argc, argv);
     std::vector<cli::OptionSpec> specs = {
         {"scene", "FILE", "scene JSON to edit (presets/scenes/*.json)", true},
         {"preset", "FILE", "edit this preset instead of the scene's (e.g. one saved by the editor)",
          false},
         {"size", "WxH", "window size in pixels (default: the scene's image size)", false},
-        {"script", "FILE", "run the actions of FILE without a window (see editor/edit_script.h)",
-         false},
-        {"screenshot", "FILE", "after the script, write the view (.png or .exr)", false},
         {"voxel-scale", "X", "painted voxel size as a fraction of the cell size (default 0.25)",
          false},
-        {"report", "FILE", "write the script's timings and memory as JSON", false},
+        {"script", "FILE",
+         "replay the actions of FILE (see editor/edit_script.h): without a window, or in it with "
+         "--window",
+         false},
+        {"window", "", "with --script: replay it in the window, one action between two frames",
+         false},
+        {"report", "FILE", "write the script's (or the window's) timings and memory as JSON",
+         false},
         cli::threadsOption()};
+    for (const cli::OptionSpec& o : editor::editWindowOptions())
+        specs.push_back(o);
+    for (const cli::OptionSpec& o : cli::renderOptions())
+        specs.push_back(o);
     cli::Args args("edit",
-                   "Paint density, comb, tilt, length and colour on the surface and edit "
-                   "the kernel. Without a window yet: --script replays a session.",
+                   "Paint density, comb, tilt, length and colour on the surface and edit the "
+                   "kernel, in a window: the GPU methods live, with Blender-like navigation "
+                   "(middle drag orbits, shift+middle pans, the wheel zooms, alt+left orbits, F "
+                   "or Home frames the mesh), the left button paints. Needs a display (DISPLAY), "
+                   "or xvfb-run. --script replays a session without a window.",
                    specs, argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);
         return 0;
     }
-    if (!args.has("script"))
-        throw InputError("spotshell edit: the editor window is not built yet; give --script FILE");
     const auto threads = args.integer("threads", 0, 0, 1024);
     std::optional<tbb::global_control> threadLimit;
     if (threads > 0)
         threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    const bool inWindow = !args.has("script") || args.has("window");
+    if (args.has("window") && !args.has("script"))
+        throw InputError("--window replays a script: give --script FILE too");
 
     // Everything is checked before anything is loaded or written.
-    const std::string scriptFile = args.str("script");
-    const std::vector<edit::ScriptAction> actions = edit::loadScript(scriptFile);
+    std::vector<edit::ScriptAction> actions;
+    const std::string scriptFile = args.has("script") ? args.str("script") : std::string();
+    if (!scriptFile.empty())
+        actions = edit::loadScript(scriptFile);
     std::optional<std::filesystem::path> screenshot;
     if (args.has("screenshot")) {
         screenshot = args.str("screenshot");
@@ -73,27 +95,83 @@ int edit(int argc, char** argv) {
     if (args.has("preset"))
         options.preset = args.str("preset");
     options.voxelScale = float(args.number("voxel-scale", 0.25, 1e-3, 1.0));
+    const std::string method = args.str("method", "instanced");
+    const splat::RenderSettings settings = cli::renderSettings(args);
+    splat::gpuMethod(method); // InputError naming the methods
+
+    if (inWindow) {
+        const noise::SceneDesc desc = noise::loadScene(args.str("scene"));
+        const int width = options.width > 0 ? options.width : desc.camera.width;
+        const int height = options.height > 0 ? options.height : desc.camera.height;
+        editor::EditWindowOptions window =
+            editor::editWindowOptions(args, width, height, desc.name);
+        window.script = actions;
+        window.scriptName = scriptFile;
+        window.log = stdout;
+        const std::filesystem::path scene = args.str("scene");
+        const editor::EditWindowReport r = editor::runEditWindow(
+            [&](const splat::ContextOptions& context) {
+                edit::SessionOptions o = options;
+                o.context = context;
+                auto session = std::make_unique<edit::Session>(scene, o);
+                session->setMethod(method, settings);
+                return session;
+            },
+            window);
+        const std::string timing =
+            r.warmFrames == 0
+                ? std::string("no warm frames (each changed method or size)")
+                : cat("warm frames: median ", r.frameMs, " ms (render ", r.renderMs,
+                      " ms, present with ImGui ", r.presentMs, " ms, panels ", r.overlayMs, " ms)");
+        std::printf("edit: %d frames (%d rendered) of %s; %s%s%s\n", r.frames, r.rendered,
+                    desc.name.c_str(), timing.c_str(), window.screenshot.empty() ? "" : "; wrote ",
+                    window.screenshot.string().c_str());
+        if (!r.strokeToFrameMs.empty()) {
+            std::vector<double> s = r.strokeToFrameMs;
+            std::sort(s.begin(), s.end());
+            std::printf("edit: stroke to frame: median %.1f ms, max %.1f ms over %zu events; "
+                        "frames while painting: median %.1f ms\n",
+                        s[s.size() / 2], s.back(), s.size(), r.strokeFrameMs);
+        }
+        if (r.refined > 0)
+            std::printf("edit: idle refinement: %d steps, %.1f ms each (median)\n", r.refined,
+                        r.refineMs);
+        if (r.validation)
+            std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
+        if (args.has("report"))
+            writeReport(args.str("report"), {{"frames", r.frames},
+                                             {"rendered", r.rendered},
+                                             {"frame_ms", r.frameMs},
+                                             {"render_ms", r.renderMs},
+                                             {"present_ms", r.presentMs},
+                                             {"panels_ms", r.overlayMs},
+                                             {"refined", r.refined},
+                                             {"refine_ms", r.refineMs},
+                                             {"stroke_to_frame_ms", r.strokeToFrameMs},
+                                             {"stroke_frame_ms", r.strokeFrameMs}});
+        return 0;
+    }
 
     edit::Session session(args.str("scene"), options);
+    session.setMethod(method, settings);
     const edit::ScriptReport report = edit::runScript(session, actions, scriptFile, stdout);
     if (screenshot)
         session.exportImage(*screenshot);
-    if (args.has("report")) {
-        nlohmann::json j = {{"strokes", report.strokes},
-                            {"frames", report.frames},
-                            {"stroke_ms", report.strokeMs},
-                            {"param_ms", report.paramMs},
-                            {"stroke_to_frame_ms", report.strokeToFrameMs},
-                            {"stroke_event_ms", report.eventMs},
-                            {"stroke_frame_ms", report.frameMs},
-                            {"stroke_generate_gpu_ms", report.generateMs},
-                            {"undo_steps", session.undoSteps()},
-                            {"undo_bytes", session.undoBytes()},
-                            {"session_bytes", session.memoryBytes()},
-                            {"peak_rss_bytes", edit::peakResidentBytes()},
-                            {"gpu_memory_bytes", session.context().peakAllocatedBytes()}};
-        writeFileAtomic(args.str("report"), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
-    }
+    if (args.has("report"))
+        writeReport(args.str("report"),
+                    {{"strokes", report.strokes},
+                     {"frames", report.frames},
+                     {"stroke_ms", report.strokeMs},
+                     {"param_ms", report.paramMs},
+                     {"stroke_to_frame_ms", report.strokeToFrameMs},
+                     {"stroke_event_ms", report.eventMs},
+                     {"stroke_frame_ms", report.frameMs},
+                     {"stroke_generate_gpu_ms", report.generateMs},
+                     {"undo_steps", session.undoSteps()},
+                     {"undo_bytes", session.undoBytes()},
+                     {"session_bytes", session.memoryBytes()},
+                     {"peak_rss_bytes", edit::peakResidentBytes()},
+                     {"gpu_memory_bytes", session.context().peakAllocatedBytes()}});
     std::printf("edited %s: %d strokes, %d frames, %zu undo steps (%zu bytes)%s%s\n",
                 session.scene().name.c_str(), report.strokes, report.frames, session.undoSteps(),
                 session.undoBytes(), screenshot ? "; wrote " : "",

@@ -10,7 +10,6 @@ int impulses(int argc, char** argv);
 int render(int argc, char** argv);
 int compare(int argc, char** argv);
 int bench(int argc, char** argv);
-int edit(int argc, char** argv);     ///< the editor: its window, or a script (cmd_edit.cpp)
-int editWindow(int argc, char** argv); ///< the editor's window alone (cmd_edit_window.cpp)
+int edit(int argc, char** argv); ///< the editor: its window, or a script headless (cmd_edit.cpp)
 
 } // namespace spot::cmd

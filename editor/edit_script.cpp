@@ -330,9 +330,16 @@ std::vector<ScriptAction> loadScript(const std::filesystem::path& file) {
 
 ScriptReport runScript(Session& session, const std::vector<ScriptAction>& actions,
                        const std::string& name, std::FILE* log) {
-    using T = ScriptAction::Type;
     ScriptReport report;
-    for (const ScriptAction& a : actions) {
+    for (const ScriptAction& a : actions)
+        runScriptAction(session, a, name, log, report);
+    return report;
+}
+
+void runScriptAction(Session& session, const ScriptAction& a, const std::string& name,
+                     std::FILE* log, ScriptReport& report) {
+    using T = ScriptAction::Type;
+    {
         const auto start = Clock::now();
         std::string note;
         try {
@@ -438,7 +445,6 @@ ScriptReport runScript(Session& session, const std::vector<ScriptAction>& action
             std::fprintf(log, "%4d  %-40s %s%s%.1f ms\n", a.line, a.text.substr(0, 40).c_str(),
                          note.c_str(), note.empty() ? "" : "; ", msSince(start));
     }
-    return report;
 }
 
 } // namespace spot::edit

@@ -96,5 +96,10 @@ struct ScriptReport {
 /// carry the line: "script NAME:LINE: message".
 ScriptReport runScript(Session& session, const std::vector<ScriptAction>& actions,
                        const std::string& name, std::FILE* log);
+/// One action of a script (what runScript does per line), adding to `report`. The window
+/// replays a script through this, one action between two frames (its strokes it replays as
+/// pointer events instead, one per frame).
+void runScriptAction(Session& session, const ScriptAction& action, const std::string& name,
+                     std::FILE* log, ScriptReport& report);
 
 } // namespace spot::edit

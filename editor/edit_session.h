@@ -149,6 +149,7 @@ public:
     bool undo(EditCost* cost = nullptr);
     bool redo(EditCost* cost = nullptr);
     std::size_t undoSteps() const { return m_undo.size(); }
+    std::size_t redoSteps() const { return m_redo.size(); }
     std::size_t undoBytes() const;
 
     // --- document -----------------------------------------------------------------------------

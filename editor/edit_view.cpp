@@ -111,4 +111,34 @@ void OrbitView::frame(const BoundingSphere& sphere, double aspect) {
     m_eye = m_target + direction * (sphere.radius * kMargin / std::sin(half));
 }
 
+noise::Camera jitteredCamera(const noise::Camera& camera, double dx, double dy) {
+    noise::Camera c = camera;
+    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
+    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
+    const glm::dvec3 up = glm::cross(right, forward);
+    const double distance = glm::length(camera.target - camera.eye);
+    const double height = camera.projection == noise::Projection::Perspective
+                              ? 2.0 * distance * std::tan(glm::radians(camera.fovYDeg) * 0.5)
+                              : camera.orthoHeight;
+    const double pixel = height / double(std::max(camera.height, 1));
+    // The view moves by -(dx, dy) so that the image moves by +(dx, dy); window y grows down.
+    const glm::dvec3 shift = -right * (dx * pixel) + up * (dy * pixel);
+    c.target += shift;
+    if (camera.projection != noise::Projection::Perspective)
+        c.eye += shift;
+    return c;
+}
+
+glm::dvec2 haltonJitter(int index) {
+    auto radical = [](int i, int base) {
+        double f = 1.0, r = 0.0;
+        for (; i > 0; i /= base) {
+            f /= base;
+            r += f * (i % base);
+        }
+        return r;
+    };
+    return {radical(index + 1, 2) - 0.5, radical(index + 1, 3) - 0.5};
+}
+
 } // namespace spot::editor

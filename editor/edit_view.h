@@ -54,4 +54,13 @@ private:
     glm::dvec3 m_eye, m_target, m_up;
 };
 
+/// `camera` with its image shifted by (dx, dy) pixels (x right, y down; sub-pixel jitter for
+/// the idle refinement). Perspective: the view turns about the eye (the target moves in the
+/// view plane), which shifts the centre of the image by exactly (dx, dy) pixels and the corners
+/// by at most (1 + tan^2(fov / 2)) times that; orthographic: eye and target move together.
+noise::Camera jitteredCamera(const noise::Camera& camera, double dx, double dy);
+
+/// Point `index` of the Halton (2, 3) sequence minus 0.5: a jitter in [-0.5, 0.5)^2 pixels.
+glm::dvec2 haltonJitter(int index);
+
 } // namespace spot::editor

@@ -15,11 +15,13 @@
 #include <imgui_impl_glfw.h>
 #include <imgui_impl_vulkan.h>
 
+#include "edit_panels.h"
+#include "edit_script.h"
+#include "edit_session.h"
 #include "edit_view.h"
 #include "noise/error.h"
 #include "noise/image.h"
 #include "render_options.h"
-#include "scene_job.h"
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
 
@@ -412,30 +414,38 @@ private:
 struct InputState {
     enum class Drag { None, Orbit, Pan, Brush };
     OrbitView* view = nullptr;
-    const EditWindowOptions* options = nullptr;
+    edit::Session* session = nullptr;
     BoundingSphere sphere;
     Drag drag = Drag::None;
     double lastX = 0.0, lastY = 0.0;
     bool sceneDirty = true;       ///< render the scene again
     bool resized = true;          ///< recreate the swapchain
+    bool closeRequested = false;  ///< the close button, with unsaved changes (the modal asks)
     Clock::time_point lastMotion; ///< of the camera (for the lower resolution while navigating)
+    /// The first brush event not yet shown (stroke-to-frame is measured from it).
+    std::optional<Clock::time_point> pendingBrush;
+    std::string error; ///< a brush or key edit the session refused
 
-    PointerEvent brushEvent(GLFWwindow* window, PointerEvent::Phase phase, int mods) const {
+    noise::Camera windowCamera(GLFWwindow* window) const {
         int w = 0, h = 0;
         glfwGetWindowSize(window, &w, &h);
-        PointerEvent e;
-        e.phase = phase;
-        e.x = lastX;
-        e.y = lastY;
-        e.camera = view->camera(std::max(w, 1), std::max(h, 1));
-        e.shift = mods & GLFW_MOD_SHIFT;
-        e.control = mods & GLFW_MOD_CONTROL;
-        e.alt = mods & GLFW_MOD_ALT;
-        return e;
+        return view->camera(std::max(w, 1), std::max(h, 1));
     }
     void moved() {
         sceneDirty = true;
         lastMotion = Clock::now();
+    }
+    /// A brush event (window pixels): the session begins, continues or ends the stroke.
+    void brush(edit::Session::PointerPhase phase, const noise::Camera& camera, double x, double y,
+               bool invert) {
+        if (!pendingBrush)
+            pendingBrush = Clock::now();
+        try {
+            session->pointer(phase, glm::vec2(float(x), float(y)), camera, invert);
+        } catch (const InputError& e) {
+            error = e.what();
+        }
+        sceneDirty = true;
     }
 };
 
@@ -443,29 +453,13 @@ InputState& state(GLFWwindow* window) {
     return *static_cast<InputState*>(glfwGetWindowUserPointer(window));
 }
 
-int currentMods(GLFWwindow* w) {
-    int mods = 0;
-    if (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
-        glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS)
-        mods |= GLFW_MOD_SHIFT;
-    if (glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
-        glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS)
-        mods |= GLFW_MOD_CONTROL;
-    if (glfwGetKey(w, GLFW_KEY_LEFT_ALT) == GLFW_PRESS ||
-        glfwGetKey(w, GLFW_KEY_RIGHT_ALT) == GLFW_PRESS)
-        mods |= GLFW_MOD_ALT;
-    return mods;
-}
-
 void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
     InputState& s = state(window);
     glfwGetCursorPos(window, &s.lastX, &s.lastY);
     if (action == GLFW_RELEASE) {
-        if (s.drag == InputState::Drag::Brush && s.options->onBrush &&
-            button == GLFW_MOUSE_BUTTON_LEFT) {
-            s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Release, mods));
-            s.sceneDirty = true;
-        }
+        if (s.drag == InputState::Drag::Brush && button == GLFW_MOUSE_BUTTON_LEFT)
+            s.brush(edit::Session::PointerPhase::Release, s.windowCamera(window), s.lastX, s.lastY,
+                    false);
         s.drag = InputState::Drag::None;
         return;
     }
@@ -474,10 +468,11 @@ void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
     const bool shift = mods & GLFW_MOD_SHIFT, alt = mods & GLFW_MOD_ALT;
     if (button == GLFW_MOUSE_BUTTON_MIDDLE || (button == GLFW_MOUSE_BUTTON_LEFT && alt)) {
         s.drag = shift ? InputState::Drag::Pan : InputState::Drag::Orbit;
-    } else if (button == GLFW_MOUSE_BUTTON_LEFT && s.options->onBrush) {
+    } else if (button == GLFW_MOUSE_BUTTON_LEFT) {
         s.drag = InputState::Drag::Brush;
-        s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Press, mods));
-        s.sceneDirty = true;
+        // Shift or ctrl at the press inverts the stroke: density-add erases, length shrinks.
+        s.brush(edit::Session::PointerPhase::Press, s.windowCamera(window), s.lastX, s.lastY,
+                (mods & (GLFW_MOD_SHIFT | GLFW_MOD_CONTROL)) != 0);
     }
 }
 
@@ -498,8 +493,7 @@ void onCursor(GLFWwindow* window, double x, double y) {
         s.moved();
         break;
     case InputState::Drag::Brush:
-        s.options->onBrush(s.brushEvent(window, PointerEvent::Phase::Drag, currentMods(window)));
-        s.sceneDirty = true;
+        s.brush(edit::Session::PointerPhase::Drag, s.windowCamera(window), x, y, false);
         break;
     case InputState::Drag::None:
         break;
@@ -521,11 +515,47 @@ void frameMesh(GLFWwindow* window, InputState& s) {
     s.moved();
 }
 
-void onKey(GLFWwindow* window, int key, int, int action, int) {
-    if (action != GLFW_PRESS || ImGui::GetIO().WantCaptureKeyboard)
+void onKey(GLFWwindow* window, int key, int, int action, int mods) {
+    if ((action != GLFW_PRESS && action != GLFW_REPEAT) || ImGui::GetIO().WantCaptureKeyboard)
         return;
-    if (key == GLFW_KEY_F || key == GLFW_KEY_HOME)
-        frameMesh(window, state(window));
+    InputState& s = state(window);
+    edit::Session& session = *s.session;
+    edit::BrushSettings& brush = session.brush();
+    const bool shift = mods & GLFW_MOD_SHIFT, control = mods & GLFW_MOD_CONTROL;
+    if (s.drag == InputState::Drag::Brush) // no undo or brush change in the middle of a stroke
+        return;
+    try {
+        if (control && key == GLFW_KEY_Z)
+            s.sceneDirty |= shift ? session.redo() : session.undo();
+        else if (control && key == GLFW_KEY_Y)
+            s.sceneDirty |= session.redo();
+        else if (control)
+            return;
+        else if (key == GLFW_KEY_F || key == GLFW_KEY_HOME)
+            frameMesh(window, s);
+        else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
+            const bool up = key == GLFW_KEY_RIGHT_BRACKET;
+            if (shift)
+                brush.strength = std::clamp(brush.strength + (up ? 0.05f : -0.05f), -1.0f, 1.0f);
+            else
+                brush.radiusPx =
+                    std::clamp(brush.radiusPx * (up ? 1.15f : 1.0f / 1.15f), 2.0f, 400.0f);
+        } else if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7)
+            brush.kind = edit::BrushKind(key - GLFW_KEY_1);
+        else if (key == GLFW_KEY_X)
+            brush.mirrorX = !brush.mirrorX;
+    } catch (const InputError& e) {
+        s.error = e.what();
+    }
+}
+
+void onClose(GLFWwindow* window) {
+    InputState& s = state(window);
+    const QuitStep step = quitStep(s.session->dirty(), true, QuitAnswer::None);
+    if (!step.close) {
+        glfwSetWindowShouldClose(window, GLFW_FALSE);
+        s.closeRequested = step.ask;
+    }
 }
 
 void onFramebufferSize(GLFWwindow* window, int, int) {
@@ -545,7 +575,8 @@ struct PanelState {
     splat::RenderSettings settings;
     bool continuous = false;
     int scale = 0;           ///< index into kScales: always
-    int navigationScale = 1; ///< index into kScales: while the camera moves
+    int navigationScale = 1; ///< index into kScales: while the camera moves or a stroke paints
+    int refineFrames = 16;   ///< idle refinement steps (0: off)
     std::string error;       ///< why the last render failed (shown until one succeeds)
 };
 
@@ -561,8 +592,11 @@ bool methodPanel(PanelState& p) {
     const auto& methods = splat::gpuMethods();
     ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
-    // A small window shows the scene first: the panel starts folded.
-    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
+    // A small window shows the scene first: the panel starts folded (below 700 pixels high, to
+    // leave the left side to the Brush panel).
+    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f ||
+                                      ImGui::GetIO().DisplaySize.y < 700.0f,
+                                  ImGuiCond_FirstUseEver);
     ImGui::Begin("Render");
     ImGui::PushItemWidth(150);
     if (ImGui::BeginCombo("method", methods[std::size_t(p.method)].name.c_str())) {
@@ -604,7 +638,8 @@ bool methodPanel(PanelState& p) {
     ImGui::Separator();
     changed |= ImGui::Checkbox("render every frame", &p.continuous);
     changed |= ImGui::Combo("resolution", &p.scale, kScaleNames);
-    ImGui::Combo("while navigating", &p.navigationScale, kScaleNames);
+    ImGui::Combo("moving / painting", &p.navigationScale, kScaleNames);
+    changed |= ImGui::SliderInt("refine when idle", &p.refineFrames, 0, 64);
     ImGui::TextDisabled("orbit: middle drag (alt+left)\npan: shift+middle\nzoom: wheel\n"
                         "frame the mesh: F or Home");
     if (!p.error.empty())
@@ -615,7 +650,8 @@ bool methodPanel(PanelState& p) {
 }
 
 void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windowW, int windowH,
-                double frameMs, double presentMs, bool navigating, bool srgb) {
+                double frameMs, double presentMs, bool navigating, bool srgb,
+                const std::string& refining) {
     const ImGuiIO& io = ImGui::GetIO();
     ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8, io.DisplaySize.y - 8), ImGuiCond_Always,
                             ImVec2(1, 1));
@@ -626,11 +662,13 @@ void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windo
                      ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
     if (renderW != windowW || renderH != windowH)
         ImGui::Text("%s  %dx%d scaled up%s", st.method.c_str(), renderW, renderH,
-                    navigating ? " while moving" : "");
+                    navigating ? " while moving or painting" : "");
     else
         ImGui::Text("%s  %dx%d", st.method.c_str(), renderW, renderH);
     for (const auto& [pass, ms] : st.passMs)
         ImGui::Text("  %-12s %8.2f ms GPU", pass.c_str(), ms);
+    if (!refining.empty())
+        ImGui::TextColored(ImVec4(0.5f, 0.8f, 1.0f, 1.0f), "%s", refining.c_str());
     ImGui::Text("total GPU      %8.2f ms", st.gpuMs);
     ImGui::Text("render wall    %8.2f ms", st.wallMs);
     ImGui::Text("present+ImGui  %8.2f ms", presentMs);
@@ -783,64 +821,187 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
     return true;
 }
 
+/// The idle refinement: the running average of jittered full-resolution frames, on the host
+/// and uploaded into an image the present blits like a renderer's result.
+struct Refinement {
+    int count = 0; ///< frames averaged (0: not refining; the interactive frame is shown)
+    std::vector<glm::vec3> sum;
+    noise::Image average;
+    splat::Image image;
+    splat::Buffer staging;
+
+    void add(splat::Context& ctx, const noise::Image& frame) {
+        if (count == 0 || average.width != frame.width || average.height != frame.height) {
+            count = 0;
+            sum.assign(frame.pixels.size(), glm::vec3(0.0f));
+            average = noise::Image(frame.width, frame.height);
+        }
+        ++count;
+        const float inv = 1.0f / float(count);
+        for (std::size_t i = 0; i < sum.size(); ++i) {
+            sum[i] += frame.pixels[i];
+            average.pixels[i] = sum[i] * inv;
+        }
+        upload(ctx);
+    }
+
+    void upload(splat::Context& ctx) {
+        const auto w = std::uint32_t(average.width), h = std::uint32_t(average.height);
+        if (image.width() != w || image.height() != h)
+            image = splat::Image(ctx, w, h, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                 VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                                     VK_IMAGE_USAGE_STORAGE_BIT,
+                                 VK_IMAGE_ASPECT_COLOR_BIT, "idle refinement");
+        const VkDeviceSize bytes = VkDeviceSize(w) * h * 4 * sizeof(float);
+        if (staging.size() < bytes)
+            staging = splat::Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                    splat::Buffer::Memory::HostVisible, "idle refinement upload");
+        auto* p = static_cast<float*>(staging.mapped());
+        for (const glm::vec3& c : average.pixels) {
+            *p++ = c.x;
+            *p++ = c.y;
+            *p++ = c.z;
+            *p++ = 1.0f;
+        }
+        ctx.submitAndWait([&](VkCommandBuffer cmd) {
+            splat::transitionImage(cmd, image.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
+                                   VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE,
+                                   VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+            VkBufferImageCopy region{};
+            region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+            region.imageExtent = {w, h, 1};
+            vkCmdCopyBufferToImage(cmd, staging.handle(), image.handle(),
+                                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+            // The general layout, as the renderers leave their results (present() expects it).
+            splat::transitionImage(cmd, image.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
+                                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                                   VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                   VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+        });
+    }
+};
+
+int methodIndex(const std::string& name) {
+    const auto& methods = splat::gpuMethods();
+    return int(&splat::gpuMethod(name) - methods.data());
+}
+
+/// The Save / Discard / Cancel modal, opened when the window was asked to close with unsaved
+/// changes.
+QuitAnswer quitModal(InputState& input, const SessionPanels& panels) {
+    if (input.closeRequested) {
+        ImGui::OpenPopup("Unsaved changes");
+        input.closeRequested = false;
+    }
+    QuitAnswer answer = QuitAnswer::None;
+    if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+        ImGui::Text("The preset has unsaved changes.\nSave them to %s first?",
+                    panels.savePath.c_str());
+        if (ImGui::Button("Save"))
+            answer = QuitAnswer::Save;
+        ImGui::SameLine();
+        if (ImGui::Button("Discard"))
+            answer = QuitAnswer::Discard;
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel"))
+            answer = QuitAnswer::Cancel;
+        if (answer != QuitAnswer::None)
+            ImGui::CloseCurrentPopup();
+        ImGui::EndPopup();
+    }
+    return answer;
+}
+
 } // namespace
 
-EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& options) {
+QuitStep quitStep(bool dirty, bool closeRequested, QuitAnswer answer) {
+    switch (answer) {
+    case QuitAnswer::Save:
+        return {true, true, false};
+    case QuitAnswer::Discard:
+        return {true, false, false};
+    case QuitAnswer::Cancel:
+        return {};
+    case QuitAnswer::None:
+        break;
+    }
+    if (!closeRequested)
+        return {};
+    return dirty ? QuitStep{false, false, true} : QuitStep{true, false, false};
+}
+
+EditWindowReport runEditWindow(const SessionFactory& makeSession,
+                               const EditWindowOptions& options) {
     const auto& methods = splat::gpuMethods();
     PanelState panel;
-    panel.method = int(&splat::gpuMethod(options.method) - methods.data());
+    panel.method = methodIndex(options.method);
     panel.settings = options.settings;
     panel.continuous = options.frames > 0;
+    panel.refineFrames = options.refineFrames;
     panel.scale = int(std::find(std::begin(kScales), std::end(kScales), options.renderScale) -
                       std::begin(kScales));
     if (panel.scale == int(std::size(kScales)))
         throw InputError(cat("render scale ", options.renderScale, " must be 1, 2 or 4"));
 
-    // Destroyed in reverse: ImGui, the swapchain, the surface, the frame, the context, the
-    // window, GLFW. The display is checked before anything else is made.
+    // Destroyed in reverse: ImGui, the swapchain, the surface, the session (its frame and
+    // context), the window, GLFW. The display is checked before anything else is made.
     GlfwLibrary glfw;
     GlfwWindow window(options.width, options.height, options.title);
-    splat::Context ctx(windowContextOptions());
-    splat::Frame frame(ctx, job.mesh, *job.generator);
+    const std::unique_ptr<edit::Session> owned = makeSession(windowContextOptions());
+    edit::Session& session = *owned;
+    splat::Context& ctx = session.context();
     Surface surface(ctx, window.handle);
     Swapchain swapchain(ctx, surface.handle);
     PresentSync sync(ctx);
 
-    OrbitView view(job.scene.camera);
+    OrbitView view(session.camera());
     InputState input;
     input.view = &view;
-    input.options = &options;
-    input.sphere = boundingSphere(job.mesh);
+    input.session = &session;
+    input.sphere = boundingSphere(session.mesh());
     glfwSetWindowUserPointer(window.handle, &input);
     glfwSetMouseButtonCallback(window.handle, onMouseButton);
     glfwSetCursorPosCallback(window.handle, onCursor);
     glfwSetScrollCallback(window.handle, onScroll);
     glfwSetKeyCallback(window.handle, onKey);
     glfwSetFramebufferSizeCallback(window.handle, onFramebufferSize);
+    glfwSetWindowCloseCallback(window.handle, onClose);
 
     int fbW = 0, fbH = 0;
     glfwGetFramebufferSize(window.handle, &fbW, &fbH);
     swapchain.recreate(fbW, fbH);
     input.resized = false;
     ImGuiLayer imgui(ctx, window.handle, swapchain);
+    SessionPanels panels;
+    panels.savePath = cat(session.scene().name, "-edited.json");
+    panels.exportPath = cat(session.scene().name, "-view.png");
 
-    const splat::View look{job.scene.camera, job.scene.shading, job.scene.background,
-                           job.scene.baseColor};
     splat::FrameStats stats;
     const splat::Image* scene = nullptr;
     int renderW = 0, renderH = 0;
     std::string renderedWith; ///< method and size of the last render (warm-frame bookkeeping)
-    std::vector<double> frameMs, renderMs, presentMs, overlayMs; // warm frames
+    std::vector<double> frameMs, renderMs, presentMs, overlayMs, refineMs, strokeFrameMs;
     EditWindowReport report;
     double lastFrameMs = 0.0, lastPresentMs = 0.0;
     std::optional<noise::Image> screenshot, windowImage;
     WindowGrab windowGrab;
+    Refinement refine;
+    edit::ScriptReport scriptReport;
+    std::size_t scriptNext = 0, strokePoint = 0; ///< the next action; a stroke's next point
+    auto scriptDone = [&] { return scriptNext >= options.script.size(); };
+    auto lastTick = Clock::now();
+    bool quit = false;
 
-    while (!glfwWindowShouldClose(window.handle)) {
-        if (options.frames > 0 && report.frames >= options.frames)
+    while (!glfwWindowShouldClose(window.handle) && !quit) {
+        if (options.frames > 0 && report.frames >= options.frames && scriptDone())
             break;
         const auto frameStart = Clock::now();
-        if (panel.continuous || input.drag != InputState::Drag::None)
+        const bool busy = panel.continuous || input.drag != InputState::Drag::None ||
+                          !scriptDone() || session.wind() ||
+                          (panel.refineFrames > 0 && refine.count < panel.refineFrames);
+        if (busy)
             glfwPollEvents();
         else
             glfwWaitEventsTimeout(0.25); // idle: redraw the overlay a few times a second
@@ -855,71 +1016,169 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
             ImGui_ImplVulkan_SetMinImageCount(swapchain.minImageCount);
             input.resized = false;
         }
+        const int fullW = int(swapchain.extent.width), fullH = int(swapchain.extent.height);
         if (options.cycleMethods) {
             const int next = report.frames % int(methods.size());
             input.sceneDirty |= next != panel.method;
             panel.method = next;
         }
-
         if (options.orbitDegreesPerFrame != 0.0 && report.frames > 0) {
             view.orbit(options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
             input.moved();
         }
+
+        // The script: one action between two frames; a stroke one pointer event per frame.
+        std::optional<glm::vec2> scriptPointer;
+        if (!scriptDone()) {
+            const edit::ScriptAction& a = options.script[scriptNext];
+            if (a.type == edit::ScriptAction::Type::Stroke) {
+                using Phase = edit::Session::PointerPhase;
+                const std::size_t i = std::min(strokePoint, a.points.size() - 1);
+                const Phase phase = strokePoint == 0                ? Phase::Press
+                                    : strokePoint < a.points.size() ? Phase::Drag
+                                                                    : Phase::Release;
+                try {
+                    if (!input.pendingBrush)
+                        input.pendingBrush = Clock::now();
+                    session.pointer(phase, a.points[i], input.windowCamera(window.handle));
+                } catch (const InputError& e) {
+                    throw InputError(
+                        cat("script ", options.scriptName, ":", a.line, ": ", e.what()));
+                }
+                scriptPointer = a.points[i];
+                input.sceneDirty = true;
+                if (phase == Phase::Release) {
+                    ++scriptReport.strokes;
+                    ++scriptNext;
+                    strokePoint = 0;
+                    if (options.log)
+                        std::fprintf(options.log, "%4d  %s\n", a.line, a.text.c_str());
+                } else {
+                    ++strokePoint;
+                }
+            } else {
+                // The window's view, so that `screenshot` and `frames` show what it shows.
+                session.setCamera(view.camera(fullW, fullH));
+                edit::runScriptAction(session, a, options.scriptName, options.log, scriptReport);
+                ++scriptNext;
+                panel.method = methodIndex(session.method());
+                panel.settings = session.settings();
+                const noise::Camera now = session.camera(), shown = view.camera(fullW, fullH);
+                if (now.eye != shown.eye || now.target != shown.target ||
+                    now.fovYDeg != shown.fovYDeg)
+                    view = OrbitView(now);
+                input.sceneDirty = true;
+            }
+        }
+        // Wind animates: the session's time advances (1/30 s a frame when scripted).
+        const double tick = std::chrono::duration<double>(Clock::now() - lastTick).count();
+        lastTick = Clock::now();
+        if (session.wind() && scriptDone()) {
+            session.setTime(session.time() + (options.frames > 0 ? 1.0 / 30.0 : tick));
+            input.sceneDirty = true;
+        }
+
+        const bool stroking = input.drag == InputState::Drag::Brush || strokePoint > 0;
+        const bool navigating =
+            input.drag == InputState::Drag::Orbit || input.drag == InputState::Drag::Pan ||
+            std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;
+        const bool lowRes = navigating || stroking;
         const auto overlayStart = Clock::now();
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         input.sceneDirty |= methodPanel(panel);
-        if (options.extraPanels)
-            options.extraPanels();
-        if (options.needsRedraw && options.needsRedraw())
-            input.sceneDirty = true;
-        const bool navigating =
-            input.drag == InputState::Drag::Orbit || input.drag == InputState::Drag::Pan ||
-            std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;
-        statsPanel(stats, renderW, renderH, int(swapchain.extent.width),
-                   int(swapchain.extent.height), lastFrameMs, lastPresentMs,
-                   navigating && panel.navigationScale > panel.scale, swapchain.srgb);
+        if (!input.error.empty()) {
+            panels.message = input.error;
+            panels.messageIsError = true;
+            input.error.clear();
+        }
+        input.sceneDirty |= sessionPanels(session, panels);
+        const QuitStep quitting = quitStep(session.dirty(), false, quitModal(input, panels));
+        if (quitting.close && (!quitting.save || saveSession(session, panels)))
+            quit = true;
+        std::string refining;
+        if (panel.refineFrames > 0 && refine.count > 0)
+            refining =
+                refine.count < panel.refineFrames
+                    ? cat("refining ", refine.count, "/", panel.refineFrames, " (sorted, jittered)")
+                    : cat("refined ", refine.count, "/", panel.refineFrames, " (sorted, jittered)");
+        statsPanel(stats, renderW, renderH, fullW, fullH, lastFrameMs, lastPresentMs,
+                   lowRes && panel.navigationScale > panel.scale, swapchain.srgb, refining);
+        // The brush under the pointer (or the script's pointer).
+        const ImVec2 mouse = ImGui::GetIO().MousePos;
+        const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid();
+        if (scriptPointer || (overScene && input.drag != InputState::Drag::Orbit &&
+                              input.drag != InputState::Drag::Pan)) {
+            const ImVec2 at = scriptPointer ? ImVec2(scriptPointer->x, scriptPointer->y) : mouse;
+            ImGui::GetForegroundDrawList()->AddCircle(at, session.brush().radiusPx,
+                                                      IM_COL32(255, 255, 255, 200), 48, 1.5f);
+        }
         ImGui::Render();
         const double overlay = msSince(overlayStart);
 
-        // Navigation ended: back to the resolution chosen.
-        if (!navigating && scene &&
-            (renderW != std::max(1, int(swapchain.extent.width) / kScales[panel.scale]) ||
-             renderH != std::max(1, int(swapchain.extent.height) / kScales[panel.scale])))
+        // Navigation or a stroke ended: back to the resolution chosen.
+        if (!lowRes && scene && refine.count == 0 &&
+            (renderW != std::max(1, fullW / kScales[panel.scale]) ||
+             renderH != std::max(1, fullH / kScales[panel.scale])))
             input.sceneDirty = true;
-        const bool last = options.frames > 0 && report.frames + 1 == options.frames;
-        const bool render = !scene || input.sceneDirty || panel.continuous;
-        bool warm = true;
-        double renderWall = 0.0;
-        if (render) {
+        const bool change = input.sceneDirty || !scene;
+        if (change)
+            refine.count = 0;
+        const bool last = options.frames > 0 && scriptDone() && report.frames + 1 >= options.frames;
+        const bool refineNow = !change && !lowRes && panel.refineFrames > 0 &&
+                               refine.count < panel.refineFrames && !session.wind();
+        const std::string& method = methods[std::size_t(panel.method)].name;
+        bool warm = true, rendered = false;
+        const splat::Image* shown = refine.count > 0 ? &refine.image : scene;
+        if (refineNow) {
+            // One more jittered frame of the most accurate method into the running average.
+            const auto refineStart = Clock::now();
+            session.setMethod("sorted", panel.settings);
+            const glm::dvec2 jitter = haltonJitter(refine.count);
+            session.setCamera(jitteredCamera(view.camera(fullW, fullH), jitter.x, jitter.y));
+            noise::Image image;
+            stats = session.render(&image);
+            refine.add(ctx, image);
+            refineMs.push_back(msSince(refineStart));
+            ++report.refined;
+            renderW = fullW;
+            renderH = fullH;
+            shown = &refine.image;
+            warm = false;
+            renderedWith = "refine";
+        } else if (change || (panel.continuous && refine.count == 0)) {
             const int scale =
-                kScales[navigating ? std::max(panel.scale, panel.navigationScale) : panel.scale];
-            renderW = std::max(1, int(swapchain.extent.width) / scale);
-            renderH = std::max(1, int(swapchain.extent.height) / scale);
-            splat::View v = look;
-            v.camera = view.camera(renderW, renderH);
-            const std::string& method = methods[std::size_t(panel.method)].name;
+                kScales[lowRes ? std::max(panel.scale, panel.navigationScale) : panel.scale];
+            renderW = std::max(1, fullW / scale);
+            renderH = std::max(1, fullH / scale);
             noise::Image image;
             const bool capture = last && !options.screenshot.empty();
             const auto renderStart = Clock::now();
             try {
-                stats = frame.render(method, v, panel.settings, capture ? &image : nullptr);
+                session.setMethod(method, panel.settings);
+                session.setCamera(view.camera(renderW, renderH));
+                stats = session.render(capture ? &image : nullptr);
                 panel.error.clear();
             } catch (const InputError& e) {
                 // Interactively, a setting the method refuses (or a frame beyond the memory
-                // budget) is shown in the panel and the last image stays; scripted, it fails.
+                // budget) is shown in the panel; scripted, it fails. The session may have
+                // rebuilt its frame: the last image is gone.
                 if (!scene || options.frames > 0)
                     throw;
                 panel.error = e.what();
                 input.sceneDirty = false;
+                scene = nullptr;
+                ImGui::EndFrame();
                 continue;
             }
-            renderWall = msSince(renderStart);
+            const double renderWall = msSince(renderStart);
             if (capture)
                 screenshot = std::move(image);
-            scene = &frame.renderer(method).result();
+            scene = &session.frame().renderer(method).result();
+            shown = scene;
             input.sceneDirty = false;
+            rendered = true;
             ++report.rendered;
             // Warm: the same method at the same size as the last render (the first frame after
             // a change creates targets and compiles pipelines).
@@ -929,17 +1188,25 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
             if (warm)
                 renderMs.push_back(renderWall);
         }
+        if (last && !options.screenshot.empty() && refine.count > 0)
+            screenshot = refine.average;
         const auto presentStart = Clock::now();
         const bool grab = last && !options.windowScreenshot.empty();
         if (grab && !swapchain.readable)
             throw std::runtime_error("--window-screenshot: the window's images cannot be read back "
                                      "on this surface");
-        if (!present(ctx, swapchain, sync, *scene, grab ? &windowGrab : nullptr))
+        if (!present(ctx, swapchain, sync, *shown, grab ? &windowGrab : nullptr))
             input.resized = true;
         if (grab)
             windowImage = windowGrab.read(swapchain.srgb);
         lastPresentMs = msSince(presentStart);
         lastFrameMs = msSince(frameStart);
+        if (rendered && input.pendingBrush) {
+            report.strokeToFrameMs.push_back(msSince(*input.pendingBrush));
+            input.pendingBrush.reset();
+        }
+        if (rendered && stroking && warm)
+            strokeFrameMs.push_back(lastFrameMs);
         if (warm && report.frames > 0) {
             presentMs.push_back(lastPresentMs);
             frameMs.push_back(lastFrameMs);
@@ -953,18 +1220,21 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
 
     if (!options.screenshot.empty()) {
         if (!screenshot) { // closed by the user: the view as it was last shown
-            splat::View v = look;
-            v.camera = view.camera(int(swapchain.extent.width), int(swapchain.extent.height));
+            session.setMethod(methods[std::size_t(panel.method)].name, panel.settings);
+            session.setCamera(
+                view.camera(int(swapchain.extent.width), int(swapchain.extent.height)));
             noise::Image image;
-            frame.render(methods[std::size_t(panel.method)].name, v, panel.settings, &image);
+            session.render(&image);
             screenshot = std::move(image);
         }
-        noise::writeImage(
-            options.screenshot, *screenshot,
-            {{"method", methods[std::size_t(panel.method)].name}, {"scene", job.scene.name}});
+        noise::writeImage(options.screenshot, *screenshot,
+                          {{"method", refine.count > 0 ? std::string("sorted (refined)")
+                                                       : methods[std::size_t(panel.method)].name},
+                           {"scene", session.scene().name}});
     }
     if (windowImage)
-        noise::writeImage(options.windowScreenshot, *windowImage, {{"scene", job.scene.name}});
+        noise::writeImage(options.windowScreenshot, *windowImage,
+                          {{"scene", session.scene().name}});
     const splat::ValidationCounts v = ctx.validation();
     if (v.errors > 0)
         throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
@@ -975,6 +1245,9 @@ EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& opti
     report.renderMs = median(renderMs);
     report.presentMs = median(presentMs);
     report.overlayMs = median(overlayMs);
+    report.refineMs = median(refineMs);
+    report.strokeFrameMs = median(strokeFrameMs);
+    report.strokeFrames = int(strokeFrameMs.size());
     return report;
 }
 
@@ -1003,18 +1276,25 @@ std::vector<cli::OptionSpec> editWindowOptions() {
         {"cycle-methods", "",
          "frame i shows method i of the registry, in turn (scripted "
          "checks)",
+         false},
+        {"refine", "N",
+         "when idle, average N jittered full-resolution frames of `sorted` (default 16; 0 "
+         "with --frames unless given)",
          false}};
 }
 
-EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& job) {
+EditWindowOptions editWindowOptions(const cli::Args& args, int width, int height,
+                                    const std::string& sceneName) {
     EditWindowOptions o;
-    o.title = cat("spotshell edit - ", job.scene.name);
-    o.width = job.scene.camera.width;
-    o.height = job.scene.camera.height;
+    o.title = cat("spotshell edit - ", sceneName);
+    o.width = width;
+    o.height = height;
     o.method = args.str("method", "instanced");
     splat::gpuMethod(o.method); // InputError naming the methods
     o.settings = cli::renderSettings(args);
     o.frames = int(args.integer("frames", 0, 0, 1000000));
+    // Scripted runs time and compare the interactive frames: no refinement unless asked for.
+    o.refineFrames = int(args.integer("refine", o.frames > 0 ? 0 : 16, 0, 1024));
     if (args.has("screenshot"))
         o.screenshot = args.str("screenshot");
     if (args.has("resize")) {

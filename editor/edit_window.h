@@ -1,43 +1,39 @@
 /// @file edit_window.h
-/// @brief The editor's window: a GLFW window with a Vulkan swapchain on splat::Context that shows
-/// the scene live through the persistent splat::Frame (the same renderers as `render`), with
-/// Blender-like navigation (edit_view.h), Dear ImGui panels (method, settings, stats) and hooks
-/// for the painting session: brush pointer events on the left button and extra panels.
+/// @brief The editor's window: a GLFW window with a Vulkan swapchain that shows and edits an
+/// edit::Session live (the session's splat::Frame, the same renderers as `render`), with
+/// Blender-like navigation (edit_view.h), painting on the left button, keys, and Dear ImGui
+/// panels (render, brush, kernel, distribution, wind, file, stats; edit_panels.h). The session
+/// is built on the window's context, so strokes, undo and panel edits show in the next frame.
 ///
 /// A frame: splat::Frame::render() renders into the method's result image (RGBA32F, linear) and
 /// waits; a second command buffer blits it into the swapchain image (an sRGB format, so the blit
 /// encodes; scaled up when the scene is rendered at a lower resolution while navigating), draws
 /// ImGui on top in a render pass, and is presented. One frame in flight: the editor waits for the
 /// present's submit before the next frame (lavapipe runs both on the same CPU cores anyway).
+/// While the camera moves or a stroke is in progress the scene renders at a lower resolution;
+/// when idle the window refines: it averages sub-pixel-jittered `sorted` frames at full
+/// resolution (read back, averaged on the host, uploaded to an image the blit shows).
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "cli.h"
+#include "edit_script.h"
 #include "noise/camera.h"
+#include "splat/context_vk.h"
 #include "splat/method_vk.h"
 
-namespace spot::cli {
-struct SceneJob;
+namespace spot::edit {
+class Session;
 }
 
 namespace spot::editor {
-
-/// A left-button event (the brush's): press, drag (pointer moved with the button held), release.
-struct PointerEvent {
-    enum class Phase { Press, Drag, Release };
-    Phase phase = Phase::Press;
-    /// Window pixels (screen coordinates), from the top-left corner of the window.
-    double x = 0.0, y = 0.0;
-    /// The view at the event with width and height set to the window's size in the same pixels,
-    /// so noise::CameraRays(camera).ray(x, y) is the ray under the pointer.
-    noise::Camera camera;
-    bool shift = false, control = false, alt = false;
-};
 
 struct EditWindowOptions {
     std::string title = "spotshell edit";
@@ -65,40 +61,64 @@ struct EditWindowOptions {
     /// Scripted checks: frame i uses method i modulo the registry's count.
     bool cycleMethods = false;
 
-    /// Left-button presses, drags and releases outside the ImGui panels (and without alt, which
-    /// orbits). The scene is re-rendered after each event.
-    std::function<void(const PointerEvent&)> onBrush;
-    /// Called every frame between ImGui::NewFrame() and ImGui::Render(): the session's panels.
-    std::function<void()> extraPanels;
-    /// Polled once per frame, after the panels: true renders the scene again (the session
-    /// changed what it shows, e.g. from a panel or a script).
-    std::function<bool()> needsRedraw;
+    /// Idle refinement: after the interactive frame, while nothing changes, accumulate this
+    /// many sub-pixel-jittered frames of the `sorted` method at full resolution into a running
+    /// average (0: off). The Render panel changes it.
+    int refineFrames = 16;
+    /// Replay these script actions, one between two frames (strokes as pointer events, one per
+    /// frame); `scriptName` names the file in messages, `log` gets one line per action.
+    std::vector<edit::ScriptAction> script;
+    std::string scriptName;
+    std::FILE* log = nullptr;
 };
 
 /// Timings of the frames a window showed (milliseconds, medians over the warm frames: all but
 /// the first of each method and size).
 struct EditWindowReport {
-    int frames = 0;          ///< frames presented
-    int rendered = 0;        ///< of which the scene was rendered (not just the overlay)
-    int warmFrames = 0;      ///< the frames the medians are over
-    double frameMs = 0.0;    ///< wall time of a whole frame: events, render, overlay, present
-    double renderMs = 0.0;   ///< splat::Frame::render() wall time
-    double presentMs = 0.0;  ///< acquire, blit, ImGui, submit, present, wait
-    double overlayMs = 0.0;  ///< building the ImGui panels on the host (included in frameMs)
-    bool validation = false; ///< the validation layer was on (SPOT_VALIDATION=1)
+    int frames = 0;         ///< frames presented
+    int rendered = 0;       ///< of which the scene was rendered (not just the overlay)
+    int warmFrames = 0;     ///< the frames the medians are over
+    double frameMs = 0.0;   ///< wall time of a whole frame: events, render, overlay, present
+    double renderMs = 0.0;  ///< splat::Frame::render() wall time
+    double presentMs = 0.0; ///< acquire, blit, ImGui, submit, present, wait
+    double overlayMs = 0.0; ///< building the ImGui panels on the host (included in frameMs)
+    double refineMs = 0.0;  ///< one idle refinement step: render, read back, average, upload
+    int refined = 0;        ///< refinement steps done
+    /// Brush events (pointer or replayed script) to the present of the frame that shows them.
+    std::vector<double> strokeToFrameMs;
+    double strokeFrameMs = 0.0; ///< median whole frame while a stroke is in progress
+    int strokeFrames = 0;
+    bool validation = false;              ///< the validation layer was on (SPOT_VALIDATION=1)
     std::uint32_t validationWarnings = 0; ///< its warnings (errors throw)
 };
 
-/// Open the window on `job`'s scene and run until it closes (or options.frames ran out).
-/// InputError (exit 2) without a display: DISPLAY unset, or GLFW cannot open it. Throws when
-/// validation (SPOT_VALIDATION=1) reported errors.
-EditWindowReport runEditWindow(cli::SceneJob& job, const EditWindowOptions& options);
+/// Makes the window's session on a context with these options (the window's presentation
+/// extensions and queue); called once the display is known to work.
+using SessionFactory =
+    std::function<std::unique_ptr<edit::Session>(const splat::ContextOptions& context)>;
+
+/// Open the window on the session `makeSession` builds and run until it closes (or
+/// options.frames ran out after the script). InputError (exit 2) without a display: DISPLAY
+/// unset, or GLFW cannot open it. Throws when validation (SPOT_VALIDATION=1) reported errors.
+EditWindowReport runEditWindow(const SessionFactory& makeSession, const EditWindowOptions& options);
 
 /// The window's command-line options (besides the scene options and the render settings).
 std::vector<cli::OptionSpec> editWindowOptions();
 /// Options from the command line: --method, --frames, --screenshot, --window-screenshot,
-/// --render-scale, --orbit, --resize, --cycle-methods,
-/// and the render settings; window size from the scene's image size (--size).
-EditWindowOptions editWindowOptions(const cli::Args& args, const cli::SceneJob& job);
+/// --render-scale, --orbit, --resize, --cycle-methods, --refine, and the render settings;
+/// `width` x `height` is the window's size (the scene's image size or --size).
+EditWindowOptions editWindowOptions(const cli::Args& args, int width, int height,
+                                    const std::string& sceneName);
+
+/// What closing the window does (the window's close button, or the modal it opens).
+enum class QuitAnswer { None, Save, Discard, Cancel };
+struct QuitStep {
+    bool close = false; ///< close the window now
+    bool save = false;  ///< save first (close only when saving succeeded)
+    bool ask = false;   ///< keep the window open and show the Save / Discard / Cancel modal
+};
+/// `closeRequested`: the user asked to close the window this frame; `answer`: the modal's
+/// button pressed this frame (None when none was). Unsaved changes are never lost silently.
+QuitStep quitStep(bool dirty, bool closeRequested, QuitAnswer answer);
 
 } // namespace spot::editor

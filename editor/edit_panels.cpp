@@ -1,0 +1,322 @@
+#include "edit_panels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include <imgui.h>
+#include <nlohmann/json.hpp>
+
+#include "edit_session.h"
+#include "noise/error.h"
+#include "noise/image.h"
+
+namespace spot::editor {
+
+namespace {
+
+/// A widget over `values` whose edits are held in the panel while it is active; returns true on
+/// the frame it is released after an edit, with `values` then holding what to commit.
+template <typename Widget>
+bool heldEdit(SessionPanels& st, const std::string& label, std::vector<float>& values,
+              Widget widget) {
+    if (const auto it = st.held.find(label); it != st.held.end())
+        values = it->second;
+    widget(label.c_str(), values.data());
+    const bool commit = ImGui::IsItemDeactivatedAfterEdit();
+    if (ImGui::IsItemActive())
+        st.held[label] = values;
+    else
+        st.held.erase(label);
+    return commit;
+}
+
+std::vector<float> floats(const nlohmann::json& j, std::vector<float> fallback) {
+    if (j.is_number())
+        return {j.get<float>()};
+    if (j.is_array() && j.size() == fallback.size())
+        for (std::size_t i = 0; i < fallback.size(); ++i)
+            fallback[i] = j[i].get<float>();
+    return fallback;
+}
+
+nlohmann::json toJson(const std::vector<float>& v) {
+    if (v.size() == 1)
+        return double(v[0]);
+    nlohmann::json a = nlohmann::json::array();
+    for (float x : v)
+        a.push_back(double(x));
+    return a;
+}
+
+/// Run a session edit; an InputError goes to the File panel's message.
+template <typename F> bool attempt(SessionPanels& st, F edit) {
+    try {
+        edit();
+        return true;
+    } catch (const InputError& e) {
+        st.message = e.what();
+        st.messageIsError = true;
+        return false;
+    }
+}
+
+void brushPanel(edit::Session& session) {
+    edit::BrushSettings& b = session.brush();
+    ImGui::SetNextWindowPos(ImVec2(8, 40), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
+    ImGui::Begin("Brush", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+    ImGui::PushItemWidth(150);
+    int kind = int(b.kind);
+    if (ImGui::BeginCombo("kind", edit::brushKindName(b.kind))) {
+        for (int k = 0; k <= int(edit::BrushKind::Smooth); ++k)
+            if (ImGui::Selectable(cat(k + 1, "  ", edit::brushKindName(edit::BrushKind(k))).c_str(),
+                                  k == kind))
+                b.kind = edit::BrushKind(k);
+        ImGui::EndCombo();
+    }
+    ImGui::SliderFloat("radius px", &b.radiusPx, 2.0f, 200.0f, "%.0f");
+    ImGui::SliderFloat("strength", &b.strength, -1.0f, 1.0f, "%.2f");
+    int falloff = int(b.falloff);
+    if (ImGui::Combo("falloff", &falloff, "smooth\0linear\0constant\0"))
+        b.falloff = edit::Falloff(falloff);
+    ImGui::Checkbox("front faces only", &b.frontFacesOnly);
+    ImGui::Checkbox("X mirror", &b.mirrorX);
+    ImGui::ColorEdit3("colour", &b.color.x, ImGuiColorEditFlags_Float);
+    int target = int(b.smoothTarget);
+    if (ImGui::Combo("smooth target", &target, "density\0comb\0tilt\0length\0color\0"))
+        b.smoothTarget = edit::Slot(target);
+    ImGui::PopItemWidth();
+    ImGui::TextDisabled("paint: left drag (shift/ctrl: erase, shrink)\n1-7 kind, [ ] radius,\n"
+                        "shift+[ ] strength, x mirror\nctrl+z undo, ctrl+shift+z / ctrl+y redo");
+    ImGui::End();
+}
+
+/// The lobes seen from the side (x right, the strand's z up): each an ellipse of 2 sigma around
+/// its offset, in its colour (brightened to be seen). A schematic, not a render: rotations and
+/// extinction are not drawn.
+void kernelSchematic(const nlohmann::json& lobes) {
+    const ImVec2 size(180, 180);
+    const ImVec2 origin = ImGui::GetCursorScreenPos();
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    draw->AddRectFilled(origin, ImVec2(origin.x + size.x, origin.y + size.y),
+                        IM_COL32(10, 10, 14, 255));
+    float extent = 1e-3f;
+    for (const nlohmann::json& lobe : lobes) {
+        const auto o = floats(lobe.value("offset", nlohmann::json()), {0, 0, 0});
+        const auto s = floats(lobe.value("sigma", nlohmann::json()), {1, 1, 1});
+        extent = std::max({extent, std::abs(o[0]) + 2 * s[0], std::abs(o[2]) + 2 * s[2]});
+    }
+    const float scale = 0.45f * size.x / extent;
+    const ImVec2 centre(origin.x + 0.5f * size.x, origin.y + 0.5f * size.y);
+    draw->AddLine(ImVec2(origin.x, centre.y), ImVec2(origin.x + size.x, centre.y),
+                  IM_COL32(60, 60, 70, 255));
+    for (const nlohmann::json& lobe : lobes) {
+        const auto o = floats(lobe.value("offset", nlohmann::json()), {0, 0, 0});
+        const auto s = floats(lobe.value("sigma", nlohmann::json()), {1, 1, 1});
+        const auto c = floats(lobe.value("color", nlohmann::json()), {1, 1, 1});
+        const float peak = std::max({c[0], c[1], c[2], 1e-3f});
+        ImVec2 points[32];
+        for (int i = 0; i < 32; ++i) {
+            const float a = 6.2831853f * float(i) / 32.0f;
+            points[i] = ImVec2(centre.x + scale * (o[0] + 2 * s[0] * std::cos(a)),
+                               centre.y - scale * (o[2] + 2 * s[2] * std::sin(a)));
+        }
+        const ImU32 colour =
+            ImGui::ColorConvertFloat4ToU32(ImVec4(c[0] / peak, c[1] / peak, c[2] / peak, 0.55f));
+        draw->AddConvexPolyFilled(points, 32, colour);
+    }
+    ImGui::Dummy(size);
+}
+
+bool kernelPanel(edit::Session& session, SessionPanels& st) {
+    bool changed = false;
+    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 8),
+                            ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(320, 0), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
+    ImGui::Begin("Kernel");
+    const nlohmann::json lobes = session.get("kernel.lobes");
+    kernelSchematic(lobes);
+    ImGui::TextDisabled("side view: 2 sigma around each offset");
+    const int count = int(lobes.size());
+    ImGui::PushItemWidth(190);
+    for (int i = 0; i < count; ++i) {
+        const nlohmann::json& lobe = lobes[std::size_t(i)];
+        ImGui::PushID(i);
+        if (ImGui::TreeNodeEx(cat("lobe ", i).c_str(),
+                              i == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+            struct Property {
+                const char* key;
+                std::vector<float> fallback;
+                float speed, lo, hi;
+            };
+            const Property properties[] = {{"offset", {0, 0, 0}, 0.01f, -10.0f, 10.0f},
+                                           {"rotation_deg", {0, 0, 0}, 0.5f, -360.0f, 360.0f},
+                                           {"sigma", {0.1f, 0.1f, 0.1f}, 0.002f, 1e-3f, 10.0f},
+                                           {"extinction", {100.0f}, 5.0f, 0.0f, 1e5f}};
+            for (const Property& p : properties) {
+                std::vector<float> v = floats(lobe.value(p.key, nlohmann::json()), p.fallback);
+                const bool commit =
+                    heldEdit(st, cat(p.key, "##", i), v, [&](const char* l, float* d) {
+                        if (v.size() == 3)
+                            ImGui::DragFloat3(l, d, p.speed, p.lo, p.hi, "%.3f");
+                        else
+                            ImGui::DragFloat(l, d, p.speed, p.lo, p.hi, "%.1f");
+                    });
+                ImGui::SameLine();
+                ImGui::TextUnformatted(p.key);
+                if (commit)
+                    changed |= attempt(st, [&] { session.setLobe(i, p.key, toJson(v)); });
+            }
+            std::vector<float> c = floats(lobe.value("color", nlohmann::json()), {1, 1, 1});
+            if (heldEdit(st, cat("colour##", i), c, [&](const char* l, float* d) {
+                    ImGui::ColorEdit3(l, d,
+                                      ImGuiColorEditFlags_Float | ImGuiColorEditFlags_NoPicker);
+                }))
+                changed |= attempt(st, [&] { session.setLobe(i, "color", toJson(c)); });
+            if (count < noise::kMaxLobes && ImGui::Button("duplicate"))
+                changed |= attempt(st, [&] { session.addLobe(i); });
+            if (count > 1) {
+                ImGui::SameLine();
+                if (ImGui::Button("remove"))
+                    changed |= attempt(st, [&] { session.removeLobe(i); });
+            }
+            ImGui::TreePop();
+        }
+        ImGui::PopID();
+        if (changed) // the lobes changed under the loop
+            break;
+    }
+    ImGui::PopItemWidth();
+    ImGui::End();
+    return changed;
+}
+
+bool distributionPanel(edit::Session& session, SessionPanels& st) {
+    bool changed = false;
+    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 40),
+                            ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
+    ImGui::Begin("Distribution", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+    ImGui::PushItemWidth(150);
+    const nlohmann::json d = session.get("distribution");
+    int type = d.value("type", std::string("poisson")) == "jittered" ? 1 : 0;
+    if (ImGui::Combo("type", &type, "poisson\0jittered\0"))
+        changed |= attempt(
+            st, [&] { session.set("distribution.type", type == 1 ? "jittered" : "poisson"); });
+    struct Slider {
+        std::string key;
+        float fallback, lo, hi;
+        const char* format;
+    };
+    std::vector<Slider> sliders = {{"distribution.density_max", 1000.0f, 10.0f, 50000.0f, "%.0f"}};
+    if (type == 1)
+        sliders.push_back({"distribution.jitter", 1.0f, 0.0f, 1.0f, "%.2f"});
+    for (const char* key : {"tilt_deg", "spin_deg", "bend_deg"})
+        sliders.push_back({cat("variation.", key), 0.0f, 0.0f, 180.0f, "%.1f"});
+    for (const char* key : {"scale", "color"})
+        sliders.push_back({cat("variation.", key), 0.0f, 0.0f, 1.0f, "%.2f"});
+    for (const Slider& s : sliders) {
+        const nlohmann::json now = session.get(s.key);
+        std::vector<float> v = {now.is_number() ? now.get<float>() : s.fallback};
+        const std::string label = s.key.substr(s.key.find('.') + 1);
+        if (heldEdit(st, label, v, [&](const char* l, float* x) {
+                ImGui::SliderFloat(l, x, s.lo, s.hi, s.format);
+            }))
+            changed |= attempt(st, [&] { session.set(s.key, double(v[0])); });
+    }
+    int seed = int(session.seed());
+    ImGui::InputInt("seed", &seed);
+    if (ImGui::IsItemDeactivatedAfterEdit() && seed >= 0)
+        changed |= attempt(st, [&] { session.setSeed(std::uint32_t(seed)); });
+    ImGui::PopItemWidth();
+    ImGui::End();
+    return changed;
+}
+
+bool windPanel(edit::Session& session, SessionPanels& st) {
+    bool changed = false;
+    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 72),
+                            ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
+    ImGui::Begin("Wind", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+    ImGui::PushItemWidth(150);
+    bool on = session.wind();
+    bool edited = ImGui::Checkbox("wind (animates)", &on);
+    edited |= ImGui::SliderFloat("amplitude deg", &st.windAmplitudeDeg, 0.0f, 80.0f, "%.0f");
+    edited |= ImGui::SliderFloat("frequency Hz", &st.windFrequencyHz, 0.05f, 4.0f, "%.2f");
+    if (edited) {
+        session.setWind(on, st.windAmplitudeDeg, st.windFrequencyHz);
+        changed = true;
+    }
+    ImGui::Text("time %.2f s", session.time());
+    ImGui::PopItemWidth();
+    ImGui::End();
+    return changed;
+}
+
+bool filePanel(edit::Session& session, SessionPanels& st) {
+    bool changed = false;
+    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 104),
+                            ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
+    ImGui::Begin("File", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+    ImGui::Text("%s", session.dirty() ? "* unsaved changes" : "saved (no changes)");
+    char save[512], image[512];
+    std::snprintf(save, sizeof save, "%s", st.savePath.c_str());
+    std::snprintf(image, sizeof image, "%s", st.exportPath.c_str());
+    ImGui::PushItemWidth(220);
+    if (ImGui::InputText("##save", save, sizeof save))
+        st.savePath = save;
+    ImGui::SameLine();
+    if (ImGui::Button("Save as"))
+        saveSession(session, st);
+    if (ImGui::InputText("##export", image, sizeof image))
+        st.exportPath = image;
+    ImGui::PopItemWidth();
+    ImGui::SameLine();
+    if (ImGui::Button("Export"))
+        attempt(st, [&] {
+            session.exportImage(st.exportPath);
+            st.message = "wrote " + st.exportPath;
+            st.messageIsError = false;
+        });
+    ImGui::BeginDisabled(!session.canUndo());
+    if (ImGui::Button(cat("Undo (", session.undoSteps(), ")").c_str()))
+        changed |= session.undo();
+    ImGui::EndDisabled();
+    ImGui::SameLine();
+    ImGui::BeginDisabled(!session.canRedo());
+    if (ImGui::Button(cat("Redo (", session.redoSteps(), ")").c_str()))
+        changed |= session.redo();
+    ImGui::EndDisabled();
+    if (!st.message.empty())
+        ImGui::TextColored(st.messageIsError ? ImVec4(1.0f, 0.3f, 0.2f, 1.0f)
+                                             : ImVec4(0.6f, 0.9f, 0.6f, 1.0f),
+                           "%s", st.message.c_str());
+    ImGui::End();
+    return changed;
+}
+
+} // namespace
+
+bool saveSession(edit::Session& session, SessionPanels& st) {
+    return attempt(st, [&] {
+        session.save(st.savePath);
+        st.message = "wrote " + st.savePath;
+        st.messageIsError = false;
+    });
+}
+
+bool sessionPanels(edit::Session& session, SessionPanels& state) {
+    brushPanel(session);
+    bool changed = kernelPanel(session, state);
+    changed |= distributionPanel(session, state);
+    changed |= windPanel(session, state);
+    changed |= filePanel(session, state);
+    return changed;
+}
+
+} // namespace spot::editor
