@@ -916,22 +916,6 @@ QuitAnswer quitModal(InputState& input, const SessionPanels& panels) {
 
 } // namespace
 
-QuitStep quitStep(bool dirty, bool closeRequested, QuitAnswer answer) {
-    switch (answer) {
-    case QuitAnswer::Save:
-        return {true, true, false};
-    case QuitAnswer::Discard:
-        return {true, false, false};
-    case QuitAnswer::Cancel:
-        return {};
-    case QuitAnswer::None:
-        break;
-    }
-    if (!closeRequested)
-        return {};
-    return dirty ? QuitStep{false, false, true} : QuitStep{true, false, false};
-}
-
 EditWindowReport runEditWindow(const SessionFactory& makeSession,
                                const EditWindowOptions& options) {
     const auto& methods = splat::gpuMethods();
@@ -1134,7 +1118,11 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         if (refineNow) {
             // One more jittered frame of the most accurate method into the running average.
             const auto refineStart = Clock::now();
-            session.setMethod("sorted", panel.settings);
+            // Without EWA: the average of the jittered point-sampled frames is the box-filtered
+            // image; EWA's widened kernels would blur it twice.
+            splat::RenderSettings refineSettings = panel.settings;
+            refineSettings.ewa = false;
+            session.setMethod("sorted", refineSettings);
             const glm::dvec2 jitter = haltonJitter(refine.count);
             session.setCamera(jitteredCamera(view.camera(fullW, fullH), jitter.x, jitter.y));
             noise::Image image;

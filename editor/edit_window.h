@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "edit_quit.h"
 #include "edit_script.h"
 #include "noise/camera.h"
 #include "splat/context_vk.h"
@@ -109,16 +110,5 @@ std::vector<cli::OptionSpec> editWindowOptions();
 /// `width` x `height` is the window's size (the scene's image size or --size).
 EditWindowOptions editWindowOptions(const cli::Args& args, int width, int height,
                                     const std::string& sceneName);
-
-/// What closing the window does (the window's close button, or the modal it opens).
-enum class QuitAnswer { None, Save, Discard, Cancel };
-struct QuitStep {
-    bool close = false; ///< close the window now
-    bool save = false;  ///< save first (close only when saving succeeded)
-    bool ask = false;   ///< keep the window open and show the Save / Discard / Cancel modal
-};
-/// `closeRequested`: the user asked to close the window this frame; `answer`: the modal's
-/// button pressed this frame (None when none was). Unsaved changes are never lost silently.
-QuitStep quitStep(bool dirty, bool closeRequested, QuitAnswer answer);
 
 } // namespace spot::editor

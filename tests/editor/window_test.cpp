@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include "edit_quit.h"
 #include "edit_view.h"
 #include "noise/camera.h"
 #include "noise/image.h"
@@ -191,6 +192,179 @@ TEST(EditWindow, UnknownMethodIsAnInputError) {
     const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --method nope");
     EXPECT_EQ(e.code, 2) << e.err;
     EXPECT_NE(e.err.find("instanced"), std::string::npos) << e.err;
+}
+
+// --- the window on the session --------------------------------------------------------------
+
+spot::noise::Camera startCameraForJitter() {
+    spot::noise::Camera c;
+    c.eye = glm::dvec3(0.0, 0.0, 4.0);
+    c.target = glm::dvec3(0.0);
+    c.fovYDeg = 30.0;
+    c.width = 200;
+    c.height = 100;
+    return c;
+}
+
+std::string writeScript(const std::string& name, const std::string& text) {
+    const std::string file = tmp(name);
+    std::ofstream(file) << text;
+    return file;
+}
+
+/// `edit` with a script in the window (validation on), its scene screenshot read back.
+spot::noise::Image editInWindow(const std::string& script, const std::string& extra,
+                                std::string* out = nullptr) {
+    static int counter = 0;
+    const std::string shot = tmp("scripted-" + std::to_string(counter++) + ".exr");
+    const Result e = run(kXvfb, "edit --scene " + scene() + " --size 200x160 --script " + script +
+                                    " --window --frames 2 --screenshot " + shot + " " + extra);
+    EXPECT_EQ(e.code, 0) << e.err;
+    EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
+    EXPECT_NE(e.out.find("validation on: no errors"), std::string::npos) << e.out;
+    if (out)
+        *out = e.out;
+    return spot::noise::readImage(shot);
+}
+
+const char* kPaint = "method hybrid\n"
+                     "brush density-erase radius 25 strength 1 falloff constant\n"
+                     "stroke 70,80 100,84 130,88\n"
+                     "brush color radius 30 color 0.1 0.6 0.9\n"
+                     "stroke 80,110 120,112\n"
+                     "lobe 0 extinction 900\n";
+
+// The script replayed in the window (its strokes as pointer events, one per frame, at the
+// reduced resolution while painting) ends on the same image as the script without a window.
+TEST(EditWindowSession, ScriptInTheWindowMatchesHeadless) {
+    const std::string script = writeScript("same.script", kPaint);
+    std::string out;
+    const spot::noise::Image window = editInWindow(script, "", &out);
+    EXPECT_NE(out.find("stroke to frame: median"), std::string::npos) << out;
+    const std::string shot = tmp("headless.exr");
+    const Result h =
+        run("SPOT_VALIDATION=1", "edit --scene " + scene() + " --size 200x160 --script " + script +
+                                     " --screenshot " + shot);
+    ASSERT_EQ(h.code, 0) << h.err;
+    const spot::noise::Image headless = spot::noise::readImage(shot);
+    ASSERT_EQ(window.width, headless.width);
+    EXPECT_GT(spot::splat::psnr(headless, window), 60.0);
+}
+
+// A stroke in the window changes the image where it paints (and only near there); undo in the
+// window restores the image before it.
+TEST(EditWindowSession, StrokeChangesTheImageAndUndoRestoresIt) {
+    const std::string before = writeScript("before.script", "method hybrid\n");
+    const std::string stroke =
+        writeScript("stroke.script", "method hybrid\n"
+                                     "brush density-erase radius 20 strength 1 falloff "
+                                     "constant\nstroke 80,80 120,80\n");
+    const std::string undone =
+        writeScript("undone.script", "method hybrid\n"
+                                     "brush density-erase radius 20 strength 1 falloff "
+                                     "constant\nstroke 80,80 120,80\nundo\n");
+    const spot::noise::Image a = editInWindow(before, "");
+    const spot::noise::Image b = editInWindow(stroke, "");
+    const spot::noise::Image c = editInWindow(undone, "");
+    ASSERT_EQ(a.width, 200);
+    ASSERT_EQ(b.width, 200);
+    // Pixels that changed: inside the band the stroke covered (fur reaches a little beyond the
+    // brush, hence the margin), none far from it.
+    std::size_t near = 0, far = 0;
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            const std::size_t i = std::size_t(y) * std::size_t(a.width) + std::size_t(x);
+            if (glm::length(a.pixels[i] - b.pixels[i]) < 1e-3f)
+                continue;
+            const double dx = std::max({0.0, 80.0 - x, x - 120.0}), dy = y - 80.0;
+            (std::hypot(dx, dy) < 20.0 + 25.0 ? near : far) += 1;
+        }
+    EXPECT_GT(near, 200u) << "the stroke changed too little where it painted";
+    EXPECT_LT(double(far), 0.05 * double(near)) << "the stroke changed pixels far from it";
+    EXPECT_GT(spot::splat::psnr(a, c), 60.0) << "undo did not restore the image";
+}
+
+// Idle refinement: the average of 16 jittered `sorted` frames is closer to a supersampled `sorted`
+// render (4x4 point-sampled pixels per pixel, EWA off, box-filtered: the image the refinement
+// converges to) than the interactive frame it starts from (EWA on).
+TEST(EditWindowSession, IdleRefinementConverges) {
+    const std::string first = tmp("refine-first.exr"), refined = tmp("refine-16.exr"),
+                      big = tmp("refine-reference.exr");
+    const std::string common =
+        "edit --scene " + scene() + " --size 160x120 --method sorted --lod 0";
+    // The interactive frame as it is shown, with EWA filtering.
+    const Result a = run(kXvfb, common + " --frames 1 --screenshot " + first);
+    ASSERT_EQ(a.code, 0) << a.err;
+    const Result b = run(kXvfb, common + " --frames 17 --refine 16 --screenshot " + refined);
+    ASSERT_EQ(b.code, 0) << b.err;
+    EXPECT_NE(b.out.find("idle refinement: 16 steps"), std::string::npos) << b.out;
+    EXPECT_EQ(b.err.find("validation error"), std::string::npos) << b.err;
+    const Result r = run("", "render --scene " + scene() +
+                                 " --size 640x480 --method sorted --lod 0 --ewa off --out " + big);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const spot::noise::Image large = spot::noise::readImage(big);
+    spot::noise::Image reference(160, 120);
+    for (int y = 0; y < 120; ++y)
+        for (int x = 0; x < 160; ++x) {
+            glm::vec3 sum(0.0f);
+            for (int j = 0; j < 4; ++j)
+                for (int i = 0; i < 4; ++i)
+                    sum += large.pixels[std::size_t(4 * y + j) * 640 + std::size_t(4 * x + i)];
+            reference.pixels[std::size_t(y) * 160 + std::size_t(x)] = sum / 16.0f;
+        }
+    const double before = spot::splat::psnr(reference, spot::noise::readImage(first));
+    const double after = spot::splat::psnr(reference, spot::noise::readImage(refined));
+    std::printf("PSNR against the 4x4-supersampled render: first frame %.2f dB, after 16 "
+                "refinement steps %.2f dB\n",
+                before, after);
+    EXPECT_GT(after, before + 1.0) << "PSNR against the supersampled render: first frame " << before
+                                   << " dB, refined " << after << " dB";
+}
+
+TEST(EditWindowSession, BadScriptLineInTheWindowIsAnInputError) {
+    const std::string script = writeScript("bad.script", "method hybrid\nbrush comb radius -3\n");
+    const Result e =
+        run(kXvfb, "edit --scene " + scene() + " --script " + script + " --window --frames 2");
+    EXPECT_EQ(e.code, 2) << e.err;
+    EXPECT_NE(e.err.find("bad.script:2:"), std::string::npos) << e.err;
+}
+
+TEST(EditWindowSession, ClosingWithUnsavedChangesAsksFirst) {
+    using spot::editor::QuitAnswer;
+    using spot::editor::quitStep;
+    // Nothing asked, nothing answered: the window stays.
+    EXPECT_FALSE(quitStep(true, false, QuitAnswer::None).close);
+    // Saved: closes at once.
+    EXPECT_TRUE(quitStep(false, true, QuitAnswer::None).close);
+    // Unsaved: stays open and asks.
+    const auto ask = quitStep(true, true, QuitAnswer::None);
+    EXPECT_FALSE(ask.close);
+    EXPECT_TRUE(ask.ask);
+    // The answers: save then close, close without saving, stay.
+    const auto save = quitStep(true, false, QuitAnswer::Save);
+    EXPECT_TRUE(save.close && save.save);
+    const auto discard = quitStep(true, false, QuitAnswer::Discard);
+    EXPECT_TRUE(discard.close && !discard.save);
+    const auto cancel = quitStep(true, false, QuitAnswer::Cancel);
+    EXPECT_FALSE(cancel.close || cancel.save || cancel.ask);
+}
+
+TEST(OrbitNavigation, JitterShiftsTheImageCentreBySubPixels) {
+    spot::noise::Camera c = startCameraForJitter();
+    const spot::noise::Camera j = spot::editor::jitteredCamera(c, 0.25, -0.5);
+    // The world point that was at the image centre is now 0.25 pixels right and 0.5 up.
+    const spot::noise::Ray ray = spot::noise::CameraRays(c).ray(100.0, 50.0);
+    const glm::dvec3 p = ray.origin + 4.0 * ray.dir;
+    const spot::noise::Ray moved = spot::noise::CameraRays(j).ray(100.25, 49.5);
+    const glm::dvec3 q = moved.origin + glm::dot(p - moved.origin, moved.dir) * moved.dir;
+    EXPECT_NEAR(glm::length(p - q), 0.0, 1e-6);
+    for (int i = 0; i < 64; ++i) {
+        const glm::dvec2 h = spot::editor::haltonJitter(i);
+        EXPECT_GE(h.x, -0.5);
+        EXPECT_LT(h.x, 0.5);
+        EXPECT_GE(h.y, -0.5);
+        EXPECT_LT(h.y, 0.5);
+    }
 }
 
 // --- the context's presentation options ---------------------------------------------------
