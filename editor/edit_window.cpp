@@ -438,7 +438,8 @@ struct InputState {
     /// A brush event (window pixels): the session begins, continues or ends the stroke.
     void brush(edit::Session::PointerPhase phase, const noise::Camera& camera, double x, double y,
                bool invert) {
-        if (!pendingBrush)
+        // A release paints nothing: the frame after it is the full-resolution one.
+        if (!pendingBrush && phase != edit::Session::PointerPhase::Release)
             pendingBrush = Clock::now();
         try {
             session->pointer(phase, glm::vec2(float(x), float(y)), camera, invert);
@@ -567,6 +568,8 @@ void onFramebufferSize(GLFWwindow* window, int, int) {
 
 /// Render at 1/kScales[i] of the window's size (the blit scales up).
 constexpr int kScales[] = {1, 2, 4};
+/// Frames slower than this while moving or painting lower the resolution (10 fps).
+constexpr double kInteractiveMs = 100.0;
 constexpr const char* kScaleNames = "full resolution\0half resolution\0quarter resolution\0";
 
 /// What the panels edit.
@@ -972,6 +975,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     std::optional<noise::Image> screenshot, windowImage;
     WindowGrab windowGrab;
     Refinement refine;
+    int movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
+    int navigationScaleChosen = panel.navigationScale;
     edit::ScriptReport scriptReport;
     std::size_t scriptNext = 0, strokePoint = 0; ///< the next action; a stroke's next point
     auto scriptDone = [&] { return scriptNext >= options.script.size(); };
@@ -1022,7 +1027,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
                                     : strokePoint < a.points.size() ? Phase::Drag
                                                                     : Phase::Release;
                 try {
-                    if (!input.pendingBrush)
+                    if (!input.pendingBrush && phase != Phase::Release)
                         input.pendingBrush = Clock::now();
                     session.pointer(phase, a.points[i], input.windowCamera(window.handle));
                 } catch (const InputError& e) {
@@ -1071,7 +1076,12 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
+        const int methodShown = panel.method;
         input.sceneDirty |= methodPanel(panel);
+        if (panel.navigationScale != navigationScaleChosen || panel.method != methodShown) {
+            navigationScaleChosen = panel.navigationScale;
+            movingScale = 0;
+        }
         if (!input.error.empty()) {
             panels.message = input.error;
             panels.messageIsError = true;
@@ -1088,7 +1098,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
                     ? cat("refining ", refine.count, "/", panel.refineFrames, " (sorted, jittered)")
                     : cat("refined ", refine.count, "/", panel.refineFrames, " (sorted, jittered)");
         statsPanel(stats, renderW, renderH, fullW, fullH, lastFrameMs, lastPresentMs,
-                   lowRes && panel.navigationScale > panel.scale, swapchain.srgb, refining);
+                   lowRes && std::max(panel.navigationScale, movingScale) > panel.scale,
+                   swapchain.srgb, refining);
         // The brush under the pointer (or the script's pointer).
         const ImVec2 mouse = ImGui::GetIO().MousePos;
         const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid();
@@ -1137,7 +1148,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
             renderedWith = "refine";
         } else if (change || (panel.continuous && refine.count == 0)) {
             const int scale =
-                kScales[lowRes ? std::max(panel.scale, panel.navigationScale) : panel.scale];
+                kScales[lowRes ? std::max({panel.scale, panel.navigationScale, movingScale})
+                               : panel.scale];
             renderW = std::max(1, fullW / scale);
             renderH = std::max(1, fullH / scale);
             noise::Image image;
@@ -1195,6 +1207,11 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         }
         if (rendered && stroking && warm)
             strokeFrameMs.push_back(lastFrameMs);
+        // Moving or painting below 10 frames a second: a lower resolution for the rest of the
+        // session (quarter at most); the Render panel's choice resets it.
+        if (rendered && lowRes && warm && lastFrameMs > kInteractiveMs &&
+            movingScale < int(std::size(kScales)) - 1)
+            movingScale = std::max(movingScale, panel.navigationScale) + 1;
         if (warm && report.frames > 0) {
             presentMs.push_back(lastPresentMs);
             frameMs.push_back(lastFrameMs);
