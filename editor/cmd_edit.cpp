@@ -130,8 +130,8 @@ int edit(int argc, char** argv) {
             std::vector<double> s = r.strokeToFrameMs;
             std::sort(s.begin(), s.end());
             std::printf("edit: stroke to frame: median %.1f ms, max %.1f ms over %zu events; "
-                        "frames while painting: median %.1f ms\n",
-                        s[s.size() / 2], s.back(), s.size(), r.strokeFrameMs);
+                        "frames while painting: median %.1f ms (at 1/%d size)\n",
+                        s[s.size() / 2], s.back(), s.size(), r.strokeFrameMs, r.lowScale);
         }
         if (r.refined > 0)
             std::printf("edit: idle refinement: %d steps, %.1f ms each (median)\n", r.refined,
@@ -148,7 +148,8 @@ int edit(int argc, char** argv) {
                                              {"refined", r.refined},
                                              {"refine_ms", r.refineMs},
                                              {"stroke_to_frame_ms", r.strokeToFrameMs},
-                                             {"stroke_frame_ms", r.strokeFrameMs}});
+                                             {"stroke_frame_ms", r.strokeFrameMs},
+                                             {"low_scale", r.lowScale}});
         return 0;
     }
 

@@ -102,7 +102,7 @@ public:
     EditCost dragStroke(glm::vec2 pixel);
     EditCost endStroke();
     bool stroking() const { return m_stroke != nullptr; }
-    /// One pointer event of the window (its onBrush hook): takes the event's view as the camera,
+    /// One pointer event of the window (its left button): takes the event's view as the camera,
     /// then begins, continues or ends the stroke. `invert` (a modifier held at the press) inverts
     /// the brush for the whole stroke: density-add erases and density-erase adds, length
     /// shrinks, tilt lifts; comb, colour and smooth are unchanged.

@@ -976,6 +976,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     WindowGrab windowGrab;
     Refinement refine;
     int movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
+    std::vector<double> recentLowMs; ///< the last moving or painting frames' times
     int navigationScaleChosen = panel.navigationScale;
     edit::ScriptReport scriptReport;
     std::size_t scriptNext = 0, strokePoint = 0; ///< the next action; a stroke's next point
@@ -1207,11 +1208,18 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         }
         if (rendered && stroking && warm)
             strokeFrameMs.push_back(lastFrameMs);
-        // Moving or painting below 10 frames a second: a lower resolution for the rest of the
-        // session (quarter at most); the Render panel's choice resets it.
-        if (rendered && lowRes && warm && lastFrameMs > kInteractiveMs &&
-            movingScale < int(std::size(kScales)) - 1)
-            movingScale = std::max(movingScale, panel.navigationScale) + 1;
+        // Moving or painting below 10 frames a second (the median of five such frames: not a
+        // one-off rebuild): a lower resolution for the rest of the session (a quarter at most);
+        // the Render panel's choice resets it.
+        if (rendered && lowRes && warm) {
+            recentLowMs.push_back(lastFrameMs);
+            if (recentLowMs.size() == 5) {
+                if (median(recentLowMs) > kInteractiveMs &&
+                    movingScale < int(std::size(kScales)) - 1)
+                    movingScale = std::max(movingScale, panel.navigationScale) + 1;
+                recentLowMs.clear();
+            }
+        }
         if (warm && report.frames > 0) {
             presentMs.push_back(lastPresentMs);
             frameMs.push_back(lastFrameMs);
@@ -1253,6 +1261,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     report.refineMs = median(refineMs);
     report.strokeFrameMs = median(strokeFrameMs);
     report.strokeFrames = int(strokeFrameMs.size());
+    report.lowScale = kScales[std::max(panel.navigationScale, movingScale)];
     return report;
 }
 

@@ -42,11 +42,12 @@ struct EditWindowOptions {
     int width = 1280, height = 720;
     std::string method = "instanced"; ///< a name of splat::gpuMethods()
     splat::RenderSettings settings;
-    /// Render this many frames, then close (0: until the window is closed). Every one of these
-    /// frames renders the scene (no redraw-on-demand), so they time the whole frame.
+    /// Render this many frames (after the script, if any), then close (0: until the window is
+    /// closed). Every one of these frames renders the scene (no redraw-on-demand), so they time
+    /// the whole frame, unless the idle refinement runs (refineFrames > 0).
     int frames = 0;
     /// Write the last rendered scene image here when the window closes (.png or .exr; the scene
-    /// only, without the ImGui overlay), atomically.
+    /// only, without the ImGui overlay; the refinement's average when it ran), atomically.
     std::filesystem::path screenshot;
     /// With `frames`: write the last frame as presented (scene and panels), read back from the
     /// swapchain image.
@@ -89,6 +90,9 @@ struct EditWindowReport {
     std::vector<double> strokeToFrameMs;
     double strokeFrameMs = 0.0; ///< median whole frame while a stroke is in progress
     int strokeFrames = 0;
+    /// Moving and painting rendered at 1/lowScale of the window's size at the end (lowered
+    /// from the Render panel's choice when those frames were slower than 10 fps).
+    int lowScale = 2;
     bool validation = false;              ///< the validation layer was on (SPOT_VALIDATION=1)
     std::uint32_t validationWarnings = 0; ///< its warnings (errors throw)
 };
