@@ -977,6 +977,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     Refinement refine;
     int movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
     std::vector<double> recentLowMs; ///< the last moving or painting frames' times
+    int slowWindows = 0;             ///< ... groups of five in a row with a slow median
     int navigationScaleChosen = panel.navigationScale;
     edit::ScriptReport scriptReport;
     std::size_t scriptNext = 0, strokePoint = 0; ///< the next action; a stroke's next point
@@ -1208,15 +1209,17 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         }
         if (rendered && stroking && warm)
             strokeFrameMs.push_back(lastFrameMs);
-        // Moving or painting below 10 frames a second (the median of five such frames: not a
-        // one-off rebuild): a lower resolution for the rest of the session (a quarter at most);
-        // the Render panel's choice resets it.
+        // Moving or painting below 10 frames a second (the median of five such frames, twice
+        // in a row: not the rebuild after a parameter edit): a lower resolution for the rest of the
+        // session (a quarter at most); the Render panel's choice resets it.
         if (rendered && lowRes && warm) {
             recentLowMs.push_back(lastFrameMs);
             if (recentLowMs.size() == 5) {
-                if (median(recentLowMs) > kInteractiveMs &&
-                    movingScale < int(std::size(kScales)) - 1)
+                slowWindows = median(recentLowMs) > kInteractiveMs ? slowWindows + 1 : 0;
+                if (slowWindows == 2 && movingScale < int(std::size(kScales)) - 1) {
                     movingScale = std::max(movingScale, panel.navigationScale) + 1;
+                    slowWindows = 0;
+                }
                 recentLowMs.clear();
             }
         }
