@@ -658,7 +658,9 @@ void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windo
     const ImGuiIO& io = ImGui::GetIO();
     ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8, io.DisplaySize.y - 8), ImGuiCond_Always,
                             ImVec2(1, 1));
-    ImGui::SetNextWindowCollapsed(io.DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
+    // The status line below says what matters; the details start folded in a small window.
+    ImGui::SetNextWindowCollapsed(io.DisplaySize.x < 640.0f || io.DisplaySize.y < 700.0f,
+                                  ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowBgAlpha(0.6f);
     ImGui::Begin("Stats", nullptr,
                  ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoMove |
@@ -684,6 +686,27 @@ void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windo
     if (!srgb)
         ImGui::TextColored(ImVec4(1, 0.5f, 0.2f, 1), "no sRGB swapchain: shown linear (dark)");
     ImGui::End();
+}
+
+/// One line at the bottom left, always shown: the method, the render size and whether it is
+/// scaled up (moving or painting), the frame rate, the refinement's progress.
+void statusLine(const splat::FrameStats& st, int renderW, int renderH, int windowW, int windowH,
+                double frameMs, bool lowRes, const std::string& refining) {
+    std::string text = cat(st.method, " ", renderW, "x", renderH);
+    if (renderW != windowW || renderH != windowH)
+        text += lowRes ? " scaled up while moving or painting" : " scaled up";
+    char rate[48];
+    std::snprintf(rate, sizeof rate, "  %.0f ms (%.1f fps)", frameMs,
+                  frameMs > 0 ? 1000.0 / frameMs : 0.0);
+    text += rate;
+    if (!refining.empty())
+        text += "  " + refining;
+    ImDrawList* draw = ImGui::GetForegroundDrawList();
+    const ImVec2 size = ImGui::CalcTextSize(text.c_str());
+    const ImVec2 at(8.0f, ImGui::GetIO().DisplaySize.y - size.y - 8.0f);
+    draw->AddRectFilled(ImVec2(at.x - 4, at.y - 2), ImVec2(at.x + size.x + 4, at.y + size.y + 2),
+                        IM_COL32(0, 0, 0, 150));
+    draw->AddText(at, IM_COL32(255, 255, 255, 255), text.c_str());
 }
 
 // --- the frame's presentation --------------------------------------------------------------
@@ -1102,6 +1125,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         statsPanel(stats, renderW, renderH, fullW, fullH, lastFrameMs, lastPresentMs,
                    lowRes && std::max(panel.navigationScale, movingScale) > panel.scale,
                    swapchain.srgb, refining);
+        statusLine(stats, renderW, renderH, fullW, fullH, lastFrameMs,
+                   lowRes && std::max(panel.navigationScale, movingScale) > panel.scale, refining);
         // The brush under the pointer (or the script's pointer).
         const ImVec2 mouse = ImGui::GetIO().MousePos;
         const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid();
