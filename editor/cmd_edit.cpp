@@ -134,8 +134,9 @@ int edit(int argc, char** argv) {
                         s[s.size() / 2], s.back(), s.size(), r.strokeFrameMs, r.lowScale);
         }
         if (r.refined > 0)
-            std::printf("edit: idle refinement: %d steps, %.1f ms each (median)\n", r.refined,
-                        r.refineMs);
+            std::printf("edit: idle refinement: %d steps, %.1f ms each (median; the average and "
+                        "its upload %.1f ms)\n",
+                        r.refined, r.refineMs, r.refineAverageMs);
         if (r.validation)
             std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
         if (args.has("report"))
@@ -147,6 +148,7 @@ int edit(int argc, char** argv) {
                                              {"panels_ms", r.overlayMs},
                                              {"refined", r.refined},
                                              {"refine_ms", r.refineMs},
+                                             {"refine_average_ms", r.refineAverageMs},
                                              {"stroke_to_frame_ms", r.strokeToFrameMs},
                                              {"stroke_frame_ms", r.strokeFrameMs},
                                              {"low_scale", r.lowScale}});

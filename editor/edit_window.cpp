@@ -992,7 +992,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     const splat::Image* scene = nullptr;
     int renderW = 0, renderH = 0;
     std::string renderedWith; ///< method and size of the last render (warm-frame bookkeeping)
-    std::vector<double> frameMs, renderMs, presentMs, overlayMs, refineMs, strokeFrameMs;
+    std::vector<double> frameMs, renderMs, presentMs, overlayMs, refineMs, refineAddMs,
+        strokeFrameMs;
     EditWindowReport report;
     double lastFrameMs = 0.0, lastPresentMs = 0.0;
     std::optional<noise::Image> screenshot, windowImage;
@@ -1165,7 +1166,9 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
             session.setCamera(jitteredCamera(view.camera(fullW, fullH), jitter.x, jitter.y));
             noise::Image image;
             stats = session.render(&image);
+            const auto addStart = Clock::now();
             refine.add(ctx, image);
+            refineAddMs.push_back(msSince(addStart));
             refineMs.push_back(msSince(refineStart));
             ++report.refined;
             renderW = fullW;
@@ -1287,6 +1290,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     report.presentMs = median(presentMs);
     report.overlayMs = median(overlayMs);
     report.refineMs = median(refineMs);
+    report.refineAverageMs = median(refineAddMs);
     report.strokeFrameMs = median(strokeFrameMs);
     report.strokeFrames = int(strokeFrameMs.size());
     report.lowScale = kScales[std::max(panel.navigationScale, movingScale)];

@@ -77,15 +77,16 @@ struct EditWindowOptions {
 /// Timings of the frames a window showed (milliseconds, medians over the warm frames: all but
 /// the first of each method and size).
 struct EditWindowReport {
-    int frames = 0;         ///< frames presented
-    int rendered = 0;       ///< of which the scene was rendered (not just the overlay)
-    int warmFrames = 0;     ///< the frames the medians are over
-    double frameMs = 0.0;   ///< wall time of a whole frame: events, render, overlay, present
-    double renderMs = 0.0;  ///< splat::Frame::render() wall time
-    double presentMs = 0.0; ///< acquire, blit, ImGui, submit, present, wait
-    double overlayMs = 0.0; ///< building the ImGui panels on the host (included in frameMs)
-    double refineMs = 0.0;  ///< one idle refinement step: render, read back, average, upload
-    int refined = 0;        ///< refinement steps done
+    int frames = 0;               ///< frames presented
+    int rendered = 0;             ///< of which the scene was rendered (not just the overlay)
+    int warmFrames = 0;           ///< the frames the medians are over
+    double frameMs = 0.0;         ///< wall time of a whole frame: events, render, overlay, present
+    double renderMs = 0.0;        ///< splat::Frame::render() wall time
+    double presentMs = 0.0;       ///< acquire, blit, ImGui, submit, present, wait
+    double overlayMs = 0.0;       ///< building the ImGui panels on the host (included in frameMs)
+    double refineMs = 0.0;        ///< one idle refinement step: render, read back, average, upload
+    double refineAverageMs = 0.0; ///< ... of which the host average and the upload
+    int refined = 0;              ///< refinement steps done
     /// Brush events (pointer or replayed script) to the present of the frame that shows them.
     std::vector<double> strokeToFrameMs;
     double strokeFrameMs = 0.0; ///< median whole frame while a stroke is in progress
