@@ -62,9 +62,16 @@ template <typename F> bool attempt(SessionPanels& st, F edit) {
     }
 }
 
+/// The left column (Render, then Brush, Distribution, Wind, File) starts below the Render panel,
+/// which is unfolded in windows at least 700 pixels high (edit_window.cpp); the right column
+/// holds the Kernel panel, with the kernel's preview to its left.
+float leftColumnTop() {
+    return ImGui::GetIO().DisplaySize.y >= 700.0f ? 310.0f : 40.0f;
+}
+
 void brushPanel(edit::Session& session) {
     edit::BrushSettings& b = session.brush();
-    ImGui::SetNextWindowPos(ImVec2(8, 40), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop()), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
     ImGui::Begin("Brush", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
     ImGui::PushItemWidth(150);
@@ -135,8 +142,11 @@ bool kernelPanel(edit::Session& session, SessionPanels& st) {
     ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 8),
                             ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(320, 0), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
-    ImGui::Begin("Kernel");
+    // Unfolded where there is room for it and the preview beside the scene.
+    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.y < 900.0f, ImGuiCond_FirstUseEver);
+    st.kernelOpen = ImGui::Begin("Kernel");
+    if (st.kernelOpen)
+        ImGui::TextDisabled("rendered preview: left of this panel");
     const nlohmann::json lobes = session.get("kernel.lobes");
     kernelSchematic(lobes);
     ImGui::TextDisabled("side view: 2 sigma around each offset");
@@ -196,8 +206,7 @@ bool kernelPanel(edit::Session& session, SessionPanels& st) {
 
 bool distributionPanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
-    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 40),
-                            ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop() + 280), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
     ImGui::Begin("Distribution", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
     ImGui::PushItemWidth(150);
@@ -238,8 +247,7 @@ bool distributionPanel(edit::Session& session, SessionPanels& st) {
 
 bool windPanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
-    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 72),
-                            ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop() + 312), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
     ImGui::Begin("Wind", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
     ImGui::PushItemWidth(150);
@@ -259,8 +267,7 @@ bool windPanel(edit::Session& session, SessionPanels& st) {
 
 bool filePanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
-    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 104),
-                            ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop() + 344), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
     ImGui::Begin("File", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
     ImGui::Text("%s", session.dirty() ? "* unsaved changes" : "saved (no changes)");

@@ -28,6 +28,7 @@ struct SessionPanels {
     std::string message;    ///< the last error or file written, shown in the File panel
     bool messageIsError = false;
     float windAmplitudeDeg = 20.0f, windFrequencyHz = 0.5f;
+    bool kernelOpen = false; ///< the Kernel panel is unfolded (the window shows the preview)
 };
 
 /// Draw the panels; returns true when the session changed what it shows (render again).

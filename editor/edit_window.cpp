@@ -21,9 +21,12 @@
 #include "edit_view.h"
 #include "noise/error.h"
 #include "noise/image.h"
+#include "noise/mesh.h"
+#include "noise/shared_data.h"
 #include "render_options.h"
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
+#include "splat/renderer_vk.h"
 
 namespace spot::editor {
 
@@ -765,7 +768,8 @@ struct WindowGrab {
 /// the presented image back. Returns false when the swapchain is out of date (then recreated by
 /// the caller).
 bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
-             const splat::Image& scene, WindowGrab* grab = nullptr) {
+             const splat::Image& scene, WindowGrab* grab = nullptr,
+             const splat::Image* inset = nullptr, VkOffset2D insetAt = {0, 0}) {
     std::uint32_t index = 0;
     const VkResult acquired = vkAcquireNextImageKHR(ctx.device(), swapchain.handle, UINT64_MAX,
                                                     sync.acquired, VK_NULL_HANDLE, &index);
@@ -809,6 +813,29 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
                            VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_NONE,
                            VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                            VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    if (inset) {
+        // The kernel preview over a corner of the scene, at its own size.
+        splat::transitionImage(cmd, inset->handle(), VK_IMAGE_ASPECT_COLOR_BIT,
+                               VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                               VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                               VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+        splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                             VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+        VkImageBlit b{};
+        b.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        b.srcOffsets[1] = {std::int32_t(inset->width()), std::int32_t(inset->height()), 1};
+        b.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        b.dstOffsets[0] = {insetAt.x, insetAt.y, 0};
+        b.dstOffsets[1] = {insetAt.x + std::int32_t(inset->width()),
+                           insetAt.y + std::int32_t(inset->height()), 1};
+        vkCmdBlitImage(cmd, inset->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
+                       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &b, VK_FILTER_NEAREST);
+        splat::transitionImage(cmd, inset->handle(), VK_IMAGE_ASPECT_COLOR_BIT,
+                               VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                               VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_NONE,
+                               VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                               VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    }
     VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
     rp.renderPass = swapchain.renderPass;
     rp.framebuffer = swapchain.framebuffers[index];
@@ -847,43 +874,25 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
     return true;
 }
 
-/// The idle refinement: the running average of jittered full-resolution frames, on the host
-/// and uploaded into an image the present blits like a renderer's result.
-struct Refinement {
-    int count = 0; ///< frames averaged (0: not refining; the interactive frame is shown)
-    std::vector<glm::vec3> sum;
-    noise::Image average;
+/// A host image uploaded into an RGBA32F image in the general layout (as the renderers leave
+/// their results), for present() to blit.
+struct UploadedImage {
     splat::Image image;
     splat::Buffer staging;
 
-    void add(splat::Context& ctx, const noise::Image& frame) {
-        if (count == 0 || average.width != frame.width || average.height != frame.height) {
-            count = 0;
-            sum.assign(frame.pixels.size(), glm::vec3(0.0f));
-            average = noise::Image(frame.width, frame.height);
-        }
-        ++count;
-        const float inv = 1.0f / float(count);
-        for (std::size_t i = 0; i < sum.size(); ++i) {
-            sum[i] += frame.pixels[i];
-            average.pixels[i] = sum[i] * inv;
-        }
-        upload(ctx);
-    }
-
-    void upload(splat::Context& ctx) {
-        const auto w = std::uint32_t(average.width), h = std::uint32_t(average.height);
+    void upload(splat::Context& ctx, const noise::Image& pixels, const char* what) {
+        const auto w = std::uint32_t(pixels.width), h = std::uint32_t(pixels.height);
         if (image.width() != w || image.height() != h)
             image = splat::Image(ctx, w, h, VK_FORMAT_R32G32B32A32_SFLOAT,
                                  VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
                                      VK_IMAGE_USAGE_STORAGE_BIT,
-                                 VK_IMAGE_ASPECT_COLOR_BIT, "idle refinement");
+                                 VK_IMAGE_ASPECT_COLOR_BIT, what);
         const VkDeviceSize bytes = VkDeviceSize(w) * h * 4 * sizeof(float);
         if (staging.size() < bytes)
             staging = splat::Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                    splat::Buffer::Memory::HostVisible, "idle refinement upload");
+                                    splat::Buffer::Memory::HostVisible, what);
         auto* p = static_cast<float*>(staging.mapped());
-        for (const glm::vec3& c : average.pixels) {
+        for (const glm::vec3& c : pixels.pixels) {
             *p++ = c.x;
             *p++ = c.y;
             *p++ = c.z;
@@ -899,7 +908,6 @@ struct Refinement {
             region.imageExtent = {w, h, 1};
             vkCmdCopyBufferToImage(cmd, staging.handle(), image.handle(),
                                    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-            // The general layout, as the renderers leave their results (present() expects it).
             splat::transitionImage(cmd, image.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
                                    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
                                    VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
@@ -907,6 +915,100 @@ struct Refinement {
                                    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
         });
     }
+};
+
+/// The idle refinement: the running average of jittered full-resolution frames, on the host
+/// and uploaded for the present to blit like a renderer's result.
+struct Refinement {
+    int count = 0; ///< frames averaged (0: not refining; the interactive frame is shown)
+    std::vector<glm::vec3> sum;
+    noise::Image average;
+    UploadedImage uploaded;
+    const splat::Image& image() const { return uploaded.image; }
+
+    void add(splat::Context& ctx, const noise::Image& frame) {
+        if (count == 0 || average.width != frame.width || average.height != frame.height) {
+            count = 0;
+            sum.assign(frame.pixels.size(), glm::vec3(0.0f));
+            average = noise::Image(frame.width, frame.height);
+        }
+        ++count;
+        const float inv = 1.0f / float(count);
+        for (std::size_t i = 0; i < sum.size(); ++i) {
+            sum[i] += frame.pixels[i];
+            average.pixels[i] = sum[i] * inv;
+        }
+        uploaded.upload(ctx, average, "idle refinement");
+    }
+};
+
+/// A live preview of one kernel: one impulse of the session's kernel standing on a plane, seen
+/// from the side (orthographic), rendered by the `instanced` splatting renderer into a small
+/// image whenever the kernel changes. Its own SceneGpu (the plane and the kernel's lobes), so
+/// the session's frame and its targets are untouched. The impulse is scaled to fill the view
+/// and its weight divided by the same factor, so its optical depth is the scene's at the
+/// preset's constant scale.
+class KernelPreview {
+public:
+    static constexpr int kSize = 160;
+
+    /// Render again when the kernel's JSON changed; the image to show.
+    const splat::Image& update(splat::Context& ctx, const edit::Session& session) {
+        const nlohmann::json kernel = session.get("kernel");
+        if (kernel == m_kernel && m_uploaded.image.handle() != VK_NULL_HANDLE)
+            return m_uploaded.image;
+        const auto start = Clock::now();
+        m_kernel = kernel;
+        const noise::Kernel& k = session.generator().kernel();
+        m_renderer.reset();
+        m_scene = std::make_unique<splat::SceneGpu>(ctx, m_plane, k);
+        m_renderer = std::make_unique<splat::SplatRenderer>(*m_scene, splat::Method::Instanced);
+        // The kernel's extent in kernel units (3 sigma around each lobe).
+        float top = 1e-3f, side = 1e-3f;
+        for (const noise::LobeDesc& l : session.preset().kernel.lobes) {
+            top = std::max(top, l.offset.z + 3.0f * l.sigma.z);
+            side = std::max({side, std::abs(l.offset.x) + 3.0f * l.sigma.x,
+                             std::abs(l.offset.y) + 3.0f * l.sigma.y});
+        }
+        const float scale = 1.6f / std::max(top, 2.0f * side);
+        const noise::FieldDesc& s = session.preset().scale;
+        const float sceneScale =
+            s.kind == noise::FieldDesc::Kind::Constant ? std::max(s.value.x, 1e-6f) : 0.02f;
+        noise::Impulse impulse;
+        impulse.normal = glm::vec3(0, 1, 0);
+        impulse.comb = glm::vec3(1, 0, 0);
+        // Kernel space x (comb), y (bitangent), z (normal) in world.
+        impulse.frame = glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 0, -1), glm::vec3(0, 1, 0));
+        impulse.scale = glm::vec3(scale);
+        impulse.weight = sceneScale / scale;
+        const std::vector<gpu::SpotImpulse> g = gpu::toGpu(std::vector<noise::Impulse>{impulse});
+        m_impulses =
+            splat::Buffer(ctx, sizeof(gpu::SpotImpulse), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                          splat::Buffer::Memory::HostVisible, "kernel preview impulse");
+        m_impulses.upload(std::span<const gpu::SpotImpulse>(g));
+        noise::Camera camera;
+        camera.projection = noise::Projection::Orthographic;
+        camera.eye = glm::dvec3(0.0, 1.2, 5.0);
+        camera.target = glm::dvec3(0.0, 0.85, 0.0);
+        camera.orthoHeight = 2.0;
+        camera.width = camera.height = kSize;
+        const noise::SceneDesc& scene = session.scene();
+        const noise::Image image = splat::renderImpulses(
+            ctx, *m_renderer, splat::View{camera, scene.shading, scene.background, scene.baseColor},
+            m_impulses, 1, splat::RenderSettings{});
+        m_uploaded.upload(ctx, image, "kernel preview");
+        lastMs = msSince(start);
+        return m_uploaded.image;
+    }
+    double lastMs = 0.0; ///< the last render, milliseconds
+
+private:
+    noise::Mesh m_plane = noise::loadMeshOrGenerated("generated:plane");
+    nlohmann::json m_kernel;
+    std::unique_ptr<splat::SceneGpu> m_scene;
+    std::unique_ptr<splat::SplatRenderer> m_renderer;
+    splat::Buffer m_impulses;
+    UploadedImage m_uploaded;
 };
 
 int methodIndex(const std::string& name) {
@@ -999,6 +1101,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     std::optional<noise::Image> screenshot, windowImage;
     WindowGrab windowGrab;
     Refinement refine;
+    KernelPreview preview;
     int movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
     std::vector<double> recentLowMs; ///< the last moving or painting frames' times
     int slowWindows = 0;             ///< ... groups of five in a row with a slow median
@@ -1137,6 +1240,12 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
             ImGui::GetForegroundDrawList()->AddCircle(at, session.brush().radiusPx,
                                                       IM_COL32(255, 255, 255, 200), 48, 1.5f);
         }
+        if (panels.kernelOpen) { // a frame around the kernel preview
+            const float x = float(fullW - 330 - 8 - KernelPreview::kSize);
+            ImGui::GetForegroundDrawList()->AddRect(
+                ImVec2(x - 1, 7), ImVec2(x + KernelPreview::kSize + 1, 9 + KernelPreview::kSize),
+                IM_COL32(120, 120, 140, 255));
+        }
         ImGui::Render();
         const double overlay = msSince(overlayStart);
 
@@ -1153,7 +1262,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
                                refine.count < panel.refineFrames && !session.wind();
         const std::string& method = methods[std::size_t(panel.method)].name;
         bool warm = true, rendered = false;
-        const splat::Image* shown = refine.count > 0 ? &refine.image : scene;
+        const splat::Image* shown = refine.count > 0 ? &refine.image() : scene;
         if (refineNow) {
             // One more jittered frame of the most accurate method into the running average.
             const auto refineStart = Clock::now();
@@ -1173,7 +1282,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
             ++report.refined;
             renderW = fullW;
             renderH = fullH;
-            shown = &refine.image;
+            shown = &refine.image();
             warm = false;
             renderedWith = "refine";
         } else if (change || (panel.continuous && refine.count == 0)) {
@@ -1225,7 +1334,20 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         if (grab && !swapchain.readable)
             throw std::runtime_error("--window-screenshot: the window's images cannot be read back "
                                      "on this surface");
-        if (!present(ctx, swapchain, sync, *shown, grab ? &windowGrab : nullptr))
+        // The kernel preview while the Kernel panel is open (rendered again when the kernel
+        // changed), left of the panel's place at the top right.
+        const splat::Image* inset = nullptr;
+        const int insetX = fullW - 330 - 8 - KernelPreview::kSize;
+        if (panels.kernelOpen && insetX >= 8 && fullH >= KernelPreview::kSize + 16) {
+            try {
+                inset = &preview.update(ctx, session);
+            } catch (const InputError& e) {
+                panels.message = e.what();
+                panels.messageIsError = true;
+            }
+        }
+        if (!present(ctx, swapchain, sync, *shown, grab ? &windowGrab : nullptr, inset,
+                     VkOffset2D{insetX, 8}))
             input.resized = true;
         if (grab)
             windowImage = windowGrab.read(swapchain.srgb);

@@ -321,6 +321,35 @@ TEST(EditWindowSession, IdleRefinementConverges) {
                                    << " dB, refined " << after << " dB";
 }
 
+// The Kernel panel (unfolded in a tall window) shows a rendered preview of one kernel beside it,
+// which follows a lobe edit.
+TEST(EditWindowSession, KernelPreviewFollowsTheKernel) {
+    const std::string plain = writeScript("plain.script", "method instanced\n");
+    const std::string red = writeScript("red.script", "method instanced\nlobe 2 color 1 0 0\n");
+    auto shot = [&](const std::string& script, const std::string& name) {
+        const std::string file = tmp(name);
+        const Result e = run("SPOT_VALIDATION=1 xvfb-run -a -s '-screen 0 1280x1024x24'",
+                             "edit --scene " + scene() + " --size 1000x900 --script " + script +
+                                 " --window --frames 1 --window-screenshot " + file);
+        EXPECT_EQ(e.code, 0) << e.err;
+        return spot::noise::readImage(file);
+    };
+    const spot::noise::Image a = shot(plain, "preview-plain.png"), b = shot(red, "preview-red.png");
+    ASSERT_EQ(a.width, 1000);
+    // The preview: 160x160 pixels at the top, 338 pixels left of the right edge.
+    const int x0 = 1000 - 338 - 160;
+    double redder = 0.0;
+    std::size_t strand = 0; // pixels of the plain preview away from the background
+    for (int y = 8; y < 168; ++y)
+        for (int x = x0; x < x0 + 160; ++x) {
+            const std::size_t i = std::size_t(y) * 1000 + std::size_t(x);
+            redder += (b.pixels[i].r - b.pixels[i].g) - (a.pixels[i].r - a.pixels[i].g);
+            strand += glm::length(a.pixels[i] - glm::vec3(0.02f, 0.02f, 0.03f)) > 0.05f;
+        }
+    EXPECT_GT(strand, 300u) << "no kernel in the preview";
+    EXPECT_GT(redder, 20.0) << "the preview did not turn red with the lobe";
+}
+
 TEST(EditWindowSession, BadScriptLineInTheWindowIsAnInputError) {
     const std::string script = writeScript("bad.script", "method hybrid\nbrush comb radius -3\n");
     const Result e =
