@@ -137,6 +137,8 @@ int edit(int argc, char** argv) {
             std::printf("edit: idle refinement: %d steps, %.1f ms each (median; the average and "
                         "its upload %.1f ms)\n",
                         r.refined, r.refineMs, r.refineAverageMs);
+        if (r.previewMs > 0.0)
+            std::printf("edit: kernel preview: %.1f ms (the last render)\n", r.previewMs);
         if (r.validation)
             std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
         if (args.has("report"))

@@ -1413,6 +1413,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     report.overlayMs = median(overlayMs);
     report.refineMs = median(refineMs);
     report.refineAverageMs = median(refineAddMs);
+    report.previewMs = preview.lastMs;
     report.strokeFrameMs = median(strokeFrameMs);
     report.strokeFrames = int(strokeFrameMs.size());
     report.lowScale = kScales[std::max(panel.navigationScale, movingScale)];

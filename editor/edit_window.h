@@ -86,6 +86,7 @@ struct EditWindowReport {
     double overlayMs = 0.0;       ///< building the ImGui panels on the host (included in frameMs)
     double refineMs = 0.0;        ///< one idle refinement step: render, read back, average, upload
     double refineAverageMs = 0.0; ///< ... of which the host average and the upload
+    double previewMs = 0.0;       ///< the last kernel preview's render (0: not shown)
     int refined = 0;              ///< refinement steps done
     /// Brush events (pointer or replayed script) to the present of the frame that shows them.
     std::vector<double> strokeToFrameMs;
