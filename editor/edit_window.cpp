@@ -1216,6 +1216,9 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
             panels.messageIsError = true;
             input.error.clear();
         }
+        // The panels' Export renders the view as the window shows it.
+        session.setMethod(methods[std::size_t(panel.method)].name, panel.settings);
+        session.setCamera(view.camera(fullW, fullH));
         input.sceneDirty |= sessionPanels(session, panels);
         const QuitStep quitting = quitStep(session.dirty(), false, quitModal(input, panels));
         if (quitting.close && (!quitting.save || saveSession(session, panels)))
