@@ -1429,8 +1429,8 @@ std::vector<cli::OptionSpec> editWindowOptions() {
          "the method shown first: " + splat::gpuMethodNames() + " (default instanced)", false},
         {"frames", "N", "render N frames, then close (default: until the window is closed)", false},
         {"screenshot", "FILE",
-         "write the last rendered scene (without the panels) as .png or "
-         ".exr when the window closes",
+         "write the last rendered scene (without the panels) as .png or .exr when the window "
+         "closes (without a window: the view after the script)",
          false},
         {"window-screenshot", "FILE",
          "with --frames: write the last frame as the window "
