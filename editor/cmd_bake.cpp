@@ -84,11 +84,7 @@ int bake(int argc, char** argv) {
                                               1e-30, 1e30));
     }
 
-    // Estimated and checked against the memory budget before anything large is allocated.
-    const noise::BakeEstimate estimate = noise::estimateBake(job.generator->cells(), options);
-    requireMemory(estimate.bytes, cat("spotshell bake: ", estimate.shellVoxels,
-                                      " voxels of size ", options.voxelSize, " (",
-                                      estimate.shellCells, " shell cells); raise --voxel-size"));
+    // The bake checks its memory against the budget before each large allocation.
     noise::BakeStats stats;
     cli::ProgressBar bar("bake");
     const noise::BakedVolume volume = noise::bakeNoise(
@@ -102,11 +98,14 @@ int bake(int argc, char** argv) {
     for (int l = 0; l < volume.levels(); ++l)
         levels += cat(l == 0 ? "" : ", ", stats.activeVoxels[std::size_t(l)]);
     std::printf("wrote %s (%d level%s, voxel %g, voxels per level %s, %llu distance voxels, "
-                "%zu impulses, %.2f MiB, %.2f s)\n",
+                "%zu impulses, %llu shell voxels evaluated, %.2f MiB, %.2f s; estimated peak "
+                "%.0f MiB)\n",
                 out.string().c_str(), volume.levels(), volume.levels() == 1 ? "" : "s",
                 double(options.voxelSize), levels.c_str(),
                 static_cast<unsigned long long>(stats.distanceVoxels), stats.impulses,
-                ec ? 0.0 : double(bytes) / double(1 << 20), stats.seconds);
+                static_cast<unsigned long long>(stats.evaluatedVoxels),
+                ec ? 0.0 : double(bytes) / double(1 << 20), stats.seconds,
+                double(stats.estimate.bytes) / double(1 << 20));
     return 0;
 }
 

@@ -38,11 +38,14 @@ namespace {
 using FloatGrid = openvdb::FloatGrid;
 using Vec3Grid = openvdb::Vec3SGrid;
 
-/// Upper bound of the bytes a shell voxel costs: level 0's density, colour and distance (the
-/// distance grid reaches a little past the non-empty voxels), the coarser levels (at most 1/7
-/// more), the per-cell lists that carry values from the workers into the trees, and OpenVDB's
-/// partly filled leaves.
-constexpr std::uint64_t kBytesPerShellVoxel = 64;
+/// Bytes per non-empty voxel: level 0's density and colour (16), the per-cell list that carries
+/// it from a worker into the trees (28), the coarser levels (at most 16/7 more) and slack for
+/// OpenVDB's partly filled leaves.
+constexpr std::uint64_t kBytesPerVoxel = 56;
+/// Bytes of a level-0 grid's voxel: density and colour.
+constexpr std::uint64_t kBytesPerGridVoxel = 16;
+/// Bytes per voxel of the distance grid: its float and the bit masks of the dilation.
+constexpr std::uint64_t kBytesPerDistanceVoxel = 6;
 
 void initializeOpenVdb() {
     static std::once_flag once;
@@ -341,8 +344,8 @@ BakeEstimate estimateBake(const SurfaceCells& cells, const BakeOptions& options)
     const double perAxis = std::ceil(h / v) + 1.0;
     e.shellVoxels = std::uint64_t(double(e.shellCells) * perAxis * perAxis * perAxis);
     const std::uint64_t threads = std::uint64_t(std::max(1, tbb::this_task_arena::max_concurrency()));
-    e.bytes = e.shellVoxels * kBytesPerShellVoxel +
-              threads * std::uint64_t(perAxis * perAxis * perAxis) * (sizeof(double) * 4);
+    e.scratchBytes = threads * std::uint64_t(perAxis * perAxis * perAxis) * (sizeof(double) * 4 + 1);
+    e.bytes = e.shellVoxels * kBytesPerVoxel + e.scratchBytes;
     return e;
 }
 
@@ -351,12 +354,12 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                          const std::function<void(long, long)>& progress, BakeStats* stats) {
     initializeOpenVdb();
     const auto start = std::chrono::steady_clock::now();
-    const BakeEstimate estimate = estimateBake(cells, options);
+    BakeEstimate estimate = estimateBake(cells, options);
     const std::size_t lobesPerKernel = kernel.lobes.size();
-    requireMemory(estimate.bytes + std::uint64_t(impulses.size()) *
-                                       (lobesPerKernel * sizeof(BakeLobe) + 2 * sizeof(std::uint32_t)),
-                  cat("a bake of ", estimate.shellVoxels, " voxels (voxel size ",
-                      options.voxelSize, ", ", estimate.shellCells, " shell cells)"));
+    const std::uint64_t lobeBytes = std::uint64_t(impulses.size()) *
+                                    (lobesPerKernel * sizeof(BakeLobe) + 2 * sizeof(std::uint32_t));
+    requireMemory(lobeBytes + estimate.scratchBytes,
+                  cat("a bake's ", impulses.size() * lobesPerKernel, " lobes"));
 
     const double h = double(cells.cellSize), v = double(options.voxelSize);
     const double k = double(kernel.supportSigma);
@@ -403,9 +406,110 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
         }
     });
 
-    // Level 0: every shell cell evaluates the voxel centres inside it, summing the lobes of the
-    // kernels of its 27 neighbours in a fixed order (neighbour, impulse, lobe).
+    // The voxels of shell cell `s` (its index range [lo, end) per axis) each lobe of the kernels
+    // of its 27 neighbours reaches, in a fixed order (neighbour, impulse, lobe, z, y, x):
+    // `visit(lobe, voxel offset in the cell's block, lobe-space point)` for every voxel centre
+    // inside the lobe's box.
     const std::vector<glm::ivec3> shell = shellCells(cells);
+    const auto cellBlock = [&](std::size_t s, glm::ivec3& lo, glm::ivec3& end) {
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = boundaryVoxel(shell[s][a], h, v);
+            end[a] = boundaryVoxel(shell[s][a] + 1, h, v);
+        }
+        const glm::ivec3 dims = glm::max(end - lo, glm::ivec3(0));
+        return std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+    };
+    const auto forLobeVoxels = [&](std::size_t s, glm::ivec3 lo, glm::ivec3 end, auto&& visit) {
+        const glm::ivec3 dims = end - lo;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const std::int64_t c = cells.find(shell[s] + glm::ivec3(dx, dy, dz));
+                    if (c < 0)
+                        continue;
+                    for (std::uint32_t n = firstImpulse[std::size_t(c)];
+                         n < firstImpulse[std::size_t(c) + 1]; ++n)
+                        for (std::size_t l = 0; l < lobesPerKernel; ++l) {
+                            const BakeLobe& lobe = lobes[n * lobesPerKernel + l];
+                            if (!(lobe.extinction > 0.0))
+                                continue;
+                            glm::ivec3 a, b;
+                            bool empty = false;
+                            for (int ax = 0; ax < 3; ++ax) {
+                                a[ax] = std::max(lo[ax], int(std::ceil(std::max(
+                                                             lobe.lo[ax] / v - 0.5, double(lo[ax] - 1)))));
+                                b[ax] = std::min(end[ax] - 1, int(std::floor(std::min(
+                                                                  lobe.hi[ax] / v - 0.5, double(end[ax])))));
+                                empty = empty || a[ax] > b[ax];
+                            }
+                            if (empty)
+                                continue;
+                            for (int z = a.z; z <= b.z; ++z)
+                                for (int y = a.y; y <= b.y; ++y)
+                                    for (int x = a.x; x <= b.x; ++x) {
+                                        const glm::dvec3 p = (glm::dvec3(x, y, z) + 0.5) * v;
+                                        const std::size_t at =
+                                            (std::size_t(z - lo.z) * std::size_t(dims.y) +
+                                             std::size_t(y - lo.y)) * std::size_t(dims.x) +
+                                            std::size_t(x - lo.x);
+                                        visit(lobe, at, lobe.toLobe * (p - lobe.centre));
+                                    }
+                        }
+                }
+    };
+
+    // Memory, in two steps, each before anything of that size is allocated. First the lobes'
+    // boxes bound the non-empty voxels from above: refuse at once when even a level-0 grid of
+    // that many voxels (fewer when the shell holds fewer) cannot fit.
+    double boxVoxels = 0.0;
+    for (const BakeLobe& lobe : lobes) {
+        if (!(lobe.extinction > 0.0))
+            continue;
+        double n = 1.0;
+        for (int a = 0; a < 3; ++a)
+            n *= std::max(0.0, std::floor(lobe.hi[a] / v - 0.5) - std::ceil(lobe.lo[a] / v - 0.5) + 1.0);
+        boxVoxels += n;
+    }
+    const double boundVoxels = std::min(double(estimate.shellVoxels), boxVoxels);
+    requireMemory(std::uint64_t(boundVoxels * double(kBytesPerGridVoxel)),
+                  cat("a bake of up to ", std::uint64_t(boundVoxels), " voxels (voxel size ",
+                      options.voxelSize, ")"));
+    // Then the non-empty voxels are counted exactly (a pass without values) and the whole bake
+    // is bounded from that count: level 0 and its lists, the coarser levels, and the distance
+    // grid (the voxels within the cap of a non-empty one, at most the shell cells' blocks grown
+    // by the cap).
+    std::vector<std::uint64_t> nonEmpty(shell.size(), 0);
+    tbb::enumerable_thread_specific<std::vector<unsigned char>> marks;
+    const double k2 = k * k;
+    tbb::parallel_for(std::size_t(0), shell.size(), [&](std::size_t s) {
+        glm::ivec3 lo, end;
+        const std::size_t count = cellBlock(s, lo, end);
+        if (count == 0)
+            return;
+        std::vector<unsigned char>& mark = marks.local();
+        mark.assign(count, 0);
+        forLobeVoxels(s, lo, end, [&](const BakeLobe&, std::size_t at, glm::dvec3 u) {
+            mark[at] |= glm::dot(u, u) < k2 ? 1 : 0;
+        });
+        nonEmpty[s] = std::uint64_t(std::count(mark.begin(), mark.end(), 1));
+    });
+    for (std::uint64_t n : nonEmpty)
+        estimate.nonEmptyVoxels += n;
+    const double grow = double(2 * (int(kBakeDistanceCap) - 1));
+    const double perAxis = std::ceil(h / v) + 1.0 + grow;
+    estimate.distanceVoxels = std::uint64_t(std::min(
+        double(estimate.nonEmptyVoxels) * (grow + 1.0) * (grow + 1.0) * (grow + 1.0),
+        double(estimate.shellCells) * perAxis * perAxis * perAxis));
+    estimate.bytes = estimate.nonEmptyVoxels * kBytesPerVoxel +
+                     estimate.distanceVoxels * kBytesPerDistanceVoxel + estimate.scratchBytes +
+                     lobeBytes;
+    requireMemory(estimate.bytes,
+                  cat("a bake of ", estimate.nonEmptyVoxels, " voxels and up to ",
+                      estimate.distanceVoxels, " distance voxels (voxel size ", options.voxelSize,
+                      ", ", options.levels, " levels)"));
+
+    // Level 0: every shell cell evaluates the voxel centres inside it, summing the lobes of the
+    // kernels of its 27 neighbours in the fixed order above.
     std::vector<std::vector<BakedVoxel>> perCell(shell.size());
     std::vector<std::uint64_t> evaluated(shell.size(), 0);
     std::atomic<long> cellsDone{0};
@@ -415,59 +519,22 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
     };
     tbb::enumerable_thread_specific<Scratch> scratch;
     tbb::parallel_for(std::size_t(0), shell.size(), [&](std::size_t s) {
-        const glm::ivec3 t = shell[s];
         glm::ivec3 lo, end;
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = boundaryVoxel(t[a], h, v);
-            end[a] = boundaryVoxel(t[a] + 1, h, v);
-        }
-        const glm::ivec3 dims = glm::max(end - lo, glm::ivec3(0));
-        const std::size_t count = std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+        const std::size_t count = cellBlock(s, lo, end);
+        const glm::ivec3 dims = end - lo;
         if (count > 0) {
             Scratch& sc = scratch.local();
             sc.sigma.assign(count, 0.0);
             sc.weighted.assign(count, glm::dvec3(0.0));
-            for (int dz = -1; dz <= 1; ++dz)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const std::int64_t c = cells.find(t + glm::ivec3(dx, dy, dz));
-                        if (c < 0)
-                            continue;
-                        for (std::uint32_t n = firstImpulse[std::size_t(c)];
-                             n < firstImpulse[std::size_t(c) + 1]; ++n)
-                            for (std::size_t l = 0; l < lobesPerKernel; ++l) {
-                                const BakeLobe& lobe = lobes[n * lobesPerKernel + l];
-                                if (!(lobe.extinction > 0.0))
-                                    continue;
-                                glm::ivec3 a, b;
-                                bool empty = false;
-                                for (int ax = 0; ax < 3; ++ax) {
-                                    a[ax] = std::max(lo[ax], int(std::ceil(
-                                        std::max(lobe.lo[ax] / v - 0.5, double(lo[ax] - 1)))));
-                                    b[ax] = std::min(end[ax] - 1, int(std::floor(
-                                        std::min(lobe.hi[ax] / v - 0.5, double(end[ax])))));
-                                    empty = empty || a[ax] > b[ax];
-                                }
-                                if (empty)
-                                    continue;
-                                for (int z = a.z; z <= b.z; ++z)
-                                    for (int y = a.y; y <= b.y; ++y)
-                                        for (int x = a.x; x <= b.x; ++x) {
-                                            const glm::dvec3 p = (glm::dvec3(x, y, z) + 0.5) * v;
-                                            const double g = sh::spotLobeDensity(
-                                                lobe.toLobe * (p - lobe.centre), k);
-                                            if (!(g > 0.0))
-                                                continue;
-                                            const std::size_t at =
-                                                (std::size_t(z - lo.z) * std::size_t(dims.y) +
-                                                 std::size_t(y - lo.y)) * std::size_t(dims.x) +
-                                                std::size_t(x - lo.x);
-                                            const double sigma = lobe.extinction * g;
-                                            sc.sigma[at] += sigma;
-                                            sc.weighted[at] += sigma * lobe.color;
-                                        }
-                            }
-                    }
+            forLobeVoxels(s, lo, end, [&](const BakeLobe& lobe, std::size_t at, glm::dvec3 u) {
+                const double g = sh::spotLobeDensity(u, k);
+                if (!(g > 0.0))
+                    return;
+                const double sigma = lobe.extinction * g;
+                sc.sigma[at] += sigma;
+                sc.weighted[at] += sigma * lobe.color;
+            });
+            perCell[s].reserve(std::size_t(nonEmpty[s]));
             std::vector<BakedVoxel>& out = perCell[s];
             for (int z = 0; z < dims.z; ++z)
                 for (int y = 0; y < dims.y; ++y)
@@ -555,10 +622,7 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
 
 BakedVolume bakeNoise(const ImpulseGenerator& generator, const BakeOptions& options,
                       const std::function<void(long, long)>& progress, BakeStats* stats) {
-    const BakeEstimate estimate = estimateBake(generator.cells(), options);
-    requireMemory(estimate.bytes, cat("a bake of ", estimate.shellVoxels, " voxels (voxel size ",
-                                      options.voxelSize, ", ", estimate.shellCells,
-                                      " shell cells)"));
+    (void)estimateBake(generator.cells(), options);
     const auto start = std::chrono::steady_clock::now();
     const std::vector<Impulse> impulses = generator.generate();
     BakedVolume volume =

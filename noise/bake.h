@@ -43,7 +43,7 @@ class ImpulseGenerator;
 /// Levels a bake may hold (level 0 and up to 7 coarser ones).
 inline constexpr int kMaxBakeLevels = 8;
 /// The distance grid's cap and background, in level-0 voxels.
-inline constexpr float kBakeDistanceCap = 8.0f;
+inline constexpr float kBakeDistanceCap = 4.0f;
 /// A bake's voxel lattice may span at most this many voxels per axis (OpenVDB coordinates are
 /// 32-bit; far beyond any practical bake).
 inline constexpr double kMaxBakeVoxelsPerAxis = double(1 << 24);
@@ -60,9 +60,14 @@ struct BakeOptions {
 
 /// What a bake will need, known before anything large is allocated.
 struct BakeEstimate {
-    std::size_t shellCells = 0;      ///< surface cells and their neighbours
-    std::uint64_t shellVoxels = 0;   ///< level-0 voxels evaluated (an upper bound)
-    std::uint64_t bytes = 0;         ///< peak memory the bake may use (an upper bound)
+    std::size_t shellCells = 0;       ///< surface cells and their neighbours
+    std::uint64_t shellVoxels = 0;    ///< level-0 voxels evaluated (an upper bound)
+    std::uint64_t scratchBytes = 0;   ///< the workers' per-cell buffers
+    /// Peak memory the bake may use (an upper bound). From estimateBake: the worst case, every
+    /// shell voxel non-empty. After bakeImpulses: from the counted non-empty voxels.
+    std::uint64_t bytes = 0;
+    std::uint64_t nonEmptyVoxels = 0; ///< counted by bakeImpulses before the values
+    std::uint64_t distanceVoxels = 0; ///< bakeImpulses' upper bound of the distance grid
 };
 
 struct BakeStats {
@@ -132,8 +137,11 @@ private:
 BakeEstimate estimateBake(const SurfaceCells& cells, const BakeOptions& options);
 
 /// Bake `impulses` (each in its generating cell `Impulse::cell`, one of `cells`; the kernel
-/// reaching at most the 3x3x3 cells around it) into `options.levels` levels. Checks the estimate
-/// against the memory budget (requireMemory) before allocating. Parallel over cells with oneTBB;
+/// reaching at most the 3x3x3 cells around it) into `options.levels` levels. Memory is checked
+/// against the budget (requireMemory) before each large allocation, so an oversized request is
+/// refused (InputError) before it allocates: at once when a level-0 grid of the voxels in the
+/// lobes' boxes cannot fit, otherwise after counting the non-empty voxels (a pass over the
+/// lobes without values), from that count. Parallel over cells with oneTBB;
 /// the result is identical for any thread count. `progress(done, total)` (may be empty) is
 /// called from worker threads as cells finish.
 BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
@@ -141,7 +149,7 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                          const std::function<void(long, long)>& progress = {},
                          BakeStats* stats = nullptr);
 
-/// Bake every impulse `generator` makes (all cells): the estimate is checked first, then the
+/// Bake every impulse `generator` makes (all cells): the options are checked first, then the
 /// impulses are generated and baked.
 BakedVolume bakeNoise(const ImpulseGenerator& generator, const BakeOptions& options,
                       const std::function<void(long, long)>& progress = {},

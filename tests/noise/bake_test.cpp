@@ -206,9 +206,15 @@ TEST(Bake, CoarseLevelsKeepTheOpticalDepthAlongAxes) {
     const std::vector<Impulse> impulses = one.generator->generate();
     ASSERT_GT(impulses.size(), 50u);
     const float v = 0.004f;
+    BakeStats stats;
     const BakedVolume bake = bakeImpulses(one.generator->cells(), one.generator->kernel(),
-                                          impulses, options(v, 4));
+                                          impulses, options(v, 4), {}, &stats);
     ASSERT_EQ(bake.levels(), 4);
+    // The memory check's counts bound what was stored.
+    EXPECT_EQ(stats.estimate.nonEmptyVoxels, bake.activeCount(0));
+    EXPECT_GE(stats.estimate.distanceVoxels, bake.distanceCount());
+    EXPECT_LE(stats.estimate.bytes, estimateBake(one.generator->cells(), options(v, 4)).bytes);
+    ASSERT_EQ(stats.activeVoxels.size(), 4u);
     for (int level = 1; level < 4; ++level) {
         EXPECT_EQ(bake.voxelSize(level), 2.0f * bake.voxelSize(level - 1));
         EXPECT_GT(bake.activeCount(level), 0u);
