@@ -42,15 +42,20 @@ int bake(int argc, char** argv) {
     for (const cli::OptionSpec& o : cli::sceneOptions())
         if (o.name != "size")
             specs.push_back(o);
-    specs.insert(specs.end(),
-                 {{"voxel-size", "V", "level 0's voxel edge in world units (default: the cell "
-                                      "size / 32)", false},
-                  {"resolution", "N", "level 0's voxels along the mesh's longest side (instead "
-                                      "of --voxel-size)", false},
-                  {"levels", "L", "mip levels: level 0 and L-1 coarser ones, each of twice the "
-                                  "voxel size (default 1, at most 8)", false},
-                  {"out", "FILE", "output OpenVDB file (.vdb)", true},
-                  cli::threadsOption()});
+    specs.insert(specs.end(), {{"voxel-size", "V",
+                                "level 0's voxel edge in world units (default: the cell "
+                                "size / 32)",
+                                false},
+                               {"resolution", "N",
+                                "level 0's voxels along the mesh's longest side (instead "
+                                "of --voxel-size)",
+                                false},
+                               {"levels", "L",
+                                "mip levels: level 0 and L-1 coarser ones, each of twice the "
+                                "voxel size (default 1, at most 8)",
+                                false},
+                               {"out", "FILE", "output OpenVDB file (.vdb)", true},
+                               cli::threadsOption()});
     cli::Args args("bake",
                    "Evaluate a scene's noise (the reference's extinction and colour, the mesh's "
                    "rest pose) into sparse voxel mip levels and write one OpenVDB file: density "
@@ -82,8 +87,8 @@ int bake(int argc, char** argv) {
     } else {
         // 32 voxels per cell edge: on fur-bunny 0.0019, about 1.7 sigmas of the thinnest lobe
         // (docs/design.md section 5 has the measured costs).
-        options.voxelSize = float(args.number("voxel-size", double(job.generator->cellSize()) / 32.0,
-                                              1e-30, 1e30));
+        options.voxelSize =
+            float(args.number("voxel-size", double(job.generator->cellSize()) / 32.0, 1e-30, 1e30));
     }
 
     // The bake checks its memory against the budget before each large allocation.

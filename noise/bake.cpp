@@ -116,9 +116,9 @@ struct BakedVoxel {
     glm::vec3 color;
 };
 
-template <typename GridT> void tagGrid(GridT& grid, const std::string& name, int level, int levels,
-                                       double voxel, std::uint64_t hash,
-                                       const std::string& preset, const std::string& version) {
+template <typename GridT>
+void tagGrid(GridT& grid, const std::string& name, int level, int levels, double voxel,
+             std::uint64_t hash, const std::string& preset, const std::string& version) {
     grid.setName(name);
     grid.setTransform(bakeTransform(voxel));
     grid.insertMeta("spotshell_level", openvdb::Int32Metadata(level));
@@ -148,28 +148,29 @@ void downsample(const FloatGrid& fineDensity, const Vec3Grid& fineColor, FloatGr
         coords.push_back(it.getCoord());
     std::vector<float> sigma(coords.size());
     std::vector<openvdb::Vec3s> rgb(coords.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, coords.size(), 4096),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-        auto dAcc = fineDensity.getConstAccessor();
-        auto cAcc = fineColor.getConstAccessor();
-        for (std::size_t n = range.begin(); n != range.end(); ++n) {
-            const openvdb::Coord base(coords[n].x() * 2, coords[n].y() * 2, coords[n].z() * 2);
-            double sum = 0.0;
-            openvdb::Vec3d weighted(0.0);
-            for (int dz = 0; dz < 2; ++dz)
-                for (int dy = 0; dy < 2; ++dy)
-                    for (int dx = 0; dx < 2; ++dx) {
-                        const openvdb::Coord c = base.offsetBy(dx, dy, dz);
-                        if (!dAcc.isValueOn(c))
-                            continue;
-                        const double s = double(dAcc.getValue(c));
-                        sum += s;
-                        weighted += s * openvdb::Vec3d(cAcc.getValue(c));
-                    }
-            sigma[n] = float(sum / 8.0);
-            rgb[n] = sum > 0.0 ? openvdb::Vec3s(weighted / sum) : openvdb::Vec3s(0.0f);
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, coords.size(), 4096),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+            auto dAcc = fineDensity.getConstAccessor();
+            auto cAcc = fineColor.getConstAccessor();
+            for (std::size_t n = range.begin(); n != range.end(); ++n) {
+                const openvdb::Coord base(coords[n].x() * 2, coords[n].y() * 2, coords[n].z() * 2);
+                double sum = 0.0;
+                openvdb::Vec3d weighted(0.0);
+                for (int dz = 0; dz < 2; ++dz)
+                    for (int dy = 0; dy < 2; ++dy)
+                        for (int dx = 0; dx < 2; ++dx) {
+                            const openvdb::Coord c = base.offsetBy(dx, dy, dz);
+                            if (!dAcc.isValueOn(c))
+                                continue;
+                            const double s = double(dAcc.getValue(c));
+                            sum += s;
+                            weighted += s * openvdb::Vec3d(cAcc.getValue(c));
+                        }
+                sigma[n] = float(sum / 8.0);
+                rgb[n] = sum > 0.0 ? openvdb::Vec3s(weighted / sum) : openvdb::Vec3s(0.0f);
+            }
+        });
     auto dOut = density.getAccessor();
     auto cOut = color.getAccessor();
     for (std::size_t n = 0; n < coords.size(); ++n) {
@@ -191,8 +192,8 @@ FloatGrid::Ptr distanceGrid(const FloatGrid& density) {
         for (auto it = density.tree().cbeginValueOn(); it; ++it)
             acc.setValueOn(it.getCoord(), 0.0f);
     }
-    auto reached = std::make_unique<openvdb::BoolTree>(density.tree(), false, true,
-                                                       openvdb::TopologyCopy());
+    auto reached =
+        std::make_unique<openvdb::BoolTree>(density.tree(), false, true, openvdb::TopologyCopy());
     auto acc = dist->getAccessor();
     for (int k = 1; k < int(kBakeDistanceCap); ++k) {
         auto grown = std::make_unique<openvdb::BoolTree>(*reached);
@@ -294,7 +295,8 @@ void BakedVolume::forEachActive(int level,
 }
 void BakedVolume::activeBounds(int level, glm::ivec3& lo, glm::ivec3& hi) const {
     m_impl->checkLevel(level);
-    const openvdb::CoordBBox box = m_impl->density[std::size_t(level)]->evalActiveVoxelBoundingBox();
+    const openvdb::CoordBBox box =
+        m_impl->density[std::size_t(level)]->evalActiveVoxelBoundingBox();
     lo = ivec(box.min());
     hi = ivec(box.max());
 }
@@ -310,8 +312,8 @@ const std::string& BakedVolume::version() const {
 std::uint64_t BakedVolume::memoryBytes() const {
     std::uint64_t bytes = m_impl->distance ? m_impl->distance->memUsage() : 0;
     for (int l = 0; l < levels(); ++l)
-        bytes += m_impl->density[std::size_t(l)]->memUsage() +
-                 m_impl->color[std::size_t(l)]->memUsage();
+        bytes +=
+            m_impl->density[std::size_t(l)]->memUsage() + m_impl->color[std::size_t(l)]->memUsage();
     return bytes;
 }
 
@@ -330,21 +332,25 @@ BakeEstimate estimateBake(const SurfaceCells& cells, const BakeOptions& options)
     }
     // OpenVDB coordinates are 32-bit: refuse a lattice that would not fit (a voxel size in the
     // wrong unit, usually) before counting anything.
-    const double reach = std::max(std::abs(double(lo.x)), std::max(std::abs(double(hi.x)) + 1,
-                         std::max(std::max(std::abs(double(lo.y)), std::abs(double(hi.y)) + 1),
-                                  std::max(std::abs(double(lo.z)), std::abs(double(hi.z)) + 1))));
+    const double reach =
+        std::max(std::abs(double(lo.x)),
+                 std::max(std::abs(double(hi.x)) + 1,
+                          std::max(std::max(std::abs(double(lo.y)), std::abs(double(hi.y)) + 1),
+                                   std::max(std::abs(double(lo.z)), std::abs(double(hi.z)) + 1))));
     const glm::ivec3 span = hi - lo + 1;
     const double across = double(std::max(span.x, std::max(span.y, span.z))) * h;
     const double extent = across / v;
     if (!(extent <= kMaxBakeVoxelsPerAxis) || !(reach * h / v < double(1 << 30)))
-        throw InputError(cat("bake: voxel size ", v, " is too small for a shell ",
-                             across, " world units across (",
-                             extent, " voxels; at most ", kMaxBakeVoxelsPerAxis, ")"));
+        throw InputError(cat("bake: voxel size ", v, " is too small for a shell ", across,
+                             " world units across (", extent, " voxels; at most ",
+                             kMaxBakeVoxelsPerAxis, ")"));
     e.shellCells = shellCells(cells).size();
     const double perAxis = std::ceil(h / v) + 1.0;
     e.shellVoxels = std::uint64_t(double(e.shellCells) * perAxis * perAxis * perAxis);
-    const std::uint64_t threads = std::uint64_t(std::max(1, tbb::this_task_arena::max_concurrency()));
-    e.scratchBytes = threads * std::uint64_t(perAxis * perAxis * perAxis) * (sizeof(double) * 4 + 1);
+    const std::uint64_t threads =
+        std::uint64_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+    e.scratchBytes =
+        threads * std::uint64_t(perAxis * perAxis * perAxis) * (sizeof(double) * 4 + 1);
     e.bytes = e.shellVoxels * kBytesPerVoxel + e.scratchBytes;
     return e;
 }
@@ -401,8 +407,8 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                 half[a] = k * glm::length(glm::dvec3(toWorld[0][a], toWorld[1][a], toWorld[2][a]));
             if (!(w.extinction > 0.0) || !std::isfinite(half.x + half.y + half.z))
                 continue;
-            out = {w.centre, w.toLobe, w.extinction, glm::dvec3(w.color), w.centre - half,
-                   w.centre + half};
+            out = {w.centre,        w.toLobe,       w.extinction, glm::dvec3(w.color),
+                   w.centre - half, w.centre + half};
         }
     });
 
@@ -436,10 +442,12 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                             glm::ivec3 a, b;
                             bool empty = false;
                             for (int ax = 0; ax < 3; ++ax) {
-                                a[ax] = std::max(lo[ax], int(std::ceil(std::max(
-                                                             lobe.lo[ax] / v - 0.5, double(lo[ax] - 1)))));
-                                b[ax] = std::min(end[ax] - 1, int(std::floor(std::min(
-                                                                  lobe.hi[ax] / v - 0.5, double(end[ax])))));
+                                a[ax] =
+                                    std::max(lo[ax], int(std::ceil(std::max(lobe.lo[ax] / v - 0.5,
+                                                                            double(lo[ax] - 1)))));
+                                b[ax] = std::min(end[ax] - 1,
+                                                 int(std::floor(std::min(lobe.hi[ax] / v - 0.5,
+                                                                         double(end[ax])))));
                                 empty = empty || a[ax] > b[ax];
                             }
                             if (empty)
@@ -450,7 +458,8 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                                         const glm::dvec3 p = (glm::dvec3(x, y, z) + 0.5) * v;
                                         const std::size_t at =
                                             (std::size_t(z - lo.z) * std::size_t(dims.y) +
-                                             std::size_t(y - lo.y)) * std::size_t(dims.x) +
+                                             std::size_t(y - lo.y)) *
+                                                std::size_t(dims.x) +
                                             std::size_t(x - lo.x);
                                         visit(lobe, at, lobe.toLobe * (p - lobe.centre));
                                     }
@@ -467,7 +476,8 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
             continue;
         double n = 1.0;
         for (int a = 0; a < 3; ++a)
-            n *= std::max(0.0, std::floor(lobe.hi[a] / v - 0.5) - std::ceil(lobe.lo[a] / v - 0.5) + 1.0);
+            n *= std::max(0.0,
+                          std::floor(lobe.hi[a] / v - 0.5) - std::ceil(lobe.lo[a] / v - 0.5) + 1.0);
         boxVoxels += n;
     }
     const double boundVoxels = std::min(double(estimate.shellVoxels), boxVoxels);
@@ -497,16 +507,15 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
         estimate.nonEmptyVoxels += n;
     const double grow = double(2 * (int(kBakeDistanceCap) - 1));
     const double perAxis = std::ceil(h / v) + 1.0 + grow;
-    estimate.distanceVoxels = std::uint64_t(std::min(
-        double(estimate.nonEmptyVoxels) * (grow + 1.0) * (grow + 1.0) * (grow + 1.0),
-        double(estimate.shellCells) * perAxis * perAxis * perAxis));
+    estimate.distanceVoxels = std::uint64_t(
+        std::min(double(estimate.nonEmptyVoxels) * (grow + 1.0) * (grow + 1.0) * (grow + 1.0),
+                 double(estimate.shellCells) * perAxis * perAxis * perAxis));
     estimate.bytes = estimate.nonEmptyVoxels * kBytesPerVoxel +
                      estimate.distanceVoxels * kBytesPerDistanceVoxel + estimate.scratchBytes +
                      lobeBytes;
-    requireMemory(estimate.bytes,
-                  cat("a bake of ", estimate.nonEmptyVoxels, " voxels and up to ",
-                      estimate.distanceVoxels, " distance voxels (voxel size ", options.voxelSize,
-                      ", ", options.levels, " levels)"));
+    requireMemory(estimate.bytes, cat("a bake of ", estimate.nonEmptyVoxels, " voxels and up to ",
+                                      estimate.distanceVoxels, " distance voxels (voxel size ",
+                                      options.voxelSize, ", ", options.levels, " levels)"));
 
     // Level 0: every shell cell evaluates the voxel centres inside it, summing the lobes of the
     // kernels of its 27 neighbours in the fixed order above.
@@ -541,7 +550,8 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                     for (int x = 0; x < dims.x; ++x) {
                         const std::size_t at =
                             (std::size_t(z) * std::size_t(dims.y) + std::size_t(y)) *
-                                std::size_t(dims.x) + std::size_t(x);
+                                std::size_t(dims.x) +
+                            std::size_t(x);
                         const float sigma = float(sc.sigma[at]);
                         if (!(sigma > 0.0f))
                             continue;
@@ -592,8 +602,8 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
         tagGrid(*impl->color[std::size_t(level)], bakedColorName(level), level, levels, vl,
                 impl->presetHash, impl->presetName, impl->version);
     }
-    tagGrid(*impl->distance, kBakedDistanceName, 0, levels, v, impl->presetHash,
-            impl->presetName, impl->version);
+    tagGrid(*impl->distance, kBakedDistanceName, 0, levels, v, impl->presetHash, impl->presetName,
+            impl->version);
     impl->distance->insertMeta(
         "spotshell_distance_units",
         openvdb::StringMetadata(cat("Chebyshev (L-infinity) distance to the nearest non-empty "
@@ -603,9 +613,8 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
     BakedVolume volume(std::move(impl));
     if (stats) {
         stats->impulses = impulses.size();
-        stats->lobes = std::size_t(std::count_if(lobes.begin(), lobes.end(), [](const BakeLobe& l) {
-            return l.extinction > 0.0;
-        }));
+        stats->lobes = std::size_t(std::count_if(
+            lobes.begin(), lobes.end(), [](const BakeLobe& l) { return l.extinction > 0.0; }));
         stats->evaluatedVoxels = 0;
         for (std::uint64_t e : evaluated)
             stats->evaluatedVoxels += e;
@@ -687,7 +696,8 @@ typename GridT::Ptr readBakedGrid(openvdb::io::File& in, const std::filesystem::
     }
     const openvdb::GridBase::Ptr meta = in.readGridMetadata(name);
     if (meta->type() != GridT::gridType())
-        throw InputError(cat(where, " is a ", meta->type(), ", a bake needs a ", GridT::gridType()));
+        throw InputError(
+            cat(where, " is a ", meta->type(), ", a bake needs a ", GridT::gridType()));
     const openvdb::GridBase::Ptr base = in.readGrid(name);
     typename GridT::Ptr grid = openvdb::gridPtrCast<GridT>(base);
     if (!grid)
@@ -698,9 +708,12 @@ typename GridT::Ptr readBakedGrid(openvdb::io::File& in, const std::filesystem::
     };
     if (!xf.isLinear() ||
         !near(xf.indexToWorld(openvdb::Vec3d(0.0)), openvdb::Vec3d(0.5 * voxel)) ||
-        !near(xf.indexToWorld(openvdb::Vec3d(1, 0, 0)), openvdb::Vec3d(1.5 * voxel, 0.5 * voxel, 0.5 * voxel)) ||
-        !near(xf.indexToWorld(openvdb::Vec3d(0, 1, 0)), openvdb::Vec3d(0.5 * voxel, 1.5 * voxel, 0.5 * voxel)) ||
-        !near(xf.indexToWorld(openvdb::Vec3d(0, 0, 1)), openvdb::Vec3d(0.5 * voxel, 0.5 * voxel, 1.5 * voxel)))
+        !near(xf.indexToWorld(openvdb::Vec3d(1, 0, 0)),
+              openvdb::Vec3d(1.5 * voxel, 0.5 * voxel, 0.5 * voxel)) ||
+        !near(xf.indexToWorld(openvdb::Vec3d(0, 1, 0)),
+              openvdb::Vec3d(0.5 * voxel, 1.5 * voxel, 0.5 * voxel)) ||
+        !near(xf.indexToWorld(openvdb::Vec3d(0, 0, 1)),
+              openvdb::Vec3d(0.5 * voxel, 0.5 * voxel, 1.5 * voxel)))
         throw InputError(cat(where, ": the transform is not the bake's (voxel ", voxel,
                              ", centres at (ijk + 1/2) x voxel, no rotation)"));
     grid->tree().voxelizeActiveTiles();
@@ -716,8 +729,9 @@ typename GridT::Ptr readBakedGrid(openvdb::io::File& in, const std::filesystem::
     return grid;
 }
 
-template <typename T> T fileMeta(const openvdb::MetaMap& meta, const std::string& key,
-                                 const std::filesystem::path& file) {
+template <typename T>
+T fileMeta(const openvdb::MetaMap& meta, const std::string& key,
+           const std::filesystem::path& file) {
     const auto value = meta.getMetadata<openvdb::TypedMetadata<T>>(key);
     if (!value)
         throw InputError(cat(file.string(), ": not a spotshell bake (no ", key, " metadata)"));
@@ -744,8 +758,8 @@ BakedVolume readBakedGrids(const std::filesystem::path& file) {
         const openvdb::MetaMap::Ptr meta = in.getMetadata();
         const int levels = fileMeta<openvdb::Int32>(*meta, "spotshell_levels", file);
         if (levels < 1 || levels > kMaxBakeLevels)
-            throw InputError(cat(file.string(), ": ", levels, " levels is outside [1, ",
-                                 kMaxBakeLevels, "]"));
+            throw InputError(
+                cat(file.string(), ": ", levels, " levels is outside [1, ", kMaxBakeLevels, "]"));
         const double voxel = fileMeta<double>(*meta, "spotshell_voxel_size", file);
         if (!(std::isfinite(voxel) && voxel > 0.0 && voxel < 1e30))
             throw InputError(cat(file.string(), ": voxel size ", voxel, " is not finite and > 0"));

@@ -52,17 +52,17 @@ inline constexpr double kMaxBakeVoxelsPerAxis = double(1 << 24);
 std::uint64_t fnv1a64(std::string_view text);
 
 struct BakeOptions {
-    float voxelSize = 0.0f; ///< level 0's voxel edge, world units, > 0
-    int levels = 1;         ///< [1, kMaxBakeLevels]
+    float voxelSize = 0.0f;       ///< level 0's voxel edge, world units, > 0
+    int levels = 1;               ///< [1, kMaxBakeLevels]
     std::uint64_t presetHash = 0; ///< recorded in the file (fnv1a64 of the preset's JSON text)
     std::string presetName;       ///< recorded in the file
 };
 
 /// What a bake will need, known before anything large is allocated.
 struct BakeEstimate {
-    std::size_t shellCells = 0;       ///< surface cells and their neighbours
-    std::uint64_t shellVoxels = 0;    ///< level-0 voxels evaluated (an upper bound)
-    std::uint64_t scratchBytes = 0;   ///< the workers' per-cell buffers
+    std::size_t shellCells = 0;     ///< surface cells and their neighbours
+    std::uint64_t shellVoxels = 0;  ///< level-0 voxels evaluated (an upper bound)
+    std::uint64_t scratchBytes = 0; ///< the workers' per-cell buffers
     /// Peak memory the bake may use (an upper bound). From estimateBake: the worst case, every
     /// shell voxel non-empty. After bakeImpulses: from the counted non-empty voxels.
     std::uint64_t bytes = 0;
@@ -74,9 +74,9 @@ struct BakeStats {
     double seconds = 0.0;
     std::size_t impulses = 0;
     std::size_t lobes = 0;
-    std::uint64_t evaluatedVoxels = 0;            ///< level-0 voxel centres evaluated
-    std::vector<std::uint64_t> activeVoxels;      ///< non-empty voxels per level
-    std::uint64_t distanceVoxels = 0;             ///< voxels stored in the distance grid
+    std::uint64_t evaluatedVoxels = 0;       ///< level-0 voxel centres evaluated
+    std::vector<std::uint64_t> activeVoxels; ///< non-empty voxels per level
+    std::uint64_t distanceVoxels = 0;        ///< voxels stored in the distance grid
     BakeEstimate estimate;
 };
 
@@ -107,8 +107,7 @@ public:
     std::uint64_t distanceCount() const;
     /// Calls `f` on every non-empty voxel of `level` in OpenVDB's tree order (deterministic for
     /// the grids' content).
-    void forEachActive(int level,
-                       const std::function<void(glm::ivec3, float, glm::vec3)>& f) const;
+    void forEachActive(int level, const std::function<void(glm::ivec3, float, glm::vec3)>& f) const;
     /// The bounds, in voxels of `level`, of its non-empty voxels (lo > hi when there are none).
     void activeBounds(int level, glm::ivec3& lo, glm::ivec3& hi) const;
     std::uint64_t presetHash() const;

@@ -184,8 +184,8 @@ TEST(Bake, SingleLobeMatchesTheAnalyticDensityAtVoxelCentres) {
                     continue;
                 }
                 ++expected;
-                ASSERT_GT(got, 0.0f) << "voxel " << ijk.x << "," << ijk.y << "," << ijk.z
-                                     << " analytic " << want;
+                ASSERT_GT(got, 0.0f)
+                    << "voxel " << ijk.x << "," << ijk.y << "," << ijk.z << " analytic " << want;
                 worst = std::max(worst, std::abs(double(got) - want) / want);
                 const glm::vec3 colour = bake.color(0, ijk);
                 EXPECT_NEAR(colour.x, 0.2f, 1e-6f);
@@ -207,8 +207,8 @@ TEST(Bake, CoarseLevelsKeepTheOpticalDepthAlongAxes) {
     ASSERT_GT(impulses.size(), 50u);
     const float v = 0.004f;
     BakeStats stats;
-    const BakedVolume bake = bakeImpulses(one.generator->cells(), one.generator->kernel(),
-                                          impulses, options(v, 4), {}, &stats);
+    const BakedVolume bake = bakeImpulses(one.generator->cells(), one.generator->kernel(), impulses,
+                                          options(v, 4), {}, &stats);
     ASSERT_EQ(bake.levels(), 4);
     // The memory check's counts bound what was stored.
     EXPECT_EQ(stats.estimate.nonEmptyVoxels, bake.activeCount(0));
@@ -237,8 +237,8 @@ TEST(Bake, CoarseLevelsKeepTheOpticalDepthAlongAxes) {
                 ASSERT_TRUE(tauCoarse.count(key));
                 worst = std::max(worst, std::abs(tauCoarse[key] - tau) / tau);
             }
-            EXPECT_LE(worst, 2e-6) << "level " << level << " axis " << axis << ", "
-                                   << tauFine.size() << " columns";
+            EXPECT_LE(worst, 2e-6)
+                << "level " << level << " axis " << axis << ", " << tauFine.size() << " columns";
         }
     }
 }
@@ -340,7 +340,8 @@ TEST(Bake, DistanceIsTheCappedChebyshevDistanceToTheNearestNonEmptyVoxel) {
     for (int z = 0; z < n.z; ++z)
         for (int y = 0; y < n.y; ++y)
             for (int x = 0; x < n.x; ++x) {
-                const float want = dist[at({x, y, z})], got = bake.distance(lo + glm::ivec3(x, y, z));
+                const float want = dist[at({x, y, z})],
+                            got = bake.distance(lo + glm::ivec3(x, y, z));
                 differ += want != got;
                 zero += got == 0.0f;
                 capped += got == kBakeDistanceCap;
@@ -356,7 +357,8 @@ TEST(Bake, IdenticalOnOneAndTwoThreads) {
     OneCell one(test::uniformPreset(4000.0f, 0.01f));
     const std::vector<Impulse> impulses = one.generator->generate();
     const auto bakeOn = [&](int threads) {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                  std::size_t(threads));
         return bakeImpulses(one.generator->cells(), one.generator->kernel(), impulses,
                             options(0.003f, 3));
     };
@@ -368,8 +370,8 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
     OneCell one(test::uniformPreset(4000.0f, 0.01f));
     const std::vector<Impulse> impulses = one.generator->generate();
     const float v = 0.004f;
-    const BakedVolume bake = bakeImpulses(one.generator->cells(), one.generator->kernel(),
-                                          impulses, options(v, 3));
+    const BakedVolume bake =
+        bakeImpulses(one.generator->cells(), one.generator->kernel(), impulses, options(v, 3));
     const fs::path file = tmpDir() / "three-levels.vdb";
     writeBakedGrids(file, bake);
     // No temporary file left beside it.
@@ -384,9 +386,8 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
     std::vector<std::string> names;
     for (auto it = in.beginName(); it != in.endName(); ++it)
         names.push_back(*it);
-    const std::vector<std::string> want = {"density",      "color",      "density_lod1",
-                                           "color_lod1",   "density_lod2", "color_lod2",
-                                           "distance"};
+    const std::vector<std::string> want = {
+        "density", "color", "density_lod1", "color_lod1", "density_lod2", "color_lod2", "distance"};
     std::vector<std::string> sortedNames = names, sortedWant = want;
     std::sort(sortedNames.begin(), sortedNames.end());
     std::sort(sortedWant.begin(), sortedWant.end());
@@ -402,14 +403,14 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
     for (const std::string& name : names) {
         const openvdb::GridBase::Ptr grid = in.readGrid(name);
         const bool isColor = name.rfind("color", 0) == 0;
-        const int level = name == "distance" ? 0
+        const int level = name == "distance"                       ? 0
                           : name.find("_lod") != std::string::npos ? name.back() - '0'
                                                                    : 0;
         SCOPED_TRACE(name);
-        EXPECT_EQ(grid->type(), isColor ? openvdb::Vec3SGrid::gridType()
-                                        : openvdb::FloatGrid::gridType());
-        EXPECT_EQ(grid->getGridClass(), name.rfind("density", 0) == 0 ? openvdb::GRID_FOG_VOLUME
-                                                                      : openvdb::GRID_UNKNOWN);
+        EXPECT_EQ(grid->type(),
+                  isColor ? openvdb::Vec3SGrid::gridType() : openvdb::FloatGrid::gridType());
+        EXPECT_EQ(grid->getGridClass(),
+                  name.rfind("density", 0) == 0 ? openvdb::GRID_FOG_VOLUME : openvdb::GRID_UNKNOWN);
         const double vl = double(v) * double(1 << level);
         EXPECT_NEAR(grid->voxelSize()[0], vl, 1e-12);
         EXPECT_NEAR(grid->voxelSize()[2], vl, 1e-12);
@@ -436,7 +437,8 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
     // vdb_print (libopenvdb-tools), when installed, reads it too.
     if (std::system("command -v vdb_print >/dev/null 2>&1") == 0) {
         const std::string out = (tmpDir() / "vdb_print.txt").string();
-        const int rc = std::system(("vdb_print -l '" + file.string() + "' > '" + out + "' 2>&1").c_str());
+        const int rc =
+            std::system(("vdb_print -l '" + file.string() + "' > '" + out + "' 2>&1").c_str());
         std::ifstream text(out);
         const std::string printed((std::istreambuf_iterator<char>(text)), {});
         EXPECT_EQ(rc, 0) << printed;
@@ -462,7 +464,8 @@ TEST(Bake, BadFilesGiveOneClearError) {
     std::ofstream(garbage, std::ios::binary) << "this is not an OpenVDB file\n";
     expectBadFile(garbage, "cannot read");
     for (const double fraction : {0.5, 0.9, 0.99}) {
-        const fs::path truncated = dir / ("truncated-" + std::to_string(int(fraction * 100)) + ".vdb");
+        const fs::path truncated =
+            dir / ("truncated-" + std::to_string(int(fraction * 100)) + ".vdb");
         std::ofstream(truncated, std::ios::binary)
             .write(bytes.data(), std::streamsize(double(bytes.size()) * fraction));
         expectBadFile(truncated, "");
@@ -558,8 +561,8 @@ struct CliRun {
 CliRun spotshell(const std::string& args, const std::string& env = "") {
     static int counter = 0;
     const fs::path errFile = tmpDir() / ("stderr-" + std::to_string(counter++) + ".txt");
-    const std::string cmd = env + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>'" +
-                            errFile.string() + "'";
+    const std::string cmd =
+        env + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>'" + errFile.string() + "'";
     CliRun r;
     FILE* pipe = popen(cmd.c_str(), "r");
     if (!pipe)
@@ -591,7 +594,8 @@ void expectExit2(const std::string& args, const std::string& phrase, const std::
 TEST(BakeCli, BakesTheBunnyOnAnyThreadCountAndInfoReadsIt) {
     const fs::path dir = tmpDir();
     const std::string one = (dir / "bunny-t1.vdb").string(), two = (dir / "bunny-t2.vdb").string();
-    const std::string common = "bake --scene " + scene("fur-bunny") + " --voxel-size 0.012 --levels 3";
+    const std::string common =
+        "bake --scene " + scene("fur-bunny") + " --voxel-size 0.012 --levels 3";
     const CliRun r1 = spotshell(common + " --threads 1 --out " + one);
     ASSERT_EQ(r1.code, 0) << r1.err;
     EXPECT_EQ(r1.out.rfind("wrote " + one + " (3 levels", 0), 0u) << r1.out;
