@@ -489,19 +489,23 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
     // grid (the voxels within the cap of a non-empty one, at most the shell cells' blocks grown
     // by the cap).
     std::vector<std::uint64_t> nonEmpty(shell.size(), 0);
+    std::atomic<long> cellsDone{0}; // progress: the count pass, then the values, per cell
     tbb::enumerable_thread_specific<std::vector<unsigned char>> marks;
     const double k2 = k * k;
     tbb::parallel_for(std::size_t(0), shell.size(), [&](std::size_t s) {
         glm::ivec3 lo, end;
         const std::size_t count = cellBlock(s, lo, end);
-        if (count == 0)
-            return;
-        std::vector<unsigned char>& mark = marks.local();
-        mark.assign(count, 0);
-        forLobeVoxels(s, lo, end, [&](const BakeLobe&, std::size_t at, glm::dvec3 u) {
-            mark[at] |= glm::dot(u, u) < k2 ? 1 : 0;
-        });
-        nonEmpty[s] = std::uint64_t(std::count(mark.begin(), mark.end(), 1));
+        if (count > 0) {
+            std::vector<unsigned char>& mark = marks.local();
+            mark.assign(count, 0);
+            forLobeVoxels(s, lo, end, [&](const BakeLobe&, std::size_t at, glm::dvec3 u) {
+                mark[at] |= glm::dot(u, u) < k2 ? 1 : 0;
+            });
+            nonEmpty[s] = std::uint64_t(std::count(mark.begin(), mark.end(), 1));
+        }
+        const long finished = ++cellsDone;
+        if (progress)
+            progress(finished, 2 * long(shell.size()));
     });
     for (std::uint64_t n : nonEmpty)
         estimate.nonEmptyVoxels += n;
@@ -521,7 +525,6 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
     // kernels of its 27 neighbours in the fixed order above.
     std::vector<std::vector<BakedVoxel>> perCell(shell.size());
     std::vector<std::uint64_t> evaluated(shell.size(), 0);
-    std::atomic<long> cellsDone{0};
     struct Scratch {
         std::vector<double> sigma;
         std::vector<glm::dvec3> weighted;
@@ -562,7 +565,7 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
         }
         const long finished = ++cellsDone;
         if (progress)
-            progress(finished, long(shell.size()));
+            progress(finished, 2 * long(shell.size()));
     });
 
     auto impl = std::make_unique<BakedVolume::Impl>();

@@ -142,7 +142,7 @@ BakeEstimate estimateBake(const SurfaceCells& cells, const BakeOptions& options)
 /// lobes' boxes cannot fit, otherwise after counting the non-empty voxels (a pass over the
 /// lobes without values), from that count. Parallel over cells with oneTBB;
 /// the result is identical for any thread count. `progress(done, total)` (may be empty) is
-/// called from worker threads as cells finish.
+/// called from worker threads as cells finish, each cell twice (counted, then evaluated).
 BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                          const std::vector<Impulse>& impulses, const BakeOptions& options,
                          const std::function<void(long, long)>& progress = {},

@@ -610,6 +610,17 @@ TEST(BakeCli, BakesTheBunnyOnAnyThreadCountAndInfoReadsIt) {
     EXPECT_EQ(a.presetHash(), fnv1a64(text));
     EXPECT_EQ(a.presetName(), "fur");
 
+    // --resolution N: N voxels along the mesh's longest side.
+    const std::string byResolution = (dir / "bunny-r60.vdb").string();
+    const CliRun r3 = spotshell("bake --scene " + scene("fur-bunny") + " --resolution 60 --out " +
+                                byResolution);
+    ASSERT_EQ(r3.code, 0) << r3.err;
+    const Bounds bounds =
+        loadMesh(std::string(SPOT_SOURCE_DIR) + "/presets/meshes/bunny.ply").bounds();
+    const glm::vec3 size = bounds.size();
+    EXPECT_NEAR(readBakedGrids(byResolution).voxelSize(0),
+                std::max(size.x, std::max(size.y, size.z)) / 60.0f, 1e-7f);
+
     const CliRun info = spotshell("info --bake " + one);
     ASSERT_EQ(info.code, 0) << info.err;
     EXPECT_NE(info.out.find("level 2    voxel 0.048"), std::string::npos) << info.out;
