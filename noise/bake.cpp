@@ -790,7 +790,8 @@ BakedVolume readBakedGrids(const std::filesystem::path& file) {
     } catch (const InputError&) {
         throw;
     } catch (const std::exception& e) {
-        throw InputError(cat(file.string(), ": cannot read the bake (", oneLine(e.what()), ")"));
+        throw InputError(cat(file.string(), ": cannot read the bake, corrupt or truncated (",
+                             oneLine(e.what()), ")"));
     }
     return BakedVolume(std::move(impl));
 }

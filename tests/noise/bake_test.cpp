@@ -468,7 +468,7 @@ TEST(Bake, BadFilesGiveOneClearError) {
             dir / ("truncated-" + std::to_string(int(fraction * 100)) + ".vdb");
         std::ofstream(truncated, std::ios::binary)
             .write(bytes.data(), std::streamsize(double(bytes.size()) * fraction));
-        expectBadFile(truncated, "");
+        expectBadFile(truncated, "cannot read");
     }
 
     // Grids renamed or of the wrong type, with the bake's metadata otherwise intact.
@@ -612,8 +612,8 @@ TEST(BakeCli, BakesTheBunnyOnAnyThreadCountAndInfoReadsIt) {
 
     // --resolution N: N voxels along the mesh's longest side.
     const std::string byResolution = (dir / "bunny-r60.vdb").string();
-    const CliRun r3 = spotshell("bake --scene " + scene("fur-bunny") + " --resolution 60 --out " +
-                                byResolution);
+    const CliRun r3 =
+        spotshell("bake --scene " + scene("fur-bunny") + " --resolution 60 --out " + byResolution);
     ASSERT_EQ(r3.code, 0) << r3.err;
     const Bounds bounds =
         loadMesh(std::string(SPOT_SOURCE_DIR) + "/presets/meshes/bunny.ply").bounds();
