@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "noise/error.h"
 #include "noise/mesh.h"
@@ -26,6 +27,37 @@ std::array<ShellTetrahedron, 3> prismTetrahedra(glm::uvec3 tri, std::uint32_t t,
         for (ShellTetrahedron& tet : out)
             std::swap(tet.vertices[0], tet.vertices[1]);
     return out;
+}
+
+bool raySegmentInTetrahedron(const ShellMesh& shell, const ShellTetrahedron& tet, glm::dvec3 origin,
+                             glm::dvec3 dir, double& tEnter, double& tExit) {
+    glm::dvec3 p[4];
+    for (int i = 0; i < 4; ++i)
+        p[i] = glm::dvec3(shell.positions[tet.vertices[std::size_t(i)]]);
+    tEnter = 0.0;
+    tExit = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 4; ++i) {
+        // The face opposite vertex i, its normal turned towards vertex i (inwards).
+        const glm::dvec3 a = p[(i + 1) % 4], b = p[(i + 2) % 4], c = p[(i + 3) % 4];
+        glm::dvec3 n = glm::cross(b - a, c - a);
+        const double side = glm::dot(n, p[i] - a);
+        if (!(side != 0.0))
+            return false;
+        if (side < 0.0)
+            n = -n;
+        const double num = glm::dot(n, origin - a), den = glm::dot(n, dir);
+        if (den == 0.0) {
+            if (num < 0.0)
+                return false;
+            continue;
+        }
+        const double t = -num / den;
+        if (den > 0.0)
+            tEnter = std::max(tEnter, t);
+        else
+            tExit = std::min(tExit, t);
+    }
+    return tEnter < tExit;
 }
 
 ShellMesh buildShell(const Mesh& mesh, float thickness) {

@@ -46,6 +46,13 @@ struct ShellMesh {
 std::array<ShellTetrahedron, 3> prismTetrahedra(glm::uvec3 tri, std::uint32_t t,
                                                 std::uint32_t baseCount);
 
+/// The part [tEnter, tExit] of the ray origin + t dir, t >= 0, inside tetrahedron `tet` of
+/// `shell`, clipped by its 4 face planes: per pixel, the tetrahedron's thickness along the view
+/// ray that the renderer marches (Ritsche 2006). World units of t times |dir|. False when the ray
+/// misses it or the tetrahedron is flat; either orientation works.
+bool raySegmentInTetrahedron(const ShellMesh& shell, const ShellTetrahedron& tet, glm::dvec3 origin,
+                             glm::dvec3 dir, double& tEnter, double& tExit);
+
 /// Extrude `mesh` by `thickness` (world units, > 0 and finite; InputError otherwise) along its
 /// vertex normals and split every prism.
 ShellMesh buildShell(const Mesh& mesh, float thickness);

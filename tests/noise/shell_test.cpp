@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -138,4 +139,62 @@ TEST(Shell, AdjacentPrismsSplitTheirSharedQuadAlikeOnTheBunny) {
     std::printf("bunny shell: %zu prisms, %zu tetrahedra, %zu interior edges, %zu tetrahedra "
                 "not positively oriented at thickness 0.06\n",
                 mesh.triangles.size(), shell.tetrahedra.size(), interiorEdges, inverted);
+}
+
+TEST(Shell, RaySegmentsOfAPrismsTetrahedraTileItsChord) {
+    // A right prism (flat triangle, equal normals) and random rays: the lengths of the ray's
+    // segments in the 3 tetrahedra add up to its chord through the prism, clipped independently
+    // by the prism's 5 planes (the slab 0 <= z <= thickness and the triangle's 3 sides).
+    Mesh m;
+    m.name = "one-triangle";
+    m.positions = {{0.0f, 0.0f, 0.0f}, {1.0f, 0.1f, 0.0f}, {0.2f, 0.9f, 0.0f}};
+    m.normals = std::vector<glm::vec3>(3, glm::vec3(0, 0, 1));
+    m.triangles = {{2, 0, 1}};
+    const float thickness = 0.3f;
+    const ShellMesh shell = buildShell(m, thickness);
+    std::uint32_t state = 12345u;
+    const auto rand01 = [&] {
+        state = state * 1664525u + 1013904223u;
+        return double(state >> 8) / double(1u << 24);
+    };
+    int hits = 0;
+    for (int r = 0; r < 2000; ++r) {
+        const glm::dvec3 o(rand01() * 1.6 - 0.3, rand01() * 1.6 - 0.3, rand01() * 1.2 - 0.45);
+        const glm::dvec3 d = glm::normalize(
+            glm::dvec3(rand01() - 0.5, rand01() - 0.5, rand01() - 0.5) + glm::dvec3(0, 0, 1e-3));
+        double sum = 0.0;
+        for (const ShellTetrahedron& tet : shell.tetrahedra) {
+            double t0 = 0.0, t1 = 0.0;
+            if (raySegmentInTetrahedron(shell, tet, o, d, t0, t1))
+                sum += t1 - t0;
+        }
+        // The prism's chord.
+        double enter = 0.0, exit = std::numeric_limits<double>::infinity();
+        const auto clip = [&](glm::dvec3 n, double offset) { // inside: n.x >= offset
+            const double num = glm::dot(n, o) - offset, den = glm::dot(n, d);
+            if (den == 0.0) {
+                if (num < 0.0)
+                    exit = -1.0;
+                return;
+            }
+            const double t = -num / den;
+            if (den > 0.0)
+                enter = std::max(enter, t);
+            else
+                exit = std::min(exit, t);
+        };
+        clip({0, 0, 1}, 0.0);
+        clip({0, 0, -1}, -double(thickness));
+        const glm::dvec3 c[3] = {glm::dvec3(m.positions[2]), glm::dvec3(m.positions[0]),
+                                 glm::dvec3(m.positions[1])};
+        for (int e = 0; e < 3; ++e) {
+            const glm::dvec3 edge = c[(e + 1) % 3] - c[e];
+            const glm::dvec3 n = glm::cross(glm::dvec3(0, 0, 1), edge); // inwards for CCW
+            clip(n, glm::dot(n, c[e]));
+        }
+        const double chord = std::max(0.0, exit - enter);
+        hits += chord > 0.0;
+        EXPECT_NEAR(sum, chord, 1e-9) << "ray " << r;
+    }
+    EXPECT_GT(hits, 200);
 }
