@@ -2,15 +2,37 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "noise/bake.h"
+#include "noise/error.h"
 #include "noise/mesh.h"
 
 namespace spot::cmd {
 
 int info(int argc, char** argv) {
-    cli::Args args("info", "Load and validate a mesh (OBJ or PLY); print its counts and bounds.",
-                   {{"mesh", "FILE", "mesh to inspect (.obj or .ply)", true}}, argc, argv);
+    cli::Args args("info",
+                   "Load and validate a mesh (OBJ or PLY) and print its counts and bounds, or read "
+                   "a bake (spotshell bake) and print its levels.",
+                   {{"mesh", "FILE", "mesh to inspect (.obj or .ply)", false},
+                    {"bake", "FILE", "bake to inspect (.vdb written by spotshell bake)", false}},
+                   argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);
+        return 0;
+    }
+    if (args.has("mesh") == args.has("bake"))
+        throw InputError("spotshell info: give --mesh FILE or --bake FILE (one of them)");
+    if (args.has("bake")) {
+        const noise::BakedVolume bake = noise::readBakedGrids(args.str("bake"));
+        std::printf("bake %s\n", args.str("bake").c_str());
+        std::printf("  preset     %s (hash %016llx)\n", bake.presetName().c_str(),
+                    static_cast<unsigned long long>(bake.presetHash()));
+        std::printf("  version    %s\n", bake.version().c_str());
+        for (int l = 0; l < bake.levels(); ++l)
+            std::printf("  level %d    voxel %g, %llu voxels\n", l, double(bake.voxelSize(l)),
+                        static_cast<unsigned long long>(bake.activeCount(l)));
+        std::printf("  distance   %llu voxels (level-0 voxels, capped at %g)\n",
+                    static_cast<unsigned long long>(bake.distanceCount()),
+                    double(noise::kBakeDistanceCap));
         return 0;
     }
     const noise::Mesh mesh = noise::loadMesh(args.str("mesh"));

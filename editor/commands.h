@@ -8,6 +8,7 @@ namespace spot::cmd {
 int info(int argc, char** argv);
 int impulses(int argc, char** argv);
 int render(int argc, char** argv);
+int bake(int argc, char** argv); ///< the noise into OpenVDB voxel mip levels (cmd_bake.cpp)
 int compare(int argc, char** argv);
 int bench(int argc, char** argv);
 int edit(int argc, char** argv); ///< the editor: its window, or a script headless (cmd_edit.cpp)

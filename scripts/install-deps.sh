@@ -11,8 +11,8 @@ packages=(
   libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
   # Vulkan on the CPU (lavapipe) with validation, shaders
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
-  # tests
-  libgtest-dev libgmock-dev libbenchmark-dev
+  # tests; vdb_print (libopenvdb-tools) reads the bake's files as users' tools do
+  libgtest-dev libgmock-dev libbenchmark-dev libopenvdb-tools
   # the editor's window: GLFW, Dear ImGui (core and backend sources), a virtual display for tests
   libglfw3-dev libimgui-dev xvfb xauth
   # the benchmark's charts

@@ -67,7 +67,7 @@ void expectInputError(const std::string& args, const std::string& phrase) {
 }
 
 TEST(Cli, HelpForEverySubcommand) {
-    for (const char* cmd : {"--help", "impulses --help", "info --help"}) {
+    for (const char* cmd : {"--help", "impulses --help", "info --help", "bake --help"}) {
         const Result r = run(cmd);
         EXPECT_EQ(r.code, 0) << cmd;
         EXPECT_NE(r.out.find("usage: spotshell"), std::string::npos) << cmd;

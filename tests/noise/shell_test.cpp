@@ -1,0 +1,200 @@
+// The shell's prisms and tetrahedra (noise/shell.h, docs/design.md section 5): the split of
+// each prism by the vertex-index rule, and no cracks between adjacent prisms on the bunny.
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "noise/error.h"
+#include "noise/mesh.h"
+#include "noise/shell.h"
+
+using namespace spot;
+using namespace spot::noise;
+
+namespace {
+
+double signedVolume(const ShellMesh& shell, const ShellTetrahedron& tet) {
+    const glm::dvec3 a(shell.positions[tet.vertices[0]]), b(shell.positions[tet.vertices[1]]),
+        c(shell.positions[tet.vertices[2]]), d(shell.positions[tet.vertices[3]]);
+    return glm::dot(glm::cross(b - a, c - a), d - a) / 6.0;
+}
+
+using Face = std::array<std::uint32_t, 3>;
+Face face(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    Face f = {a, b, c};
+    std::sort(f.begin(), f.end());
+    return f;
+}
+
+/// The 4 faces of a tetrahedron, each with its vertex indices sorted.
+std::array<Face, 4> faces(const ShellTetrahedron& tet) {
+    const auto& v = tet.vertices;
+    return {face(v[0], v[1], v[2]), face(v[0], v[1], v[3]), face(v[0], v[2], v[3]),
+            face(v[1], v[2], v[3])};
+}
+
+} // namespace
+
+TEST(Shell, EachPrismSplitsAlongTheDiagonalsRisingFromTheLowerIndex) {
+    // A flat triangle with equal normals: a right prism, whose volume is area x thickness, for
+    // every order of the same three indices (both windings).
+    Mesh m;
+    m.name = "one-triangle";
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {0, 0, 0}};
+    m.normals = std::vector<glm::vec3>(5, glm::vec3(0, 0, 1));
+    // Indices 4, 0, 2 name positions 4 -> (1,0,0) after the swap below, so corners keep their
+    // places while their indices' order changes.
+    m.positions[4] = m.positions[1];
+    const std::vector<glm::uvec3> orders = {{0, 4, 2}, {4, 2, 0}, {2, 0, 4}};
+    for (const glm::uvec3 tri : orders) {
+        m.triangles = {tri};
+        const ShellMesh shell = buildShell(m, 0.25f);
+        ASSERT_EQ(shell.tetrahedra.size(), 3u);
+        double volume = 0.0;
+        for (const ShellTetrahedron& tet : shell.tetrahedra) {
+            const double v = signedVolume(shell, tet);
+            EXPECT_GT(v, 0.0) << tet.vertices[0] << " " << tet.vertices[1] << " " << tet.vertices[2]
+                              << " " << tet.vertices[3];
+            volume += v;
+        }
+        EXPECT_NEAR(volume, 0.5 * 0.25, 1e-7);
+        // Side quad (i, j), i < j: its two triangles both hold the diagonal b_i - t_j, and no
+        // face holds the other one.
+        std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+        for (const ShellTetrahedron& tet : shell.tetrahedra)
+            for (int a = 0; a < 4; ++a)
+                for (int b = a + 1; b < 4; ++b)
+                    edges.insert({std::min(tet.vertices[a], tet.vertices[b]),
+                                  std::max(tet.vertices[a], tet.vertices[b])});
+        const std::array<std::uint32_t, 3> v = {0, 2, 4};
+        for (int i = 0; i < 3; ++i)
+            for (int j = i + 1; j < 3; ++j) {
+                EXPECT_TRUE(edges.count({v[i], shell.top(v[j])})) << v[i] << "-" << v[j];
+                EXPECT_FALSE(edges.count({v[j], shell.top(v[i])})) << v[j] << "-" << v[i];
+            }
+    }
+    m.triangles = {orders[0]};
+    EXPECT_THROW(buildShell(m, 0.0f), InputError);
+}
+
+TEST(Shell, AdjacentPrismsSplitTheirSharedQuadAlikeOnTheBunny) {
+    const Mesh mesh = loadMesh(std::string(SPOT_SOURCE_DIR) + "/presets/meshes/bunny.ply");
+    const ShellMesh shell = buildShell(mesh, 0.06f); // about fur.json's cell size
+    ASSERT_EQ(shell.tetrahedra.size(), 3 * mesh.triangles.size());
+    // Every face of every tetrahedron, counted: a face shared by two tetrahedra (inside a prism,
+    // or a side quad's half shared by the two prisms of an edge) appears twice. A crack, two
+    // prisms splitting their quad along different diagonals, leaves four side faces that appear
+    // once on an edge that two triangles share.
+    std::map<Face, int> count;
+    for (const ShellTetrahedron& tet : shell.tetrahedra)
+        for (const Face& f : faces(tet))
+            ++count[f];
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edgeUse;
+    for (const glm::uvec3& t : mesh.triangles)
+        for (int e = 0; e < 3; ++e) {
+            const std::uint32_t a = t[e], b = t[(e + 1) % 3];
+            ++edgeUse[{std::min(a, b), std::max(a, b)}];
+        }
+    const std::uint32_t n = shell.baseCount;
+    std::size_t sharedSideFaces = 0, cracks = 0, overused = 0;
+    for (const auto& [f, c] : count) {
+        overused += c > 2;
+        // A side face has base and top vertices, of exactly two mesh vertices.
+        std::set<std::uint32_t> corners;
+        int tops = 0;
+        for (const std::uint32_t v : f) {
+            corners.insert(v % n);
+            tops += v >= n;
+        }
+        if (tops == 0 || tops == 3 || corners.size() != 2)
+            continue;
+        const std::pair<std::uint32_t, std::uint32_t> edge = {*corners.begin(), *corners.rbegin()};
+        const auto it = edgeUse.find(edge);
+        ASSERT_NE(it, edgeUse.end());
+        if (it->second == 2) {
+            sharedSideFaces += c == 2;
+            cracks += c != 2;
+        }
+    }
+    EXPECT_EQ(overused, 0u);
+    EXPECT_EQ(cracks, 0u) << "side faces on shared edges used by one prism only";
+    std::size_t interiorEdges = 0;
+    for (const auto& [edge, uses] : edgeUse)
+        interiorEdges += uses == 2;
+    EXPECT_EQ(sharedSideFaces, 2 * interiorEdges);
+    EXPECT_GT(interiorEdges, 5000u);
+    std::size_t inverted = 0;
+    for (const ShellTetrahedron& tet : shell.tetrahedra)
+        inverted += !(signedVolume(shell, tet) > 0.0);
+    // Where the vertex normals diverge over a small triangle the extruded prism folds; few do at
+    // fur's thickness (131 of 11,022 when measured).
+    EXPECT_LT(inverted, shell.tetrahedra.size() / 50);
+    std::printf("bunny shell: %zu prisms, %zu tetrahedra, %zu interior edges, %zu tetrahedra "
+                "not positively oriented at thickness 0.06\n",
+                mesh.triangles.size(), shell.tetrahedra.size(), interiorEdges, inverted);
+}
+
+TEST(Shell, RaySegmentsOfAPrismsTetrahedraTileItsChord) {
+    // A right prism (flat triangle, equal normals) and random rays: the lengths of the ray's
+    // segments in the 3 tetrahedra add up to its chord through the prism, clipped independently
+    // by the prism's 5 planes (the slab 0 <= z <= thickness and the triangle's 3 sides).
+    Mesh m;
+    m.name = "one-triangle";
+    m.positions = {{0.0f, 0.0f, 0.0f}, {1.0f, 0.1f, 0.0f}, {0.2f, 0.9f, 0.0f}};
+    m.normals = std::vector<glm::vec3>(3, glm::vec3(0, 0, 1));
+    m.triangles = {{2, 0, 1}};
+    const float thickness = 0.3f;
+    const ShellMesh shell = buildShell(m, thickness);
+    std::uint32_t state = 12345u;
+    const auto rand01 = [&] {
+        state = state * 1664525u + 1013904223u;
+        return double(state >> 8) / double(1u << 24);
+    };
+    int hits = 0;
+    for (int r = 0; r < 2000; ++r) {
+        const glm::dvec3 o(rand01() * 1.6 - 0.3, rand01() * 1.6 - 0.3, rand01() * 1.2 - 0.45);
+        const glm::dvec3 d = glm::normalize(
+            glm::dvec3(rand01() - 0.5, rand01() - 0.5, rand01() - 0.5) + glm::dvec3(0, 0, 1e-3));
+        double sum = 0.0;
+        for (const ShellTetrahedron& tet : shell.tetrahedra) {
+            double t0 = 0.0, t1 = 0.0;
+            if (raySegmentInTetrahedron(shell, tet, o, d, t0, t1))
+                sum += t1 - t0;
+        }
+        // The prism's chord.
+        double enter = 0.0, exit = std::numeric_limits<double>::infinity();
+        const auto clip = [&](glm::dvec3 n, double offset) { // inside: n.x >= offset
+            const double num = glm::dot(n, o) - offset, den = glm::dot(n, d);
+            if (den == 0.0) {
+                if (num < 0.0)
+                    exit = -1.0;
+                return;
+            }
+            const double t = -num / den;
+            if (den > 0.0)
+                enter = std::max(enter, t);
+            else
+                exit = std::min(exit, t);
+        };
+        clip({0, 0, 1}, 0.0);
+        clip({0, 0, -1}, -double(thickness));
+        const glm::dvec3 c[3] = {glm::dvec3(m.positions[2]), glm::dvec3(m.positions[0]),
+                                 glm::dvec3(m.positions[1])};
+        for (int e = 0; e < 3; ++e) {
+            const glm::dvec3 edge = c[(e + 1) % 3] - c[e];
+            const glm::dvec3 n = glm::cross(glm::dvec3(0, 0, 1), edge); // inwards for CCW
+            clip(n, glm::dot(n, c[e]));
+        }
+        const double chord = std::max(0.0, exit - enter);
+        hits += chord > 0.0;
+        EXPECT_NEAR(sum, chord, 1e-9) << "ray " << r;
+    }
+    EXPECT_GT(hits, 200);
+}
