@@ -68,6 +68,13 @@ int edit(int argc, char** argv) {
     const bool inWindow = !args.has("script") || args.has("window");
     if (args.has("window") && !args.has("script"))
         throw InputError("--window replays a script: give --script FILE too");
+    if (!inWindow)
+        for (const char* option : {"frames", "orbit", "resize", "cycle-methods",
+                                   "window-screenshot", "render-scale", "refine"})
+            if (args.has(option))
+                throw InputError(cat("--", option,
+                                     " needs the window: give --window too (a --script without "
+                                     "it has no window)"));
 
     // Everything is checked before anything is loaded or written.
     std::vector<edit::ScriptAction> actions;
@@ -172,6 +179,9 @@ int edit(int argc, char** argv) {
                      {"stroke_event_ms", report.eventMs},
                      {"stroke_frame_ms", report.frameMs},
                      {"stroke_generate_gpu_ms", report.generateMs},
+                     {"start_arm_ms", session.startArmCost().milliseconds},
+                     {"arm_ms", report.armMs},
+                     {"arm_frame_ms", report.armFrameMs},
                      {"undo_steps", session.undoSteps()},
                      {"undo_bytes", session.undoBytes()},
                      {"session_bytes", session.memoryBytes()},

@@ -69,8 +69,11 @@ float leftColumnTop() {
     return ImGui::GetIO().DisplaySize.y >= 700.0f ? 310.0f : 40.0f;
 }
 
-void brushPanel(edit::Session& session) {
+/// Choosing a kind or a smooth target arms its slot (Session::armBrush); returns true then (the
+/// view is rendered again).
+bool brushPanel(edit::Session& session, SessionPanels& st) {
     edit::BrushSettings& b = session.brush();
+    bool armed = false;
     ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop()), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
     ImGui::Begin("Brush", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
@@ -80,7 +83,7 @@ void brushPanel(edit::Session& session) {
         for (int k = 0; k <= int(edit::BrushKind::Smooth); ++k)
             if (ImGui::Selectable(cat(k + 1, "  ", edit::brushKindName(edit::BrushKind(k))).c_str(),
                                   k == kind))
-                b.kind = edit::BrushKind(k);
+                armed |= attempt(st, [&] { session.setBrushKind(edit::BrushKind(k)); });
         ImGui::EndCombo();
     }
     ImGui::SliderFloat("radius px", &b.radiusPx, 2.0f, 200.0f, "%.0f");
@@ -92,12 +95,15 @@ void brushPanel(edit::Session& session) {
     ImGui::Checkbox("X mirror", &b.mirrorX);
     ImGui::ColorEdit3("colour", &b.color.x, ImGuiColorEditFlags_Float);
     int target = int(b.smoothTarget);
-    if (ImGui::Combo("smooth target", &target, "density\0comb\0tilt\0length\0color\0"))
+    if (ImGui::Combo("smooth target", &target, "density\0comb\0tilt\0length\0color\0")) {
         b.smoothTarget = edit::Slot(target);
+        armed |= attempt(st, [&] { session.armBrush(); });
+    }
     ImGui::PopItemWidth();
     ImGui::TextDisabled("paint: left drag (shift/ctrl: erase, shrink)\n1-7 kind, [ ] radius,\n"
                         "shift+[ ] strength, x mirror\nctrl+z undo, ctrl+shift+z / ctrl+y redo");
     ImGui::End();
+    return armed;
 }
 
 /// The lobes seen from the side (x right, the strand's z up): each an ellipse of 2 sigma around
@@ -318,8 +324,8 @@ bool saveSession(edit::Session& session, SessionPanels& st) {
 }
 
 bool sessionPanels(edit::Session& session, SessionPanels& state) {
-    brushPanel(session);
-    bool changed = kernelPanel(session, state);
+    bool changed = brushPanel(session, state);
+    changed |= kernelPanel(session, state);
     changed |= distributionPanel(session, state);
     changed |= windPanel(session, state);
     changed |= filePanel(session, state);

@@ -356,9 +356,23 @@ void runScriptAction(Session& session, const ScriptAction& a, const std::string&
             case T::Method:
                 session.setMethod(a.name, a.settings);
                 break;
-            case T::Brush:
-                session.brush() = a.brush;
+            case T::Brush: {
+                // Arming a constant field's slot rebuilds the frame; the window's next frame
+                // would absorb the rest (the renderer made again, every impulse generated), so
+                // one frame here too: the script's first stroke then measures what the window's
+                // does.
+                const EditCost cost = session.setBrush(a.brush);
+                if (!cost.armed && !cost.generatorRebuilt)
+                    break;
+                const double frameMs = cost.generatorRebuilt ? session.render().wallMs : 0.0;
+                report.armMs.push_back(cost.milliseconds);
+                report.armFrameMs.push_back(frameMs);
+                note = cat(cost.armed ? cat("armed ", slotKey(brushSlot(a.brush)))
+                                      : std::string("disarmed"),
+                           " in ", cost.milliseconds, " ms",
+                           cost.generatorRebuilt ? cat(", then a frame in ", frameMs, " ms") : "");
                 break;
+            }
             case T::Stroke: {
                 // The last pointer event to the frame that shows it: the dabs of that event, the
                 // fields' refresh, the regeneration and the render, pixels read back.

@@ -90,6 +90,9 @@ struct ScriptReport {
     std::vector<double> eventMs;    ///< per stroke: the last drag event's dabs and field refresh
     std::vector<double> frameMs;    ///< per stroke: the frame after it (host wall time)
     std::vector<double> generateMs; ///< per stroke: that frame's impulse regeneration (GPU)
+    /// per `brush` line that armed or disarmed a slot (Session::armBrush): the arming, and the
+    /// frame after it when it rebuilt the frame (else 0)
+    std::vector<double> armMs, armFrameMs;
 };
 
 /// Run the actions on `session`, printing one line per action to `log` (null: silent). Errors

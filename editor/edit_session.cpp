@@ -43,6 +43,20 @@ double intersect(const noise::Ray& ray, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c
     return glm::dot(e2, q) * inv;
 }
 
+bool paintedIn(const nlohmann::json& preset, Slot slot) {
+    const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
+    if (!preset.contains(ptr))
+        return false;
+    const nlohmann::json& j = preset.at(ptr);
+    return j.is_object() && j.value("type", std::string()) == "painted";
+}
+
+/// The generator's field of each slot (SPOT_FIELD_*), and the kind of a painted field
+/// (noise/painted.h's SpotField).
+constexpr int kSlotField[kSlotCount] = {SPOT_FIELD_DENSITY, SPOT_FIELD_COMB, SPOT_FIELD_TILT,
+                                        SPOT_FIELD_SCALE, SPOT_FIELD_COLOR};
+constexpr std::int32_t kPaintedFieldKind = 5;
+
 glm::vec3 mirrorX(glm::vec3 v) {
     return glm::vec3(-v.x, v.y, v.z);
 }
@@ -146,6 +160,8 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
         boxes.push_back(b);
     }
     m_bvh.build(boxes);
+    if (options.armBrush)
+        m_startArmCost = armBrush();
 }
 
 Session::~Session() {
@@ -208,11 +224,12 @@ glm::vec3 Session::screenToWorld(glm::vec2 drag) const {
 }
 
 bool Session::painted(Slot slot) const {
+    return paintedIn(m_presetJson, slot);
+}
+
+nlohmann::json Session::slotJson(Slot slot) const {
     const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
-    if (!m_presetJson.contains(ptr))
-        return false;
-    const nlohmann::json& j = m_presetJson.at(ptr);
-    return j.is_object() && j.value("type", std::string()) == "painted";
+    return m_presetJson.contains(ptr) ? m_presetJson.at(ptr) : nlohmann::json();
 }
 
 const noise::PaintedGrid* Session::grid(Slot slot) const {
@@ -249,23 +266,68 @@ void Session::setVoxelScale(float fraction) {
     m_voxelScale = fraction;
 }
 
-void Session::rebuild() {
-    noise::PresetDesc preset = noise::parsePreset(m_presetJson.dump(), m_presetFile.string());
+noise::PresetDesc Session::parseDocument(const nlohmann::json& json) const {
+    noise::PresetDesc preset = noise::parsePreset(json.dump(), m_presetFile.string());
     preset.baseDir = m_presetFile.parent_path();
-    m_preset = std::move(preset);
     for (int s = 0; s < kSlotCount; ++s) {
-        if (!painted(Slot(s)))
+        const Slot slot = Slot(s);
+        if (!paintedIn(json, slot))
             continue;
-        if (!m_grids[s])
-            throw InputError(cat("preset ", m_presetFile.string(), ": fields.", slotKey(Slot(s)),
+        // A slot painted in `json` but not in the document is an armed, bound one.
+        const std::shared_ptr<noise::PaintedGrid>& grid =
+            painted(slot) ? m_grids[s] : m_armed[s].grid;
+        if (!grid)
+            throw InputError(cat("preset ", m_presetFile.string(), ": fields.", slotKey(slot),
                                  " is painted but its grid is not loaded"));
-        noise::FieldDesc* d = slotDesc(Slot(s));
+        noise::FieldDesc* d = nullptr;
+        switch (slot) {
+        case Slot::Density:
+            d = &preset.density;
+            break;
+        case Slot::Comb:
+            d = preset.comb ? &*preset.comb : nullptr;
+            break;
+        case Slot::Tilt:
+            d = &preset.tiltDeg;
+            break;
+        case Slot::Scale:
+            d = &preset.scale;
+            break;
+        case Slot::Color:
+            d = &preset.color;
+            break;
+        }
         SPOT_CHECK(d != nullptr);
-        d->painted = m_grids[s];
+        d->painted = grid;
+    }
+    return preset;
+}
+
+void Session::rebuild() {
+    // An armed grid stands for the slot's field as it was armed: a changed or painted field
+    // disarms it.
+    bool armed = false;
+    for (int s = 0; s < kSlotCount; ++s) {
+        if (m_armed[s].grid && (painted(Slot(s)) || slotJson(Slot(s)) != m_armed[s].field))
+            m_armed[s] = {};
+        armed |= m_armed[s].bound;
+    }
+    m_preset = parseDocument(m_presetJson);
+    noise::PresetDesc bound;
+    if (armed) {
+        // The generator reads the armed slots as the painted fields the first stroke makes of
+        // them; m_preset (sampling, the panels) keeps the document's fields.
+        nlohmann::json json = m_presetJson;
+        for (int s = 0; s < kSlotCount; ++s)
+            if (m_armed[s].bound)
+                json[keyPathPointer(std::string("fields.") + slotKey(Slot(s)))] =
+                    paintedJson(Slot(s));
+        bound = parseDocument(json);
     }
     noise::GeneratorOptions options;
     options.seed = m_scene.seed;
-    auto generator = std::make_unique<noise::ImpulseGenerator>(m_mesh, m_preset, options);
+    auto generator =
+        std::make_unique<noise::ImpulseGenerator>(m_mesh, armed ? bound : m_preset, options);
     m_frame.reset();
     m_generator = std::move(generator);
     m_frame = std::make_unique<splat::Frame>(*m_ctx, m_mesh, *m_generator);
@@ -311,15 +373,16 @@ void Session::refreshFields(const std::vector<glm::vec3>* changed, float voxelSi
     m_frame->fieldsChanged(touched);
 }
 
-void Session::ensurePainted(Slot slot, Edit& edit) {
-    if (painted(slot))
-        return;
-    const int s = int(slot);
+bool Session::constantSlot(Slot slot) {
+    const noise::FieldDesc* d = slotDesc(slot);
+    return d && d->kind == noise::FieldDesc::Kind::Constant;
+}
+
+std::shared_ptr<noise::PaintedGrid> Session::startGrid(Slot slot) {
     noise::FieldDesc old;
     if (const noise::FieldDesc* d = slotDesc(slot))
         old = *d;
-    const bool absentComb = slot == Slot::Comb && !m_preset.comb;
-    const bool constant = !absentComb && old.kind == noise::FieldDesc::Kind::Constant;
+    const bool constant = constantSlot(slot);
     auto grid = std::make_shared<noise::PaintedGrid>(
         slotKey(slot), slotComponents(slot), voxelSize(), constant ? old.value : glm::vec3(0.0f));
     if (!constant) {
@@ -330,6 +393,69 @@ void Session::ensurePainted(Slot slot, Edit& edit) {
         for (std::size_t i = 0; i < voxels.size(); ++i)
             grid->set(voxels[i].ijk, values[i]);
     }
+    return grid;
+}
+
+EditCost Session::setBrush(const BrushSettings& brush) {
+    m_brush = brush;
+    return armBrush();
+}
+
+EditCost Session::setBrushKind(BrushKind kind) {
+    m_brush.kind = kind;
+    return armBrush();
+}
+
+EditCost Session::armBrush() {
+    EditCost cost;
+    const Slot slot = brushSlot(m_brush);
+    const int s = int(slot);
+    const Armed& a = m_armed[s];
+    const bool arm = !painted(slot) &&
+                     !(a.grid && a.grid->voxelSize() == voxelSize() && a.field == slotJson(slot));
+    bool others = false, othersBound = false;
+    for (int t = 0; t < kSlotCount; ++t)
+        if (t != s) {
+            others |= m_armed[t].grid != nullptr;
+            othersBound |= m_armed[t].bound;
+        }
+    if (!arm && !others)
+        return cost;
+    if (m_stroke)
+        endStroke();
+    const auto start = Clock::now();
+    // Only the current brush's slot stays armed (memory: one grid over the whole surface).
+    for (int t = 0; t < kSlotCount; ++t)
+        if (t != s)
+            m_armed[t] = {};
+    // A constant field is bound now (its grid reads the constant exactly); a sampled grid only
+    // approximates its field, so it waits for the first stroke, which swaps it in with
+    // setField (no new generator or frame).
+    const bool bind = arm && constantSlot(slot);
+    if (arm)
+        m_armed[s] = Armed{startGrid(slot), slotJson(slot), bind};
+    if (bind || othersBound) {
+        rebuild();
+        cost.generatorRebuilt = true;
+    }
+    if (arm && !bind)
+        m_frame->generator().prepareFieldKind(std::uint32_t(kSlotField[s]), kPaintedFieldKind,
+                                              slotComponents(slot));
+    cost.armed = arm;
+    cost.milliseconds = msSince(start);
+    return cost;
+}
+
+bool Session::ensurePainted(Slot slot, Edit& edit) {
+    if (painted(slot))
+        return false;
+    const int s = int(slot);
+    // The armed grid is already bound to the generator: the stroke only makes it the document's.
+    const Armed& a = m_armed[s];
+    const bool bound = a.grid && a.grid->voxelSize() == voxelSize() && a.field == slotJson(slot);
+    const bool swap = bound && !a.bound; // a sampled grid, swapped in below
+    const std::shared_ptr<noise::PaintedGrid> grid = bound ? a.grid : startGrid(slot);
+    m_armed[s] = {};
     const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
     JsonChange change{ptr, std::nullopt, paintedJson(slot)};
     if (m_presetJson.contains(ptr))
@@ -338,7 +464,23 @@ void Session::ensurePainted(Slot slot, Edit& edit) {
     edit.json.push_back(change);
     m_grids[s] = grid;
     m_presetJson[ptr] = *change.after;
-    rebuild();
+    if (!bound) {
+        rebuild();
+        return true;
+    }
+    m_preset = parseDocument(m_presetJson);
+    if (swap) {
+        noise::FieldDesc* d = slotDesc(slot);
+        SPOT_CHECK(d != nullptr);
+        try {
+            m_generator->setField(kSlotField[s], *d);
+        } catch (const InputError&) {
+            rebuild(); // a scale the generator's cells cannot hold: start over
+            return true;
+        }
+        m_frame->fieldsChanged();
+    }
+    return false;
 }
 
 const std::vector<SurfaceVoxel>& Session::surfaceVoxels() {
@@ -451,10 +593,8 @@ EditCost Session::beginStroke(glm::vec2 pixel, bool invert) {
     m_stroke->id = m_nextId++;
     EditCost cost;
     const Slot slot = brushSlot(m_brush);
-    if (!painted(slot)) {
-        ensurePainted(slot, *m_stroke);
-        cost.generatorRebuilt = true;
-    }
+    if (!painted(slot))
+        cost.generatorRebuilt = ensurePainted(slot, *m_stroke);
     m_strokeLast = pixel;
     m_strokeCarry = 0.0f;
     m_strokeDabs = m_strokeVoxels = 0;
@@ -716,11 +856,23 @@ bool Session::undo(EditCost* cost) {
     for (auto it = e.created.rbegin(); it != e.created.rend(); ++it)
         m_grids[int(std::get<0>(*it))] = std::get<1>(*it);
     applyJson(e.json, false);
+    // Undoing the first stroke on the brush's slot returns to the armed state: the grid it
+    // created, its voxels back to what arming wrote, bound again by the rebuild below when the
+    // field is a constant (m_preset parsed first: constantSlot reads the field as it is again).
+    if (!e.created.empty())
+        m_preset = parseDocument(m_presetJson);
+    for (const auto& [slot, before, after] : e.created)
+        if (after && !painted(slot) && slot == brushSlot(m_brush))
+            m_armed[int(slot)] = Armed{after, slotJson(slot), constantSlot(slot)};
     const bool full = !e.json.empty();
     if (full)
         rebuild();
     else
         refreshDeltas(e);
+    for (int t = 0; t < kSlotCount; ++t)
+        if (full && m_armed[t].grid && !m_armed[t].bound)
+            m_frame->generator().prepareFieldKind(std::uint32_t(kSlotField[t]), kPaintedFieldKind,
+                                                  slotComponents(Slot(t)));
     m_current = m_undo.empty() ? 0 : m_undo.back().id;
     m_redo.push_back(std::move(e));
     if (cost) {

@@ -50,6 +50,8 @@ struct SessionOptions {
     std::size_t undoBytes = std::size_t(256) << 20; ///< ... and at most this many bytes beyond
                                                     ///< the last kMinUndoSteps
     splat::ContextOptions context = splat::contextOptionsFromEnvironment();
+    /// Arm the default brush's slot when the session starts (Session::armBrush).
+    bool armBrush = true;
 };
 
 /// Where a window pixel's ray meets the mesh.
@@ -67,6 +69,7 @@ struct EditCost {
     bool fieldsRefreshed = false;  ///< only the fields' data re-flattened and re-uploaded
     std::size_t voxelsWritten = 0; ///< strokes
     std::size_t dabs = 0;          ///< strokes
+    bool armed = false;            ///< a slot was armed (Session::armBrush)
 };
 
 class Session {
@@ -94,8 +97,34 @@ public:
     // --- picking and strokes ------------------------------------------------------------------
     /// The closest mesh hit of the ray through window pixel (x, y), top-left origin.
     std::optional<Hit> pick(glm::vec2 pixel) const;
+    /// The brush. Changing its kind (or smooth target) through this reference does not arm its
+    /// slot: call armBrush() after, or use setBrush / setBrushKind.
     BrushSettings& brush() { return m_brush; }
     const BrushSettings& brush() const { return m_brush; }
+    /// Replace the brush, or only its kind, and arm its slot (armBrush).
+    EditCost setBrush(const BrushSettings& brush);
+    EditCost setBrushKind(BrushKind kind);
+    /// Arm the slot the brush paints, so that its first stroke neither creates a grid nor
+    /// rebuilds the generator and the frame: when the slot's field is not painted yet, create
+    /// the grid the first stroke would create. A constant field's grid (every voxel reads the
+    /// constant) is bound to the generator now, rebuilding it and the frame here instead of in
+    /// the stroke; the first stroke then only writes voxels and regenerates the cells it
+    /// touched. Any other field is sampled at the voxels near the surface, which only
+    /// approximates it, so the grid is swapped in by the first stroke (ImpulseGenerator::
+    /// setField, every impulse generated again, no new generator or frame); the generation
+    /// pipeline for the painted kind is compiled here (GpuGenerator::prepareFieldKind), not in
+    /// the stroke's frame (a later rebuild, e.g. a parameter edit, drops it). Either way the
+    /// impulses stay bit for bit until the first stroke. Only the current brush's slot stays
+    /// armed. Not an edit: the document, dirty() and the undo history are unchanged, and save()
+    /// writes the slot's field as it was; undoing the first stroke arms the slot again when it
+    /// is still the brush's. A change of the slot's field (set, undo) disarms it: the next
+    /// first stroke creates its grid as before. Returns the cost (armed: false when the slot
+    /// was painted or already armed).
+    EditCost armBrush();
+    /// The grid bound to `slot` by arming, or null.
+    const noise::PaintedGrid* armedGrid(Slot slot) const { return m_armed[int(slot)].grid.get(); }
+    /// What arming the default brush cost when the session started.
+    const EditCost& startArmCost() const { return m_startArmCost; }
     /// Pointer pressed / moved / released. Dabs are spaced radius/4 pixels along the drag; each
     /// drag event's dabs are visible in the next render(). endStroke records the undo step.
     EditCost beginStroke(glm::vec2 pixel, bool invert = false);
@@ -190,7 +219,23 @@ private:
         std::size_t bytes() const;
     };
 
+    /// The grid a slot whose field is not painted was armed with (armBrush), the slot's JSON
+    /// when it was armed (a change of it disarms), and whether the generator reads the grid
+    /// already (a constant field) or only from the first stroke on (a sampled one).
+    struct Armed {
+        std::shared_ptr<noise::PaintedGrid> grid;
+        nlohmann::json field;
+        bool bound = false;
+    };
+
     void rebuild();
+    /// m_preset from m_presetJson, with the painted grids attached.
+    noise::PresetDesc parseDocument(const nlohmann::json& json) const;
+    nlohmann::json slotJson(Slot slot) const;
+    /// Whether `slot`'s field is a constant (its painted grid is then exact: all background).
+    bool constantSlot(Slot slot);
+    /// The grid a first stroke on `slot` starts from (see armBrush).
+    std::shared_ptr<noise::PaintedGrid> startGrid(Slot slot);
     /// After voxels of grids changed in place: the CPU generator re-flattens its fields, and
     /// the frame regenerates only the cells whose impulses read the voxels `changed` (world
     /// positions of voxels of size `voxelSize`), or every cell when `changed` is null.
@@ -198,7 +243,8 @@ private:
     bool painted(Slot slot) const;
     noise::FieldDesc* slotDesc(Slot slot);
     nlohmann::json paintedJson(Slot slot) const;
-    void ensurePainted(Slot slot, Edit& edit);
+    /// Make `slot` painted for a stroke; true when that rebuilt the generator (not armed).
+    bool ensurePainted(Slot slot, Edit& edit);
     void applyJson(const std::vector<JsonChange>& changes, bool after);
     void push(Edit edit);
     EditCost dabsAlong(glm::vec2 from, glm::vec2 to);
@@ -222,6 +268,8 @@ private:
     nlohmann::json m_presetJson;
     noise::PresetDesc m_preset;
     std::array<std::shared_ptr<noise::PaintedGrid>, kSlotCount> m_grids;
+    std::array<Armed, kSlotCount> m_armed;
+    EditCost m_startArmCost;
     float m_voxelScale = 0.25f;
 
     std::unique_ptr<splat::Context> m_ctx;

@@ -545,7 +545,8 @@ void onKey(GLFWwindow* window, int key, int, int action, int mods) {
                 brush.radiusPx =
                     std::clamp(brush.radiusPx * (up ? 1.15f : 1.0f / 1.15f), 2.0f, 400.0f);
         } else if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7)
-            brush.kind = edit::BrushKind(key - GLFW_KEY_1);
+            s.sceneDirty |=
+                session.setBrushKind(edit::BrushKind(key - GLFW_KEY_1)).generatorRebuilt;
         else if (key == GLFW_KEY_X)
             brush.mirrorX = !brush.mirrorX;
     } catch (const InputError& e) {

@@ -213,18 +213,43 @@ void GpuGenerator::choosePartial() {
 }
 
 const Pipeline& GpuGenerator::candidatePipeline() {
-    Pipeline& p = m_candidatePipeline;
-    if (p.handle())
-        return p;
+    if (m_candidatePipeline.handle())
+        return m_candidatePipeline;
     m_candidateKey = specializationKey();
+    if (m_preparedPipeline.handle() && m_preparedKey == m_candidateKey) {
+        m_candidatePipeline = std::move(m_preparedPipeline);
+        m_preparedKey.clear();
+    } else {
+        m_candidatePipeline = makeCandidatePipeline(m_candidateKey);
+    }
+    return m_candidatePipeline;
+}
+
+void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
+                                    std::int32_t components) {
+    if (slot >= SPOT_FIELD_COUNT)
+        throw InputError(cat("field slot ", slot, " does not exist (", SPOT_FIELD_COUNT, ")"));
+    std::vector<std::int32_t> key = specializationKey();
+    key[1 + 2 * slot] = kind;
+    key[2 + 2 * slot] = components;
+    if (slot == SPOT_FIELD_COMB)
+        key[0] = 1; // a comb field is bound
+    if ((m_candidatePipeline.handle() && key == m_candidateKey) ||
+        (m_preparedPipeline.handle() && key == m_preparedKey))
+        return;
+    m_preparedPipeline = makeCandidatePipeline(key);
+    m_preparedKey = std::move(key);
+}
+
+Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& key) {
     const gpu::SpotGenParams& params = m_generator.sharedParams();
     Specialization spec;
-    spec.set(kGenSpecComb, params.flags.z != 0u)
-        .set(kGenSpecUv, (params.flags.w & 1u) != 0u)
+    spec.set(kGenSpecComb, key[0] != 0)
+        .set(kGenSpecUv, (params.flags.w & 1u) != 0u) // the mesh's: no field changes them
         .set(kGenSpecTangents, (params.flags.w & 2u) != 0u);
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
-        spec.set(kGenSpecFieldKind + slot, std::int32_t(params.fields[slot].kind.x))
-            .set(kGenSpecFieldComponents + slot, std::int32_t(params.fields[slot].kind.y));
+        spec.set(kGenSpecFieldKind + slot, key[1 + 2 * slot])
+            .set(kGenSpecFieldComponents + slot, key[2 + 2 * slot]);
     const Bindings bindings = {storageBuffer(kGenBindParams),    storageBuffer(kGenBindCells),
                                storageBuffer(kGenBindPieces),    storageBuffer(kGenBindTriangles),
                                storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
@@ -232,10 +257,9 @@ const Pipeline& GpuGenerator::candidatePipeline() {
                                storageBuffer(kGenBindFieldData), storageBuffer(kGenBindScratch),
                                storageBuffer(kGenBindFlags),     storageBuffer(kGenBindSites),
                                storageBuffer(kGenBindDirty)};
-    p = makeComputePipeline(
+    return makeComputePipeline(
         m_ctx, m_jittered ? spirv(spv_generate_jittered_comp) : spirv(spv_generate_poisson_comp),
         bindings, sizeof(SpotGenPush), spec);
-    return p;
 }
 
 const GpuGenerator::CellCandidates& GpuGenerator::cellCandidates(std::uint32_t cell) {

@@ -73,6 +73,11 @@ public:
     /// regenerate. The cells' candidate counts stay (they depend on no field). No frame that
     /// reads this generator may be in flight.
     void refreshFields();
+    /// Make now, ahead of its use, the candidates pipeline for the current fields with field
+    /// `slot` (SPOT_FIELD_*) of kind `kind` and `components` components, so that a setField
+    /// that gives the slot that kind later (the editor's first stroke on a slot swaps in its
+    /// painted grid) does not compile in its frame. Keeps one such pipeline.
+    void prepareFieldKind(std::uint32_t slot, std::int32_t kind, std::int32_t components);
     /// refreshFields() when the fields changed only where the model cells `cells` (indices into
     /// the generator's cells) read them: the next prepare(), if it chooses the cells and level of
     /// detail of the last generation, decides only those cells' candidates again and keeps every
@@ -104,6 +109,8 @@ private:
         return m_jittered ? std::uint32_t(c.inside.size()) : c.candidates;
     }
     const Pipeline& candidatePipeline();
+    /// The candidates pipeline for a specializationKey().
+    Pipeline makeCandidatePipeline(const std::vector<std::int32_t>& key);
     /// What the candidates pipeline is specialized for: the comb flag, each slot's kind and
     /// component count.
     std::vector<std::int32_t> specializationKey() const;
@@ -117,6 +124,8 @@ private:
     std::vector<CellCandidates> m_cellCandidates; ///< per model cell
     Pipeline m_candidatePipeline;                 ///< specialized for the preset; made on first use
     std::vector<std::int32_t> m_candidateKey;     ///< specializationKey() it was made for
+    Pipeline m_preparedPipeline;                  ///< prepareFieldKind's, until its key is used
+    std::vector<std::int32_t> m_preparedKey;
     Pipeline m_scanPipeline, m_scatterPipeline;
     Buffer m_params, m_pieces, m_triangles, m_positions, m_normals, m_tangents, m_uvs, m_fieldData;
 

@@ -1,6 +1,7 @@
 // Editor scripts: the parser names the bad line; `spotshell edit` fails with exit 2 before it
 // writes anything, on a malformed script and on a corrupt or mismatched .vdb; a good script runs
 // and writes its files.
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -182,3 +183,22 @@ TEST(EditScript, RunsAndSavesAndRejectsBadGrids) {
 }
 
 } // namespace
+
+// The window's options without --window: one line, exit 2, nothing run.
+TEST(EditScript, WindowOptionsNeedTheWindow) {
+    const fs::path script = test::tmpPath("edit_window_options.script");
+    test::writeText(script, "frames 1\n");
+    for (const std::string option :
+         {"--frames 3", "--orbit 5", "--resize 100x100", "--cycle-methods",
+          "--window-screenshot w.png", "--render-scale 2", "--refine 4"}) {
+        std::string err;
+        EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --script " +
+                                      script.string() + " " + option,
+                                  &err),
+                  2)
+            << option;
+        const std::string name = option.substr(0, option.find(' '));
+        EXPECT_NE(err.find(name + " needs the window"), std::string::npos) << err;
+        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    }
+}

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 #include <gtest/gtest.h>
 
@@ -142,6 +143,8 @@ TEST(EditSession, UndoRestoresBitIdenticalState) {
     EXPECT_TRUE(s.dirty());
     EXPECT_EQ(s.undoSteps(), 4u);
 
+    // Undoing a slot's first stroke arms it again when it is the brush's.
+    s.setBrushKind(edit::BrushKind::DensityErase);
     ASSERT_TRUE(s.undo()); // the parameter
     ASSERT_TRUE(s.undo()); // the comb stroke (and the comb grid it created)
     EXPECT_EQ(s.grid(edit::Slot::Comb), nullptr);
@@ -150,6 +153,7 @@ TEST(EditSession, UndoRestoresBitIdenticalState) {
     test::expectSameImpulses(s.generator().generate(), impulses1, "after undoing to stroke 1");
     ASSERT_TRUE(s.undo()); // the first stroke, which made the density painted
     EXPECT_EQ(s.grid(edit::Slot::Density), nullptr);
+    EXPECT_NE(s.armedGrid(edit::Slot::Density), nullptr);
     EXPECT_EQ(s.presetJson(), json0);
     test::expectSameImpulses(s.generator().generate(), impulses0, "after undoing everything");
     EXPECT_FALSE(s.undo());
@@ -510,3 +514,140 @@ TEST(EditSession, PointerEventsWithAModifierShrink) {
 }
 
 } // namespace
+
+namespace {
+
+/// What `session` writes when saved to `name` (the preset's text).
+std::string savedText(edit::Session& session, const std::string& name) {
+    const std::filesystem::path file = test::tmpPath(name);
+    std::filesystem::remove(file);
+    session.save(file);
+    std::ifstream in(file);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+} // namespace
+
+// Arming a constant field's slot (tilt_deg 35) binds a grid whose every voxel reads the constant:
+// the impulses stay bit for bit, the document is unchanged (not dirty, no undo step, saving
+// writes the constant back and no .vdb). The first stroke then rebuilds nothing, and undoing it
+// returns to the armed state.
+TEST(EditSession, ArmingAConstantFieldKeepsTheImpulses) {
+    edit::SessionOptions o = editOptions();
+    o.armBrush = false;
+    edit::Session s(test::bunnyScene(), o);
+    const nlohmann::json json0 = s.presetJson();
+    const std::string saved0 = savedText(s, "edit_arm_unarmed.json");
+    const std::vector<noise::Impulse> impulses0 = s.generator().generate();
+    EXPECT_EQ(s.armedGrid(edit::Slot::Tilt), nullptr);
+
+    const edit::EditCost arm = s.setBrushKind(edit::BrushKind::Tilt);
+    std::printf("arming tilt_deg (constant): %.1f ms\n", arm.milliseconds);
+    EXPECT_TRUE(arm.armed);
+    EXPECT_TRUE(arm.generatorRebuilt);
+    ASSERT_NE(s.armedGrid(edit::Slot::Tilt), nullptr);
+    EXPECT_EQ(s.grid(edit::Slot::Tilt), nullptr) << "armed is not painted";
+    test::expectSameImpulses(s.generator().generate(), impulses0, "after arming tilt");
+    EXPECT_FALSE(s.dirty());
+    EXPECT_EQ(s.undoSteps(), 0u);
+    EXPECT_EQ(s.presetJson(), json0);
+    std::filesystem::remove(test::tmpPath("edit_arm_armed.vdb"));
+    EXPECT_EQ(savedText(s, "edit_arm_armed.json"), saved0);
+    EXPECT_FALSE(std::filesystem::exists(test::tmpPath("edit_arm_armed.vdb")));
+    EXPECT_FALSE(s.armBrush().armed) << "arming twice does nothing";
+
+    s.brush().radiusPx = 20.0f;
+    const edit::EditCost first = s.beginStroke({120.0f, 120.0f});
+    s.dragStroke({150.0f, 130.0f});
+    s.endStroke();
+    EXPECT_FALSE(first.generatorRebuilt) << "the armed grid is already bound";
+    EXPECT_NE(s.grid(edit::Slot::Tilt), nullptr);
+    EXPECT_EQ(s.armedGrid(edit::Slot::Tilt), nullptr);
+    EXPECT_TRUE(s.dirty());
+    EXPECT_EQ(s.undoSteps(), 1u);
+    EXPECT_EQ(s.presetJson()["fields"]["tilt_deg"]["type"], "painted");
+
+    ASSERT_TRUE(s.undo());
+    EXPECT_EQ(s.grid(edit::Slot::Tilt), nullptr);
+    EXPECT_NE(s.armedGrid(edit::Slot::Tilt), nullptr) << "undo returns to the armed state";
+    EXPECT_EQ(s.presetJson(), json0);
+    EXPECT_FALSE(s.dirty());
+    test::expectSameImpulses(s.generator().generate(), impulses0, "after undoing the stroke");
+    ASSERT_TRUE(s.redo());
+    ASSERT_TRUE(s.undo());
+    // Armed and bound again: a stroke rebuilds nothing.
+    const edit::EditCost again = s.beginStroke({120.0f, 120.0f});
+    s.endStroke();
+    EXPECT_FALSE(again.generatorRebuilt);
+    ASSERT_TRUE(s.undo());
+    ASSERT_TRUE(s.redo());
+    EXPECT_NE(s.grid(edit::Slot::Tilt), nullptr);
+    EXPECT_EQ(s.armedGrid(edit::Slot::Tilt), nullptr);
+    test::expectNoValidationErrors(s.context());
+}
+
+// The bunny's density is a noise field: arming samples it at the voxels near the surface (as a
+// first stroke does) but leaves the noise bound, since the grid's trilinear interpolation only
+// approximates it; the impulses stay bit for bit, the document as it was. The first stroke swaps
+// the grid in without a new generator: its impulses are those of the saved stroke (a session
+// loading the saved preset), and undoing it gives back the noise's impulses.
+TEST(EditSession, ArmingASampledFieldKeepsTheImpulses) {
+    edit::SessionOptions o = editOptions();
+    o.armBrush = false;
+    edit::Session s(test::bunnyScene(), o);
+    const std::string saved0 = savedText(s, "edit_arm_noise_unarmed.json");
+    const std::vector<noise::Impulse> impulses0 = s.generator().generate();
+
+    const edit::EditCost arm = s.armBrush(); // density-add: the density slot
+    std::printf("arming the noise density: %.1f ms\n", arm.milliseconds);
+    EXPECT_TRUE(arm.armed);
+    EXPECT_FALSE(arm.generatorRebuilt) << "a sampled grid is not bound before the stroke";
+    ASSERT_NE(s.armedGrid(edit::Slot::Density), nullptr);
+    test::expectSameImpulses(s.generator().generate(), impulses0, "after arming the density");
+    EXPECT_FALSE(s.dirty());
+    EXPECT_EQ(s.undoSteps(), 0u);
+    EXPECT_EQ(savedText(s, "edit_arm_noise_armed.json"), saved0);
+
+    s.brush().kind = edit::BrushKind::DensityErase;
+    s.brush().radiusPx = 20.0f;
+    const edit::EditCost first = s.beginStroke({120.0f, 120.0f});
+    s.dragStroke({150.0f, 130.0f});
+    s.endStroke();
+    EXPECT_FALSE(first.generatorRebuilt);
+    ASSERT_NE(s.grid(edit::Slot::Density), nullptr);
+    const std::vector<noise::Impulse> stroked = s.generator().generate();
+    const std::filesystem::path file = test::tmpPath("edit_arm_noise_stroked.json");
+    s.save(file);
+    edit::SessionOptions again = o;
+    again.preset = file;
+    edit::Session loaded(test::bunnyScene(), again);
+    test::expectSameImpulses(loaded.generator().generate(), stroked,
+                             "a session on the saved first stroke");
+
+    ASSERT_TRUE(s.undo());
+    EXPECT_EQ(s.grid(edit::Slot::Density), nullptr);
+    EXPECT_NE(s.armedGrid(edit::Slot::Density), nullptr) << "undo returns to the armed state";
+    test::expectSameImpulses(s.generator().generate(), impulses0, "after undoing the stroke");
+    test::expectNoValidationErrors(s.context());
+}
+
+// Switching brushes keeps only the new brush's slot armed; the impulses never move.
+TEST(EditSession, SwitchingBrushesDisarmsTheOtherSlots) {
+    edit::Session s(test::bunnyScene(), editOptions()); // arms the density at the start
+    EXPECT_TRUE(s.startArmCost().armed);
+    ASSERT_NE(s.armedGrid(edit::Slot::Density), nullptr);
+    const std::vector<noise::Impulse> impulses0 = s.generator().generate();
+    for (const edit::BrushKind kind :
+         {edit::BrushKind::Tilt, edit::BrushKind::Comb, edit::BrushKind::Length,
+          edit::BrushKind::Color, edit::BrushKind::DensityErase}) {
+        const edit::EditCost cost = s.setBrushKind(kind);
+        const edit::Slot slot = edit::brushSlot(s.brush());
+        EXPECT_TRUE(cost.armed) << edit::brushKindName(kind);
+        for (int t = 0; t < edit::kSlotCount; ++t)
+            EXPECT_EQ(s.armedGrid(edit::Slot(t)) != nullptr, edit::Slot(t) == slot)
+                << edit::brushKindName(kind) << " slot " << t;
+        test::expectSameImpulses(s.generator().generate(), impulses0, edit::brushKindName(kind));
+    }
+    EXPECT_FALSE(s.dirty());
+    EXPECT_EQ(s.undoSteps(), 0u);
+}
