@@ -366,7 +366,7 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         m_bakeStats.maxSteps = std::uint32_t(
             std::ceil(diameter / (double(kBakedStepFraction) * m_bakeStats.voxelSize)) + 1.0);
     }
-    const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedLoopBudget;
+    const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
     // baked_march.comp: 4 + N (1 + (P_d + 1) + 8 (1 + P + 1)).
     const std::uint64_t bound =
         4 + std::uint64_t(m_bakeStats.maxSteps) *

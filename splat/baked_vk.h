@@ -63,6 +63,8 @@ static_assert(sizeof(SpotBakedTet) == 128);
 static_assert(sizeof(SpotBakedParams) == 176);
 } // namespace gpu_baked
 
+/// Loop iterations one march invocation may need by default (baked_march.comp).
+inline constexpr std::uint32_t kBakedMarchLoopBudget = gpu_baked::kBakedLoopBudget;
 /// Most peel passes accepted.
 inline constexpr int kBakedMaxPeelPasses = 64;
 
