@@ -16,8 +16,10 @@ SPOT_CONST uint kBakedLeafVoxels = 512u;
 SPOT_CONST int kBakedEmptySlot = -1;
 SPOT_CONST uint kBakedSections = 12u;          /* 8 levels at most, the distance grid, spare */
 SPOT_CONST uint kBakedDistanceSection = 8u;
-/* The march's step: this fraction of the level's voxel, in rest-pose (texture) units. */
-SPOT_CONST float kBakedStepFraction = 0.5f;
+/* The march's step: this fraction of the level's voxel, in rest-pose (texture) units. One voxel:
+ * on fur-bunny at 128x128 (16 layers) 31.36 dB against the reference, half a voxel 31.33 dB
+ * at 1.2 times the cost (the trilinear reconstruction, not the step, limits the error). */
+SPOT_CONST float kBakedStepFraction = 1.0f;
 /* Loop iterations one invocation may run (lavapipe stops one at 65,535; docs/design.md 8). */
 SPOT_CONST uint kBakedLoopBudget = 60000u;
 
