@@ -1,6 +1,6 @@
 /// @file method_vk.h
 /// @brief The one interface every GPU method sits behind (instanced, oit, hybrid, sorted,
-/// raymarch), the registry that names them, and what a frame hands to them.
+/// raymarch, baked), the registry that names them, and what a frame hands to them.
 ///
 /// A renderer is persistent: it owns its targets and buffers, made for one image size and
 /// impulse capacity and reused by every frame like the last one (recreated when the size changes
