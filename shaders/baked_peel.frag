@@ -1,5 +1,5 @@
 #version 450
-// Baked renderer, one depth-peeling layer (seed of docs/design.md section 5): of the
+// Baked renderer, one depth-peeling layer (docs/design.md section 5): of the
 // tetrahedron front faces strictly farther than the previous layer's (reversed depth: smaller),
 // the depth test keeps the nearest; the mesh's depth, copied into the depth buffer first, culls
 // those behind the mesh. Writes the tetrahedron (+1; 0 where none) and its depth for the next
