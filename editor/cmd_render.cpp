@@ -138,6 +138,8 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
     if (method.marching)
         r.summary += cat(settings.steps, " steps, ", settings.supersample, "x", settings.supersample,
                          " rays per pixel, ");
+    if (method.baked)
+        r.summary += cat(settings.peelPasses, " peel passes, ");
     r.summary += cat(first.gpuMs, " ms GPU");
     if (repeat > 0)
         r.summary += cat(" (", repeat, " warm frames: median ", double(summary(gpu)["median"]),

@@ -1137,7 +1137,9 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         }
         const int fullW = int(swapchain.extent.width), fullH = int(swapchain.extent.height);
         if (options.cycleMethods) {
-            const int next = report.frames % int(methods.size());
+            int next = report.frames % int(methods.size());
+            if (methods[std::size_t(next)].baked && panel.settings.bakeFile.empty())
+                next = 0; // `baked` needs a bake file (--bake)
             input.sceneDirty |= next != panel.method;
             panel.method = next;
         }

@@ -1,6 +1,7 @@
 #include "render_options.h"
 
 #include "noise/error.h"
+#include "splat/baked_vk.h"
 #include "splat/raymarch_vk.h"
 
 namespace spot::cli {
@@ -18,6 +19,10 @@ std::vector<OptionSpec> renderOptions() {
                            "too long)", false},
             {"supersample", "N", "raymarch: N x N rays per pixel, box-filtered (default 1, at "
                                  "most 8)", false},
+            {"bake", "FILE", "baked: the bake to render (an OpenVDB file from spotshell bake)",
+             false},
+            {"peel-passes", "N", "baked: depth-peeling layers of tetrahedra (default 4, at most "
+                                 "64)", false},
             {"lod", "PIXELS", "GPU methods: thin the kernels of cells smaller than PIXELS on "
                               "screen, conserving mass (default 0: off)", false},
             {"count-fragments", "", "splatting: count the fragments shaded and the pixels a "
@@ -47,6 +52,8 @@ splat::RenderSettings renderSettings(const Args& args) {
         throw InputError(cat("--closest must be atomic or depth-pass, not '", closest, "'"));
     s.steps = int(args.integer("steps", 32, 1, splat::kRaymarchMaxSteps));
     s.supersample = int(args.integer("supersample", 1, 1, splat::kRaymarchMaxSupersample));
+    s.bakeFile = args.str("bake", "");
+    s.peelPasses = int(args.integer("peel-passes", 4, 1, splat::kBakedMaxPeelPasses));
     s.lodPixels = args.number("lod", 0.0, 0.0, 64.0);
     s.countFragments = args.has("count-fragments");
     return s;
@@ -63,6 +70,10 @@ nlohmann::json describe(const splat::MethodInfo& method, const splat::RenderSett
     if (method.marching) {
         d["steps"] = s.steps;
         d["supersample"] = s.supersample;
+    }
+    if (method.baked) {
+        d["bake"] = s.bakeFile;
+        d["peel_passes"] = s.peelPasses;
     }
     d["lod_pixels"] = s.lodPixels;
     return d;

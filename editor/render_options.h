@@ -13,7 +13,8 @@
 
 namespace spot::cli {
 
-/// --kernel-samples, --ewa, --weight, --closest, --lod, --steps, --supersample,
+/// --kernel-samples, --ewa, --weight, --closest, --lod, --steps, --supersample, --bake,
+/// --peel-passes,
 /// --count-fragments.
 std::vector<OptionSpec> renderOptions();
 

@@ -4,6 +4,7 @@
 
 #include "noise/error.h"
 #include "noise/mesh.h"
+#include "splat/baked_vk.h"
 #include "splat/raymarch_vk.h"
 #include "splat/renderer_vk.h"
 
@@ -69,6 +70,14 @@ const std::vector<MethodInfo>& gpuMethods() {
                      false, true, [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
                          return std::make_unique<RaymarchRenderer>(scene);
                      }});
+        m.push_back({"baked",
+                     "a bake (render --bake FILE.vdb) marched through the shell's tetrahedra, "
+                     "composited by depth peeling",
+                     false, false,
+                     [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
+                         return std::make_unique<BakedRenderer>(scene);
+                     },
+                     true});
         return m;
     }();
     return methods;

@@ -1,6 +1,6 @@
 /// @file method_vk.h
 /// @brief The one interface every GPU method sits behind (instanced, oit, hybrid, sorted,
-/// raymarch), the registry that names them, and what a frame hands to them.
+/// raymarch, baked), the registry that names them, and what a frame hands to them.
 ///
 /// A renderer is persistent: it owns its targets and buffers, made for one image size and
 /// impulse capacity and reused by every frame like the last one (recreated when the size changes
@@ -83,6 +83,10 @@ struct RenderSettings {
     /// lavapipe's 65,535 to show what the guard prevents. 0: the default budget.
     std::uint32_t loopBudget = 0;
     bool cullImpulses = true; ///< skip impulses whose box misses the sample (exact)
+
+    // Baked (baked_vk.h).
+    std::string bakeFile; ///< the bake (noise/bake.h's OpenVDB file) the method renders
+    int peelPasses = 4;   ///< depth-peeling layers of tetrahedra, [1, kBakedMaxPeelPasses]
 };
 
 /// Impulses on the GPU for one frame (GpuGenerator's, or uploaded by a test).
@@ -173,6 +177,7 @@ struct MethodInfo {
     bool splatting = false; ///< reads RenderSettings' splatting fields
     bool marching = false;  ///< reads RenderSettings' ray-march fields
     std::function<std::unique_ptr<Renderer>(const SceneGpu&)> make;
+    bool baked = false; ///< reads RenderSettings' bake fields (and needs a bake file)
 };
 
 /// Every GPU method, in the order `render --help` and the bench list them.
@@ -181,7 +186,7 @@ const std::vector<MethodInfo>& gpuMethods();
 const MethodInfo& gpuMethod(std::string_view name);
 /// The method called `name`, or null.
 const MethodInfo* findGpuMethod(std::string_view name);
-/// "instanced, oit, hybrid, sorted, raymarch".
+/// "instanced, oit, hybrid, sorted, raymarch, baked".
 std::string gpuMethodNames();
 
 } // namespace spot::splat

@@ -54,7 +54,8 @@ MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_c
     if (!vertices.empty())
         m_vertices.upload(std::span<const gpu_splat::SpotMeshVertex>(vertices));
     m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
-    m_indices = Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+    m_indices = Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3),
+                       VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                        Buffer::Memory::HostVisible, cat(who, " mesh indices (", mesh.name, ")"));
     if (!mesh.triangles.empty())
         m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));

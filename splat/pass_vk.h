@@ -85,6 +85,11 @@ public:
     /// (kDepthFormat), all in attachment layouts, cleared first. Nothing else changes layout.
     void record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
                 const Image& distance, const Image& depth, glm::vec3 background) const;
+    /// gpu_splat::SpotMeshVertex[] (world units, unit normals or zero).
+    const Buffer& vertices() const { return m_vertices; }
+    /// uint32[3 x triangles], usable as a storage buffer too.
+    const Buffer& indices() const { return m_indices; }
+    std::uint32_t indexCount() const { return m_indexCount; }
 
 private:
     Context* m_ctx;

@@ -1,0 +1,66 @@
+/* baked_layout.glsl: what the baked renderer's host code (splat/baked_vk.cpp) and its shaders
+ * (baked_*.comp, baked_tet.vert, baked_peel.frag) share: bindings, the parameter block, the
+ * sparse grid's table layout and its hash. Compiles as C++ (GLM types, SPOT_CONST and SPOT_FN
+ * defined by the includer) and as GLSL. docs/design.md section 5 describes the renderer. */
+
+/* The sparse grid: the bake's OpenVDB leaves (8^3 voxels) as bricks. Brick b of the density
+ * levels holds vec4(extinction x colour, extinction) per voxel at bricks[b * 512 + offset];
+ * brick b of the distance grid a float per voxel at distances[b * 512 + offset], with offset =
+ * (i & 7) << 6 | (j & 7) << 3 | (k & 7) for voxel ijk. A leaf is found in an open-addressed hash
+ * table (linear probing, at most half full): section s (levels 0..levels-1, then the distance
+ * grid at kBakedDistanceSection) spans slots [tableOffset[s], tableOffset[s] + tableMask[s]];
+ * a slot is ivec4(leaf ijk, brick) with brick kBakedEmptySlot where free. No key lies more than
+ * probe[s] slots past its home slot, so a lookup reads at most probe[s] + 1 slots. */
+SPOT_CONST uint kBakedLeafBits = 3u;
+SPOT_CONST uint kBakedLeafVoxels = 512u;
+SPOT_CONST int kBakedEmptySlot = -1;
+SPOT_CONST uint kBakedSections = 12u;          /* 8 levels at most, the distance grid, spare */
+SPOT_CONST uint kBakedDistanceSection = 8u;
+/* The march's step: this fraction of the level's voxel, in rest-pose (texture) units. One voxel:
+ * on fur-bunny at 128x128 (16 layers) 31.36 dB against the reference, half a voxel 31.33 dB
+ * at 1.2 times the cost (the trilinear reconstruction, not the step, limits the error). */
+SPOT_CONST float kBakedStepFraction = 1.0f;
+/* Loop iterations one invocation may run (lavapipe stops one at 65,535; docs/design.md 8). */
+SPOT_CONST uint kBakedLoopBudget = 60000u;
+
+/* Bindings (set 0, push descriptors). */
+SPOT_CONST uint kBakedBindParams = 0u;      /* SpotBakedParams */
+SPOT_CONST uint kBakedBindVertices = 1u;    /* SpotMeshVertex[]: the mesh now (world) */
+SPOT_CONST uint kBakedBindRest = 2u;        /* SpotMeshVertex[]: the mesh at rest (the bake's) */
+SPOT_CONST uint kBakedBindIndices = 3u;     /* uint[3 x triangles] */
+SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
+SPOT_CONST uint kBakedBindTable = 5u;       /* ivec4[]: the hash tables' slots */
+SPOT_CONST uint kBakedBindBricks = 6u;      /* vec4[]: density bricks of every level */
+SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
+SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's depth */
+SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's tetrahedron + 1 */
+SPOT_CONST uint kBakedBindMeshDistance = 10u; /* r32f image: ray distance to the mesh */
+SPOT_CONST uint kBakedBindAccum = 11u;      /* rgba32f image: premultiplied colour, alpha */
+SPOT_CONST uint kBakedBindBase = 12u;       /* rgba32f image: the mesh's colour */
+SPOT_CONST uint kBakedBindResult = 13u;     /* rgba32f image: the frame's result */
+SPOT_CONST uint kBakedBindLoops = 14u;      /* uint: the most loop iterations (counted frames) */
+
+/* Specialization ids. */
+SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids below are splat_common.glsl's) */
+
+struct SpotBakedTet {
+    vec4 world[4]; /* xyz: corner now, world units */
+    vec4 rest[4];  /* xyz: corner at rest, world units of the bake (the texture coordinate) */
+};
+
+struct SpotBakedParams {
+    vec4 grid;     /* x: level 0's voxel size; y: its inverse; z: distance cap (level-0 voxels); w: shell thickness */
+    uvec4 counts;  /* x: triangles; y: levels; z: most steps per segment; w: 0 */
+    uvec4 tableOffset[3]; /* per section (kBakedSections), flattened [s >> 2][s & 3] */
+    uvec4 tableMask[3];
+    uvec4 probe[3];
+};
+
+SPOT_FN uint bakedHash(ivec3 c, uint section) {
+    uint h = (uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u) ^
+             (section * 2654435761u);
+    h ^= h >> 16u;
+    h *= 0x7feb352du;
+    h ^= h >> 15u;
+    return h;
+}

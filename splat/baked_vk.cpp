@@ -1,0 +1,553 @@
+#include "baked_vk.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <span>
+#include <system_error>
+#include <unordered_map>
+#include <vector>
+
+#include "noise/bake.h"
+#include "noise/error.h"
+
+#include "baked_march.comp.h"
+#include "baked_peel.frag.h"
+#include "baked_resolve.comp.h"
+#include "baked_shell.comp.h"
+#include "baked_tet.vert.h"
+
+namespace spot::splat {
+
+namespace {
+
+using namespace gpu_baked;
+
+constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
+constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
+constexpr VkFormat kTetFormat = VK_FORMAT_R32_UINT;
+/// A table is regrown (doubled) while a key lies more than this many slots past its home, at
+/// most kTableGrowths times: the loop bound pays for every probe.
+constexpr std::uint32_t kWantedProbe = 8;
+constexpr int kTableGrowths = 4;
+/// Layers whose peel and march passes are timed apart (2 marks each, within PassTimer's 32).
+constexpr std::uint32_t kBakedMarkedLayers = 12;
+
+struct LeafKey {
+    glm::ivec3 leaf;
+    bool operator==(const LeafKey& o) const { return leaf == o.leaf; }
+};
+struct LeafKeyHash {
+    std::size_t operator()(const LeafKey& k) const { return bakedHash(k.leaf, 0u); }
+};
+
+/// A section of leaves in first-seen order (the bake's tree order: deterministic).
+struct Leaves {
+    std::unordered_map<LeafKey, std::uint32_t, LeafKeyHash> index;
+    std::vector<glm::ivec3> keys;
+    std::uint32_t brick(glm::ivec3 leaf) {
+        const auto [it, added] = index.try_emplace(LeafKey{leaf}, std::uint32_t(keys.size()));
+        if (added)
+            keys.push_back(leaf);
+        return it->second;
+    }
+};
+
+/// Every memory barrier the passes need: each pass reads what the previous ones wrote (images,
+/// buffers, attachments); lavapipe runs them in order anyway, the barrier keeps it valid Vulkan.
+void fullBarrier(VkCommandBuffer cmd) {
+    memoryBarrier(cmd, passes::kAll, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
+                  passes::kAll, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+}
+
+std::uint32_t section(const std::vector<std::uint32_t>& v, std::uint32_t s) { return v[s]; }
+
+} // namespace
+
+BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scene.context()) {
+    requireFormat(m_ctx, kColorFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "stored RGBA32F targets");
+    requireFormat(m_ctx, kScalarFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "stored R32F targets");
+    requireFormat(m_ctx, kTetFormat,
+                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
+                  "stored R32UI targets");
+    requireFormat(m_ctx, kDepthFormat,
+                  VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT |
+                      VK_FORMAT_FEATURE_TRANSFER_SRC_BIT | VK_FORMAT_FEATURE_TRANSFER_DST_BIT,
+                  "copied depth");
+    const std::uint32_t push = sizeof(gpu_splat::SpotSplatFrame);
+    m_shell = makeComputePipeline(
+        m_ctx, spirv(spv_baked_shell_comp),
+        {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindVertices),
+         storageBuffer(kBakedBindRest), storageBuffer(kBakedBindIndices),
+         storageBuffer(kBakedBindTets)},
+        push);
+    GraphicsPipelineDesc desc;
+    desc.vertex = spirv(spv_baked_tet_vert);
+    desc.fragment = spirv(spv_baked_peel_frag);
+    desc.bindings = {storageBuffer(kBakedBindTets), storageImage(kBakedBindPrevDepth)};
+    desc.pushBytes = push;
+    desc.colorFormats = {kTetFormat, kScalarFormat};
+    desc.blends = {opaqueBlend(), opaqueBlend()};
+    desc.depthFormat = kDepthFormat;
+    desc.depthTest = true;
+    desc.depthWrite = true;
+    desc.depthCompare = VK_COMPARE_OP_GREATER;
+    m_peel = makeGraphicsPipeline(m_ctx, desc);
+    m_resolve = makeComputePipeline(m_ctx, spirv(spv_baked_resolve_comp),
+                                    {storageImage(kBakedBindAccum), storageImage(kBakedBindBase),
+                                     storageImage(kBakedBindResult)},
+                                    push);
+    m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
+    m_loops = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
+                     "baked loop counter");
+}
+
+BakedRenderer::~BakedRenderer() = default;
+
+const Pipeline& BakedRenderer::marchPipeline(bool count) {
+    if (const auto it = m_march.find(count); it != m_march.end())
+        return it->second;
+    Specialization spec;
+    spec.set(kBakedSpecCount, count);
+    Pipeline p = makeComputePipeline(
+        m_ctx, spirv(spv_baked_march_comp),
+        {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
+         storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
+         storageBuffer(kBakedBindDistances), storageImage(kBakedBindLayerTet),
+         storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
+         storageBuffer(kBakedBindLoops)},
+        sizeof(gpu_splat::SpotSplatFrame), spec);
+    return m_march.emplace(count, std::move(p)).first->second;
+}
+
+void BakedRenderer::loadBake(const std::string& file) {
+    const noise::BakedVolume volume = noise::readBakedGrids(file);
+    const int levels = volume.levels();
+    // Density leaves per level: vec4(extinction x colour, extinction) per voxel.
+    std::vector<Leaves> leaves(std::size_t(levels) + 1);
+    std::vector<std::vector<glm::vec4>> bricks(static_cast<std::size_t>(levels));
+    std::uint64_t brickCount = 0;
+    for (int l = 0; l < levels; ++l) {
+        volume.forEachActive(l, [&](glm::ivec3 ijk, float density, glm::vec3 color) {
+            const std::uint32_t b = leaves[std::size_t(l)].brick(ijk >> int(kBakedLeafBits));
+            auto& data = bricks[std::size_t(l)];
+            if (data.size() < std::size_t(b + 1) * kBakedLeafVoxels)
+                data.resize(std::size_t(b + 1) * kBakedLeafVoxels, glm::vec4(0.0f));
+            const glm::ivec3 o = ijk & 7;
+            data[std::size_t(b) * kBakedLeafVoxels + std::size_t(o.x << 6 | o.y << 3 | o.z)] =
+                glm::vec4(density * color, density);
+        });
+        brickCount += leaves[std::size_t(l)].keys.size();
+    }
+    // Distance leaves: every leaf within 3 voxels of a non-empty level-0 voxel (nearer than the
+    // cap), filled from the bake's distance grid; leaves that hold only the cap are left out
+    // (a lookup that finds no leaf reads the cap).
+    const float cap = noise::kBakeDistanceCap;
+    const int reach = int(cap) - 1;
+    Leaves candidates;
+    volume.forEachActive(0, [&](glm::ivec3 ijk, float, glm::vec3) {
+        for (int c = 0; c < 8; ++c) {
+            const glm::ivec3 d((c & 4) ? reach : -reach, (c & 2) ? reach : -reach,
+                               (c & 1) ? reach : -reach);
+            candidates.brick((ijk + d) >> int(kBakedLeafBits));
+        }
+    });
+    Leaves& distanceLeaves = leaves.back();
+    std::vector<float> distances;
+    std::vector<float> one(kBakedLeafVoxels);
+    for (const glm::ivec3& leaf : candidates.keys) {
+        bool any = false;
+        for (std::uint32_t v = 0; v < kBakedLeafVoxels; ++v) {
+            const glm::ivec3 ijk = leaf * 8 + glm::ivec3(int(v >> 6), int(v >> 3) & 7, int(v) & 7);
+            one[v] = volume.distance(ijk);
+            any = any || one[v] < cap;
+        }
+        if (!any)
+            continue;
+        distanceLeaves.brick(leaf);
+        distances.insert(distances.end(), one.begin(), one.end());
+    }
+
+    // Hash tables: one section per level, then the distance grid's.
+    std::vector<glm::ivec4> table;
+    std::vector<std::uint32_t> offsets(kBakedSections, 0), masks(kBakedSections, 0),
+        probes(kBakedSections, 0);
+    std::vector<std::uint32_t> firstBrick(std::size_t(levels) + 1, 0);
+    std::uint32_t base = 0;
+    std::uint32_t longest = 0;
+    for (std::size_t s = 0; s < leaves.size(); ++s) {
+        const std::uint32_t id = s < std::size_t(levels) ? std::uint32_t(s) : kBakedDistanceSection;
+        const Leaves& L = leaves[s];
+        firstBrick[s] = s < std::size_t(levels) ? base : 0;
+        std::uint64_t capacity = 16;
+        while (capacity < 2 * std::uint64_t(L.keys.size()))
+            capacity *= 2;
+        std::vector<glm::ivec4> slots;
+        std::uint32_t probe = 0;
+        for (int growth = 0;; ++growth, capacity *= 2) {
+            slots.assign(capacity, glm::ivec4(0, 0, 0, kBakedEmptySlot));
+            probe = 0;
+            const std::uint32_t mask = std::uint32_t(capacity - 1);
+            for (std::uint32_t b = 0; b < L.keys.size(); ++b) {
+                std::uint32_t slot = bakedHash(L.keys[b], id) & mask, p = 0;
+                while (slots[slot].w != kBakedEmptySlot) {
+                    slot = (slot + 1) & mask;
+                    ++p;
+                }
+                slots[slot] = glm::ivec4(L.keys[b], std::int32_t(firstBrick[s] + b));
+                probe = std::max(probe, p);
+            }
+            if (probe <= kWantedProbe || growth == kTableGrowths)
+                break;
+        }
+        offsets[id] = std::uint32_t(table.size());
+        masks[id] = std::uint32_t(slots.size() - 1);
+        probes[id] = probe;
+        longest = std::max(longest, probe);
+        table.insert(table.end(), slots.begin(), slots.end());
+        if (s < std::size_t(levels))
+            base += std::uint32_t(L.keys.size());
+    }
+
+    const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * kBakedLeafVoxels * 16;
+    const std::uint64_t distanceBytes =
+        std::max<std::uint64_t>(distanceLeaves.keys.size(), 1) * kBakedLeafVoxels * 4;
+    const std::uint64_t tableBytes = table.size() * sizeof(glm::ivec4);
+    const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
+    if (brickBytes > range || distanceBytes > range || tableBytes > range)
+        throw InputError(cat("baked: ", file, " holds ", brickCount, " leaves (", brickBytes >> 20,
+                             " MiB of bricks), more than one storage buffer of this device takes (",
+                             range >> 20, " MiB); bake it at a larger voxel size"));
+    const std::uint64_t held =
+        m_table.reservedBytes() + m_bricks.reservedBytes() + m_distances.reservedBytes();
+    if (m_ctx.allocatedBytes() - held + brickBytes + distanceBytes + tableBytes >
+        m_ctx.memoryBudget())
+        throw InputError(cat("baked: ", file, " needs ",
+                             (brickBytes + distanceBytes + tableBytes) >> 20,
+                             " MiB of GPU memory; ", (m_ctx.allocatedBytes() - held) >> 20,
+                             " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
+                             " MiB; bake it at a larger voxel size"));
+    m_table = Buffer();
+    m_bricks = Buffer();
+    m_distances = Buffer();
+    m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked hash tables");
+    m_table.upload(std::span<const glm::ivec4>(table));
+    m_bricks = Buffer(m_ctx, brickBytes, kStorage, kHost, cat("baked bricks (", brickCount, ")"));
+    for (int l = 0; l < levels; ++l)
+        if (!bricks[std::size_t(l)].empty())
+            m_bricks.upload(bricks[std::size_t(l)].data(),
+                            bricks[std::size_t(l)].size() * sizeof(glm::vec4),
+                            VkDeviceSize(firstBrick[std::size_t(l)]) * kBakedLeafVoxels * 16);
+    m_distances = Buffer(m_ctx, distanceBytes, kStorage, kHost, "baked distance bricks");
+    if (!distances.empty())
+        m_distances.upload(std::span<const float>(distances));
+    m_offsets = offsets;
+    m_masks = masks;
+    m_probes = probes;
+    m_bakeStats = BakedStats{};
+    m_bakeStats.voxelSize = volume.voxelSize(0);
+    m_bakeStats.levels = std::uint32_t(levels);
+    m_bakeStats.bricks = std::uint32_t(brickCount);
+    m_bakeStats.distanceBricks = std::uint32_t(distanceLeaves.keys.size());
+    m_bakeStats.longestProbe = longest;
+    m_bakeStats.gpuBytes = brickBytes + distanceBytes + tableBytes;
+}
+
+void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
+    if (m_width == width && m_height == height && m_result.handle())
+        return;
+    // Per pixel: base 16, distance 4, 2 depths 8, 2 layer depths 8, layer tet 4, accum 16,
+    // result 16.
+    const std::uint64_t need = std::uint64_t(width) * height * 72;
+    std::uint64_t held = 0;
+    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_layerDepth[0],
+                           &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+        held += i->reservedBytes();
+    if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
+        throw InputError(cat("baked: a ", width, "x", height, " frame needs ", need >> 20,
+                             " MiB of GPU memory for its targets; ",
+                             (m_ctx.allocatedBytes() - held) >> 20,
+                             " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
+                             " MiB; reduce the image size"));
+    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_layerDepth[0],
+                     &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+        *i = Image();
+    m_width = m_height = 0;
+    constexpr VkImageUsageFlags kAttach = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+    constexpr VkImageUsageFlags kStore = VK_IMAGE_USAGE_STORAGE_BIT;
+    constexpr VkImageUsageFlags kSrc = VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    constexpr VkImageUsageFlags kDst = VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    constexpr VkImageUsageFlags kDepthUse = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+    constexpr VkImageAspectFlags kColor = VK_IMAGE_ASPECT_COLOR_BIT;
+    constexpr VkImageAspectFlags kDepth = VK_IMAGE_ASPECT_DEPTH_BIT;
+    m_base = Image(m_ctx, width, height, kColorFormat, kAttach | kStore, kColor, "baked base colour");
+    m_distance =
+        Image(m_ctx, width, height, kScalarFormat, kAttach | kStore, kColor, "baked mesh distance");
+    m_meshDepth =
+        Image(m_ctx, width, height, kDepthFormat, kDepthUse | kSrc, kDepth, "baked mesh depth");
+    m_peelDepth =
+        Image(m_ctx, width, height, kDepthFormat, kDepthUse | kDst, kDepth, "baked peel depth");
+    for (Image& d : m_layerDepth)
+        d = Image(m_ctx, width, height, kScalarFormat, kAttach | kStore | kDst, kColor,
+                  "baked layer depth");
+    m_layerTet =
+        Image(m_ctx, width, height, kTetFormat, kAttach | kStore, kColor, "baked layer tetrahedra");
+    m_accum = Image(m_ctx, width, height, kColorFormat, kStore | kDst, kColor, "baked accumulation");
+    m_result = Image(m_ctx, width, height, kColorFormat, kStore | kSrc, kColor, "baked result");
+    m_width = width;
+    m_height = height;
+}
+
+void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
+                            const RenderSettings& settings) {
+    if (settings.bakeFile.empty())
+        throw InputError("baked: no bake file (render --bake FILE.vdb; spotshell bake makes one)");
+    if (view.camera.projection == noise::Projection::Orthographic)
+        throw InputError("baked: orthographic cameras are not supported yet");
+    if (view.shading.mode == noise::Shading::Mode::Lambert)
+        throw InputError("baked: Lambert shading needs normals the bake does not store; use "
+                         "unlit shading");
+    if (settings.peelPasses < 1 || settings.peelPasses > kBakedMaxPeelPasses)
+        throw InputError(cat("baked: ", settings.peelPasses, " peel passes; 1 to ",
+                             kBakedMaxPeelPasses, " are accepted"));
+    if (!impulses.cells)
+        throw InputError("baked: the shell's thickness needs the impulses' cells");
+    std::error_code error;
+    const auto time = std::filesystem::last_write_time(settings.bakeFile, error);
+    if (settings.bakeFile != m_bakeFile || error || time != m_bakeTime) {
+        m_bakeFile.clear();
+        loadBake(settings.bakeFile);
+        m_bakeFile = settings.bakeFile;
+        m_bakeTime = time;
+    }
+
+    // The tetrahedra, and the most steps one segment can take: the segment lies in its
+    // tetrahedron, whose rest-pose diameter is at most its prism's.
+    const float thickness = impulses.cells->cellSize;
+    const std::uint32_t triangles = m_scene.meshPass().indexCount() / 3;
+    const std::uint64_t tetBytes = std::max<std::uint64_t>(triangles, 1) * 3 * sizeof(SpotBakedTet);
+    if (m_tets.size() < tetBytes) {
+        const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
+        if (tetBytes > range)
+            throw InputError(cat("baked: the shell of ", triangles, " triangles needs ",
+                                 tetBytes >> 20, " MiB in one storage buffer, more than ",
+                                 range >> 20, " MiB"));
+        m_tets = Buffer();
+        m_tets = Buffer(m_ctx, tetBytes, kStorage, kDevice, "baked tetrahedra");
+    }
+    if (m_bakeStats.thickness != thickness || m_bakeStats.tetrahedra != 3 * triangles) {
+        const auto* vertices =
+            static_cast<const gpu_splat::SpotMeshVertex*>(m_scene.meshPass().vertices().mapped());
+        const auto* indices =
+            static_cast<const std::uint32_t*>(m_scene.meshPass().indices().mapped());
+        double diameter = 0.0;
+        for (std::uint32_t t = 0; t < triangles; ++t) {
+            std::array<glm::dvec3, 6> c;
+            for (int k = 0; k < 3; ++k) {
+                const gpu_splat::SpotMeshVertex& v = vertices[indices[3 * t + std::uint32_t(k)]];
+                const glm::dvec3 n(v.normal);
+                const double len = glm::length(n);
+                c[std::size_t(k)] = glm::dvec3(v.position);
+                c[std::size_t(k) + 3] =
+                    glm::dvec3(v.position) + (len > 0.0 ? double(thickness) / len : 0.0) * n;
+            }
+            for (std::size_t i = 0; i < 6; ++i)
+                for (std::size_t j = i + 1; j < 6; ++j)
+                    diameter = std::max(diameter, glm::length(c[i] - c[j]));
+        }
+        m_bakeStats.thickness = thickness;
+        m_bakeStats.tetrahedra = 3 * triangles;
+        m_bakeStats.maxSteps = std::uint32_t(
+            std::ceil(diameter / (double(kBakedStepFraction) * m_bakeStats.voxelSize)) + 1.0);
+    }
+    const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
+    // baked_march.comp: 4 + N (1 + (P_d + 1) + 8 (1 + P + 1)).
+    const std::uint64_t bound =
+        4 + std::uint64_t(m_bakeStats.maxSteps) *
+                (1 + (section(m_probes, kBakedDistanceSection) + 1) +
+                 8 * (2 + std::uint64_t(m_bakeStats.longestProbe)));
+    if (bound > budget)
+        throw InputError(cat("baked: a segment may take ", m_bakeStats.maxSteps,
+                             " steps, so one march invocation may loop ", bound,
+                             " times, more than the budget of ", budget,
+                             " (lavapipe stops an invocation at 65,535); bake at a larger voxel "
+                             "size or use a thinner shell"));
+    m_bakeStats.loopBound = std::uint32_t(bound);
+    m_bakeStats.peelPasses = std::uint32_t(settings.peelPasses);
+
+    SpotBakedParams params{};
+    params.grid = glm::vec4(m_bakeStats.voxelSize, 1.0f / m_bakeStats.voxelSize,
+                            noise::kBakeDistanceCap, thickness);
+    params.counts = glm::uvec4(triangles, m_bakeStats.levels, m_bakeStats.maxSteps, 0u);
+    for (std::uint32_t s = 0; s < kBakedSections; ++s) {
+        params.tableOffset[s >> 2][s & 3] = m_offsets[s];
+        params.tableMask[s >> 2][s & 3] = m_masks[s];
+        params.probe[s >> 2][s & 3] = m_probes[s];
+    }
+    m_params.upload(&params, sizeof(params));
+
+    ensureTargets(std::uint32_t(view.camera.width), std::uint32_t(view.camera.height));
+    m_frame.frame = makeSplatFrame(view.camera, view.shading, view.baseColor, 0, 1, 1.0f, 0, 0);
+    m_frame.background = view.background;
+    m_frame.peelPasses = std::uint32_t(settings.peelPasses);
+    m_frame.count = m_countLoops;
+    marchPipeline(m_frame.count);
+}
+
+void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const std::uint32_t triangles = m_bakeStats.tetrahedra / 3;
+    const MeshPass& mesh = m_scene.meshPass();
+
+    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet).
+    if (triangles > 0) {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_shell.handle());
+        pushFrame(cmd, m_shell, f.frame);
+        Descriptors()
+            .buffer(kBakedBindParams, m_params)
+            .buffer(kBakedBindVertices, mesh.vertices())
+            .buffer(kBakedBindRest, mesh.vertices())
+            .buffer(kBakedBindIndices, mesh.indices())
+            .buffer(kBakedBindTets, m_tets)
+            .push(m_ctx, cmd, m_shell);
+        vkCmdDispatch(cmd, (triangles + 63) / 64, 1, 1);
+    }
+    fullBarrier(cmd);
+    timer.mark(cmd, "shell");
+
+    // The base mesh.
+    for (const Image* image : {&m_base, &m_distance})
+        transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kAttachment,
+                        VK_PIPELINE_STAGE_2_NONE, 0, kColorOut, kColorRW);
+    transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0, kTests,
+                    kDepthRW);
+    mesh.record(cmd, f.frame, m_base, m_distance, m_meshDepth, f.background);
+    for (const Image* image : {&m_base, &m_distance})
+        transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
+                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kAll,
+                        VK_ACCESS_2_MEMORY_READ_BIT);
+    transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
+                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kGeneral, kTests, kDepthRW, kAll,
+                    VK_ACCESS_2_MEMORY_READ_BIT);
+    transitionImage(cmd, m_peelDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
+                    VK_IMAGE_LAYOUT_UNDEFINED, kGeneral, VK_PIPELINE_STAGE_2_NONE, 0, kAll,
+                    VK_ACCESS_2_MEMORY_WRITE_BIT);
+    for (const Image* image : {&m_layerDepth[0], &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+        transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
+                        VK_PIPELINE_STAGE_2_NONE, 0, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT);
+    // Nothing accumulated; layer 0's "previous depth" is nearer than any face (depth <= 1).
+    const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    const VkClearColorValue zero{};
+    VkClearColorValue nearest{};
+    nearest.float32[0] = 2.0f;
+    vkCmdClearColorImage(cmd, m_accum.handle(), kGeneral, &zero, 1, &colorRange);
+    vkCmdClearColorImage(cmd, m_layerDepth[1].handle(), kGeneral, &nearest, 1, &colorRange);
+    if (f.count)
+        vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
+    fullBarrier(cmd);
+    timer.mark(cmd, "mesh");
+
+    const Pipeline& march = m_march.at(f.count);
+    VkImageCopy copy{};
+    copy.srcSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
+    copy.dstSubresource = copy.srcSubresource;
+    copy.extent = {m_width, m_height, 1};
+    // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
+    const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
+    for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
+        const Image& prev = m_layerDepth[(k + 1) % 2];
+        const Image& layerDepth = m_layerDepth[k % 2];
+        // Peel: the nearest tetrahedron front face behind the previous layer, before the mesh.
+        vkCmdCopyImage(cmd, m_meshDepth.handle(), kGeneral, m_peelDepth.handle(), kGeneral, 1,
+                       &copy);
+        fullBarrier(cmd);
+        VkRenderingAttachmentInfo tetInfo = colorAttachment(m_layerTet, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo depthOut = colorAttachment(layerDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo depthInfo = depthAttachment(m_peelDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
+        tetInfo.imageLayout = depthOut.imageLayout = depthInfo.imageLayout = kGeneral;
+        beginRendering(cmd, m_width, m_height, {tetInfo, depthOut}, &depthInfo);
+        if (triangles > 0) {
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_peel.handle());
+            pushFrame(cmd, m_peel, f.frame);
+            Descriptors()
+                .buffer(kBakedBindTets, m_tets)
+                .image(kBakedBindPrevDepth, prev, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+                .push(m_ctx, cmd, m_peel);
+            vkCmdDraw(cmd, triangles * 3 * 12, 1, 0, 0);
+        }
+        vkCmdEndRendering(cmd);
+        fullBarrier(cmd);
+        if (markLayers)
+            timer.mark(cmd, "peel");
+
+        // March the kept tetrahedron and composite under the earlier layers.
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
+        pushFrame(cmd, march, f.frame);
+        Descriptors()
+            .buffer(kBakedBindParams, m_params)
+            .buffer(kBakedBindTets, m_tets)
+            .buffer(kBakedBindTable, m_table)
+            .buffer(kBakedBindBricks, m_bricks)
+            .buffer(kBakedBindDistances, m_distances)
+            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindLoops, m_loops)
+            .push(m_ctx, cmd, march);
+        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+        fullBarrier(cmd);
+        if (markLayers)
+            timer.mark(cmd, "march");
+    }
+    if (!markLayers)
+        timer.mark(cmd, "peel+march");
+
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_resolve.handle());
+    pushFrame(cmd, m_resolve, f.frame);
+    Descriptors()
+        .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .image(kBakedBindBase, m_base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .image(kBakedBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .push(m_ctx, cmd, m_resolve);
+    vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                  kCompute | kTransfer | kHostStage,
+                  kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
+    timer.mark(cmd, "resolve");
+}
+
+BakedStats BakedRenderer::stats() const {
+    BakedStats s = m_bakeStats;
+    if (m_frame.count)
+        std::memcpy(&s.maxLoopIterations, m_loops.mapped(), sizeof(std::uint32_t));
+    return s;
+}
+
+FrameCounters BakedRenderer::counters() const {
+    const BakedStats s = stats();
+    FrameCounters c;
+    c.extra = {{"voxel_size", double(s.voxelSize)},
+               {"levels", double(s.levels)},
+               {"thickness", double(s.thickness)},
+               {"tetrahedra", double(s.tetrahedra)},
+               {"bricks", double(s.bricks)},
+               {"distance_bricks", double(s.distanceBricks)},
+               {"max_steps", double(s.maxSteps)},
+               {"longest_probe", double(s.longestProbe)},
+               {"loop_bound", double(s.loopBound)},
+               {"peel_passes", double(s.peelPasses)},
+               {"bake_mib", double(s.gpuBytes) / double(1 << 20)}};
+    if (m_frame.count)
+        c.extra.emplace_back("max_loop_iterations", double(s.maxLoopIterations));
+    return c;
+}
+
+} // namespace spot::splat

@@ -1,0 +1,145 @@
+/// @file baked_vk.h
+/// @brief The `baked` method of docs/design.md section 5: the bake (noise/bake.h) rendered
+/// through the mesh's shell of tetrahedra with depth-peeling order-independent transparency.
+/// A Renderer of the registry (method_vk.h).
+///
+/// Per frame, recorded into the caller's command buffer with no host wait:
+///  1. shell (compute, baked_shell.comp): per triangle its prism (the mesh extruded along its
+///     vertex normals by the shell thickness) split into 3 tetrahedra with noise/shell.h's rule,
+///     each corner with its position now and at rest (the texture coordinate into the bake).
+///     Rebuilt from the mesh's vertices every frame, so an animated mesh's shell follows it.
+///  2. mesh (raster): the opaque base mesh's colour, ray distance and depth (MeshPass).
+///  3. per layer k = 1..N (RenderSettings::peelPasses): peel (raster, baked_tet.vert and
+///     baked_peel.frag): the tetrahedra's faces that face the eye, with the mesh's depth copied
+///     into the depth buffer (z-buffer culling behind the mesh) and a test against layer k-1's
+///     depth, keep per pixel the nearest tetrahedron not yet peeled; march (compute,
+///     baked_march.comp): the view ray's segment inside that tetrahedron, in texture space by its
+///     affine map, marched through the bake at the mip level of the pixel's footprint and
+///     composited under the earlier layers (front to back).
+///  4. resolve (compute): the accumulation over the mesh colour, into result().
+///
+/// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in one storage
+/// buffer (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
+/// found through open-addressed hash tables (one section per level and one for the distance
+/// grid, at most half full, linear probing with the longest probe known on the host). The march
+/// skips the samples the distance grid proves empty.
+///
+/// The loop guard: lavapipe stops an invocation after 65,535 loop iterations, so prepare()
+/// bounds what one march invocation can run (baked_march.comp's formula, from the steps per
+/// segment and the tables' longest probes) and refuses a frame above kBakedLoopBudget.
+///
+/// Limits: perspective cameras and unlit shading only (the bake stores no normals); a layer
+/// holds one tetrahedron per pixel, so tetrahedra beyond the N-th along a ray are not drawn
+/// (more layers never make the image worse; 4 cover most of the fur at the scenes' views).
+/// Results are deterministic: no float atomics, every pixel independent.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "shaders/spot_layout.hpp"
+#include "splat/context_vk.h"
+#include "splat/method_vk.h"
+#include "splat/pass_vk.h"
+
+namespace spot::splat {
+
+namespace gpu_baked {
+using glm::ivec3;
+using glm::ivec4;
+using glm::uvec4;
+using glm::vec4;
+using uint = std::uint32_t;
+#define SPOT_CONST inline constexpr
+#define SPOT_FN inline
+#include "shaders/baked_layout.glsl"
+#undef SPOT_CONST
+#undef SPOT_FN
+static_assert(sizeof(SpotBakedTet) == 128);
+static_assert(sizeof(SpotBakedParams) == 176);
+} // namespace gpu_baked
+
+/// Loop iterations one march invocation may need by default (baked_march.comp).
+inline constexpr std::uint32_t kBakedMarchLoopBudget = gpu_baked::kBakedLoopBudget;
+/// Most peel passes accepted.
+inline constexpr int kBakedMaxPeelPasses = 64;
+
+/// What the last frame used (the stats' FrameCounters::extra gives them to `render --stats`).
+struct BakedStats {
+    float voxelSize = 0.0f;      ///< level 0's, world units
+    std::uint32_t levels = 0;    ///< mip levels in the bake
+    float thickness = 0.0f;      ///< the shell's, world units
+    std::uint32_t tetrahedra = 0;
+    std::uint32_t bricks = 0;         ///< density leaves of every level
+    std::uint32_t distanceBricks = 0; ///< distance leaves
+    std::uint32_t maxSteps = 0;       ///< most march steps per segment
+    std::uint32_t longestProbe = 0;   ///< of every table section
+    std::uint32_t loopBound = 0;      ///< what one march invocation may run
+    std::uint32_t maxLoopIterations = 0; ///< counted (countLoops) in the last frame
+    std::uint32_t peelPasses = 0;
+    std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
+};
+
+class BakedRenderer final : public Renderer {
+public:
+    /// `scene` must outlive the renderer.
+    explicit BakedRenderer(const SceneGpu& scene);
+    ~BakedRenderer() override;
+
+    /// Reads settings.bakeFile when it changed (InputError, one line naming the file, for a
+    /// missing or bad file, or a bake beyond the storage-buffer or memory limits). The shell's
+    /// thickness is the impulses' cell size (ImpulseSet::cells; the kernels reach at most one
+    /// cell from the surface). InputError for an orthographic camera, Lambert shading, a peel
+    /// count outside [1, kBakedMaxPeelPasses] or a loop bound beyond the budget.
+    void prepare(const View& view, const ImpulseSet& impulses,
+                 const RenderSettings& settings) override;
+    void record(VkCommandBuffer cmd, PassTimer& timer) override;
+    const Image& result() const override { return m_result; }
+    /// extra: voxel_size, levels, thickness, tetrahedra, bricks, distance_bricks, max_steps,
+    /// longest_probe, loop_bound, peel_passes, bake_mib (and max_loop_iterations when counting).
+    FrameCounters counters() const override;
+
+    /// Count every march invocation's loop iterations from the next frame on (for tests).
+    void countLoops(bool on) { m_countLoops = on; }
+    /// After the frame completed.
+    BakedStats stats() const;
+
+private:
+    struct Bake;
+    void loadBake(const std::string& file);
+    void ensureTargets(std::uint32_t width, std::uint32_t height);
+    const Pipeline& marchPipeline(bool count);
+
+    const SceneGpu& m_scene;
+    Context& m_ctx;
+    Pipeline m_shell, m_peel, m_resolve;
+    std::map<bool, Pipeline> m_march;
+    bool m_countLoops = false;
+
+    // Per bake file.
+    std::string m_bakeFile;
+    std::filesystem::file_time_type m_bakeTime{};
+    BakedStats m_bakeStats;
+    Buffer m_table, m_bricks, m_distances;
+    std::vector<std::uint32_t> m_offsets, m_masks, m_probes;
+    // Per mesh: the tetrahedra (3 per triangle).
+    Buffer m_tets, m_params;
+    // Per image size.
+    std::uint32_t m_width = 0, m_height = 0;
+    Image m_base, m_distance, m_meshDepth, m_peelDepth, m_layerDepth[2], m_layerTet, m_accum,
+        m_result;
+    Buffer m_loops;
+
+    struct Prepared {
+        gpu_splat::SpotSplatFrame frame{};
+        glm::vec3 background{0.0f};
+        std::uint32_t peelPasses = 1;
+        bool count = false;
+    } m_frame;
+};
+
+} // namespace spot::splat
