@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "editor/edit_session.h"
@@ -70,7 +72,10 @@ inline float worldRadius(const edit::Session& s, const edit::Hit& hit, float rad
 
 /// Run spotshell with `args`; the exit code, stderr in `err`.
 inline int spotshell(const std::string& args, std::string* err = nullptr) {
-    const std::filesystem::path errFile = tmpPath("spotshell_stderr.txt");
+    // One file per process and call: ctest runs tests in parallel processes that share tmp/.
+    static int calls = 0;
+    const std::filesystem::path errFile =
+        tmpPath("spotshell_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(calls++) + ".txt");
     const std::string command =
         std::string(SPOT_SPOTSHELL) + " " + args + " >/dev/null 2>" + errFile.string();
     const int status = std::system(command.c_str());

@@ -48,7 +48,7 @@ std::string slurp(const std::string& file) {
 /// `prefix` goes before the command (environment changes, xvfb-run).
 Result run(const std::string& prefix, const std::string& args) {
     static int counter = 0;
-    const std::string errFile = tmp("stderr-" + std::to_string(counter++) + ".txt");
+    const std::string errFile = tmp("stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
     const std::string cmd =
         prefix + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
     Result r;
@@ -216,7 +216,7 @@ std::string writeScript(const std::string& name, const std::string& text) {
 spot::noise::Image editInWindow(const std::string& script, const std::string& extra,
                                 std::string* out = nullptr) {
     static int counter = 0;
-    const std::string shot = tmp("scripted-" + std::to_string(counter++) + ".exr");
+    const std::string shot = tmp("scripted-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".exr");
     const Result e = run(kXvfb, "edit --scene " + scene() + " --size 200x160 --script " + script +
                                     " --window --frames 2 --screenshot " + shot + " " + extra);
     EXPECT_EQ(e.code, 0) << e.err;

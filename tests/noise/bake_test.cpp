@@ -560,7 +560,7 @@ struct CliRun {
 
 CliRun spotshell(const std::string& args, const std::string& env = "") {
     static int counter = 0;
-    const fs::path errFile = tmpDir() / ("stderr-" + std::to_string(counter++) + ".txt");
+    const fs::path errFile = tmpDir() / ("stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
     const std::string cmd =
         env + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>'" + errFile.string() + "'";
     CliRun r;

@@ -243,7 +243,7 @@ struct CliRun {
 
 CliRun spotshell(const std::string& args) {
     static int counter = 0;
-    const fs::path errFile = tmpDir() / ("stderr-" + std::to_string(counter++) + ".txt");
+    const fs::path errFile = tmpDir() / ("stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
     const std::string cmd =
         std::string(SPOT_SPOTSHELL) + " " + args + " >/dev/null 2>'" + errFile.string() + "'";
     CliRun r;
