@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_run.h"
 #include "editor/edit_session.h"
 #include "noise/camera.h"
 #include "noise/impulses.h"
@@ -72,18 +73,10 @@ inline float worldRadius(const edit::Session& s, const edit::Hit& hit, float rad
 
 /// Run spotshell with `args`; the exit code, stderr in `err`.
 inline int spotshell(const std::string& args, std::string* err = nullptr) {
-    // One file per process and call: ctest runs tests in parallel processes that share tmp/.
-    static int calls = 0;
-    const std::filesystem::path errFile =
-        tmpPath("spotshell_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(calls++) + ".txt");
-    const std::string command =
-        std::string(SPOT_SPOTSHELL) + " " + args + " >/dev/null 2>" + errFile.string();
-    const int status = std::system(command.c_str());
-    if (err) {
-        std::ifstream in(errFile);
-        err->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    }
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const CliResult r = runSpotshell(args + " >/dev/null");
+    if (err)
+        *err = r.err;
+    return r.code;
 }
 
 inline void writeText(const std::filesystem::path& file, const std::string& text) {

@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_run.h"
 #include "edit_quit.h"
 #include "edit_view.h"
 #include "noise/camera.h"
@@ -27,41 +28,16 @@ namespace {
 
 using spot::editor::OrbitView;
 
-struct Result {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
+using Result = spot::test::CliResult;
 
 std::string tmp(const std::string& name) {
     // Per process: ctest runs these tests in parallel processes.
     return std::string(SPOT_TEST_TMP_DIR) + "/window-" + std::to_string(::getpid()) + "-" + name;
 }
 
-std::string slurp(const std::string& file) {
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 /// `prefix` goes before the command (environment changes, xvfb-run).
 Result run(const std::string& prefix, const std::string& args) {
-    static int counter = 0;
-    const std::string errFile = tmp("stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
-    const std::string cmd =
-        prefix + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
-    Result r;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe)
-        return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), int(buf.size()), pipe))
-        r.out += buf.data();
-    const int status = pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = slurp(errFile);
-    return r;
+    return spot::test::runSpotshell(args, prefix);
 }
 
 /// Validation on: any error fails the command (exit 1) and is printed.

@@ -11,13 +11,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cli_run.h"
+
 namespace {
 
-struct Result {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
+using Result = spot::test::CliResult;
 
 std::string tmp(const std::string& name) { return std::string(SPOT_TEST_TMP_DIR) + "/" + name; }
 
@@ -28,25 +26,8 @@ std::string slurp(const std::string& file) {
     return s.str();
 }
 
-Result run(const std::string& args) {
-    static int counter = 0;
-    // Per process and call: ctest runs these tests in parallel processes.
-    const std::string errFile =
-        tmp("stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
-    // Validation on for every GPU method the command runs: any error fails the command (exit 1).
-    const std::string cmd = "SPOT_VALIDATION=1 " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile;
-    Result r;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe)
-        return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), int(buf.size()), pipe))
-        r.out += buf.data();
-    const int status = pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = slurp(errFile);
-    return r;
-}
+/// Validation on for every GPU method the command runs: any error fails the command (exit 1).
+Result run(const std::string& args) { return spot::test::runSpotshell(args, "SPOT_VALIDATION=1"); }
 
 void write(const std::string& file, const std::string& text) {
     std::ofstream(file, std::ios::binary) << text;

@@ -25,6 +25,7 @@
 #include "noise/mesh.h"
 #include "noise/painted.h"
 #include "noise/preset.h"
+#include "cli_run.h"
 #include "test_support.h"
 
 namespace {
@@ -570,26 +571,10 @@ TEST(PaintedField, GeneratorSetFieldAndRefresh) {
 
 // ---- The command line --------------------------------------------------------------------
 
-struct Result {
-    int code = -1;
-    std::string out, err;
-};
+using Result = spot::test::CliResult;
 
-Result run(const std::string& args, const fs::path& dir) {
-    const fs::path errFile = dir / "stderr.txt";
-    const std::string cmd =
-        "SPOT_VALIDATION=1 " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile.string();
-    Result r;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe)
-        return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), int(buf.size()), pipe))
-        r.out += buf.data();
-    const int status = pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = slurp(errFile);
-    return r;
+Result run(const std::string& args, const fs::path&) {
+    return spot::test::runSpotshell(args, "SPOT_VALIDATION=1");
 }
 
 TEST(PaintedCli, ImpulsesAndRenderReadAPaintedPreset) {

@@ -91,7 +91,8 @@ TEST(VulkanContext, RefusesAllocationsBeyondTheBudget) {
 TEST(VulkanContext, ValidationErrorsAreCounted) {
     // A deliberate misuse must be seen, or the zero-error checks above prove nothing.
     splat::Context ctx(validated());
-    VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    VkBufferCreateInfo bci{};
+    bci.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
     bci.size = 0; // invalid: size must be > 0
     bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
     VkBuffer buffer = VK_NULL_HANDLE;
