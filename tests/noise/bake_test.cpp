@@ -23,6 +23,7 @@
 #include <openvdb/openvdb.h>
 #include <tbb/global_control.h>
 
+#include "cli_run.h"
 #include "noise/bake.h"
 #include "noise/error.h"
 #include "noise/impulses.h"
@@ -549,28 +550,10 @@ TEST(Bake, Fnv1aMatchesTheReferenceVectors) {
 
 namespace {
 
-struct CliRun {
-    int code = -1;
-    std::string out, err;
-};
+using CliRun = spot::test::CliResult;
 
 CliRun spotshell(const std::string& args, const std::string& env = "") {
-    static int counter = 0;
-    const fs::path errFile = tmpDir() / ("stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
-    const std::string cmd =
-        env + " " + std::string(SPOT_SPOTSHELL) + " " + args + " 2>'" + errFile.string() + "'";
-    CliRun r;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe)
-        return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), int(buf.size()), pipe))
-        r.out += buf.data();
-    const int status = pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream err(errFile);
-    r.err.assign((std::istreambuf_iterator<char>(err)), {});
-    return r;
+    return spot::test::runSpotshell(args, env);
 }
 
 std::string scene(const std::string& name) {
