@@ -545,16 +545,22 @@ std::string fmt(const char* format, auto... args) {
 /// coarse mip levels against level 0 alone at the same voxel size and peel passes, and baked's
 /// speed-up over hybrid's default setting with whether its FLIP is at most hybrid's.
 std::vector<std::string> bakedFindings(const json& rows) {
-    std::vector<std::string> out;
-    for (const json& hyb : rows) {
-        if (hyb["scenario"] != "far view" || hyb["method"] != "hybrid" ||
-            hyb["setting"] != "ewa mb analytic" || !measured(hyb))
-            continue;
-        const std::string scene = hyb["scene"];
+    std::vector<std::string> out, scenes;
+    for (const json& r : rows)
+        if (r["scenario"] == "far view" && r["method"] == "baked" &&
+            std::find(scenes.begin(), scenes.end(), r["scene"]) == scenes.end())
+            scenes.push_back(r["scene"]);
+    for (const std::string& scene : scenes) {
         std::vector<const json*> baked;
-        for (const json& r : rows)
-            if (r["scene"] == scene && r["scenario"] == "far view" && r["method"] == "baked" && measured(r))
+        const json* hybrid = nullptr;
+        for (const json& r : rows) {
+            if (r["scene"] != scene || r["scenario"] != "far view" || !measured(r))
+                continue;
+            if (r["method"] == "baked")
                 baked.push_back(&r);
+            else if (r["method"] == "hybrid" && r["setting"] == "ewa mb analytic")
+                hybrid = &r;
+        }
         if (baked.empty()) {
             out.push_back(cat("Far view (", scene, "): no baked row was measured."));
             continue;
@@ -579,7 +585,9 @@ std::vector<std::string> bakedFindings(const json& rows) {
             }
         }
         // Speed: baked's most accurate setting, and its fastest one at most as wrong as hybrid.
-        const double hMs = hyb["ms_median"], hFlip = hyb["flip"];
+        if (!hybrid)
+            continue;
+        const double hMs = (*hybrid)["ms_median"], hFlip = (*hybrid)["flip"];
         const json* acc = *std::min_element(baked.begin(), baked.end(), [](const json* a, const json* b) {
             return double((*a)["flip"]) < double((*b)["flip"]);
         });
@@ -741,7 +749,7 @@ int bench(int argc, char** argv) {
                    "stability.md/png and scaling.png into DIR.",
                    {{"suite", "NAME", "quick (a few minutes), full (every scene at 128x128) or realtime (every "
                                       "scene at 640x480 and 50k fur kernels at 1024x1024); default quick", false},
-                    {"out", "DIR", "output folder (created; references are cached in DIR/cache)", true},
+                    {"out", "DIR", "output folder (created; references and bakes are cached in DIR/cache)", true},
                     {"scenes", "DIR", "scene folder (default: presets/scenes next to the source)", false},
                     {"only", "NAMES", "bench only these of the suite's scenes, comma-separated file "
                                       "names without .json (e.g. fur-bunny-far,fur-bunny-close); "
