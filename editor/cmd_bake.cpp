@@ -8,6 +8,7 @@
 
 #include <tbb/global_control.h>
 
+#include "bench_bake.h"
 #include "cli.h"
 #include "commands.h"
 #include "noise/bake.h"
@@ -23,17 +24,6 @@ namespace {
 
 /// Presets are small JSON files; the cap only guards against a wrong path.
 constexpr std::uint64_t kMaxPresetBytes = 64ull << 20;
-
-/// The longest side of the mesh's bounding box, world units.
-double longestSide(const noise::Mesh& mesh) {
-    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-    for (const glm::vec3& p : mesh.positions) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    const glm::vec3 d = hi - lo;
-    return mesh.positions.empty() ? 0.0 : double(std::max(d.x, std::max(d.y, d.z)));
-}
 
 } // namespace
 
@@ -80,10 +70,11 @@ int bake(int argc, char** argv) {
     options.presetHash = noise::fnv1a64(readFileCapped(job.scene.preset, kMaxPresetBytes));
     if (args.has("resolution")) {
         const auto n = args.integer("resolution", 0, 1, 1 << 24);
-        options.voxelSize = float(longestSide(job.mesh) / double(n));
-        if (!(options.voxelSize > 0.0f))
-            throw InputError(cat("spotshell bake: the mesh ", job.mesh.name,
-                                 " has no extent to divide into ", n, " voxels"));
+        try {
+            options.voxelSize = voxelSizeForResolution(job.mesh, int(n));
+        } catch (const InputError& e) {
+            throw InputError(cat("spotshell bake: ", e.what()));
+        }
     } else {
         // 32 voxels per cell edge: on fur-bunny 0.0019, about 1.7 sigmas of the thinnest lobe
         // (docs/design.md section 5 has the measured costs).

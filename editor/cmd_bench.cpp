@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench_bake.h"
 #include "bench_plot.h"
 #include "cli.h"
 #include "commands.h"
@@ -45,6 +46,9 @@ struct Variant {
     std::string method;  ///< a GPU method of the registry (splat::gpuMethods())
     std::string setting; ///< human-readable settings, unique per method
     splat::RenderSettings settings;
+    /// baked: the bake's level-0 voxels along the mesh's longest side and its levels (the bench
+    /// bakes each scene's noise itself; settings.bakeFile is set per scene).
+    int bakeResolution = 0, bakeLevels = 0;
 };
 
 struct SceneEntry {
@@ -75,6 +79,11 @@ splat::RenderSettings splatSettings(bool ewa, splat::OitWeight w, int samples, d
 }
 
 enum class Variants { Quick, Full, Realtime };
+
+std::string bakedSetting(int resolution, int levels, int peels) {
+    return cat("res ", resolution, ", ", levels, levels == 1 ? " level, " : " levels, ", peels,
+               peels == 1 ? " peel" : " peels");
+}
 
 std::vector<Variant> variants(Variants which) {
     const bool full = which == Variants::Full;
@@ -111,6 +120,26 @@ std::vector<Variant> variants(Variants which) {
         s.steps = steps;
         s.supersample = n;
         v.push_back({"raymarch", n == 1 ? cat(steps, " steps") : cat(steps, " steps ", n, "x", n), s});
+    }
+    // The bake (baked) against its voxel size (resolution: level 0's voxels along the mesh's
+    // longest side), its mip levels (1: level 0 only, so a far view samples voxels far below a
+    // pixel) and its depth-peeling passes (on fur-bunny 4 leave enough fur undrawn to be
+    // degraded; 8 do not). Quick: one cheap row per scene, so CI covers the path. Full:
+    // resolution x levels at 8 peels, the peel passes 1, 2, 4 at 256 with mips, and 512, whose
+    // bricks exceed one storage buffer on the bunny (a refused row). Realtime: with and without
+    // mips at 256, at the renderer's default 4 peels.
+    struct Baked {
+        int resolution, levels, peels;
+    };
+    const std::vector<Baked> bakes =
+        full ? std::vector<Baked>{{128, 1, 8}, {128, 4, 8}, {256, 1, 8}, {256, 4, 8},
+                                  {256, 4, 1}, {256, 4, 2}, {256, 4, 4}, {512, 4, 8}}
+        : which == Variants::Realtime ? std::vector<Baked>{{256, 1, 4}, {256, 4, 4}}
+                                      : std::vector<Baked>{{128, 4, 8}};
+    for (const Baked& b : bakes) {
+        splat::RenderSettings s;
+        s.peelPasses = b.peels;
+        v.push_back({"baked", bakedSetting(b.resolution, b.levels, b.peels), s, b.resolution, b.levels});
     }
     return v;
 }
@@ -270,14 +299,49 @@ struct Bench {
         return f;
     }
 
+    /// The bakes of this run by cache key (bench_bake.h), and the refused ones with the reason.
+    std::map<std::string, BenchBake> bakes{};
+    std::map<std::string, std::string> refusedBakes{};
+
+    /// The bake baked variant `v` renders on `job`'s scene, found in DIR/cache or made now; sets
+    /// v.settings.bakeFile and the row's bake columns. InputError when the bake is refused.
+    void prepareBake(cli::SceneJob& job, const std::string& meshBytes, Variant& v, json& row) {
+        BenchBakeInputs in;
+        in.mesh = meshBytes;
+        in.preset = slurp(job.scene.preset);
+        in.seed = job.scene.seed;
+        in.voxelSize = voxelSizeForResolution(job.mesh, v.bakeResolution);
+        in.levels = v.bakeLevels;
+        row.update({{"resolution", v.bakeResolution}, {"voxel_size", in.voxelSize},
+                    {"levels", v.bakeLevels}, {"peel_passes", v.settings.peelPasses}});
+        const std::string key = benchBakeKey(in);
+        if (const auto r = refusedBakes.find(key); r != refusedBakes.end())
+            throw InputError(r->second);
+        auto it = bakes.find(key);
+        if (it == bakes.end()) {
+            try {
+                it = bakes.emplace(key, benchBake(out / "cache", *job.generator, in, job.preset.name)).first;
+            } catch (const InputError& e) {
+                refusedBakes[key] = cat("bake refused: ", oneLine(e.what()));
+                throw InputError(refusedBakes[key]);
+            }
+        }
+        row.update({{"bake_seconds", it->second.seconds}, {"bake_bytes", it->second.bytes},
+                    {"bake_cached", it->second.cached}});
+        v.settings.bakeFile = it->second.file.string();
+    }
+
     json runVariant(const SceneEntry& entry, cli::SceneJob& job, splat::Frame& frame,
-                    const Variant& v, const noise::Image& ref, double refFlicker,
-                    double rooflineMs) {
+                    Variant v, const noise::Image& ref, double refFlicker,
+                    double rooflineMs, const std::string& meshBytes) {
         json row = {{"scene", job.scene.name}, {"scenario", entry.scenario}, {"method", v.method},
                     {"setting", v.setting}, {"width", job.scene.camera.width},
                     {"rays_per_pixel", v.method == "raymarch" ? v.settings.supersample * v.settings.supersample : 0},
                     {"height", job.scene.camera.height}};
+        const bool baked = splat::gpuMethod(v.method).baked;
         try {
+            if (baked)
+                prepareBake(job, meshBytes, v, row);
             ctx.resetPeak();
             // One cold frame, then the slow orbit: its frames are the warm frames timed (the view
             // turns 0.5 degrees a frame, the work stays the same), frame 0 is the scene's own
@@ -342,6 +406,11 @@ struct Bench {
                 row["status"] = "ok";
                 row["reason"] = "";
             }
+        } catch (const InputError& e) {
+            // baked refuses what it cannot render (Lambert shading, bricks beyond one storage
+            // buffer, a bake over the memory budget): a limit of the method, recorded as such.
+            row["status"] = baked ? "refused" : "failed";
+            row["reason"] = oneLine(e.what());
         } catch (const std::exception& e) {
             row["status"] = "failed";
             row["reason"] = oneLine(e.what());
@@ -360,18 +429,27 @@ struct Bench {
             refOrbit.push_back(reference(file, job, orbit(job.scene.camera, k, suite.orbitDeg)));
         const double refFlicker = flicker(refOrbit);
         splat::Frame frame(ctx, job.mesh, *job.generator);
-        // The roofline: the same quads over the same pixels with trivial shaders.
+        // The roofline: the same quads over the same pixels with trivial shaders (when a
+        // splatting method is benched).
         Variant roofline{"oit", "roofline", splatSettings(true, splat::OitWeight::McGuireBavoil, 0)};
         roofline.settings.roofline = true;
         std::vector<double> rooflineMs;
-        for (int f = 0; f <= suite.frames; ++f) {
+        const bool splatting = std::any_of(suite.variants.begin(), suite.variants.end(), [](const Variant& v) {
+            return splat::gpuMethod(v.method).splatting;
+        });
+        for (int f = 0; splatting && f <= suite.frames; ++f) {
             const Frame fr = render(job, frame, job.scene.camera, roofline, false);
             if (f > 0)
                 rooflineMs.push_back(fr.splatMs);
         }
         const double rooflineMedian = percentile(rooflineMs, 0.5);
+        // The mesh's bytes, for the bake cache's keys.
+        std::string meshBytes;
+        if (std::any_of(suite.variants.begin(), suite.variants.end(),
+                        [](const Variant& v) { return splat::gpuMethod(v.method).baked; }))
+            meshBytes = slurp(job.scene.mesh);
         for (const Variant& v : suite.variants) {
-            json row = runVariant(entry, job, frame, v, ref, refFlicker, rooflineMedian);
+            json row = runVariant(entry, job, frame, v, ref, refFlicker, rooflineMedian, meshBytes);
             row["reference_flicker"] = refFlicker;
             rows.push_back(row);
             bar.update(++done, total);
@@ -441,6 +519,98 @@ struct Bench {
     }
 };
 
+/// The stability matrix's column of a row: the method, except that the ray-march without a pixel
+/// filter and the bake without mips (level 0 only) are columns of their own.
+std::string matrixColumn(const json& r) {
+    const std::string method = r["method"];
+    if (r.value("rays_per_pixel", 0) == 1)
+        return method + " (1 ray/pixel)";
+    if (method == "baked" && r.value("levels", 0) == 1)
+        return method + " (no mips)";
+    return method;
+}
+
+/// A row with measurements (status ok or degraded).
+bool measured(const json& r) {
+    return (r["status"] == "ok" || r["status"] == "degraded") && r.contains("flip");
+}
+
+std::string fmt(const char* format, auto... args) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf, format, args...);
+    return buf;
+}
+
+/// What the baked rows show, as sentences made from this run's numbers: in every far view, the
+/// coarse mip levels against level 0 alone at the same voxel size and peel passes, and baked's
+/// speed-up over hybrid's default setting with whether its FLIP is at most hybrid's.
+std::vector<std::string> bakedFindings(const json& rows) {
+    std::vector<std::string> out, scenes;
+    for (const json& r : rows)
+        if (r["scenario"] == "far view" && r["method"] == "baked" &&
+            std::find(scenes.begin(), scenes.end(), r["scene"]) == scenes.end())
+            scenes.push_back(r["scene"]);
+    for (const std::string& scene : scenes) {
+        std::vector<const json*> baked;
+        const json* hybrid = nullptr;
+        for (const json& r : rows) {
+            if (r["scene"] != scene || r["scenario"] != "far view" || !measured(r))
+                continue;
+            if (r["method"] == "baked")
+                baked.push_back(&r);
+            else if (r["method"] == "hybrid" && r["setting"] == "ewa mb analytic")
+                hybrid = &r;
+        }
+        if (baked.empty()) {
+            out.push_back(cat("Far view (", scene, "): no baked row was measured."));
+            continue;
+        }
+        // Mips: each setting with coarse levels against the same bake without them.
+        for (const json* m : baked) {
+            if (m->value("levels", 1) <= 1)
+                continue;
+            for (const json* z : baked) {
+                if (z->value("levels", 1) != 1 || (*z)["resolution"] != (*m)["resolution"] ||
+                    (*z)["peel_passes"] != (*m)["peel_passes"])
+                    continue;
+                const double fm = (*m)["flip"], fz = (*z)["flip"];
+                out.push_back(fmt("Far view (%s), resolution %d, %d peel passes: with %d mip levels "
+                                  "FLIP %.4f (PSNR %.2f dB), level 0 alone FLIP %.4f (PSNR %.2f dB): "
+                                  "the coarse levels match the reference %s.",
+                                  scene.c_str(), int((*m)["resolution"]), int((*m)["peel_passes"]),
+                                  int((*m)["levels"]), fm, double((*m)["psnr"]), fz,
+                                  double((*z)["psnr"]),
+                                  fm <= fz ? "no worse than level 0 does"
+                                           : fmt("worse than level 0 does (FLIP +%.4f)", fm - fz).c_str()));
+            }
+        }
+        // Speed: baked's most accurate setting, and its fastest one at most as wrong as hybrid.
+        if (!hybrid)
+            continue;
+        const double hMs = (*hybrid)["ms_median"], hFlip = (*hybrid)["flip"];
+        const json* acc = *std::min_element(baked.begin(), baked.end(), [](const json* a, const json* b) {
+            return double((*a)["flip"]) < double((*b)["flip"]);
+        });
+        const json* fast = nullptr;
+        for (const json* r : baked)
+            if (double((*r)["flip"]) <= hFlip && (!fast || double((*r)["ms_median"]) < double((*fast)["ms_median"])))
+                fast = r;
+        auto against = [&](const char* what, const json& r) {
+            const double ms = r["ms_median"], flip = r["flip"];
+            return fmt("Far view (%s): baked's %s setting (%s) takes %.2f ms against hybrid's "
+                       "(ewa mb analytic) %.2f ms, a speed-up of %.2fx; its FLIP %.4f is %s hybrid's %.4f.",
+                       scene.c_str(), what, std::string(r["setting"]).c_str(), ms, hMs,
+                       ms > 0.0 ? hMs / ms : 0.0, flip, flip <= hFlip ? "<=" : ">", hFlip);
+        };
+        out.push_back(against("most accurate", *acc));
+        if (fast && fast != acc)
+            out.push_back(against("fastest at most hybrid's FLIP", *fast));
+        else if (!fast)
+            out.push_back(cat("Far view (", scene, "): no baked setting reaches hybrid's FLIP."));
+    }
+    return out;
+}
+
 /// The stability matrix as markdown: scenario rows, method columns, error / flicker / verdict.
 std::string stabilityMarkdown(const json& rows, const Suite& suite) {
     std::vector<std::string> methods;
@@ -451,18 +621,16 @@ std::string stabilityMarkdown(const json& rows, const Suite& suite) {
         if (scenario.rfind("scaling", 0) == 0)
             continue;
         // The ray-march without a pixel filter is a column of its own: it fails where the
-        // filtered one does not.
-        const std::string method = r.value("rays_per_pixel", 0) == 1
-                                       ? std::string(r["method"]) + " (1 ray/pixel)"
-                                       : std::string(r["method"]);
+        // filtered one does not. So is the bake without mips: it aliases where they do not.
+        const std::string method = matrixColumn(r);
         if (std::find(methods.begin(), methods.end(), method) == methods.end())
             methods.push_back(method);
         if (std::find_if(scenarios.begin(), scenarios.end(), [&](auto& s) { return s.first == scenario; }) ==
             scenarios.end())
             scenarios.emplace_back(scenario, r["scene"]);
         json& b = best[{scenario, method}];
-        const bool better = b.is_null() || (r["status"] != "failed" && (b["status"] == "failed" ||
-                                                                        r.value("flip", 1.0) < b.value("flip", 1.0)));
+        const auto unusable = [](const json& x) { return x["status"] == "failed" || x["status"] == "refused"; };
+        const bool better = b.is_null() || (!unusable(r) && (unusable(b) || r.value("flip", 1.0) < b.value("flip", 1.0)));
         if (better)
             b = r;
     }
@@ -474,7 +642,10 @@ std::string stabilityMarkdown(const json& rows, const Suite& suite) {
           "a slow "
        << suite.orbitFrames << "-frame orbit) / verdict. Verdicts: **ok**; **degraded** when FLIP > "
        << kDegradedFlip << " or flicker > +" << kDegradedFlicker
-       << "; **failed** with the reason (non-finite pixels, validation errors, refused).\n\n| "
+       << "; **failed** with the reason (non-finite pixels, validation errors, refused); "
+          "**refused** with the reason where baked declines what it cannot render (Lambert "
+          "shading, a bake whose bricks exceed one storage buffer). baked (no mips) is the bake "
+          "with level 0 only, baked the bake with coarser levels.\n\n| "
           "scenario (scene) |";
     for (const std::string& m : methods)
         md << " " << m << " |";
@@ -490,8 +661,8 @@ std::string stabilityMarkdown(const json& rows, const Suite& suite) {
                 md << " - |";
                 continue;
             }
-            if (r["status"] == "failed") {
-                md << " failed: " << std::string(r["reason"]) << " |";
+            if (r["status"] == "failed" || r["status"] == "refused") {
+                md << " " << std::string(r["status"]) << ": " << std::string(r["reason"]) << " |";
                 continue;
             }
             char cell[160];
@@ -502,6 +673,12 @@ std::string stabilityMarkdown(const json& rows, const Suite& suite) {
         }
         md << "\n";
     }
+    const std::vector<std::string> findings = bakedFindings(rows);
+    if (!findings.empty()) {
+        md << "\n## Baked in the far view\n\n";
+        for (const std::string& f : findings)
+            md << "- " << f << "\n";
+    }
     return md.str();
 }
 
@@ -511,7 +688,10 @@ void writeCsv(const fs::path& file, const json& rows) {
                           "splat_ms_median", "roofline_splat_ms", "roofline_fraction",
                           "fragments_shaded", "pixels_covered", "fragment_efficiency",
                           "wall_ms_median", "psnr", "ssim", "flip", "flicker", "reference_flicker",
-                          "gpu_memory_bytes", "host_memory_bytes", "status", "reason"};
+                          "gpu_memory_bytes", "host_memory_bytes", "status", "reason",
+                          // baked's (appended, so that the columns before keep their places)
+                          "resolution", "voxel_size", "levels", "peel_passes", "bake_seconds",
+                          "bake_bytes", "bake_cached"};
     writeFileAtomic(file, [&](std::ostream& o) {
         for (std::size_t i = 0; i < std::size(cols); ++i)
             o << (i ? "," : "") << cols[i];
@@ -535,6 +715,31 @@ void writeCsv(const fs::path& file, const json& rows) {
     });
 }
 
+/// Keep the items whose name (by `name`) is in the comma-separated `list`; InputError naming the
+/// suite's names for a name that matches none.
+template <typename T, typename Name>
+void restrict(std::vector<T>& items, const std::string& list, const char* option, const char* what,
+              Name name) {
+    std::vector<std::string> wanted;
+    std::stringstream in(list);
+    for (std::string w; std::getline(in, w, ',');)
+        if (!w.empty())
+            wanted.push_back(w);
+    std::string known;
+    for (const T& item : items)
+        if (known.find(cat(" ", name(item), ",")) == std::string::npos)
+            known += cat(" ", name(item), ",");
+    for (const std::string& w : wanted)
+        if (std::none_of(items.begin(), items.end(), [&](const T& i) { return name(i) == w; }))
+            throw InputError(cat("spotshell bench: ", option, " ", w, ": no ", what,
+                                 " of that name in the suite (", known.substr(1, known.size() - 2), ")"));
+    if (wanted.empty())
+        throw InputError(cat("spotshell bench: ", option, " names no ", what));
+    std::erase_if(items, [&](const T& i) {
+        return std::find(wanted.begin(), wanted.end(), name(i)) == wanted.end();
+    });
+}
+
 } // namespace
 
 int bench(int argc, char** argv) {
@@ -544,17 +749,33 @@ int bench(int argc, char** argv) {
                    "stability.md/png and scaling.png into DIR.",
                    {{"suite", "NAME", "quick (a few minutes), full (every scene at 128x128) or realtime (every "
                                       "scene at 640x480 and 50k fur kernels at 1024x1024); default quick", false},
-                    {"out", "DIR", "output folder (created; references are cached in DIR/cache)", true},
+                    {"out", "DIR", "output folder (created; references and bakes are cached in DIR/cache)", true},
                     {"scenes", "DIR", "scene folder (default: presets/scenes next to the source)", false},
+                    {"only", "NAMES", "bench only these of the suite's scenes, comma-separated file "
+                                      "names without .json (e.g. fur-bunny-far,fur-bunny-close); "
+                                      "skips the scaling runs", false},
+                    {"methods", "NAMES", "bench only these methods, comma-separated (e.g. "
+                                         "hybrid,baked); skips the scaling runs", false},
                     cli::threadsOption()},
                    argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);
         return 0;
     }
+    Suite suite = makeSuite(args.str("suite", "quick"));
+    if (args.has("only")) {
+        restrict(suite.scenes, args.str("only"), "--only", "scene",
+                 [](const SceneEntry& e) { return fs::path(e.file).stem().string(); });
+        suite.scaling = false;
+    }
+    if (args.has("methods")) {
+        restrict(suite.variants, args.str("methods"), "--methods", "method",
+                 [](const Variant& v) { return v.method; });
+        suite.scaling = false;
+    }
     Bench b{splat::Context(), fs::path(args.str("out")),
-            fs::path(args.str("scenes", SPOT_SOURCE_DIR "/presets/scenes")),
-            makeSuite(args.str("suite", "quick")), json::array()};
+            fs::path(args.str("scenes", SPOT_SOURCE_DIR "/presets/scenes")), std::move(suite),
+            json::array()};
     std::error_code ec;
     fs::create_directories(b.out / "cache", ec);
     if (ec)
@@ -580,6 +801,8 @@ int bench(int argc, char** argv) {
     const std::string md = stabilityMarkdown(b.rows, b.suite);
     writeFileAtomic(b.out / "stability.md", [&](std::ostream& o) { o << md; });
     drawBenchCharts(b.out);
+    for (const std::string& f : bakedFindings(b.rows))
+        std::printf("%s\n", f.c_str());
     std::printf("wrote %s/{results.csv,results.json,stability.md,stability.png,pareto.png%s} "
                 "(%zu rows, suite %s)\n",
                 b.out.string().c_str(), b.suite.scaling ? ",scaling.png" : "", b.rows.size(),

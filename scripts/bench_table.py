@@ -7,7 +7,9 @@ Table 1, per scene: the most accurate row; the fastest splatting row within 1 dB
 splatting PSNR; the cheapest ray-march whose FLIP is at least as low, and the splatter's speed-up
 over it. Table 2, per scene and splat method at its default setting: the splat pass's time
 against its roofline (the rasterizer's own cost for the same quads) and the fragment efficiency
-(fragments shaded / pixels where a kernel's alpha reaches 1/255).
+(fragments shaded / pixels where a kernel's alpha reaches 1/255). Table 3, when the run has baked
+rows, per scene: each baked setting's time and error against hybrid's default setting, the bake's
+seconds and file size (refused rows with their reason).
 """
 import json
 import sys
@@ -76,6 +78,28 @@ def main(path):
                 eff = f"{r['fragment_efficiency']:.2f}"
         cells.append(eff)
         print("| " + " | ".join(cells) + " |")
+
+    baked = [r for r in doc["rows"] if r["method"] == "baked"]
+    if baked:
+        print("\nbaked (resolution: level 0's voxels along the mesh's longest side; levels: mip "
+              "levels; peels: depth-peeling passes) against hybrid's default setting:\n")
+        print("| scene | setting | ms | PSNR | FLIP | hybrid ms / PSNR / FLIP | bake s | bake MiB "
+              "| status |")
+        print("| --- " * 9 + "|")
+        for r in baked:
+            h = next((x for x in rows if x["scene"] == r["scene"] and x["method"] == "hybrid"
+                      and x["setting"] == DEFAULTS["hybrid"]), None)
+            hyb = f"{h['ms_median']:.1f} / {h['psnr']:.2f} / {h['flip']:.3f}" if h else "-"
+            size = f"{r['bake_bytes'] / 2**20:.1f}" if r.get("bake_bytes") else "-"
+            secs = f"{r['bake_seconds']:.2f}" if "bake_seconds" in r else "-"
+            if "psnr" in r and r["status"] in ("ok", "degraded"):
+                cells = [f"{r['ms_median']:.1f}", f"{r['psnr']:.2f}", f"{r['flip']:.3f}"]
+                status = r["status"]
+            else:
+                cells = ["-", "-", "-"]
+                status = f"{r['status']}: {r.get('reason', '')}"
+            print("| " + " | ".join([r["scene"], r["setting"]] + cells + [hyb, secs, size, status])
+                  + " |")
 
 
 if __name__ == "__main__":

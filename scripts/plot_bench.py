@@ -32,6 +32,7 @@ METHOD_STYLE = {
     "hybrid": ("D", "tab:orange"),
     "sorted": ("^", "tab:green"),
     "raymarch": ("v", "tab:red"),
+    "baked": ("P", "tab:purple"),
 }
 
 
@@ -86,8 +87,13 @@ plt.close(fig)
 
 # ---- stability.png: scenarios x methods, the best setting of each, coloured by verdict --------
 def column(r):
-    # The ray-march without a pixel filter is a column of its own (as in stability.md).
-    return r["method"] + (" (1 ray/pixel)" if r.get("rays_per_pixel") == 1 else "")
+    # The ray-march without a pixel filter and the bake without mips (level 0 only) are columns
+    # of their own (as in stability.md).
+    if r.get("rays_per_pixel") == 1:
+        return r["method"] + " (1 ray/pixel)"
+    if r["method"] == "baked" and r.get("levels") == 1:
+        return r["method"] + " (no mips)"
+    return r["method"]
 
 
 scenarios, methods = [], []
@@ -100,13 +106,13 @@ for r in stability:
 
 def best(scenario, method):
     cands = [r for r in stability if r["scenario"] == scenario and column(r) == method]
-    good = [r for r in cands if r["status"] != "failed"]
+    good = [r for r in cands if r["status"] not in ("failed", "refused")]
     if good:
         return min(good, key=lambda r: r["flip"])
     return cands[0] if cands else None
 
 
-VERDICT = {"ok": "#a6dba0", "degraded": "#fdd49e", "failed": "#f4a6a6"}
+VERDICT = {"ok": "#a6dba0", "degraded": "#fdd49e", "failed": "#f4a6a6", "refused": "#d9d9d9"}
 fig, ax = plt.subplots(figsize=(2.3 * len(methods) + 3.2, 0.8 * len(scenarios) + 1.6))
 for y, scenario in enumerate(scenarios):
     for x, method in enumerate(methods):
@@ -115,8 +121,8 @@ for y, scenario in enumerate(scenarios):
         ax.add_patch(plt.Rectangle((x, y), 1, 1, color=color, ec="white", lw=2))
         if r is None:
             text = "-"
-        elif r["status"] == "failed":
-            text = "failed"
+        elif r["status"] in ("failed", "refused"):
+            text = r["status"]
         else:
             text = "FLIP %.3f\nflicker %+.4f\n%s" % (r["flip"], r["flicker"], r["setting"])
         ax.text(x + 0.5, y + 0.5, text, ha="center", va="center", fontsize=8)
@@ -131,7 +137,8 @@ ax.tick_params(length=0)
 for s in ax.spines.values():
     s.set_visible(False)
 handles = [plt.Rectangle((0, 0), 1, 1, color=c, label=k) for k, c in VERDICT.items()]
-ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=3, frameon=False)
+ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=len(handles),
+          frameon=False)
 ax.set_title("Which method fails where (best setting per method; %s suite)" % doc["suite"],
              pad=28, fontsize=11)
 fig.tight_layout()
