@@ -22,6 +22,15 @@ SPOT_CONST uint kBakedDistanceSection = 8u;
 SPOT_CONST float kBakedStepFraction = 1.0f;
 /* Loop iterations one invocation may run (lavapipe stops one at 65,535; docs/design.md 8). */
 SPOT_CONST uint kBakedLoopBudget = 60000u;
+/* A layer's walk (baked_march.comp): at most this many tetrahedra and this many samples (skipped
+ * ones included); a layer that reaches either ends there (the next layer starts at the next
+ * entry face behind that point). */
+SPOT_CONST uint kBakedMaxLayerTets = 512u;
+SPOT_CONST uint kBakedMaxLayerSamples = 512u;
+/* A transmittance below this ends the walk, and the pixel counts as opaque (no later layer). */
+SPOT_CONST float kBakedOpaque = 1e-4f;
+/* No tetrahedron (the eye test's "the eye is outside the shell"). */
+SPOT_CONST uint kBakedNoTet = 0xffffffffu;
 
 /* Bindings (set 0, push descriptors). */
 SPOT_CONST uint kBakedBindParams = 0u;      /* SpotBakedParams */
@@ -32,16 +41,21 @@ SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
 SPOT_CONST uint kBakedBindTable = 5u;       /* ivec4[]: the hash tables' slots */
 SPOT_CONST uint kBakedBindBricks = 6u;      /* vec4[]: density bricks of every level */
 SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
-SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's depth */
-SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's tetrahedron + 1 */
+SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
+SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's entry, 4 tet + face + 1 */
 SPOT_CONST uint kBakedBindMeshDistance = 10u; /* r32f image: ray distance to the mesh */
 SPOT_CONST uint kBakedBindAccum = 11u;      /* rgba32f image: premultiplied colour, alpha */
 SPOT_CONST uint kBakedBindBase = 12u;       /* rgba32f image: the mesh's colour */
 SPOT_CONST uint kBakedBindResult = 13u;     /* rgba32f image: the frame's result */
 SPOT_CONST uint kBakedBindLoops = 14u;      /* uint: the most loop iterations (counted frames) */
+SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: the tet across each face, -1 */
+SPOT_CONST uint kBakedBindEntryFaces = 16u; /* uint[]: 4 tet + face of each enterable boundary face */
+SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
+SPOT_CONST uint kBakedBindExitDepth = 18u;  /* r32f image: where this layer's walk left the shell */
 
 /* Specialization ids. */
 SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids below are splat_common.glsl's) */
+SPOT_CONST uint kBakedSpecFirstLayer = 65u; /* bool: the first layer (starts at the eye's tetrahedron if any) */
 
 struct SpotBakedTet {
     vec4 world[4]; /* xyz: corner now, world units */
@@ -50,7 +64,7 @@ struct SpotBakedTet {
 
 struct SpotBakedParams {
     vec4 grid;     /* x: level 0's voxel size; y: its inverse; z: distance cap (level-0 voxels); w: shell thickness */
-    uvec4 counts;  /* x: triangles; y: levels; z: most steps per segment; w: 0 */
+    uvec4 counts;  /* x: triangles; y: levels; z: tetrahedra; w: 0 */
     uvec4 tableOffset[3]; /* per section (kBakedSections), flattened [s >> 2][s & 3] */
     uvec4 tableMask[3];
     uvec4 probe[3];

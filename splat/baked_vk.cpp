@@ -11,6 +11,7 @@
 
 #include "noise/bake.h"
 #include "noise/error.h"
+#include "noise/shell.h"
 
 #include "baked_march.comp.h"
 #include "baked_peel.frag.h"
@@ -85,15 +86,16 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
         m_ctx, spirv(spv_baked_shell_comp),
         {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindVertices),
          storageBuffer(kBakedBindRest), storageBuffer(kBakedBindIndices),
-         storageBuffer(kBakedBindTets)},
+         storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEyeTet)},
         push);
     GraphicsPipelineDesc desc;
     desc.vertex = spirv(spv_baked_tet_vert);
     desc.fragment = spirv(spv_baked_peel_frag);
-    desc.bindings = {storageBuffer(kBakedBindTets), storageImage(kBakedBindPrevDepth)};
+    desc.bindings = {storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEntryFaces),
+                     storageImage(kBakedBindPrevDepth)};
     desc.pushBytes = push;
-    desc.colorFormats = {kTetFormat, kScalarFormat};
-    desc.blends = {opaqueBlend(), opaqueBlend()};
+    desc.colorFormats = {kTetFormat};
+    desc.blends = {opaqueBlend()};
     desc.depthFormat = kDepthFormat;
     desc.depthTest = true;
     desc.depthWrite = true;
@@ -106,24 +108,28 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
     m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
     m_loops = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                      "baked loop counter");
+    m_eyeTet = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice,
+                      "baked eye tetrahedron");
 }
 
 BakedRenderer::~BakedRenderer() = default;
 
-const Pipeline& BakedRenderer::marchPipeline(bool count) {
-    if (const auto it = m_march.find(count); it != m_march.end())
+const Pipeline& BakedRenderer::marchPipeline(bool count, bool first) {
+    if (const auto it = m_march.find({count, first}); it != m_march.end())
         return it->second;
     Specialization spec;
     spec.set(kBakedSpecCount, count);
+    spec.set(kBakedSpecFirstLayer, first);
     Pipeline p = makeComputePipeline(
         m_ctx, spirv(spv_baked_march_comp),
         {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
+         storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
          storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
          storageBuffer(kBakedBindDistances), storageImage(kBakedBindLayerTet),
          storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
-         storageBuffer(kBakedBindLoops)},
+         storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops)},
         sizeof(gpu_splat::SpotSplatFrame), spec);
-    return m_march.emplace(count, std::move(p)).first->second;
+    return m_march.emplace(std::pair{count, first}, std::move(p)).first->second;
 }
 
 void BakedRenderer::loadBake(const std::string& file) {
@@ -262,12 +268,11 @@ void BakedRenderer::loadBake(const std::string& file) {
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     if (m_width == width && m_height == height && m_result.handle())
         return;
-    // Per pixel: base 16, distance 4, 2 depths 8, 2 layer depths 8, layer tet 4, accum 16,
-    // result 16.
-    const std::uint64_t need = std::uint64_t(width) * height * 72;
+    // Per pixel: base 16, distance 4, 2 depths 8, exit depth 4, layer tet 4, accum 16, result 16.
+    const std::uint64_t need = std::uint64_t(width) * height * 68;
     std::uint64_t held = 0;
-    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_layerDepth[0],
-                           &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
+                           &m_layerTet, &m_accum, &m_result})
         held += i->reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("baked: a ", width, "x", height, " frame needs ", need >> 20,
@@ -275,8 +280,8 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
                              (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; reduce the image size"));
-    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_layerDepth[0],
-                     &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
+                     &m_layerTet, &m_accum, &m_result})
         *i = Image();
     m_width = m_height = 0;
     constexpr VkImageUsageFlags kAttach = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
@@ -293,9 +298,7 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
         Image(m_ctx, width, height, kDepthFormat, kDepthUse | kSrc, kDepth, "baked mesh depth");
     m_peelDepth =
         Image(m_ctx, width, height, kDepthFormat, kDepthUse | kDst, kDepth, "baked peel depth");
-    for (Image& d : m_layerDepth)
-        d = Image(m_ctx, width, height, kScalarFormat, kAttach | kStore | kDst, kColor,
-                  "baked layer depth");
+    m_exitDepth = Image(m_ctx, width, height, kScalarFormat, kStore | kDst, kColor, "baked exit depth");
     m_layerTet =
         Image(m_ctx, width, height, kTetFormat, kAttach | kStore, kColor, "baked layer tetrahedra");
     m_accum = Image(m_ctx, width, height, kColorFormat, kStore | kDst, kColor, "baked accumulation");
@@ -327,8 +330,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         m_bakeTime = time;
     }
 
-    // The tetrahedra, and the most steps one segment can take: the segment lies in its
-    // tetrahedron, whose rest-pose diameter is at most its prism's.
+    // The tetrahedra (rebuilt per frame on the GPU), and per mesh their neighbours and the
+    // boundary faces a ray can enter through (topology only, from the triangles).
     const float thickness = impulses.cells->cellSize;
     const std::uint32_t triangles = m_scene.meshPass().indexCount() / 3;
     const std::uint64_t tetBytes = std::max<std::uint64_t>(triangles, 1) * 3 * sizeof(SpotBakedTet);
@@ -341,50 +344,67 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         m_tets = Buffer();
         m_tets = Buffer(m_ctx, tetBytes, kStorage, kDevice, "baked tetrahedra");
     }
-    if (m_bakeStats.thickness != thickness || m_bakeStats.tetrahedra != 3 * triangles) {
-        const auto* vertices =
-            static_cast<const gpu_splat::SpotMeshVertex*>(m_scene.meshPass().vertices().mapped());
+    if (m_bakeStats.tetrahedra != 3 * triangles || !m_neighbours.handle()) {
         const auto* indices =
             static_cast<const std::uint32_t*>(m_scene.meshPass().indices().mapped());
-        double diameter = 0.0;
-        for (std::uint32_t t = 0; t < triangles; ++t) {
-            std::array<glm::dvec3, 6> c;
-            for (int k = 0; k < 3; ++k) {
-                const gpu_splat::SpotMeshVertex& v = vertices[indices[3 * t + std::uint32_t(k)]];
-                const glm::dvec3 n(v.normal);
-                const double len = glm::length(n);
-                c[std::size_t(k)] = glm::dvec3(v.position);
-                c[std::size_t(k) + 3] =
-                    glm::dvec3(v.position) + (len > 0.0 ? double(thickness) / len : 0.0) * n;
+        const std::uint32_t vertexCount = std::uint32_t(
+            m_scene.meshPass().vertices().size() / sizeof(gpu_splat::SpotMeshVertex));
+        std::vector<glm::uvec3> tris(triangles);
+        for (std::uint32_t t = 0; t < triangles; ++t)
+            tris[t] = glm::uvec3(indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]);
+        const std::vector<noise::ShellTetrahedron> tets = noise::shellTetrahedra(tris, vertexCount);
+        const auto neighbours = noise::shellNeighbours(tets);
+        std::vector<glm::ivec4> packed(std::max<std::size_t>(neighbours.size(), 1), glm::ivec4(-1));
+        std::vector<std::uint32_t> entries;
+        for (std::size_t t = 0; t < tets.size(); ++t)
+            for (std::uint32_t f = 0; f < 4; ++f) {
+                packed[t][int(f)] = neighbours[t][f];
+                // Boundary faces but the base (all three corners on the mesh): the top surface
+                // and the sides of open edges.
+                bool base = true;
+                for (std::uint32_t i = 1; i < 4; ++i)
+                    base = base && tets[t].vertices[(f + i) % 4] < vertexCount;
+                if (neighbours[t][f] < 0 && !base)
+                    entries.push_back(std::uint32_t(t) * 4 + f);
             }
-            for (std::size_t i = 0; i < 6; ++i)
-                for (std::size_t j = i + 1; j < 6; ++j)
-                    diameter = std::max(diameter, glm::length(c[i] - c[j]));
-        }
-        m_bakeStats.thickness = thickness;
-        m_bakeStats.tetrahedra = 3 * triangles;
-        m_bakeStats.maxSteps = std::uint32_t(
-            std::ceil(diameter / (double(kBakedStepFraction) * m_bakeStats.voxelSize)) + 1.0);
+        m_entryFaceCount = std::uint32_t(entries.size());
+        if (entries.empty())
+            entries.push_back(0);
+        m_neighbours = Buffer();
+        m_entryFaces = Buffer();
+        m_neighbours = Buffer(m_ctx, packed.size() * sizeof(glm::ivec4), kStorage, kHost,
+                              "baked tetrahedron neighbours");
+        m_neighbours.upload(std::span<const glm::ivec4>(packed));
+        m_entryFaces = Buffer(m_ctx, entries.size() * sizeof(std::uint32_t), kStorage, kHost,
+                              "baked entry faces");
+        m_entryFaces.upload(std::span<const std::uint32_t>(entries));
     }
+    m_bakeStats.thickness = thickness;
+    m_bakeStats.tetrahedra = 3 * triangles;
+    m_bakeStats.entryFaces = m_entryFaceCount;
+    m_bakeStats.maxLayerTets = kBakedMaxLayerTets;
+    m_bakeStats.maxLayerSamples = kBakedMaxLayerSamples;
     const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
-    // baked_march.comp: 4 + N (1 + (P_d + 1) + 8 (1 + P + 1)).
+    // baked_march.comp: M (1 + 4) + S (1 + (P_d + 1) + 8 (1 + P + 1)).
     const std::uint64_t bound =
-        4 + std::uint64_t(m_bakeStats.maxSteps) *
-                (1 + (section(m_probes, kBakedDistanceSection) + 1) +
-                 8 * (2 + std::uint64_t(m_bakeStats.longestProbe)));
+        std::uint64_t(kBakedMaxLayerTets) * 5 +
+        std::uint64_t(kBakedMaxLayerSamples) *
+            (1 + (section(m_probes, kBakedDistanceSection) + 1) +
+             8 * (2 + std::uint64_t(m_bakeStats.longestProbe)));
     if (bound > budget)
-        throw InputError(cat("baked: a segment may take ", m_bakeStats.maxSteps,
-                             " steps, so one march invocation may loop ", bound,
-                             " times, more than the budget of ", budget,
-                             " (lavapipe stops an invocation at 65,535); bake at a larger voxel "
-                             "size or use a thinner shell"));
+        throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets, " tetrahedra and take ",
+                             kBakedMaxLayerSamples, " samples (hash tables probing up to ",
+                             m_bakeStats.longestProbe, " slots), so one march invocation may loop ",
+                             bound, " times, more than the budget of ", budget,
+                             " (lavapipe stops an invocation at 65,535); bake it again (its tables "
+                             "probe too long)"));
     m_bakeStats.loopBound = std::uint32_t(bound);
     m_bakeStats.peelPasses = std::uint32_t(settings.peelPasses);
 
     SpotBakedParams params{};
     params.grid = glm::vec4(m_bakeStats.voxelSize, 1.0f / m_bakeStats.voxelSize,
                             noise::kBakeDistanceCap, thickness);
-    params.counts = glm::uvec4(triangles, m_bakeStats.levels, m_bakeStats.maxSteps, 0u);
+    params.counts = glm::uvec4(triangles, m_bakeStats.levels, 3 * triangles, 0u);
     for (std::uint32_t s = 0; s < kBakedSections; ++s) {
         params.tableOffset[s >> 2][s & 3] = m_offsets[s];
         params.tableMask[s >> 2][s & 3] = m_masks[s];
@@ -397,7 +417,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_frame.background = view.background;
     m_frame.peelPasses = std::uint32_t(settings.peelPasses);
     m_frame.count = m_countLoops;
-    marchPipeline(m_frame.count);
+    marchPipeline(m_frame.count, false);
+    marchPipeline(m_frame.count, true);
 }
 
 void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
@@ -406,7 +427,10 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     const std::uint32_t triangles = m_bakeStats.tetrahedra / 3;
     const MeshPass& mesh = m_scene.meshPass();
 
-    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet).
+    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet),
+    // and the tetrahedron holding the eye, if any (the lowest index).
+    vkCmdFillBuffer(cmd, m_eyeTet.handle(), 0, VK_WHOLE_SIZE, kBakedNoTet);
+    fullBarrier(cmd);
     if (triangles > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_shell.handle());
         pushFrame(cmd, m_shell, f.frame);
@@ -416,6 +440,7 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kBakedBindRest, mesh.vertices())
             .buffer(kBakedBindIndices, mesh.indices())
             .buffer(kBakedBindTets, m_tets)
+            .buffer(kBakedBindEyeTet, m_eyeTet)
             .push(m_ctx, cmd, m_shell);
         vkCmdDispatch(cmd, (triangles + 63) / 64, 1, 1);
     }
@@ -440,22 +465,43 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_peelDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                     VK_IMAGE_LAYOUT_UNDEFINED, kGeneral, VK_PIPELINE_STAGE_2_NONE, 0, kAll,
                     VK_ACCESS_2_MEMORY_WRITE_BIT);
-    for (const Image* image : {&m_layerDepth[0], &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+    for (const Image* image : {&m_exitDepth, &m_layerTet, &m_accum, &m_result})
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                         VK_PIPELINE_STAGE_2_NONE, 0, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT);
-    // Nothing accumulated; layer 0's "previous depth" is nearer than any face (depth <= 1).
+    // Nothing accumulated; the first peel's "previous exit" is nearer than any face (depth <= 1).
     const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     const VkClearColorValue zero{};
     VkClearColorValue nearest{};
     nearest.float32[0] = 2.0f;
     vkCmdClearColorImage(cmd, m_accum.handle(), kGeneral, &zero, 1, &colorRange);
-    vkCmdClearColorImage(cmd, m_layerDepth[1].handle(), kGeneral, &nearest, 1, &colorRange);
+    vkCmdClearColorImage(cmd, m_exitDepth.handle(), kGeneral, &nearest, 1, &colorRange);
     if (f.count)
         vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
     fullBarrier(cmd);
     timer.mark(cmd, "mesh");
 
-    const Pipeline& march = m_march.at(f.count);
+    // The march of one layer: from its entry faces, or (the first) from the eye.
+    const auto recordMarch = [&](bool first) {
+        const Pipeline& march = m_march.at({f.count, first});
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
+        pushFrame(cmd, march, f.frame);
+        Descriptors()
+            .buffer(kBakedBindParams, m_params)
+            .buffer(kBakedBindTets, m_tets)
+            .buffer(kBakedBindNeighbours, m_neighbours)
+            .buffer(kBakedBindEyeTet, m_eyeTet)
+            .buffer(kBakedBindTable, m_table)
+            .buffer(kBakedBindBricks, m_bricks)
+            .buffer(kBakedBindDistances, m_distances)
+            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindLoops, m_loops)
+            .push(m_ctx, cmd, march);
+        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+        fullBarrier(cmd);
+    };
     VkImageCopy copy{};
     copy.srcSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
     copy.dstSubresource = copy.srcSubresource;
@@ -463,47 +509,31 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
     const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
     for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
-        const Image& prev = m_layerDepth[(k + 1) % 2];
-        const Image& layerDepth = m_layerDepth[k % 2];
-        // Peel: the nearest tetrahedron front face behind the previous layer, before the mesh.
+        // Peel: the nearest entry face behind the previous layer's exit, before the mesh.
         vkCmdCopyImage(cmd, m_meshDepth.handle(), kGeneral, m_peelDepth.handle(), kGeneral, 1,
                        &copy);
         fullBarrier(cmd);
         VkRenderingAttachmentInfo tetInfo = colorAttachment(m_layerTet, VK_ATTACHMENT_LOAD_OP_CLEAR);
-        VkRenderingAttachmentInfo depthOut = colorAttachment(layerDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
         VkRenderingAttachmentInfo depthInfo = depthAttachment(m_peelDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
-        tetInfo.imageLayout = depthOut.imageLayout = depthInfo.imageLayout = kGeneral;
-        beginRendering(cmd, m_width, m_height, {tetInfo, depthOut}, &depthInfo);
-        if (triangles > 0) {
+        tetInfo.imageLayout = depthInfo.imageLayout = kGeneral;
+        beginRendering(cmd, m_width, m_height, {tetInfo}, &depthInfo);
+        if (m_entryFaceCount > 0) {
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_peel.handle());
             pushFrame(cmd, m_peel, f.frame);
             Descriptors()
                 .buffer(kBakedBindTets, m_tets)
-                .image(kBakedBindPrevDepth, prev, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+                .buffer(kBakedBindEntryFaces, m_entryFaces)
+                .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
                 .push(m_ctx, cmd, m_peel);
-            vkCmdDraw(cmd, triangles * 3 * 12, 1, 0, 0);
+            vkCmdDraw(cmd, m_entryFaceCount * 3, 1, 0, 0);
         }
         vkCmdEndRendering(cmd);
         fullBarrier(cmd);
         if (markLayers)
             timer.mark(cmd, "peel");
 
-        // March the kept tetrahedron and composite under the earlier layers.
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
-        pushFrame(cmd, march, f.frame);
-        Descriptors()
-            .buffer(kBakedBindParams, m_params)
-            .buffer(kBakedBindTets, m_tets)
-            .buffer(kBakedBindTable, m_table)
-            .buffer(kBakedBindBricks, m_bricks)
-            .buffer(kBakedBindDistances, m_distances)
-            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(kBakedBindLoops, m_loops)
-            .push(m_ctx, cmd, march);
-        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
-        fullBarrier(cmd);
+        // Walk the shell from the kept entry and composite under the earlier layers.
+        recordMarch(k == 0);
         if (markLayers)
             timer.mark(cmd, "march");
     }
@@ -540,7 +570,9 @@ FrameCounters BakedRenderer::counters() const {
                {"tetrahedra", double(s.tetrahedra)},
                {"bricks", double(s.bricks)},
                {"distance_bricks", double(s.distanceBricks)},
-               {"max_steps", double(s.maxSteps)},
+               {"entry_faces", double(s.entryFaces)},
+               {"max_layer_tets", double(s.maxLayerTets)},
+               {"max_layer_samples", double(s.maxLayerSamples)},
                {"longest_probe", double(s.longestProbe)},
                {"loop_bound", double(s.loopBound)},
                {"peel_passes", double(s.peelPasses)},

@@ -76,7 +76,9 @@ struct BakedStats {
     std::uint32_t tetrahedra = 0;
     std::uint32_t bricks = 0;         ///< density leaves of every level
     std::uint32_t distanceBricks = 0; ///< distance leaves
-    std::uint32_t maxSteps = 0;       ///< most march steps per segment
+    std::uint32_t entryFaces = 0;     ///< boundary faces the peel draws (top and open sides)
+    std::uint32_t maxLayerTets = 0;   ///< most tetrahedra one layer walks
+    std::uint32_t maxLayerSamples = 0; ///< most samples one layer takes (skipped ones included)
     std::uint32_t longestProbe = 0;   ///< of every table section
     std::uint32_t loopBound = 0;      ///< what one march invocation may run
     std::uint32_t maxLoopIterations = 0; ///< counted (countLoops) in the last frame
@@ -99,8 +101,9 @@ public:
                  const RenderSettings& settings) override;
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
     const Image& result() const override { return m_result; }
-    /// extra: voxel_size, levels, thickness, tetrahedra, bricks, distance_bricks, max_steps,
-    /// longest_probe, loop_bound, peel_passes, bake_mib (and max_loop_iterations when counting).
+    /// extra: voxel_size, levels, thickness, tetrahedra, bricks, distance_bricks, entry_faces,
+    /// max_layer_tets, max_layer_samples, longest_probe, loop_bound, peel_passes, bake_mib (and
+    /// max_loop_iterations when counting).
     FrameCounters counters() const override;
 
     /// Count every march invocation's loop iterations from the next frame on (for tests).
@@ -112,12 +115,12 @@ private:
     struct Bake;
     void loadBake(const std::string& file);
     void ensureTargets(std::uint32_t width, std::uint32_t height);
-    const Pipeline& marchPipeline(bool count);
+    const Pipeline& marchPipeline(bool count, bool first);
 
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_shell, m_peel, m_resolve;
-    std::map<bool, Pipeline> m_march;
+    std::map<std::pair<bool, bool>, Pipeline> m_march; ///< by (count loops, first layer)
     bool m_countLoops = false;
 
     // Per bake file.
@@ -126,11 +129,12 @@ private:
     BakedStats m_bakeStats;
     Buffer m_table, m_bricks, m_distances;
     std::vector<std::uint32_t> m_offsets, m_masks, m_probes;
-    // Per mesh: the tetrahedra (3 per triangle).
-    Buffer m_tets, m_params;
+    // Per mesh: the tetrahedra (3 per triangle), their neighbours, the entry faces.
+    Buffer m_tets, m_params, m_neighbours, m_entryFaces, m_eyeTet;
+    std::uint32_t m_entryFaceCount = 0;
     // Per image size.
     std::uint32_t m_width = 0, m_height = 0;
-    Image m_base, m_distance, m_meshDepth, m_peelDepth, m_layerDepth[2], m_layerTet, m_accum,
+    Image m_base, m_distance, m_meshDepth, m_peelDepth, m_exitDepth, m_layerTet, m_accum,
         m_result;
     Buffer m_loops;
 
