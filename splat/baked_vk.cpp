@@ -108,7 +108,7 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
     m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
     m_loops = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                      "baked loop counter");
-    m_eyeTet = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice,
+    m_eyeTet = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                       "baked eye tetrahedron");
 }
 
@@ -558,6 +558,9 @@ BakedStats BakedRenderer::stats() const {
     BakedStats s = m_bakeStats;
     if (m_frame.count)
         std::memcpy(&s.maxLoopIterations, m_loops.mapped(), sizeof(std::uint32_t));
+    std::uint32_t eye = kBakedNoTet;
+    std::memcpy(&eye, m_eyeTet.mapped(), sizeof(eye));
+    s.eyeTetrahedron = eye == kBakedNoTet ? -1 : std::int64_t(eye);
     return s;
 }
 
@@ -576,6 +579,7 @@ FrameCounters BakedRenderer::counters() const {
                {"longest_probe", double(s.longestProbe)},
                {"loop_bound", double(s.loopBound)},
                {"peel_passes", double(s.peelPasses)},
+               {"eye_tetrahedron", double(s.eyeTetrahedron)},
                {"bake_mib", double(s.gpuBytes) / double(1 << 20)}};
     if (m_frame.count)
         c.extra.emplace_back("max_loop_iterations", double(s.maxLoopIterations));

@@ -83,6 +83,7 @@ struct BakedStats {
     std::uint32_t loopBound = 0;      ///< what one march invocation may run
     std::uint32_t maxLoopIterations = 0; ///< counted (countLoops) in the last frame
     std::uint32_t peelPasses = 0;
+    std::int64_t eyeTetrahedron = -1; ///< the one holding the eye in the last frame, -1: none
     std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
 };
 
@@ -102,8 +103,8 @@ public:
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
     const Image& result() const override { return m_result; }
     /// extra: voxel_size, levels, thickness, tetrahedra, bricks, distance_bricks, entry_faces,
-    /// max_layer_tets, max_layer_samples, longest_probe, loop_bound, peel_passes, bake_mib (and
-    /// max_loop_iterations when counting).
+    /// max_layer_tets, max_layer_samples, longest_probe, loop_bound, peel_passes,
+    /// eye_tetrahedron, bake_mib (and max_loop_iterations when counting).
     FrameCounters counters() const override;
 
     /// Count every march invocation's loop iterations from the next frame on (for tests).
