@@ -58,8 +58,11 @@ SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids 
 SPOT_CONST uint kBakedSpecFirstLayer = 65u; /* bool: the first layer (starts at the eye's tetrahedron if any) */
 
 struct SpotBakedTet {
-    vec4 world[4]; /* xyz: corner now, world units */
-    vec4 rest[4];  /* xyz: corner at rest, world units of the bake (the texture coordinate) */
+    vec4 world[4];  /* xyz: corner now, world units */
+    vec4 plane[4];  /* face i (opposite corner i): xyz its normal turned inwards, w such that
+                       dot(xyz, x) + w >= 0 inside; (0, 0, 0, -1) for a flat tetrahedron */
+    vec4 toRest[3]; /* the affine map from world now to rest (world units of the bake, the texture
+                       coordinate): rest[j] = dot(toRest[j].xyz, x) + toRest[j].w */
 };
 
 struct SpotBakedParams {

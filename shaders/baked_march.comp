@@ -104,15 +104,19 @@ float distanceAt(vec3 x) {
     return b < 0 ? params.grid.z : distances[uint(b) * kBakedLeafVoxels + voxelOffset(ijk)];
 }
 
-// Face f's plane (opposite corner f), its normal turned inwards (towards corner f): the ray
-// origin + t dir crosses it at t = num / den, entering where den > 0, leaving where den < 0.
-void facePlane(vec3 p[4], uint f, vec3 origin, vec3 dir, out float num, out float den) {
-    vec3 a = p[(f + 1u) % 4u], b = p[(f + 2u) % 4u], c = p[(f + 3u) % 4u];
-    vec3 n = cross(b - a, c - a);
-    if (dot(n, p[f] - a) < 0.0)
-        n = -n;
-    num = dot(n, a - origin);
-    den = dot(n, dir);
+// Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where
+// den > 0, leaving where den < 0.
+void facePlane(uint tet, uint f, vec3 origin, vec3 dir, out float num, out float den) {
+    vec4 plane = tets[tet].plane[f];
+    num = -(dot(plane.xyz, origin) + plane.w);
+    den = dot(plane.xyz, dir);
+}
+
+// The rest-pose position of world point x in `tet`.
+vec3 toRest(uint tet, vec3 x) {
+    return vec3(dot(tets[tet].toRest[0].xyz, x) + tets[tet].toRest[0].w,
+                dot(tets[tet].toRest[1].xyz, x) + tets[tet].toRest[1].w,
+                dot(tets[tet].toRest[2].xyz, x) + tets[tet].toRest[2].w);
 }
 
 // The layer ends: its exit depth (reversed: near / view depth) for the next peel.
@@ -143,13 +147,10 @@ void main() {
     float tMesh = imageLoad(meshDistance, pixel).r;
     float viewCos = dot(dir, frame.forward.xyz);
 
-    vec3 p[4], r[4];
-    for (uint i = 0u; i < 4u; ++i)
-        p[i] = tets[tet].world[i].xyz;
     float tIn = 0.0;
     if (!fromEye) {
         float num, den;
-        facePlane(p, entryFace, origin, dir, num, den);
+        facePlane(tet, entryFace, origin, dir, num, den);
         tIn = den != 0.0 ? max(num / den, 0.0) : 0.0;
     }
 
@@ -175,11 +176,6 @@ void main() {
     for (uint walked = 0u; walked < kBakedMaxLayerTets; ++walked) {
         if (kCountLoops)
             ++loops;
-        if (walked > 0u)
-            for (uint i = 0u; i < 4u; ++i)
-                p[i] = tets[tet].world[i].xyz;
-        for (uint i = 0u; i < 4u; ++i)
-            r[i] = tets[tet].rest[i].xyz;
         // The exit: the nearest plane the ray leaves through, the entry face excluded.
         float tOut = 3.0e38;
         uint exitFace = 4u;
@@ -189,7 +185,7 @@ void main() {
             if (f == entryFace)
                 continue;
             float num, den;
-            facePlane(p, f, origin, dir, num, den);
+            facePlane(tet, f, origin, dir, num, den);
             if (den < 0.0 && num / den < tOut) {
                 tOut = num / den;
                 exitFace = f;
@@ -202,12 +198,9 @@ void main() {
         tOut = min(tOut, tMesh);
         float tFirst = tStart + (float(k) + 0.5) * dt;
         if (tOut > tIn && tFirst < tOut && samples < kBakedMaxLayerSamples) {
-            // The affine map world -> rest at the segment's ends.
-            mat3 pm = mat3(p[1] - p[0], p[2] - p[0], p[3] - p[0]);
-            mat3 rm = mat3(r[1] - r[0], r[2] - r[0], r[3] - r[0]);
-            mat3 map = rm * inverse(pm);
-            vec3 ra = r[0] + map * (origin + tIn * dir - p[0]);
-            vec3 rb = r[0] + map * (origin + tOut * dir - p[0]);
+            // The segment's ends at rest.
+            vec3 ra = toRest(tet, origin + tIn * dir);
+            vec3 rb = toRest(tet, origin + tOut * dir);
             float restPerWorld = length(rb - ra) / (tOut - tIn);
             float inverseLength = 1.0 / (tOut - tIn);
             for (; samples < kBakedMaxLayerSamples; ++samples) {

@@ -59,7 +59,7 @@ using uint = std::uint32_t;
 #include "shaders/baked_layout.glsl"
 #undef SPOT_CONST
 #undef SPOT_FN
-static_assert(sizeof(SpotBakedTet) == 128);
+static_assert(sizeof(SpotBakedTet) == 176);
 static_assert(sizeof(SpotBakedParams) == 176);
 } // namespace gpu_baked
 
