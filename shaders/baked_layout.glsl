@@ -52,6 +52,7 @@ SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: the tet acr
 SPOT_CONST uint kBakedBindEntryFaces = 16u; /* uint[]: 4 tet + face of each enterable boundary face */
 SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
 SPOT_CONST uint kBakedBindExitDepth = 18u;  /* r32f image: where this layer's walk left the shell */
+SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList, then uint[width x height]: the pixels to march */
 
 /* Specialization ids. */
 SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids below are splat_common.glsl's) */
@@ -71,6 +72,12 @@ struct SpotBakedParams {
     uvec4 tableOffset[3]; /* per section (kBakedSections), flattened [s >> 2][s & 3] */
     uvec4 tableMask[3];
     uvec4 probe[3];
+};
+
+/* The pixels a layer's march walks (baked_list.comp), x | y << 16 each after this header. */
+struct SpotBakedList {
+    uvec3 groups; /* the march's indirect dispatch: (entries + 63) / 64, 1, 1 */
+    uint count;   /* entries */
 };
 
 SPOT_FN uint bakedHash(ivec3 c, uint section) {

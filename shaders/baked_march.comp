@@ -1,5 +1,6 @@
 #version 450
-// Baked renderer, one layer's march (docs/design.md section 5): per pixel, a walk through the
+// Baked renderer, one layer's march (docs/design.md section 5): per pixel of the layer's list
+// (baked_list.comp: those with an entry, not opaque; dispatched indirectly), a walk through the
 // shell's tetrahedra from the layer's entry, front to back, across the face where the ray leaves
 // each into the neighbour there (the host's noise::shellNeighbours), so one layer covers the
 // ray's whole contiguous passage through the shell. Per tetrahedron: the exit is the nearest of
@@ -10,7 +11,7 @@
 // The walk ends at the shell's boundary (no neighbour), at the mesh, when the transmittance
 // falls below kBakedOpaque, or at kBakedMaxLayerTets tetrahedra or kBakedMaxLayerSamples samples;
 // the exit depth it writes is where the next layer's peel starts (0 when nothing behind can
-// show: the pixel is opaque, or had no entry).
+// show: the pixel became opaque, or the walk reached the mesh).
 //
 // A layer starts at the entry face the peel kept (the layer-tet image); but the first layer
 // (kFirstLayer), when the eye is inside the shell, starts every pixel at t = 0 in the
@@ -25,7 +26,7 @@
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 64) in;
 
 layout(constant_id = kBakedSpecCount) const bool kCountLoops = false;
 layout(constant_id = kBakedSpecFirstLayer) const bool kFirstLayer = false;
@@ -42,6 +43,7 @@ layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDist
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
 layout(binding = kBakedBindExitDepth, r32f) uniform writeonly image2D exitDepth;
 layout(std430, binding = kBakedBindLoops) buffer Loops { uint maxLoops; };
+layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList list; uint listPixels[]; };
 
 uint loops = 0u;
 
@@ -127,18 +129,15 @@ void finish(ivec2 pixel, float depth) {
 }
 
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (pixel.x >= int(frame.size.x) || pixel.y >= int(frame.size.y))
+    if (gl_GlobalInvocationID.x >= list.count)
         return;
+    uint packedPixel = listPixels[gl_GlobalInvocationID.x];
+    ivec2 pixel = ivec2(packedPixel & 0xffffu, packedPixel >> 16u);
     vec4 acc = imageLoad(accum, pixel);
     uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = 4u; // 4: none (from the eye)
     bool fromEye = tet != kBakedNoTet;
     if (!fromEye) {
-        uint id = imageLoad(layerTet, pixel).r;
-        if (id == 0u || acc.a >= 1.0) {
-            finish(pixel, 0.0); // no entry left, or opaque: nothing behind shows
-            return;
-        }
+        uint id = imageLoad(layerTet, pixel).r; // not 0: the list holds pixels with an entry
         tet = (id - 1u) >> 2u;
         entryFace = (id - 1u) & 3u;
     }

@@ -13,6 +13,7 @@
 #include "noise/error.h"
 #include "noise/shell.h"
 
+#include "baked_list.comp.h"
 #include "baked_march.comp.h"
 #include "baked_peel.frag.h"
 #include "baked_resolve.comp.h"
@@ -127,8 +128,19 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first) {
          storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
          storageBuffer(kBakedBindDistances), storageImage(kBakedBindLayerTet),
          storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
-         storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops)},
+         storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops),
+         storageBuffer(kBakedBindList)},
         sizeof(gpu_splat::SpotSplatFrame), spec);
+    if (!m_list.count(first)) {
+        Specialization listSpec;
+        listSpec.set(kBakedSpecFirstLayer, first);
+        m_list.emplace(first, makeComputePipeline(
+                                  m_ctx, spirv(spv_baked_list_comp),
+                                  {storageBuffer(kBakedBindEyeTet), storageImage(kBakedBindLayerTet),
+                                   storageImage(kBakedBindAccum), storageImage(kBakedBindExitDepth),
+                                   storageBuffer(kBakedBindList)},
+                                  sizeof(gpu_splat::SpotSplatFrame), listSpec));
+    }
     return m_march.emplace(std::pair{count, first}, std::move(p)).first->second;
 }
 
@@ -268,12 +280,14 @@ void BakedRenderer::loadBake(const std::string& file) {
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     if (m_width == width && m_height == height && m_result.handle())
         return;
-    // Per pixel: base 16, distance 4, 2 depths 8, exit depth 4, layer tet 4, accum 16, result 16.
-    const std::uint64_t need = std::uint64_t(width) * height * 68;
+    // Per pixel: base 16, distance 4, 2 depths 8, exit depth 4, layer tet 4, accum 16, result 16,
+    // the march's list 4.
+    const std::uint64_t need = std::uint64_t(width) * height * 72 + sizeof(SpotBakedList);
     std::uint64_t held = 0;
     for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
                            &m_layerTet, &m_accum, &m_result})
         held += i->reservedBytes();
+    held += m_pixelList.reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("baked: a ", width, "x", height, " frame needs ", need >> 20,
                              " MiB of GPU memory for its targets; ",
@@ -283,6 +297,7 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
                      &m_layerTet, &m_accum, &m_result})
         *i = Image();
+    m_pixelList = Buffer();
     m_width = m_height = 0;
     constexpr VkImageUsageFlags kAttach = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
     constexpr VkImageUsageFlags kStore = VK_IMAGE_USAGE_STORAGE_BIT;
@@ -303,6 +318,10 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
         Image(m_ctx, width, height, kTetFormat, kAttach | kStore, kColor, "baked layer tetrahedra");
     m_accum = Image(m_ctx, width, height, kColorFormat, kStore | kDst, kColor, "baked accumulation");
     m_result = Image(m_ctx, width, height, kColorFormat, kStore | kSrc, kColor, "baked result");
+    m_pixelList = Buffer(m_ctx, sizeof(SpotBakedList) + std::uint64_t(width) * height * 4,
+                         kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                             VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                         kDevice, "baked pixel list");
     m_width = width;
     m_height = height;
 }
@@ -480,8 +499,21 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     fullBarrier(cmd);
     timer.mark(cmd, "mesh");
 
-    // The march of one layer: from its entry faces, or (the first) from the eye.
+    // The march of one layer: from its entry faces, or (the first) from the eye, over the list
+    // of the pixels that walk.
     const auto recordMarch = [&](bool first) {
+        const Pipeline& list = m_list.at(first);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, list.handle());
+        pushFrame(cmd, list, f.frame);
+        Descriptors()
+            .buffer(kBakedBindEyeTet, m_eyeTet)
+            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindList, m_pixelList)
+            .push(m_ctx, cmd, list);
+        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+        fullBarrier(cmd);
         const Pipeline& march = m_march.at({f.count, first});
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
         pushFrame(cmd, march, f.frame);
@@ -498,8 +530,9 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .buffer(kBakedBindLoops, m_loops)
+            .buffer(kBakedBindList, m_pixelList)
             .push(m_ctx, cmd, march);
-        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+        vkCmdDispatchIndirect(cmd, m_pixelList.handle(), 0);
         fullBarrier(cmd);
     };
     VkImageCopy copy{};
@@ -512,6 +545,8 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         // Peel: the nearest entry face behind the previous layer's exit, before the mesh.
         vkCmdCopyImage(cmd, m_meshDepth.handle(), kGeneral, m_peelDepth.handle(), kGeneral, 1,
                        &copy);
+        const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
+        vkCmdUpdateBuffer(cmd, m_pixelList.handle(), 0, sizeof(emptyList), &emptyList);
         fullBarrier(cmd);
         VkRenderingAttachmentInfo tetInfo = colorAttachment(m_layerTet, VK_ATTACHMENT_LOAD_OP_CLEAR);
         VkRenderingAttachmentInfo depthInfo = depthAttachment(m_peelDepth, VK_ATTACHMENT_LOAD_OP_LOAD);

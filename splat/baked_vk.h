@@ -51,6 +51,7 @@ namespace spot::splat {
 namespace gpu_baked {
 using glm::ivec3;
 using glm::ivec4;
+using glm::uvec3;
 using glm::uvec4;
 using glm::vec4;
 using uint = std::uint32_t;
@@ -122,6 +123,7 @@ private:
     Context& m_ctx;
     Pipeline m_shell, m_peel, m_resolve;
     std::map<std::pair<bool, bool>, Pipeline> m_march; ///< by (count loops, first layer)
+    std::map<bool, Pipeline> m_list;                    ///< by first layer
     bool m_countLoops = false;
 
     // Per bake file.
@@ -137,7 +139,7 @@ private:
     std::uint32_t m_width = 0, m_height = 0;
     Image m_base, m_distance, m_meshDepth, m_peelDepth, m_exitDepth, m_layerTet, m_accum,
         m_result;
-    Buffer m_loops;
+    Buffer m_loops, m_pixelList;
 
     struct Prepared {
         gpu_splat::SpotSplatFrame frame{};
