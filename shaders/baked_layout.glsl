@@ -1,16 +1,18 @@
 /* baked_layout.glsl: what the baked renderer's host code (splat/baked_vk.cpp) and its shaders
  * (baked_*.comp, baked_tet.vert, baked_peel.frag) share: bindings, the parameter block, the
- * sparse grid's table layout and its hash. Compiles as C++ (GLM types, SPOT_CONST and SPOT_FN
+ * sparse grid's leaf tables. Compiles as C++ (GLM types, SPOT_CONST and SPOT_FN
  * defined by the includer) and as GLSL. docs/design.md section 5 describes the renderer. */
 
 /* The sparse grid: the bake's OpenVDB leaves (8^3 voxels) as bricks. Brick b of the density
  * levels holds vec4(extinction x colour, extinction) per voxel at bricks[b * 512 + offset];
  * brick b of the distance grid a float per voxel at distances[b * 512 + offset], with offset =
- * (i & 7) << 6 | (j & 7) << 3 | (k & 7) for voxel ijk. A leaf is found in an open-addressed hash
- * table (linear probing, at most half full): section s (levels 0..levels-1, then the distance
- * grid at kBakedDistanceSection) spans slots [tableOffset[s], tableOffset[s] + tableMask[s]];
- * a slot is ivec4(leaf ijk, brick) with brick kBakedEmptySlot where free. No key lies more than
- * probe[s] slots past its home slot, so a lookup reads at most probe[s] + 1 slots. */
+ * (i & 7) << 6 | (j & 7) << 3 | (k & 7) for voxel ijk. A leaf is found in a dense table over
+ * the box of its section's leaves (section s: levels 0..levels-1, then the distance grid at
+ * kBakedDistanceSection): leaf L's entry, the brick or kBakedEmptySlot, is
+ * table[leafOrigin[s].w + (r.z leafDims[s].y + r.y) leafDims[s].x + r.x] with
+ * r = L - leafOrigin[s].xyz inside [0, leafDims[s].xyz); outside the box no leaf is stored. One
+ * read, no probing: the table holds an int per leaf of the box (the bunny's bakes: under 1 MiB),
+ * where a hash table's probe loops cost lavapipe the longest probe of the SIMD batch. */
 SPOT_CONST uint kBakedLeafBits = 3u;
 SPOT_CONST uint kBakedLeafVoxels = 512u;
 SPOT_CONST int kBakedEmptySlot = -1;
@@ -25,8 +27,8 @@ SPOT_CONST uint kBakedLoopBudget = 60000u;
 /* A layer's walk (baked_march.comp): at most this many tetrahedra and this many samples (skipped
  * ones included); a layer that reaches either ends there (the next layer starts at the next
  * entry face behind that point). */
-SPOT_CONST uint kBakedMaxLayerTets = 512u;
-SPOT_CONST uint kBakedMaxLayerSamples = 512u;
+SPOT_CONST uint kBakedMaxLayerTets = 2048u;
+SPOT_CONST uint kBakedMaxLayerSamples = 4096u;
 /* A transmittance below this ends the walk, and the pixel counts as opaque (no later layer). */
 SPOT_CONST float kBakedOpaque = 1e-4f;
 /* No tetrahedron (the eye test's "the eye is outside the shell"). */
@@ -69,9 +71,8 @@ struct SpotBakedTet {
 struct SpotBakedParams {
     vec4 grid;     /* x: level 0's voxel size; y: its inverse; z: distance cap (level-0 voxels); w: shell thickness */
     uvec4 counts;  /* x: triangles; y: levels; z: tetrahedra; w: 0 */
-    uvec4 tableOffset[3]; /* per section (kBakedSections), flattened [s >> 2][s & 3] */
-    uvec4 tableMask[3];
-    uvec4 probe[3];
+    ivec4 leafOrigin[kBakedSections]; /* per section: xyz its lowest leaf; w its first table entry */
+    ivec4 leafDims[kBakedSections];   /* per section: xyz the leaves of its box (0 when empty) */
 };
 
 /* The pixels a layer's march walks (baked_list.comp), x | y << 16 each after this header. */
@@ -79,12 +80,3 @@ struct SpotBakedList {
     uvec3 groups; /* the march's indirect dispatch: (entries + 63) / 64, 1, 1 */
     uint count;   /* entries */
 };
-
-SPOT_FN uint bakedHash(ivec3 c, uint section) {
-    uint h = (uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u) ^
-             (section * 2654435761u);
-    h ^= h >> 16u;
-    h *= 0x7feb352du;
-    h ^= h >> 15u;
-    return h;
-}

@@ -18,10 +18,10 @@
 // tetrahedron holding the eye (found by baked_shell.comp), and the next peel continues behind.
 //
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
-//   M (1 + 4) + S (1 + (P_d + 1) + 8 (1 + P + 1))
-// with M = kBakedMaxLayerTets (the walk, 4 planes each), S = kBakedMaxLayerSamples (each a
-// distance lookup and, when not skipped, a trilinear sample of 8 lookups), P_d the distance
-// table's longest probe, P the longest probe of any level. Empty-space skipping only lowers it.
+//   M (1 + 4) + S (1 + 8)
+// with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
+// distance lookup and, when not skipped, a trilinear sample of 8 voxels; a lookup is one read
+// of the leaf table, no loop). Empty-space skipping only lowers it.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
@@ -35,7 +35,7 @@ layout(std430, binding = kBakedBindParams) readonly buffer Params { SpotBakedPar
 layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tets[]; };
 layout(std430, binding = kBakedBindNeighbours) readonly buffer Neighbours { ivec4 neighbours[]; };
 layout(std430, binding = kBakedBindEyeTet) readonly buffer EyeTet { uint eyeTet; };
-layout(std430, binding = kBakedBindTable) readonly buffer Table { ivec4 table[]; };
+layout(std430, binding = kBakedBindTable) readonly buffer Table { int table[]; };
 layout(std430, binding = kBakedBindBricks) readonly buffer Bricks { vec4 bricks[]; };
 layout(std430, binding = kBakedBindDistances) readonly buffer Distances { float distances[]; };
 layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
@@ -47,26 +47,14 @@ layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList li
 
 uint loops = 0u;
 
-uint sectionValue(uvec4 a[3], uint s) { return a[s >> 2u][s & 3u]; }
-
-// The brick holding voxel `ijk` of section `s`, or -1.
+// The brick holding voxel `ijk` of section `s`, or -1 (baked_layout.glsl's leaf tables).
 int findBrick(ivec3 ijk, uint s) {
-    ivec3 leaf = ijk >> int(kBakedLeafBits);
-    uint offset = sectionValue(params.tableOffset, s);
-    uint mask = sectionValue(params.tableMask, s);
-    uint probe = sectionValue(params.probe, s);
-    uint slot = bakedHash(leaf, s) & mask;
-    for (uint i = 0u; i <= probe; ++i) {
-        if (kCountLoops)
-            ++loops;
-        ivec4 e = table[offset + slot];
-        if (e.w == kBakedEmptySlot)
-            return -1;
-        if (e.xyz == leaf)
-            return e.w;
-        slot = (slot + 1u) & mask;
-    }
-    return -1;
+    ivec4 origin = params.leafOrigin[s];
+    ivec3 dims = params.leafDims[s].xyz;
+    ivec3 r = (ijk >> int(kBakedLeafBits)) - origin.xyz;
+    if (any(lessThan(r, ivec3(0))) || any(greaterThanEqual(r, dims)))
+        return -1;
+    return table[origin.w + (r.z * dims.y + r.y) * dims.x + r.x];
 }
 
 uint voxelOffset(ivec3 ijk) {

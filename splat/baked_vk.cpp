@@ -30,10 +30,6 @@ constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
 constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
 constexpr VkFormat kTetFormat = VK_FORMAT_R32_UINT;
-/// A table is regrown (doubled) while a key lies more than this many slots past its home, at
-/// most kTableGrowths times: the loop bound pays for every probe.
-constexpr std::uint32_t kWantedProbe = 8;
-constexpr int kTableGrowths = 4;
 /// Layers whose peel and march passes are timed apart (2 marks each, within PassTimer's 32).
 constexpr std::uint32_t kBakedMarkedLayers = 12;
 
@@ -42,7 +38,13 @@ struct LeafKey {
     bool operator==(const LeafKey& o) const { return leaf == o.leaf; }
 };
 struct LeafKeyHash {
-    std::size_t operator()(const LeafKey& k) const { return bakedHash(k.leaf, 0u); }
+    std::size_t operator()(const LeafKey& k) const {
+        std::uint32_t h = std::uint32_t(k.leaf.x) * 73856093u ^ std::uint32_t(k.leaf.y) * 19349663u ^
+                          std::uint32_t(k.leaf.z) * 83492791u;
+        h ^= h >> 16u;
+        h *= 0x7feb352du;
+        return h ^ (h >> 15u);
+    }
 };
 
 /// A section of leaves in first-seen order (the bake's tree order: deterministic).
@@ -64,7 +66,6 @@ void fullBarrier(VkCommandBuffer cmd) {
                   passes::kAll, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
 }
 
-std::uint32_t section(const std::vector<std::uint32_t>& v, std::uint32_t s) { return v[s]; }
 
 } // namespace
 
@@ -193,51 +194,50 @@ void BakedRenderer::loadBake(const std::string& file) {
     }
 
     // Hash tables: one section per level, then the distance grid's.
-    std::vector<glm::ivec4> table;
-    std::vector<std::uint32_t> offsets(kBakedSections, 0), masks(kBakedSections, 0),
-        probes(kBakedSections, 0);
+    // Leaf tables: per section the dense box of its leaves, an int each (the brick, or empty).
+    const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
+    std::vector<std::int32_t> table;
+    std::vector<glm::ivec4> origins(kBakedSections, glm::ivec4(0)), dims(kBakedSections, glm::ivec4(0));
     std::vector<std::uint32_t> firstBrick(std::size_t(levels) + 1, 0);
     std::uint32_t base = 0;
-    std::uint32_t longest = 0;
     for (std::size_t s = 0; s < leaves.size(); ++s) {
         const std::uint32_t id = s < std::size_t(levels) ? std::uint32_t(s) : kBakedDistanceSection;
         const Leaves& L = leaves[s];
         firstBrick[s] = s < std::size_t(levels) ? base : 0;
-        std::uint64_t capacity = 16;
-        while (capacity < 2 * std::uint64_t(L.keys.size()))
-            capacity *= 2;
-        std::vector<glm::ivec4> slots;
-        std::uint32_t probe = 0;
-        for (int growth = 0;; ++growth, capacity *= 2) {
-            slots.assign(capacity, glm::ivec4(0, 0, 0, kBakedEmptySlot));
-            probe = 0;
-            const std::uint32_t mask = std::uint32_t(capacity - 1);
-            for (std::uint32_t b = 0; b < L.keys.size(); ++b) {
-                std::uint32_t slot = bakedHash(L.keys[b], id) & mask, p = 0;
-                while (slots[slot].w != kBakedEmptySlot) {
-                    slot = (slot + 1) & mask;
-                    ++p;
-                }
-                slots[slot] = glm::ivec4(L.keys[b], std::int32_t(firstBrick[s] + b));
-                probe = std::max(probe, p);
+        origins[id].w = std::int32_t(table.size());
+        if (!L.keys.empty()) {
+            glm::ivec3 lo = L.keys[0], hi = L.keys[0];
+            for (const glm::ivec3& k : L.keys) {
+                lo = glm::min(lo, k);
+                hi = glm::max(hi, k);
             }
-            if (probe <= kWantedProbe || growth == kTableGrowths)
-                break;
+            const glm::i64vec3 d = glm::i64vec3(hi) - glm::i64vec3(lo) + std::int64_t(1);
+            const std::uint64_t entries = std::uint64_t(d.x * d.y * d.z);
+            if ((table.size() + entries) * sizeof(std::int32_t) > range)
+                throw InputError(cat("baked: ", file, "'s leaves span a box of ", d.x, "x", d.y,
+                                     "x", d.z, " leaves (level ", s, "), more than one storage "
+                                     "buffer of this device takes as a leaf table (",
+                                     range >> 20, " MiB)"));
+            const std::size_t offset = table.size();
+            table.resize(offset + entries, kBakedEmptySlot);
+            for (std::uint32_t b = 0; b < L.keys.size(); ++b) {
+                const glm::i64vec3 r = glm::i64vec3(L.keys[b]) - glm::i64vec3(lo);
+                table[offset + std::size_t((r.z * d.y + r.y) * d.x + r.x)] =
+                    std::int32_t(firstBrick[s] + b);
+            }
+            origins[id] = glm::ivec4(lo, std::int32_t(offset));
+            dims[id] = glm::ivec4(glm::ivec3(d), 0);
         }
-        offsets[id] = std::uint32_t(table.size());
-        masks[id] = std::uint32_t(slots.size() - 1);
-        probes[id] = probe;
-        longest = std::max(longest, probe);
-        table.insert(table.end(), slots.begin(), slots.end());
         if (s < std::size_t(levels))
             base += std::uint32_t(L.keys.size());
     }
+    if (table.empty())
+        table.push_back(kBakedEmptySlot);
 
     const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * kBakedLeafVoxels * 16;
     const std::uint64_t distanceBytes =
         std::max<std::uint64_t>(distanceLeaves.keys.size(), 1) * kBakedLeafVoxels * 4;
-    const std::uint64_t tableBytes = table.size() * sizeof(glm::ivec4);
-    const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
+    const std::uint64_t tableBytes = table.size() * sizeof(std::int32_t);
     if (brickBytes > range || distanceBytes > range || tableBytes > range)
         throw InputError(cat("baked: ", file, " holds ", brickCount, " leaves (", brickBytes >> 20,
                              " MiB of bricks), more than one storage buffer of this device takes (",
@@ -254,8 +254,8 @@ void BakedRenderer::loadBake(const std::string& file) {
     m_table = Buffer();
     m_bricks = Buffer();
     m_distances = Buffer();
-    m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked hash tables");
-    m_table.upload(std::span<const glm::ivec4>(table));
+    m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
+    m_table.upload(std::span<const std::int32_t>(table));
     m_bricks = Buffer(m_ctx, brickBytes, kStorage, kHost, cat("baked bricks (", brickCount, ")"));
     for (int l = 0; l < levels; ++l)
         if (!bricks[std::size_t(l)].empty())
@@ -265,15 +265,14 @@ void BakedRenderer::loadBake(const std::string& file) {
     m_distances = Buffer(m_ctx, distanceBytes, kStorage, kHost, "baked distance bricks");
     if (!distances.empty())
         m_distances.upload(std::span<const float>(distances));
-    m_offsets = offsets;
-    m_masks = masks;
-    m_probes = probes;
+    m_leafOrigin = origins;
+    m_leafDims = dims;
     m_bakeStats = BakedStats{};
     m_bakeStats.voxelSize = volume.voxelSize(0);
     m_bakeStats.levels = std::uint32_t(levels);
     m_bakeStats.bricks = std::uint32_t(brickCount);
     m_bakeStats.distanceBricks = std::uint32_t(distanceLeaves.keys.size());
-    m_bakeStats.longestProbe = longest;
+    m_bakeStats.tableEntries = std::uint32_t(table.size());
     m_bakeStats.gpuBytes = brickBytes + distanceBytes + tableBytes;
 }
 
@@ -404,19 +403,14 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_bakeStats.maxLayerTets = kBakedMaxLayerTets;
     m_bakeStats.maxLayerSamples = kBakedMaxLayerSamples;
     const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
-    // baked_march.comp: M (1 + 4) + S (1 + (P_d + 1) + 8 (1 + P + 1)).
-    const std::uint64_t bound =
-        std::uint64_t(kBakedMaxLayerTets) * 5 +
-        std::uint64_t(kBakedMaxLayerSamples) *
-            (1 + (section(m_probes, kBakedDistanceSection) + 1) +
-             8 * (2 + std::uint64_t(m_bakeStats.longestProbe)));
+    // baked_march.comp: M (1 + 4) + S (1 + 8).
+    const std::uint64_t bound = std::uint64_t(kBakedMaxLayerTets) * 5 +
+                                std::uint64_t(kBakedMaxLayerSamples) * 9;
     if (bound > budget)
         throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets, " tetrahedra and take ",
-                             kBakedMaxLayerSamples, " samples (hash tables probing up to ",
-                             m_bakeStats.longestProbe, " slots), so one march invocation may loop ",
+                             kBakedMaxLayerSamples, " samples, so one march invocation may loop ",
                              bound, " times, more than the budget of ", budget,
-                             " (lavapipe stops an invocation at 65,535); bake it again (its tables "
-                             "probe too long)"));
+                             " (lavapipe stops an invocation at 65,535)"));
     m_bakeStats.loopBound = std::uint32_t(bound);
     m_bakeStats.peelPasses = std::uint32_t(settings.peelPasses);
 
@@ -425,9 +419,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                             noise::kBakeDistanceCap, thickness);
     params.counts = glm::uvec4(triangles, m_bakeStats.levels, 3 * triangles, 0u);
     for (std::uint32_t s = 0; s < kBakedSections; ++s) {
-        params.tableOffset[s >> 2][s & 3] = m_offsets[s];
-        params.tableMask[s >> 2][s & 3] = m_masks[s];
-        params.probe[s >> 2][s & 3] = m_probes[s];
+        params.leafOrigin[s] = m_leafOrigin[s];
+        params.leafDims[s] = m_leafDims[s];
     }
     m_params.upload(&params, sizeof(params));
 
@@ -611,7 +604,7 @@ FrameCounters BakedRenderer::counters() const {
                {"entry_faces", double(s.entryFaces)},
                {"max_layer_tets", double(s.maxLayerTets)},
                {"max_layer_samples", double(s.maxLayerSamples)},
-               {"longest_probe", double(s.longestProbe)},
+               {"table_entries", double(s.tableEntries)},
                {"loop_bound", double(s.loopBound)},
                {"peel_passes", double(s.peelPasses)},
                {"eye_tetrahedron", double(s.eyeTetrahedron)},

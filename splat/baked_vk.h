@@ -61,7 +61,7 @@ using uint = std::uint32_t;
 #undef SPOT_CONST
 #undef SPOT_FN
 static_assert(sizeof(SpotBakedTet) == 176);
-static_assert(sizeof(SpotBakedParams) == 176);
+static_assert(sizeof(SpotBakedParams) == 416);
 } // namespace gpu_baked
 
 /// Loop iterations one march invocation may need by default (baked_march.comp).
@@ -80,7 +80,7 @@ struct BakedStats {
     std::uint32_t entryFaces = 0;     ///< boundary faces the peel draws (top and open sides)
     std::uint32_t maxLayerTets = 0;   ///< most tetrahedra one layer walks
     std::uint32_t maxLayerSamples = 0; ///< most samples one layer takes (skipped ones included)
-    std::uint32_t longestProbe = 0;   ///< of every table section
+    std::uint32_t tableEntries = 0;   ///< of the leaf tables (one int per leaf of each box)
     std::uint32_t loopBound = 0;      ///< what one march invocation may run
     std::uint32_t maxLoopIterations = 0; ///< counted (countLoops) in the last frame
     std::uint32_t peelPasses = 0;
@@ -104,7 +104,7 @@ public:
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
     const Image& result() const override { return m_result; }
     /// extra: voxel_size, levels, thickness, tetrahedra, bricks, distance_bricks, entry_faces,
-    /// max_layer_tets, max_layer_samples, longest_probe, loop_bound, peel_passes,
+    /// max_layer_tets, max_layer_samples, table_entries, loop_bound, peel_passes,
     /// eye_tetrahedron, bake_mib (and max_loop_iterations when counting).
     FrameCounters counters() const override;
 
@@ -131,7 +131,7 @@ private:
     std::filesystem::file_time_type m_bakeTime{};
     BakedStats m_bakeStats;
     Buffer m_table, m_bricks, m_distances;
-    std::vector<std::uint32_t> m_offsets, m_masks, m_probes;
+    std::vector<glm::ivec4> m_leafOrigin, m_leafDims;
     // Per mesh: the tetrahedra (3 per triangle), their neighbours, the entry faces.
     Buffer m_tets, m_params, m_neighbours, m_entryFaces, m_eyeTet;
     std::uint32_t m_entryFaceCount = 0;
