@@ -155,6 +155,9 @@ void main() {
     // (Chebyshev): with the distance d there, the next (d - 1) voxel0 - 1.5 size along the ray
     // (rest units) read only empty voxels, so those samples are skipped (they add nothing).
     float reach = 1.5 * size;
+    // The distance grid stores at most its cap: at the coarser levels no sample can be skipped,
+    // and the lookup is left out.
+    bool skipping = (params.grid.z - 1.0) * voxel0 - reach >= 0.0;
     uint k = 0u;       // the next sample
     uint samples = 0u; // taken or skipped
     vec3 radiance = vec3(0.0);
@@ -197,7 +200,7 @@ void main() {
                 if (t >= tOut)
                     break;
                 vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
-                float skip = (distanceAt(x) - 1.0) * voxel0 - reach;
+                float skip = skipping ? (distanceAt(x) - 1.0) * voxel0 - reach : -1.0;
                 if (skip >= 0.0) {
                     k += 1u + uint(floor(skip / max(restPerWorld * dt, 1e-30)));
                     continue;
@@ -220,9 +223,8 @@ void main() {
         int next = neighbours[tet][exitFace];
         if (next < 0)
             break; // left the shell
-        ivec4 back = neighbours[next];
-        entryFace = back.x == int(tet) ? 0u : back.y == int(tet) ? 1u : back.z == int(tet) ? 2u : 3u;
-        tet = uint(next);
+        tet = uint(next) >> 2u;
+        entryFace = uint(next) & 3u;
     }
     acc.rgb += (1.0 - acc.a) * radiance;
     acc.a += (1.0 - acc.a) * (1.0 - transmittance);

@@ -376,7 +376,12 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         std::vector<std::uint32_t> entries;
         for (std::size_t t = 0; t < tets.size(); ++t)
             for (std::uint32_t f = 0; f < 4; ++f) {
-                packed[t][int(f)] = neighbours[t][f];
+                // The neighbour and the face it shares, as that neighbour numbers it.
+                const std::int32_t n = neighbours[t][f];
+                std::int32_t back = 0;
+                while (n >= 0 && back < 3 && neighbours[std::size_t(n)][std::size_t(back)] != std::int32_t(t))
+                    ++back;
+                packed[t][int(f)] = n < 0 ? -1 : n * 4 + back;
                 // Boundary faces but the base (all three corners on the mesh): the top surface
                 // and the sides of open edges.
                 bool base = true;

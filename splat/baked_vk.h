@@ -6,32 +6,45 @@
 /// Per frame, recorded into the caller's command buffer with no host wait:
 ///  1. shell (compute, baked_shell.comp): per triangle its prism (the mesh extruded along its
 ///     vertex normals by the shell thickness) split into 3 tetrahedra with noise/shell.h's rule,
-///     each corner with its position now and at rest (the texture coordinate into the bake).
-///     Rebuilt from the mesh's vertices every frame, so an animated mesh's shell follows it.
+///     each with its corners now, its 4 inward face planes and its affine map from world now to
+///     rest (the texture coordinate into the bake); and the lowest tetrahedron holding the eye,
+///     if any. Rebuilt from the mesh's vertices every frame, so an animated mesh's shell follows
+///     it. Per mesh, on the host (topology only): each tetrahedron's neighbour across each face
+///     (noise::shellNeighbours) and the shell's entry faces, the boundary faces a ray can enter
+///     through (the top surface and the sides of open edges; not the base, the mesh).
 ///  2. mesh (raster): the opaque base mesh's colour, ray distance and depth (MeshPass).
 ///  3. per layer k = 1..N (RenderSettings::peelPasses): peel (raster, baked_tet.vert and
-///     baked_peel.frag): the tetrahedra's faces that face the eye, with the mesh's depth copied
-///     into the depth buffer (z-buffer culling behind the mesh) and a test against layer k-1's
-///     depth, keep per pixel the nearest tetrahedron not yet peeled; march (compute,
-///     baked_march.comp): the view ray's segment inside that tetrahedron, in texture space by its
-///     affine map, marched through the bake at the mip level of the pixel's footprint and
-///     composited under the earlier layers (front to back).
+///     baked_peel.frag): the entry faces that face the eye (one triangle per mesh triangle on a
+///     closed mesh), with the mesh's depth copied into the depth buffer (z-buffer culling behind
+///     the mesh) and a test against where layer k-1's walk left the shell, keep per pixel the
+///     nearest entry; list (compute, baked_list.comp): the pixels with an entry that are not
+///     opaque, compacted; march (compute, baked_march.comp, dispatched indirectly over the
+///     list): from the entry, a walk through the tetrahedra across their shared faces until the
+///     ray leaves the shell, reaches the mesh or is opaque, sampling the bake at one spacing for
+///     the whole layer (the mip level of the pixel's footprint at the entry) through each
+///     tetrahedron's affine map, composited under the earlier layers (front to back); it writes
+///     the walk's exit depth, where the next peel starts. So one layer is the ray's whole
+///     contiguous passage through the shell, and later layers are re-entries (ears,
+///     silhouettes). The first layer starts every pixel at the eye, t = 0, when the eye is
+///     inside the shell.
 ///  4. resolve (compute): the accumulation over the mesh colour, into result().
 ///
 /// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in one storage
 /// buffer (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
-/// found through open-addressed hash tables (one section per level and one for the distance
-/// grid, at most half full, linear probing with the longest probe known on the host). The march
-/// skips the samples the distance grid proves empty.
+/// found through dense leaf tables (one int per leaf of each level's box of leaves, and of the
+/// distance grid's: one read, no probing). The march skips the samples the distance grid proves
+/// empty.
 ///
-/// The loop guard: lavapipe stops an invocation after 65,535 loop iterations, so prepare()
-/// bounds what one march invocation can run (baked_march.comp's formula, from the steps per
-/// segment and the tables' longest probes) and refuses a frame above kBakedLoopBudget.
+/// The loop guard: lavapipe stops an invocation after 65,535 loop iterations, so a layer walks at
+/// most kBakedMaxLayerTets tetrahedra and takes at most kBakedMaxLayerSamples samples, prepare()
+/// computes the bound one march invocation can run (baked_march.comp's formula) and refuses a
+/// frame above the budget (kBakedLoopBudget by default).
 ///
-/// Limits: perspective cameras and unlit shading only (the bake stores no normals); a layer
-/// holds one tetrahedron per pixel, so tetrahedra beyond the N-th along a ray are not drawn
-/// (more layers never make the image worse; 4 cover most of the fur at the scenes' views).
-/// Results are deterministic: no float atomics, every pixel independent.
+/// Limits: perspective cameras and unlit shading only (the bake stores no normals); a passage
+/// longer than the per-layer caps, or a walk stopped by a degenerate tetrahedron, leaves the
+/// rest of that passage out (the next layer starts at the next entry face behind it); faces of
+/// non-manifold edges are boundary (the walk stops there). More layers never make the image
+/// worse. Results are deterministic: no float atomics, every pixel independent.
 #pragma once
 
 #include <cstdint>
