@@ -5,6 +5,8 @@
 
 /* The sparse grid: the bake's OpenVDB leaves (8^3 voxels) as bricks. Brick b of the density
  * levels holds vec4(extinction x colour, extinction) per voxel at bricks[b * 512 + offset];
+ * the density bricks are split over up to kBakedBrickBuffers storage buffers of counts.w bricks
+ * each (one buffer's range is limited: 128 MiB on lavapipe), brick b in buffer b / counts.w;
  * brick b of the distance grid a float per voxel at distances[b * 512 + offset], with offset =
  * (i & 7) << 6 | (j & 7) << 3 | (k & 7) for voxel ijk. A leaf is found in a dense table over
  * the box of its section's leaves (section s: levels 0..levels-1, then the distance grid at
@@ -18,6 +20,7 @@ SPOT_CONST uint kBakedLeafVoxels = 512u;
 SPOT_CONST int kBakedEmptySlot = -1;
 SPOT_CONST uint kBakedSections = 12u;          /* 8 levels at most, the distance grid, spare */
 SPOT_CONST uint kBakedDistanceSection = 8u;
+SPOT_CONST uint kBakedBrickBuffers = 4u;
 /* The march's step: this fraction of the level's voxel, in rest-pose (texture) units. One voxel:
  * on fur-bunny at 128x128 (16 layers) 31.36 dB against the reference, half a voxel 31.33 dB
  * at 1.2 times the cost (the trilinear reconstruction, not the step, limits the error). */
@@ -41,7 +44,7 @@ SPOT_CONST uint kBakedBindRest = 2u;        /* SpotMeshVertex[]: the mesh at res
 SPOT_CONST uint kBakedBindIndices = 3u;     /* uint[3 x triangles] */
 SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
 SPOT_CONST uint kBakedBindTable = 5u;       /* ivec4[]: the hash tables' slots */
-SPOT_CONST uint kBakedBindBricks = 6u;      /* vec4[]: density bricks of every level */
+SPOT_CONST uint kBakedBindBricks = 6u;      /* vec4[]: density bricks of every level (the first buffer's) */
 SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
 SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
 SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's entry, 4 tet + face + 1 */
@@ -54,6 +57,9 @@ SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: across face
 SPOT_CONST uint kBakedBindEntryFaces = 16u; /* uint[]: 4 tet + face of each enterable boundary face */
 SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
 SPOT_CONST uint kBakedBindExitDepth = 18u;  /* r32f image: where this layer's walk left the shell */
+SPOT_CONST uint kBakedBindBricks1 = 20u;    /* vec4[]: the second to fourth buffers of density bricks */
+SPOT_CONST uint kBakedBindBricks2 = 21u;
+SPOT_CONST uint kBakedBindBricks3 = 22u;
 SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList, then uint[width x height]: the pixels to march */
 
 /* Specialization ids. */
@@ -70,7 +76,7 @@ struct SpotBakedTet {
 
 struct SpotBakedParams {
     vec4 grid;     /* x: level 0's voxel size; y: its inverse; z: distance cap (level-0 voxels); w: shell thickness */
-    uvec4 counts;  /* x: triangles; y: levels; z: tetrahedra; w: 0 */
+    uvec4 counts;  /* x: triangles; y: levels; z: tetrahedra; w: bricks per brick buffer */
     ivec4 leafOrigin[kBakedSections]; /* per section: xyz its lowest leaf; w its first table entry */
     ivec4 leafDims[kBakedSections];   /* per section: xyz the leaves of its box (0 when empty) */
 };

@@ -36,7 +36,10 @@ layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tet
 layout(std430, binding = kBakedBindNeighbours) readonly buffer Neighbours { ivec4 neighbours[]; };
 layout(std430, binding = kBakedBindEyeTet) readonly buffer EyeTet { uint eyeTet; };
 layout(std430, binding = kBakedBindTable) readonly buffer Table { int table[]; };
-layout(std430, binding = kBakedBindBricks) readonly buffer Bricks { vec4 bricks[]; };
+layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { vec4 bricks0[]; };
+layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { vec4 bricks1[]; };
+layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { vec4 bricks2[]; };
+layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { vec4 bricks3[]; };
 layout(std430, binding = kBakedBindDistances) readonly buffer Distances { float distances[]; };
 layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
@@ -62,10 +65,24 @@ uint voxelOffset(ivec3 ijk) {
     return uint(l.x << 6 | l.y << 3 | l.z);
 }
 
+// Voxel `offset` of density brick b, from the brick buffer that holds it.
+vec4 brickVoxel(uint b, uint offset) {
+    uint per = params.counts.w;
+    uint which = b / per;
+    uint i = (b - which * per) * kBakedLeafVoxels + offset;
+    if (which == 0u)
+        return bricks0[i];
+    if (which == 1u)
+        return bricks1[i];
+    if (which == 2u)
+        return bricks2[i];
+    return bricks3[i];
+}
+
 // (extinction x colour, extinction) of voxel ijk of `level`, 0 where not stored.
 vec4 voxel(ivec3 ijk, uint level) {
     int b = findBrick(ijk, level);
-    return b < 0 ? vec4(0.0) : bricks[uint(b) * kBakedLeafVoxels + voxelOffset(ijk)];
+    return b < 0 ? vec4(0.0) : brickVoxel(uint(b), voxelOffset(ijk));
 }
 
 // Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`.

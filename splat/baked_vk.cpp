@@ -127,6 +127,8 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first) {
         {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
          storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
          storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
+         storageBuffer(kBakedBindBricks1), storageBuffer(kBakedBindBricks2),
+         storageBuffer(kBakedBindBricks3),
          storageBuffer(kBakedBindDistances), storageImage(kBakedBindLayerTet),
          storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
          storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops),
@@ -238,12 +240,18 @@ void BakedRenderer::loadBake(const std::string& file) {
     const std::uint64_t distanceBytes =
         std::max<std::uint64_t>(distanceLeaves.keys.size(), 1) * kBakedLeafVoxels * 4;
     const std::uint64_t tableBytes = table.size() * sizeof(std::int32_t);
-    if (brickBytes > range || distanceBytes > range || tableBytes > range)
+    // The density bricks over up to kBakedBrickBuffers buffers of one storage buffer's range.
+    const std::uint64_t fits = range / (std::uint64_t(kBakedLeafVoxels) * 16);
+    const std::uint64_t perBuffer = m_brickSplit > 0 ? std::min<std::uint64_t>(m_brickSplit, fits) : fits;
+    const std::uint64_t bufferCount = std::max<std::uint64_t>((brickCount + perBuffer - 1) / perBuffer, 1);
+    if (bufferCount > kBakedBrickBuffers || distanceBytes > range || tableBytes > range)
         throw InputError(cat("baked: ", file, " holds ", brickCount, " leaves (", brickBytes >> 20,
-                             " MiB of bricks), more than one storage buffer of this device takes (",
-                             range >> 20, " MiB); bake it at a larger voxel size"));
-    const std::uint64_t held =
-        m_table.reservedBytes() + m_bricks.reservedBytes() + m_distances.reservedBytes();
+                             " MiB of bricks, ", distanceBytes >> 20, " MiB of distances), more than ",
+                             kBakedBrickBuffers, " storage buffers of this device take (",
+                             range >> 20, " MiB each); bake it at a larger voxel size"));
+    std::uint64_t held = m_table.reservedBytes() + m_distances.reservedBytes();
+    for (const Buffer& b : m_bricks)
+        held += b.reservedBytes();
     if (m_ctx.allocatedBytes() - held + brickBytes + distanceBytes + tableBytes >
         m_ctx.memoryBudget())
         throw InputError(cat("baked: ", file, " needs ",
@@ -252,16 +260,31 @@ void BakedRenderer::loadBake(const std::string& file) {
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; bake it at a larger voxel size"));
     m_table = Buffer();
-    m_bricks = Buffer();
+    for (Buffer& b : m_bricks)
+        b = Buffer();
     m_distances = Buffer();
     m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
     m_table.upload(std::span<const std::int32_t>(table));
-    m_bricks = Buffer(m_ctx, brickBytes, kStorage, kHost, cat("baked bricks (", brickCount, ")"));
-    for (int l = 0; l < levels; ++l)
-        if (!bricks[std::size_t(l)].empty())
-            m_bricks.upload(bricks[std::size_t(l)].data(),
-                            bricks[std::size_t(l)].size() * sizeof(glm::vec4),
-                            VkDeviceSize(firstBrick[std::size_t(l)]) * kBakedLeafVoxels * 16);
+    const std::uint64_t brickBytesEach = std::uint64_t(kBakedLeafVoxels) * 16;
+    for (std::uint64_t i = 0; i < bufferCount; ++i) {
+        const std::uint64_t n = std::min<std::uint64_t>(perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
+        m_bricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
+                             cat("baked bricks (", n, ", buffer ", i, ")"));
+    }
+    // Level l's bricks are [firstBrick[l], + its leaves), uploaded in pieces at buffer bounds.
+    for (int l = 0; l < levels; ++l) {
+        const auto& data = bricks[std::size_t(l)];
+        const std::uint64_t count = data.size() / kBakedLeafVoxels;
+        for (std::uint64_t done = 0; done < count;) {
+            const std::uint64_t b = firstBrick[std::size_t(l)] + done;
+            const std::uint64_t buffer = b / perBuffer, local = b % perBuffer;
+            const std::uint64_t n = std::min(count - done, perBuffer - local);
+            m_bricks[buffer].upload(data.data() + done * kBakedLeafVoxels, n * brickBytesEach,
+                                    local * brickBytesEach);
+            done += n;
+        }
+    }
+    m_bricksPerBuffer = std::uint32_t(perBuffer);
     m_distances = Buffer(m_ctx, distanceBytes, kStorage, kHost, "baked distance bricks");
     if (!distances.empty())
         m_distances.upload(std::span<const float>(distances));
@@ -271,6 +294,7 @@ void BakedRenderer::loadBake(const std::string& file) {
     m_bakeStats.voxelSize = volume.voxelSize(0);
     m_bakeStats.levels = std::uint32_t(levels);
     m_bakeStats.bricks = std::uint32_t(brickCount);
+    m_bakeStats.brickBuffers = std::uint32_t(bufferCount);
     m_bakeStats.distanceBricks = std::uint32_t(distanceLeaves.keys.size());
     m_bakeStats.tableEntries = std::uint32_t(table.size());
     m_bakeStats.gpuBytes = brickBytes + distanceBytes + tableBytes;
@@ -422,7 +446,7 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     SpotBakedParams params{};
     params.grid = glm::vec4(m_bakeStats.voxelSize, 1.0f / m_bakeStats.voxelSize,
                             noise::kBakeDistanceCap, thickness);
-    params.counts = glm::uvec4(triangles, m_bakeStats.levels, 3 * triangles, 0u);
+    params.counts = glm::uvec4(triangles, m_bakeStats.levels, 3 * triangles, m_bricksPerBuffer);
     for (std::uint32_t s = 0; s < kBakedSections; ++s) {
         params.leafOrigin[s] = m_leafOrigin[s];
         params.leafDims[s] = m_leafDims[s];
@@ -521,7 +545,10 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kBakedBindNeighbours, m_neighbours)
             .buffer(kBakedBindEyeTet, m_eyeTet)
             .buffer(kBakedBindTable, m_table)
-            .buffer(kBakedBindBricks, m_bricks)
+            .buffer(kBakedBindBricks, m_bricks[0])
+            .buffer(kBakedBindBricks1, m_bricks[m_bricks[1].handle() ? 1 : 0])
+            .buffer(kBakedBindBricks2, m_bricks[m_bricks[2].handle() ? 2 : 0])
+            .buffer(kBakedBindBricks3, m_bricks[m_bricks[3].handle() ? 3 : 0])
             .buffer(kBakedBindDistances, m_distances)
             .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
@@ -605,6 +632,7 @@ FrameCounters BakedRenderer::counters() const {
                {"thickness", double(s.thickness)},
                {"tetrahedra", double(s.tetrahedra)},
                {"bricks", double(s.bricks)},
+               {"brick_buffers", double(s.brickBuffers)},
                {"distance_bricks", double(s.distanceBricks)},
                {"entry_faces", double(s.entryFaces)},
                {"max_layer_tets", double(s.maxLayerTets)},

@@ -29,8 +29,8 @@
 ///     inside the shell.
 ///  4. resolve (compute): the accumulation over the mesh colour, into result().
 ///
-/// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in one storage
-/// buffer (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
+/// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in up to 4 storage
+/// buffers of one binding's range each (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
 /// found through dense leaf tables (one int per leaf of each level's box of leaves, and of the
 /// distance grid's: one read, no probing). The march skips the samples the distance grid proves
 /// empty.
@@ -47,6 +47,7 @@
 /// worse. Results are deterministic: no float atomics, every pixel independent.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -89,6 +90,7 @@ struct BakedStats {
     float thickness = 0.0f;      ///< the shell's, world units
     std::uint32_t tetrahedra = 0;
     std::uint32_t bricks = 0;         ///< density leaves of every level
+    std::uint32_t brickBuffers = 0;   ///< storage buffers they are split over
     std::uint32_t distanceBricks = 0; ///< distance leaves
     std::uint32_t entryFaces = 0;     ///< boundary faces the peel draws (top and open sides)
     std::uint32_t maxLayerTets = 0;   ///< most tetrahedra one layer walks
@@ -116,13 +118,19 @@ public:
                  const RenderSettings& settings) override;
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
     const Image& result() const override { return m_result; }
-    /// extra: voxel_size, levels, thickness, tetrahedra, bricks, distance_bricks, entry_faces,
-    /// max_layer_tets, max_layer_samples, table_entries, loop_bound, peel_passes,
+    /// extra: voxel_size, levels, thickness, tetrahedra, bricks, brick_buffers, distance_bricks,
+    /// entry_faces, max_layer_tets, max_layer_samples, table_entries, loop_bound, peel_passes,
     /// eye_tetrahedron, bake_mib (and max_loop_iterations when counting).
     FrameCounters counters() const override;
 
     /// Count every march invocation's loop iterations from the next frame on (for tests).
     void countLoops(bool on) { m_countLoops = on; }
+    /// Split the density bricks over buffers of at most this many bricks (0: as many as one
+    /// storage buffer takes) from the next bake loaded on (for tests: the split of a small bake).
+    void splitBricks(std::uint32_t bricksPerBuffer) {
+        m_brickSplit = bricksPerBuffer;
+        m_bakeFile.clear();
+    }
     /// After the frame completed.
     BakedStats stats() const;
 
@@ -143,7 +151,9 @@ private:
     std::string m_bakeFile;
     std::filesystem::file_time_type m_bakeTime{};
     BakedStats m_bakeStats;
-    Buffer m_table, m_bricks, m_distances;
+    Buffer m_table, m_distances;
+    std::array<Buffer, gpu_baked::kBakedBrickBuffers> m_bricks; ///< the density bricks' buffers
+    std::uint32_t m_bricksPerBuffer = 0, m_brickSplit = 0;
     std::vector<glm::ivec4> m_leafOrigin, m_leafDims;
     // Per mesh: the tetrahedra (3 per triangle), their neighbours, the entry faces.
     Buffer m_tets, m_params, m_neighbours, m_entryFaces, m_eyeTet;

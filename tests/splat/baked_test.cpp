@@ -300,6 +300,39 @@ TEST(BakedFrame, DeterministicWarmFramesAndTheLoopGuard) {
     expectNoValidationErrors(ctx);
 }
 
+// A bake larger than one storage buffer's range (128 MiB on lavapipe) is split over up to 4
+// buffers. Here the small bake split over 4 (at most 2,500 bricks each) renders byte for byte
+// what it renders from one, and a split that would need 5 is refused with one line.
+TEST(BakedFrame, BricksSplitOverBuffersRenderTheSame) {
+    const BakedScene s = loadBakedScene("fur-bunny", 64, 0.004f, 4);
+    splat::Context ctx(validated());
+    splat::Frame frame(ctx, s.mesh, *s.generator);
+    auto& renderer = dynamic_cast<splat::BakedRenderer&>(frame.renderer("baked"));
+    splat::RenderSettings settings;
+    settings.bakeFile = s.bake;
+    noise::Image whole, split;
+    frame.render("baked", s.view(), settings, &whole);
+    EXPECT_EQ(renderer.stats().brickBuffers, 1u);
+    const std::uint32_t bricks = renderer.stats().bricks;
+    ASSERT_GT(bricks, 7500u);
+    ASSERT_LE(bricks, 10000u);
+    renderer.splitBricks(2500);
+    frame.render("baked", s.view(), settings, &split);
+    EXPECT_EQ(renderer.stats().brickBuffers, 4u);
+    ASSERT_EQ(whole.pixels.size(), split.pixels.size());
+    EXPECT_EQ(std::memcmp(whole.pixels.data(), split.pixels.data(),
+                          whole.pixels.size() * sizeof(glm::vec3)),
+              0);
+    renderer.splitBricks(bricks / 5);
+    try {
+        frame.render("baked", s.view(), settings);
+        ADD_FAILURE() << "a bake needing 5 brick buffers was not refused";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("storage buffers"), std::string::npos) << e.what();
+    }
+    expectNoValidationErrors(ctx);
+}
+
 struct CliRun {
     int code = -1;
     std::string err;
