@@ -64,6 +64,7 @@ SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList, then uint[width x 
 
 /* Specialization ids. */
 SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids below are splat_common.glsl's) */
+SPOT_CONST uint kBakedSpecSplitBricks = 66u; /* bool: the density bricks span several buffers */
 SPOT_CONST uint kBakedSpecFirstLayer = 65u; /* bool: the first layer (starts at the eye's tetrahedron if any) */
 
 struct SpotBakedTet {

@@ -30,6 +30,7 @@ layout(local_size_x = 64) in;
 
 layout(constant_id = kBakedSpecCount) const bool kCountLoops = false;
 layout(constant_id = kBakedSpecFirstLayer) const bool kFirstLayer = false;
+layout(constant_id = kBakedSpecSplitBricks) const bool kSplitBricks = false;
 
 layout(std430, binding = kBakedBindParams) readonly buffer Params { SpotBakedParams params; };
 layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tets[]; };
@@ -67,6 +68,8 @@ uint voxelOffset(ivec3 ijk) {
 
 // Voxel `offset` of density brick b, from the brick buffer that holds it.
 vec4 brickVoxel(uint b, uint offset) {
+    if (!kSplitBricks)
+        return bricks0[b * kBakedLeafVoxels + offset]; // one buffer: no selection (it costs)
     uint per = params.counts.w;
     uint which = b / per;
     uint i = (b - which * per) * kBakedLeafVoxels + offset;

@@ -116,12 +116,13 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
 
 BakedRenderer::~BakedRenderer() = default;
 
-const Pipeline& BakedRenderer::marchPipeline(bool count, bool first) {
-    if (const auto it = m_march.find({count, first}); it != m_march.end())
+const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split) {
+    if (const auto it = m_march.find({count, first, split}); it != m_march.end())
         return it->second;
     Specialization spec;
     spec.set(kBakedSpecCount, count);
     spec.set(kBakedSpecFirstLayer, first);
+    spec.set(kBakedSpecSplitBricks, split);
     Pipeline p = makeComputePipeline(
         m_ctx, spirv(spv_baked_march_comp),
         {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
@@ -144,7 +145,7 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first) {
                                    storageBuffer(kBakedBindList)},
                                   sizeof(gpu_splat::SpotSplatFrame), listSpec));
     }
-    return m_march.emplace(std::pair{count, first}, std::move(p)).first->second;
+    return m_march.emplace(std::tuple{count, first, split}, std::move(p)).first->second;
 }
 
 void BakedRenderer::loadBake(const std::string& file) {
@@ -458,8 +459,9 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_frame.background = view.background;
     m_frame.peelPasses = std::uint32_t(settings.peelPasses);
     m_frame.count = m_countLoops;
-    marchPipeline(m_frame.count, false);
-    marchPipeline(m_frame.count, true);
+    m_frame.split = m_bakeStats.brickBuffers > 1;
+    marchPipeline(m_frame.count, false, m_frame.split);
+    marchPipeline(m_frame.count, true, m_frame.split);
 }
 
 void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
@@ -536,7 +538,7 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .push(m_ctx, cmd, list);
         vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
         fullBarrier(cmd);
-        const Pipeline& march = m_march.at({f.count, first});
+        const Pipeline& march = m_march.at({f.count, first, f.split});
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
         pushFrame(cmd, march, f.frame);
         Descriptors()

@@ -51,6 +51,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <tuple>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -138,12 +139,12 @@ private:
     struct Bake;
     void loadBake(const std::string& file);
     void ensureTargets(std::uint32_t width, std::uint32_t height);
-    const Pipeline& marchPipeline(bool count, bool first);
+    const Pipeline& marchPipeline(bool count, bool first, bool split);
 
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_shell, m_peel, m_resolve;
-    std::map<std::pair<bool, bool>, Pipeline> m_march; ///< by (count loops, first layer)
+    std::map<std::tuple<bool, bool, bool>, Pipeline> m_march; ///< by (count loops, first layer, split bricks)
     std::map<bool, Pipeline> m_list;                    ///< by first layer
     bool m_countLoops = false;
 
@@ -169,6 +170,7 @@ private:
         glm::vec3 background{0.0f};
         std::uint32_t peelPasses = 1;
         bool count = false;
+        bool split = false; ///< the bricks span several buffers
     } m_frame;
 };
 
