@@ -222,7 +222,8 @@ void main() {
                 vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
                 float skip = skipping ? (distanceAt(x) - 1.0) * voxel0 - reach : -1.0;
                 if (skip >= 0.0) {
-                    k += 1u + uint(floor(skip / max(restPerWorld * dt, 1e-30)));
+                    // (clamped: a flat tetrahedron's map has no length)
+                    k += 1u + uint(min(floor(skip / max(restPerWorld * dt, 1e-30)), 65536.0));
                     continue;
                 }
                 vec4 s = sampleLevel(x, level, inverseSize);
