@@ -60,6 +60,52 @@ bool raySegmentInTetrahedron(const ShellMesh& shell, const ShellTetrahedron& tet
     return tEnter < tExit;
 }
 
+std::vector<ShellTetrahedron> shellTetrahedra(const std::vector<glm::uvec3>& triangles,
+                                              std::uint32_t baseCount) {
+    std::vector<ShellTetrahedron> out;
+    out.reserve(3 * triangles.size());
+    for (std::size_t t = 0; t < triangles.size(); ++t)
+        for (const ShellTetrahedron& tet :
+             prismTetrahedra(triangles[t], std::uint32_t(t), baseCount))
+            out.push_back(tet);
+    return out;
+}
+
+std::vector<std::array<std::int32_t, 4>> shellNeighbours(
+    const std::vector<ShellTetrahedron>& tetrahedra) {
+    // Every face as (sorted vertex triple, tetrahedron x 4 + face), sorted: a face's holders
+    // end up next to each other (deterministic, no hashing).
+    struct Entry {
+        std::array<std::uint32_t, 3> key;
+        std::uint32_t id;
+        bool operator<(const Entry& o) const { return key != o.key ? key < o.key : id < o.id; }
+    };
+    SPOT_CHECK_LE(tetrahedra.size(), std::size_t(1) << 29);
+    std::vector<Entry> faces;
+    faces.reserve(4 * tetrahedra.size());
+    for (std::size_t t = 0; t < tetrahedra.size(); ++t)
+        for (std::uint32_t f = 0; f < 4; ++f) {
+            const auto& v = tetrahedra[t].vertices;
+            std::array<std::uint32_t, 3> key = {v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
+            std::sort(key.begin(), key.end());
+            faces.push_back({key, std::uint32_t(t) * 4 + f});
+        }
+    std::sort(faces.begin(), faces.end());
+    std::vector<std::array<std::int32_t, 4>> out(tetrahedra.size(), {-1, -1, -1, -1});
+    for (std::size_t i = 0; i < faces.size();) {
+        std::size_t j = i + 1;
+        while (j < faces.size() && faces[j].key == faces[i].key)
+            ++j;
+        if (j - i == 2) {
+            const std::uint32_t a = faces[i].id, b = faces[i + 1].id;
+            out[a >> 2][a & 3] = std::int32_t(b >> 2);
+            out[b >> 2][b & 3] = std::int32_t(a >> 2);
+        }
+        i = j;
+    }
+    return out;
+}
+
 ShellMesh buildShell(const Mesh& mesh, float thickness) {
     if (!(std::isfinite(thickness) && thickness > 0.0f))
         throw InputError(
@@ -72,11 +118,7 @@ ShellMesh buildShell(const Mesh& mesh, float thickness) {
     shell.positions = mesh.positions;
     for (std::size_t i = 0; i < mesh.positions.size(); ++i)
         shell.positions.push_back(mesh.positions[i] + thickness * mesh.normals[i]);
-    shell.tetrahedra.reserve(3 * mesh.triangles.size());
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (const ShellTetrahedron& tet :
-             prismTetrahedra(mesh.triangles[t], std::uint32_t(t), shell.baseCount))
-            shell.tetrahedra.push_back(tet);
+    shell.tetrahedra = shellTetrahedra(mesh.triangles, shell.baseCount);
     return shell;
 }
 

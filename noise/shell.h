@@ -53,6 +53,21 @@ std::array<ShellTetrahedron, 3> prismTetrahedra(glm::uvec3 tri, std::uint32_t t,
 bool raySegmentInTetrahedron(const ShellMesh& shell, const ShellTetrahedron& tet, glm::dvec3 origin,
                              glm::dvec3 dir, double& tEnter, double& tExit);
 
+/// Per tetrahedron and face (face i is the one opposite vertex i), the tetrahedron across it, or
+/// -1 on the shell's boundary. Faces match by their vertex-index triples (base vertex v or top
+/// vertex v + baseCount): the rising-edge rule makes the two prisms of a shared edge split their
+/// quad alike, so inside the shell every face is held by exactly two tetrahedra. Boundary: the
+/// top (offset) surface, the base (the mesh), the side faces of open edges, and the faces of
+/// non-manifold edges (held by more than two; none is paired). Topology only: a per-mesh
+/// precomputation that an animated mesh keeps.
+std::vector<std::array<std::int32_t, 4>> shellNeighbours(
+    const std::vector<ShellTetrahedron>& tetrahedra);
+
+/// The tetrahedra of the prisms of `triangles`, 3 per triangle in triangle order (as buildShell's,
+/// without positions: vertex v's top vertex is v + baseCount).
+std::vector<ShellTetrahedron> shellTetrahedra(const std::vector<glm::uvec3>& triangles,
+                                              std::uint32_t baseCount);
+
 /// Extrude `mesh` by `thickness` (world units, > 0 and finite; InputError otherwise) along its
 /// vertex normals and split every prism.
 ShellMesh buildShell(const Mesh& mesh, float thickness);

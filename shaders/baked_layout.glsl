@@ -1,27 +1,41 @@
 /* baked_layout.glsl: what the baked renderer's host code (splat/baked_vk.cpp) and its shaders
  * (baked_*.comp, baked_tet.vert, baked_peel.frag) share: bindings, the parameter block, the
- * sparse grid's table layout and its hash. Compiles as C++ (GLM types, SPOT_CONST and SPOT_FN
+ * sparse grid's leaf tables. Compiles as C++ (GLM types, SPOT_CONST and SPOT_FN
  * defined by the includer) and as GLSL. docs/design.md section 5 describes the renderer. */
 
 /* The sparse grid: the bake's OpenVDB leaves (8^3 voxels) as bricks. Brick b of the density
  * levels holds vec4(extinction x colour, extinction) per voxel at bricks[b * 512 + offset];
+ * the density bricks are split over up to kBakedBrickBuffers storage buffers of counts.w bricks
+ * each (one buffer's range is limited: 128 MiB on lavapipe), brick b in buffer b / counts.w;
  * brick b of the distance grid a float per voxel at distances[b * 512 + offset], with offset =
- * (i & 7) << 6 | (j & 7) << 3 | (k & 7) for voxel ijk. A leaf is found in an open-addressed hash
- * table (linear probing, at most half full): section s (levels 0..levels-1, then the distance
- * grid at kBakedDistanceSection) spans slots [tableOffset[s], tableOffset[s] + tableMask[s]];
- * a slot is ivec4(leaf ijk, brick) with brick kBakedEmptySlot where free. No key lies more than
- * probe[s] slots past its home slot, so a lookup reads at most probe[s] + 1 slots. */
+ * (i & 7) << 6 | (j & 7) << 3 | (k & 7) for voxel ijk. A leaf is found in a dense table over
+ * the box of its section's leaves (section s: levels 0..levels-1, then the distance grid at
+ * kBakedDistanceSection): leaf L's entry, the brick or kBakedEmptySlot, is
+ * table[leafOrigin[s].w + (r.z leafDims[s].y + r.y) leafDims[s].x + r.x] with
+ * r = L - leafOrigin[s].xyz inside [0, leafDims[s].xyz); outside the box no leaf is stored. One
+ * read, no probing: the table holds an int per leaf of the box (the bunny's bakes: under 1 MiB),
+ * where a hash table's probe loops cost lavapipe the longest probe of the SIMD batch. */
 SPOT_CONST uint kBakedLeafBits = 3u;
 SPOT_CONST uint kBakedLeafVoxels = 512u;
 SPOT_CONST int kBakedEmptySlot = -1;
 SPOT_CONST uint kBakedSections = 12u;          /* 8 levels at most, the distance grid, spare */
 SPOT_CONST uint kBakedDistanceSection = 8u;
+SPOT_CONST uint kBakedBrickBuffers = 4u;
 /* The march's step: this fraction of the level's voxel, in rest-pose (texture) units. One voxel:
  * on fur-bunny at 128x128 (16 layers) 31.36 dB against the reference, half a voxel 31.33 dB
  * at 1.2 times the cost (the trilinear reconstruction, not the step, limits the error). */
 SPOT_CONST float kBakedStepFraction = 1.0f;
 /* Loop iterations one invocation may run (lavapipe stops one at 65,535; docs/design.md 8). */
 SPOT_CONST uint kBakedLoopBudget = 60000u;
+/* A layer's walk (baked_march.comp): at most this many tetrahedra and this many samples (skipped
+ * ones included); a layer that reaches either ends there (the next layer starts at the next
+ * entry face behind that point). */
+SPOT_CONST uint kBakedMaxLayerTets = 2048u;
+SPOT_CONST uint kBakedMaxLayerSamples = 4096u;
+/* A transmittance below this ends the walk, and the pixel counts as opaque (no later layer). */
+SPOT_CONST float kBakedOpaque = 1e-4f;
+/* No tetrahedron (the eye test's "the eye is outside the shell"). */
+SPOT_CONST uint kBakedNoTet = 0xffffffffu;
 
 /* Bindings (set 0, push descriptors). */
 SPOT_CONST uint kBakedBindParams = 0u;      /* SpotBakedParams */
@@ -30,37 +44,46 @@ SPOT_CONST uint kBakedBindRest = 2u;        /* SpotMeshVertex[]: the mesh at res
 SPOT_CONST uint kBakedBindIndices = 3u;     /* uint[3 x triangles] */
 SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
 SPOT_CONST uint kBakedBindTable = 5u;       /* ivec4[]: the hash tables' slots */
-SPOT_CONST uint kBakedBindBricks = 6u;      /* vec4[]: density bricks of every level */
+SPOT_CONST uint kBakedBindBricks = 6u;      /* vec4[]: density bricks of every level (the first buffer's) */
 SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
-SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's depth */
-SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's tetrahedron + 1 */
+SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
+SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's entry, 4 tet + face + 1 */
 SPOT_CONST uint kBakedBindMeshDistance = 10u; /* r32f image: ray distance to the mesh */
 SPOT_CONST uint kBakedBindAccum = 11u;      /* rgba32f image: premultiplied colour, alpha */
 SPOT_CONST uint kBakedBindBase = 12u;       /* rgba32f image: the mesh's colour */
 SPOT_CONST uint kBakedBindResult = 13u;     /* rgba32f image: the frame's result */
 SPOT_CONST uint kBakedBindLoops = 14u;      /* uint: the most loop iterations (counted frames) */
+SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: across face f, 4 tet + its face there, or -1 */
+SPOT_CONST uint kBakedBindEntryFaces = 16u; /* uint[]: 4 tet + face of each enterable boundary face */
+SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
+SPOT_CONST uint kBakedBindExitDepth = 18u;  /* r32f image: where this layer's walk left the shell */
+SPOT_CONST uint kBakedBindBricks1 = 20u;    /* vec4[]: the second to fourth buffers of density bricks */
+SPOT_CONST uint kBakedBindBricks2 = 21u;
+SPOT_CONST uint kBakedBindBricks3 = 22u;
+SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList, then uint[width x height]: the pixels to march */
 
 /* Specialization ids. */
 SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids below are splat_common.glsl's) */
+SPOT_CONST uint kBakedSpecSplitBricks = 66u; /* bool: the density bricks span several buffers */
+SPOT_CONST uint kBakedSpecFirstLayer = 65u; /* bool: the first layer (starts at the eye's tetrahedron if any) */
 
 struct SpotBakedTet {
-    vec4 world[4]; /* xyz: corner now, world units */
-    vec4 rest[4];  /* xyz: corner at rest, world units of the bake (the texture coordinate) */
+    vec4 world[4];  /* xyz: corner now, world units */
+    vec4 plane[4];  /* face i (opposite corner i): xyz its normal turned inwards, w such that
+                       dot(xyz, x) + w >= 0 inside; (0, 0, 0, -1) for a flat tetrahedron */
+    vec4 toRest[3]; /* the affine map from world now to rest (world units of the bake, the texture
+                       coordinate): rest[j] = dot(toRest[j].xyz, x) + toRest[j].w */
 };
 
 struct SpotBakedParams {
     vec4 grid;     /* x: level 0's voxel size; y: its inverse; z: distance cap (level-0 voxels); w: shell thickness */
-    uvec4 counts;  /* x: triangles; y: levels; z: most steps per segment; w: 0 */
-    uvec4 tableOffset[3]; /* per section (kBakedSections), flattened [s >> 2][s & 3] */
-    uvec4 tableMask[3];
-    uvec4 probe[3];
+    uvec4 counts;  /* x: triangles; y: levels; z: tetrahedra; w: bricks per brick buffer */
+    ivec4 leafOrigin[kBakedSections]; /* per section: xyz its lowest leaf; w its first table entry */
+    ivec4 leafDims[kBakedSections];   /* per section: xyz the leaves of its box (0 when empty) */
 };
 
-SPOT_FN uint bakedHash(ivec3 c, uint section) {
-    uint h = (uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u) ^
-             (section * 2654435761u);
-    h ^= h >> 16u;
-    h *= 0x7feb352du;
-    h ^= h >> 15u;
-    return h;
-}
+/* The pixels a layer's march walks (baked_list.comp), x | y << 16 each after this header. */
+struct SpotBakedList {
+    uvec3 groups; /* the march's indirect dispatch: (entries + 63) / 64, 1, 1 */
+    uint count;   /* entries */
+};

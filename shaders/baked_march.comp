@@ -1,54 +1,64 @@
 #version 450
-// Baked renderer, one layer's march: per pixel, the tetrahedron the peel pass kept, the view
-// ray's segment inside it (clipped by its 4 face planes, and at the mesh), mapped to rest-pose
-// (texture) coordinates by the tetrahedron's affine map, marched through the baked grid at the
-// mip level of the pixel's footprint, and composited under what the earlier layers left
-// (front to back). docs/design.md section 5.
+// Baked renderer, one layer's march (docs/design.md section 5): per pixel of the layer's list
+// (baked_list.comp: those with an entry, not opaque; dispatched indirectly), a walk through the
+// shell's tetrahedra from the layer's entry, front to back, across the face where the ray leaves
+// each into the neighbour there (the host's noise::shellNeighbours), so one layer covers the
+// ray's whole contiguous passage through the shell. Per tetrahedron: the exit is the nearest of
+// its face planes the ray leaves through (the entry face excluded, the previous exit the entry),
+// and the samples of the layer's fixed spacing that fall in [entry, exit) are taken in rest-pose
+// (texture) coordinates by the tetrahedron's affine map, through the baked grid at the mip level
+// of the pixel's footprint at the layer's entry; composited under what the earlier layers left.
+// The walk ends at the shell's boundary (no neighbour), at the mesh, when the transmittance
+// falls below kBakedOpaque, or at kBakedMaxLayerTets tetrahedra or kBakedMaxLayerSamples samples;
+// the exit depth it writes is where the next layer's peel starts (0 when nothing behind can
+// show: the pixel became opaque, or the walk reached the mesh).
+//
+// A layer starts at the entry face the peel kept (the layer-tet image); but the first layer
+// (kFirstLayer), when the eye is inside the shell, starts every pixel at t = 0 in the
+// tetrahedron holding the eye (found by baked_shell.comp), and the next peel continues behind.
 //
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
-//   4 (planes) + N (1 + (P_d + 1) + 8 (1 + P + 1))
-// with N the most steps per segment, P_d the distance table's longest probe, P the longest probe
-// of any level. Empty-space skipping only lowers the count.
+//   M (1 + 4) + S (1 + 8)
+// with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
+// distance lookup and, when not skipped, a trilinear sample of 8 voxels; a lookup is one read
+// of the leaf table, no loop). Empty-space skipping only lowers it.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 64) in;
 
 layout(constant_id = kBakedSpecCount) const bool kCountLoops = false;
+layout(constant_id = kBakedSpecFirstLayer) const bool kFirstLayer = false;
+layout(constant_id = kBakedSpecSplitBricks) const bool kSplitBricks = false;
 
 layout(std430, binding = kBakedBindParams) readonly buffer Params { SpotBakedParams params; };
 layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tets[]; };
-layout(std430, binding = kBakedBindTable) readonly buffer Table { ivec4 table[]; };
-layout(std430, binding = kBakedBindBricks) readonly buffer Bricks { vec4 bricks[]; };
+layout(std430, binding = kBakedBindNeighbours) readonly buffer Neighbours { ivec4 neighbours[]; };
+layout(std430, binding = kBakedBindEyeTet) readonly buffer EyeTet { uint eyeTet; };
+layout(std430, binding = kBakedBindTable) readonly buffer Table { int table[]; };
+layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { vec4 bricks0[]; };
+layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { vec4 bricks1[]; };
+layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { vec4 bricks2[]; };
+layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { vec4 bricks3[]; };
 layout(std430, binding = kBakedBindDistances) readonly buffer Distances { float distances[]; };
 layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
+layout(binding = kBakedBindExitDepth, r32f) uniform writeonly image2D exitDepth;
 layout(std430, binding = kBakedBindLoops) buffer Loops { uint maxLoops; };
+layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList list; uint listPixels[]; };
 
 uint loops = 0u;
 
-uint sectionValue(uvec4 a[3], uint s) { return a[s >> 2u][s & 3u]; }
-
-// The brick holding voxel `ijk` of section `s`, or -1.
+// The brick holding voxel `ijk` of section `s`, or -1 (baked_layout.glsl's leaf tables).
 int findBrick(ivec3 ijk, uint s) {
-    ivec3 leaf = ijk >> int(kBakedLeafBits);
-    uint offset = sectionValue(params.tableOffset, s);
-    uint mask = sectionValue(params.tableMask, s);
-    uint probe = sectionValue(params.probe, s);
-    uint slot = bakedHash(leaf, s) & mask;
-    for (uint i = 0u; i <= probe; ++i) {
-        if (kCountLoops)
-            ++loops;
-        ivec4 e = table[offset + slot];
-        if (e.w == kBakedEmptySlot)
-            return -1;
-        if (e.xyz == leaf)
-            return e.w;
-        slot = (slot + 1u) & mask;
-    }
-    return -1;
+    ivec4 origin = params.leafOrigin[s];
+    ivec3 dims = params.leafDims[s].xyz;
+    ivec3 r = (ijk >> int(kBakedLeafBits)) - origin.xyz;
+    if (any(lessThan(r, ivec3(0))) || any(greaterThanEqual(r, dims)))
+        return -1;
+    return table[origin.w + (r.z * dims.y + r.y) * dims.x + r.x];
 }
 
 uint voxelOffset(ivec3 ijk) {
@@ -56,10 +66,26 @@ uint voxelOffset(ivec3 ijk) {
     return uint(l.x << 6 | l.y << 3 | l.z);
 }
 
+// Voxel `offset` of density brick b, from the brick buffer that holds it.
+vec4 brickVoxel(uint b, uint offset) {
+    if (!kSplitBricks)
+        return bricks0[b * kBakedLeafVoxels + offset]; // one buffer: no selection (it costs)
+    uint per = params.counts.w;
+    uint which = b / per;
+    uint i = (b - which * per) * kBakedLeafVoxels + offset;
+    if (which == 0u)
+        return bricks0[i];
+    if (which == 1u)
+        return bricks1[i];
+    if (which == 2u)
+        return bricks2[i];
+    return bricks3[i];
+}
+
 // (extinction x colour, extinction) of voxel ijk of `level`, 0 where not stored.
 vec4 voxel(ivec3 ijk, uint level) {
     int b = findBrick(ijk, level);
-    return b < 0 ? vec4(0.0) : bricks[uint(b) * kBakedLeafVoxels + voxelOffset(ijk)];
+    return b < 0 ? vec4(0.0) : brickVoxel(uint(b), voxelOffset(ijk));
 }
 
 // Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`.
@@ -88,99 +114,145 @@ float distanceAt(vec3 x) {
     return b < 0 ? params.grid.z : distances[uint(b) * kBakedLeafVoxels + voxelOffset(ijk)];
 }
 
-// Barycentric coordinates of x in the tetrahedron with corners p (weights of p1, p2, p3).
-vec3 barycentric(vec3 p[4], vec3 x) {
-    mat3 m = mat3(p[1] - p[0], p[2] - p[0], p[3] - p[0]);
-    return inverse(m) * (x - p[0]);
+// Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where
+// den > 0, leaving where den < 0.
+void facePlane(uint tet, uint f, vec3 origin, vec3 dir, out float num, out float den) {
+    vec4 plane = tets[tet].plane[f];
+    num = -(dot(plane.xyz, origin) + plane.w);
+    den = dot(plane.xyz, dir);
+}
+
+// The rest-pose position of world point x in `tet`.
+vec3 toRest(uint tet, vec3 x) {
+    return vec3(dot(tets[tet].toRest[0].xyz, x) + tets[tet].toRest[0].w,
+                dot(tets[tet].toRest[1].xyz, x) + tets[tet].toRest[1].w,
+                dot(tets[tet].toRest[2].xyz, x) + tets[tet].toRest[2].w);
+}
+
+// The layer ends: its exit depth (reversed: near / view depth) for the next peel.
+void finish(ivec2 pixel, float depth) {
+    imageStore(exitDepth, pixel, vec4(depth));
+    if (kCountLoops)
+        atomicMax(maxLoops, loops);
 }
 
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (pixel.x >= int(frame.size.x) || pixel.y >= int(frame.size.y))
+    if (gl_GlobalInvocationID.x >= list.count)
         return;
-    uint id = imageLoad(layerTet, pixel).r;
+    uint packedPixel = listPixels[gl_GlobalInvocationID.x];
+    ivec2 pixel = ivec2(packedPixel & 0xffffu, packedPixel >> 16u);
     vec4 acc = imageLoad(accum, pixel);
-    if (id == 0u || acc.a >= 1.0)
-        return;
-    SpotBakedTet tet = tets[id - 1u];
+    uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = 4u; // 4: none (from the eye)
+    bool fromEye = tet != kBakedNoTet;
+    if (!fromEye) {
+        uint id = imageLoad(layerTet, pixel).r; // not 0: the list holds pixels with an entry
+        tet = (id - 1u) >> 2u;
+        entryFace = (id - 1u) & 3u;
+    }
     vec3 origin, dir;
     splatPixelRay(vec2(pixel) + 0.5, origin, dir);
+    float tMesh = imageLoad(meshDistance, pixel).r;
+    float viewCos = dot(dir, frame.forward.xyz);
 
-    // The segment: the ray clipped by the 4 face planes (noise::raySegmentInTetrahedron).
-    vec3 p[4], r[4];
-    for (uint i = 0u; i < 4u; ++i) {
-        p[i] = tet.world[i].xyz;
-        r[i] = tet.rest[i].xyz;
-    }
-    float tEnter = 0.0, tExit = imageLoad(meshDistance, pixel).r;
-    for (uint f = 0u; f < 4u; ++f) {
-        if (kCountLoops)
-            ++loops;
-        vec3 a = p[(f + 1u) % 4u], b = p[(f + 2u) % 4u], c = p[(f + 3u) % 4u];
-        vec3 n = cross(b - a, c - a);
-        if (dot(n, p[f] - a) < 0.0)
-            n = -n; // inwards
-        float num = dot(n, a - origin); // inside where dot(n, x - a) >= 0
-        float den = dot(n, dir);
-        if (den > 0.0)
-            tEnter = max(tEnter, num / den);
-        else if (den < 0.0)
-            tExit = min(tExit, num / den);
-        else if (num > 0.0)
-            tExit = -1.0; // parallel and outside
-    }
-    if (!(tExit > tEnter)) {
-        if (kCountLoops)
-            atomicMax(maxLoops, loops);
-        return;
-    }
-    vec3 ra = vec3(0.0), rb = vec3(0.0);
-    {
-        vec3 ba = barycentric(p, origin + tEnter * dir), bb = barycentric(p, origin + tExit * dir);
-        mat3 rm = mat3(r[1] - r[0], r[2] - r[0], r[3] - r[0]);
-        ra = r[0] + rm * ba;
-        rb = r[0] + rm * bb;
+    float tIn = 0.0;
+    if (!fromEye) {
+        float num, den;
+        facePlane(tet, entryFace, origin, dir, num, den);
+        tIn = den != 0.0 ? max(num / den, 0.0) : 0.0;
     }
 
-    // The mip level: the coarsest whose voxel is no larger than the pixel's footprint there.
+    // The samples: t_k = tStart + (k + 1/2) dt for the whole layer, at the mip level of the
+    // pixel's footprint at the entry (the coarsest whose voxel is no larger).
     float voxel0 = params.grid.x;
-    float footprint = frame.size.z * dot(origin + 0.5 * (tEnter + tExit) * dir - frame.eye.xyz,
-                                         frame.forward.xyz);
+    float footprint = frame.size.z * tIn * viewCos;
     uint levels = params.counts.y;
     uint level = uint(clamp(floor(log2(max(footprint / voxel0, 1.0))), 0.0, float(levels - 1u)));
     float size = voxel0 * float(1u << level);
-    float restLength = length(rb - ra);
-    uint steps = uint(clamp(ceil(restLength / (kBakedStepFraction * size)), 1.0,
-                            float(params.counts.z)));
-    float dtWorld = (tExit - tEnter) / float(steps);
-    float dtRest = restLength / float(steps);
+    float inverseSize = 1.0 / size;
+    float dt = kBakedStepFraction * size;
+    float tStart = tIn;
     // A sample at level L reads voxels whose level-0 children lie within 1.5 x size of it
     // (Chebyshev): with the distance d there, the next (d - 1) voxel0 - 1.5 size along the ray
-    // (in rest units) read only empty voxels, so those samples are skipped (they add nothing).
+    // (rest units) read only empty voxels, so those samples are skipped (they add nothing).
     float reach = 1.5 * size;
-
+    // The distance grid stores at most its cap: at the coarser levels no sample can be skipped,
+    // and the lookup is left out.
+    bool skipping = (params.grid.z - 1.0) * voxel0 - reach >= 0.0;
+    uint k = 0u;       // the next sample
+    uint samples = 0u; // taken or skipped
     vec3 radiance = vec3(0.0);
     float transmittance = 1.0;
-    float inverseSize = 1.0 / size;
-    for (uint i = 0u; i < steps; ++i) {
+    float tEnd = tIn;
+    for (uint walked = 0u; walked < kBakedMaxLayerTets; ++walked) {
         if (kCountLoops)
             ++loops;
-        vec3 x = mix(ra, rb, (float(i) + 0.5) / float(steps));
-        float skip = (distanceAt(x) - 1.0) * voxel0 - reach;
-        if (skip >= 0.0) {
-            i += uint(floor(skip / max(dtRest, 1e-30)));
-            continue;
+        // The exit: the nearest plane the ray leaves through, the entry face excluded.
+        float tOut = 3.0e38;
+        uint exitFace = 4u;
+        for (uint f = 0u; f < 4u; ++f) {
+            if (kCountLoops)
+                ++loops;
+            if (f == entryFace)
+                continue;
+            float num, den;
+            facePlane(tet, f, origin, dir, num, den);
+            if (den < 0.0 && num / den < tOut) {
+                tOut = num / den;
+                exitFace = f;
+            }
         }
-        vec4 s = sampleLevel(x, level, inverseSize);
-        if (s.w > 0.0) {
-            float alpha = 1.0 - exp(-s.w * dtWorld);
-            radiance += transmittance * alpha * (s.rgb / s.w);
-            transmittance *= 1.0 - alpha;
+        if (exitFace == 4u)
+            break; // flat or degenerate: the walk stops here
+        tOut = max(tOut, tIn);
+        bool atMesh = tOut >= tMesh;
+        tOut = min(tOut, tMesh);
+        float tFirst = tStart + (float(k) + 0.5) * dt;
+        if (tOut > tIn && tFirst < tOut && samples < kBakedMaxLayerSamples) {
+            // The segment's ends at rest.
+            vec3 ra = toRest(tet, origin + tIn * dir);
+            vec3 rb = toRest(tet, origin + tOut * dir);
+            float restPerWorld = length(rb - ra) / (tOut - tIn);
+            float inverseLength = 1.0 / (tOut - tIn);
+            for (; samples < kBakedMaxLayerSamples; ++samples) {
+                if (kCountLoops)
+                    ++loops;
+                float t = tStart + (float(k) + 0.5) * dt;
+                if (t >= tOut)
+                    break;
+                vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
+                float skip = skipping ? (distanceAt(x) - 1.0) * voxel0 - reach : -1.0;
+                if (skip >= 0.0) {
+                    // (clamped: a flat tetrahedron's map has no length)
+                    k += 1u + uint(min(floor(skip / max(restPerWorld * dt, 1e-30)), 65536.0));
+                    continue;
+                }
+                vec4 s = sampleLevel(x, level, inverseSize);
+                if (s.w > 0.0) {
+                    float alpha = 1.0 - exp(-s.w * dt);
+                    radiance += transmittance * alpha * (s.rgb / s.w);
+                    transmittance *= 1.0 - alpha;
+                }
+                ++k;
+                if (transmittance < kBakedOpaque)
+                    break;
+            }
         }
+        tEnd = tOut;
+        tIn = tOut;
+        if (atMesh || transmittance < kBakedOpaque || samples >= kBakedMaxLayerSamples)
+            break;
+        int next = neighbours[tet][exitFace];
+        if (next < 0)
+            break; // left the shell
+        tet = uint(next) >> 2u;
+        entryFace = uint(next) & 3u;
     }
     acc.rgb += (1.0 - acc.a) * radiance;
     acc.a += (1.0 - acc.a) * (1.0 - transmittance);
+    if (transmittance < kBakedOpaque)
+        acc.a = 1.0;
     imageStore(accum, pixel, acc);
-    if (kCountLoops)
-        atomicMax(maxLoops, loops);
+    float depth = tEnd * viewCos;
+    finish(pixel, transmittance < kBakedOpaque || tEnd >= tMesh ? 0.0
+                  : depth > 0.0 ? frame.forward.w / depth : 2.0);
 }

@@ -3,8 +3,15 @@
 // animated mesh's shell follows it). Per triangle, its prism (base vertices on the mesh, top
 // vertices thickness along the unit vertex normals) split into 3 tetrahedra by noise/shell.h's
 // rule: corners sorted by index v0 < v1 < v2, (b0, b1, b2, t2), (b0, b1, t2, t1),
-// (b0, t0, t1, t2). Each corner carries its position now (world) and at rest (the texture
-// coordinate into the bake).
+// (b0, t0, t1, t2), with corners 0 and 1 swapped where sorting reversed the triangle's winding
+// (so that tetrahedron 3t + k and its face i, opposite corner i, are noise::shellTetrahedra's,
+// whose neighbours the host uploads). Each corner carries its position now (world) and at rest
+// (the texture coordinate into the bake): its 4 face planes, normals inwards, and its affine map
+// from world now to rest, for the march.
+// The eye test: each invocation also tests its 3 tetrahedra against the eye, and the lowest
+// index of those whose 4 face planes hold it is kept (atomicMin on an integer: deterministic;
+// the host fills kBakedNoTet first). The first layer's march (baked_march.comp) starts every
+// pixel's walk there, at t = 0, when the camera is inside the shell.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
@@ -16,6 +23,7 @@ layout(std430, binding = kBakedBindVertices) readonly buffer Vertices { SpotMesh
 layout(std430, binding = kBakedBindRest) readonly buffer Rest { SpotMeshVertex rest[]; };
 layout(std430, binding = kBakedBindIndices) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = kBakedBindTets) writeonly buffer Tets { SpotBakedTet tets[]; };
+layout(std430, binding = kBakedBindEyeTet) buffer EyeTet { uint eyeTet; };
 
 vec3 extrude(SpotMeshVertex v, bool top) {
     float len = length(v.normal.xyz);
@@ -36,14 +44,36 @@ void main() {
     const uvec4 kTop[3] = uvec4[3](uvec4(0u, 0u, 0u, 1u), uvec4(0u, 0u, 1u, 1u),
                                    uvec4(0u, 1u, 1u, 1u));
     uint sorted[3] = uint[3](v0, v1, v2);
+    bool reversed = !((a == v0 && b == v1) || (b == v0 && c == v1) || (c == v0 && a == v1));
     for (uint k = 0u; k < 3u; ++k) {
         SpotBakedTet tet;
+        vec3 p[4], r[4];
         for (uint i = 0u; i < 4u; ++i) {
-            uint v = sorted[kCorner[k][i]];
-            bool top = kTop[k][i] != 0u;
-            tet.world[i] = vec4(extrude(vertices[v], top), 1.0);
-            tet.rest[i] = vec4(extrude(rest[v], top), 1.0);
+            uint j = reversed && i < 2u ? 1u - i : i;
+            uint v = sorted[kCorner[k][j]];
+            bool top = kTop[k][j] != 0u;
+            p[i] = extrude(vertices[v], top);
+            r[i] = extrude(rest[v], top);
+            tet.world[i] = vec4(p[i], 1.0);
         }
+        bool holdsEye = true;
+        for (uint f = 0u; f < 4u; ++f) {
+            vec3 a = p[(f + 1u) % 4u], b = p[(f + 2u) % 4u], c = p[(f + 3u) % 4u];
+            vec3 n = cross(b - a, c - a);
+            float side = dot(n, p[f] - a);
+            if (side < 0.0)
+                n = -n;
+            tet.plane[f] = side == 0.0 ? vec4(0.0, 0.0, 0.0, -1.0) : vec4(n, -dot(n, a));
+            holdsEye = holdsEye && dot(tet.plane[f].xyz, frame.eye.xyz) + tet.plane[f].w >= 0.0;
+        }
+        mat3 pm = mat3(p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+        mat3 m = determinant(pm) != 0.0 ? mat3(r[1] - r[0], r[2] - r[0], r[3] - r[0]) * inverse(pm)
+                                         : mat3(0.0);
+        vec3 offset = r[0] - m * p[0];
+        for (uint j = 0u; j < 3u; ++j)
+            tet.toRest[j] = vec4(m[0][j], m[1][j], m[2][j], offset[j]);
         tets[3u * t + k] = tet;
+        if (holdsEye)
+            atomicMin(eyeTet, 3u * t + k);
     }
 }

@@ -1,20 +1,22 @@
 #version 450
-// Baked renderer, the peel passes' vertices: every tetrahedron's 4 faces, 12 vertices per
-// tetrahedron pulled from the shell. Only faces that face the eye are drawn (a back face's three
-// vertices collapse to one point, so it covers no pixel): a ray enters a convex tetrahedron
-// through exactly one of them, so each tetrahedron covers a pixel at most once per layer.
+// Baked renderer, the peel passes' vertices: the shell's boundary faces that a ray can enter
+// through (the top surface, one face per triangle, and the side faces of open mesh edges; the
+// host lists them as 4 tet + face), 3 vertices each pulled from the shell. Only faces that face
+// the eye are drawn (a back face's three vertices collapse to one point, so it covers no pixel).
 // Reversed depth near / z as the base mesh's (splat_mesh.vert); perspective cameras only.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
 
 layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tets[]; };
+layout(std430, binding = kBakedBindEntryFaces) readonly buffer EntryFaces { uint entryFaces[]; };
 
-layout(location = 0) flat out uint vTet;
+layout(location = 0) flat out uint vEntry;
 
 void main() {
-    uint tet = uint(gl_VertexIndex) / 12u;
-    uint face = (uint(gl_VertexIndex) / 3u) % 4u; // the face opposite corner `face`
+    uint entry = entryFaces[uint(gl_VertexIndex) / 3u];
+    uint tet = entry >> 2u;
+    uint face = entry & 3u; // the face opposite corner `face`
     uint corner = uint(gl_VertexIndex) % 3u;
     vec3 p[4];
     for (uint i = 0u; i < 4u; ++i)
@@ -25,7 +27,7 @@ void main() {
         n = -n; // outwards
     bool front = dot(n, p[i0] - frame.eye.xyz) < 0.0;
     vec3 x = front ? p[corner == 0u ? i0 : corner == 1u ? i1 : i2] : p[i0];
-    vTet = tet;
+    vEntry = entry;
     vec3 rel = x - frame.eye.xyz;
     float sx = dot(rel, frame.right.xyz) / frame.right.w;
     float sy = -dot(rel, frame.up.xyz) / frame.up.w;

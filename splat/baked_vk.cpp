@@ -11,7 +11,9 @@
 
 #include "noise/bake.h"
 #include "noise/error.h"
+#include "noise/shell.h"
 
+#include "baked_list.comp.h"
 #include "baked_march.comp.h"
 #include "baked_peel.frag.h"
 #include "baked_resolve.comp.h"
@@ -28,10 +30,6 @@ constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
 constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
 constexpr VkFormat kTetFormat = VK_FORMAT_R32_UINT;
-/// A table is regrown (doubled) while a key lies more than this many slots past its home, at
-/// most kTableGrowths times: the loop bound pays for every probe.
-constexpr std::uint32_t kWantedProbe = 8;
-constexpr int kTableGrowths = 4;
 /// Layers whose peel and march passes are timed apart (2 marks each, within PassTimer's 32).
 constexpr std::uint32_t kBakedMarkedLayers = 12;
 
@@ -40,7 +38,13 @@ struct LeafKey {
     bool operator==(const LeafKey& o) const { return leaf == o.leaf; }
 };
 struct LeafKeyHash {
-    std::size_t operator()(const LeafKey& k) const { return bakedHash(k.leaf, 0u); }
+    std::size_t operator()(const LeafKey& k) const {
+        std::uint32_t h = std::uint32_t(k.leaf.x) * 73856093u ^ std::uint32_t(k.leaf.y) * 19349663u ^
+                          std::uint32_t(k.leaf.z) * 83492791u;
+        h ^= h >> 16u;
+        h *= 0x7feb352du;
+        return h ^ (h >> 15u);
+    }
 };
 
 /// A section of leaves in first-seen order (the bake's tree order: deterministic).
@@ -62,7 +66,6 @@ void fullBarrier(VkCommandBuffer cmd) {
                   passes::kAll, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
 }
 
-std::uint32_t section(const std::vector<std::uint32_t>& v, std::uint32_t s) { return v[s]; }
 
 } // namespace
 
@@ -85,15 +88,16 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
         m_ctx, spirv(spv_baked_shell_comp),
         {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindVertices),
          storageBuffer(kBakedBindRest), storageBuffer(kBakedBindIndices),
-         storageBuffer(kBakedBindTets)},
+         storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEyeTet)},
         push);
     GraphicsPipelineDesc desc;
     desc.vertex = spirv(spv_baked_tet_vert);
     desc.fragment = spirv(spv_baked_peel_frag);
-    desc.bindings = {storageBuffer(kBakedBindTets), storageImage(kBakedBindPrevDepth)};
+    desc.bindings = {storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEntryFaces),
+                     storageImage(kBakedBindPrevDepth)};
     desc.pushBytes = push;
-    desc.colorFormats = {kTetFormat, kScalarFormat};
-    desc.blends = {opaqueBlend(), opaqueBlend()};
+    desc.colorFormats = {kTetFormat};
+    desc.blends = {opaqueBlend()};
     desc.depthFormat = kDepthFormat;
     desc.depthTest = true;
     desc.depthWrite = true;
@@ -106,24 +110,42 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
     m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
     m_loops = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                      "baked loop counter");
+    m_eyeTet = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
+                      "baked eye tetrahedron");
 }
 
 BakedRenderer::~BakedRenderer() = default;
 
-const Pipeline& BakedRenderer::marchPipeline(bool count) {
-    if (const auto it = m_march.find(count); it != m_march.end())
+const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split) {
+    if (const auto it = m_march.find({count, first, split}); it != m_march.end())
         return it->second;
     Specialization spec;
     spec.set(kBakedSpecCount, count);
+    spec.set(kBakedSpecFirstLayer, first);
+    spec.set(kBakedSpecSplitBricks, split);
     Pipeline p = makeComputePipeline(
         m_ctx, spirv(spv_baked_march_comp),
         {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
+         storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
          storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
+         storageBuffer(kBakedBindBricks1), storageBuffer(kBakedBindBricks2),
+         storageBuffer(kBakedBindBricks3),
          storageBuffer(kBakedBindDistances), storageImage(kBakedBindLayerTet),
          storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
-         storageBuffer(kBakedBindLoops)},
+         storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops),
+         storageBuffer(kBakedBindList)},
         sizeof(gpu_splat::SpotSplatFrame), spec);
-    return m_march.emplace(count, std::move(p)).first->second;
+    if (!m_list.count(first)) {
+        Specialization listSpec;
+        listSpec.set(kBakedSpecFirstLayer, first);
+        m_list.emplace(first, makeComputePipeline(
+                                  m_ctx, spirv(spv_baked_list_comp),
+                                  {storageBuffer(kBakedBindEyeTet), storageImage(kBakedBindLayerTet),
+                                   storageImage(kBakedBindAccum), storageImage(kBakedBindExitDepth),
+                                   storageBuffer(kBakedBindList)},
+                                  sizeof(gpu_splat::SpotSplatFrame), listSpec));
+    }
+    return m_march.emplace(std::tuple{count, first, split}, std::move(p)).first->second;
 }
 
 void BakedRenderer::loadBake(const std::string& file) {
@@ -175,57 +197,62 @@ void BakedRenderer::loadBake(const std::string& file) {
     }
 
     // Hash tables: one section per level, then the distance grid's.
-    std::vector<glm::ivec4> table;
-    std::vector<std::uint32_t> offsets(kBakedSections, 0), masks(kBakedSections, 0),
-        probes(kBakedSections, 0);
+    // Leaf tables: per section the dense box of its leaves, an int each (the brick, or empty).
+    const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
+    std::vector<std::int32_t> table;
+    std::vector<glm::ivec4> origins(kBakedSections, glm::ivec4(0)), dims(kBakedSections, glm::ivec4(0));
     std::vector<std::uint32_t> firstBrick(std::size_t(levels) + 1, 0);
     std::uint32_t base = 0;
-    std::uint32_t longest = 0;
     for (std::size_t s = 0; s < leaves.size(); ++s) {
         const std::uint32_t id = s < std::size_t(levels) ? std::uint32_t(s) : kBakedDistanceSection;
         const Leaves& L = leaves[s];
         firstBrick[s] = s < std::size_t(levels) ? base : 0;
-        std::uint64_t capacity = 16;
-        while (capacity < 2 * std::uint64_t(L.keys.size()))
-            capacity *= 2;
-        std::vector<glm::ivec4> slots;
-        std::uint32_t probe = 0;
-        for (int growth = 0;; ++growth, capacity *= 2) {
-            slots.assign(capacity, glm::ivec4(0, 0, 0, kBakedEmptySlot));
-            probe = 0;
-            const std::uint32_t mask = std::uint32_t(capacity - 1);
-            for (std::uint32_t b = 0; b < L.keys.size(); ++b) {
-                std::uint32_t slot = bakedHash(L.keys[b], id) & mask, p = 0;
-                while (slots[slot].w != kBakedEmptySlot) {
-                    slot = (slot + 1) & mask;
-                    ++p;
-                }
-                slots[slot] = glm::ivec4(L.keys[b], std::int32_t(firstBrick[s] + b));
-                probe = std::max(probe, p);
+        origins[id].w = std::int32_t(table.size());
+        if (!L.keys.empty()) {
+            glm::ivec3 lo = L.keys[0], hi = L.keys[0];
+            for (const glm::ivec3& k : L.keys) {
+                lo = glm::min(lo, k);
+                hi = glm::max(hi, k);
             }
-            if (probe <= kWantedProbe || growth == kTableGrowths)
-                break;
+            const glm::i64vec3 d = glm::i64vec3(hi) - glm::i64vec3(lo) + std::int64_t(1);
+            const std::uint64_t entries = std::uint64_t(d.x * d.y * d.z);
+            if ((table.size() + entries) * sizeof(std::int32_t) > range)
+                throw InputError(cat("baked: ", file, "'s leaves span a box of ", d.x, "x", d.y,
+                                     "x", d.z, " leaves (level ", s, "), more than one storage "
+                                     "buffer of this device takes as a leaf table (",
+                                     range >> 20, " MiB)"));
+            const std::size_t offset = table.size();
+            table.resize(offset + entries, kBakedEmptySlot);
+            for (std::uint32_t b = 0; b < L.keys.size(); ++b) {
+                const glm::i64vec3 r = glm::i64vec3(L.keys[b]) - glm::i64vec3(lo);
+                table[offset + std::size_t((r.z * d.y + r.y) * d.x + r.x)] =
+                    std::int32_t(firstBrick[s] + b);
+            }
+            origins[id] = glm::ivec4(lo, std::int32_t(offset));
+            dims[id] = glm::ivec4(glm::ivec3(d), 0);
         }
-        offsets[id] = std::uint32_t(table.size());
-        masks[id] = std::uint32_t(slots.size() - 1);
-        probes[id] = probe;
-        longest = std::max(longest, probe);
-        table.insert(table.end(), slots.begin(), slots.end());
         if (s < std::size_t(levels))
             base += std::uint32_t(L.keys.size());
     }
+    if (table.empty())
+        table.push_back(kBakedEmptySlot);
 
     const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * kBakedLeafVoxels * 16;
     const std::uint64_t distanceBytes =
         std::max<std::uint64_t>(distanceLeaves.keys.size(), 1) * kBakedLeafVoxels * 4;
-    const std::uint64_t tableBytes = table.size() * sizeof(glm::ivec4);
-    const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
-    if (brickBytes > range || distanceBytes > range || tableBytes > range)
+    const std::uint64_t tableBytes = table.size() * sizeof(std::int32_t);
+    // The density bricks over up to kBakedBrickBuffers buffers of one storage buffer's range.
+    const std::uint64_t fits = range / (std::uint64_t(kBakedLeafVoxels) * 16);
+    const std::uint64_t perBuffer = m_brickSplit > 0 ? std::min<std::uint64_t>(m_brickSplit, fits) : fits;
+    const std::uint64_t bufferCount = std::max<std::uint64_t>((brickCount + perBuffer - 1) / perBuffer, 1);
+    if (bufferCount > kBakedBrickBuffers || distanceBytes > range || tableBytes > range)
         throw InputError(cat("baked: ", file, " holds ", brickCount, " leaves (", brickBytes >> 20,
-                             " MiB of bricks), more than one storage buffer of this device takes (",
-                             range >> 20, " MiB); bake it at a larger voxel size"));
-    const std::uint64_t held =
-        m_table.reservedBytes() + m_bricks.reservedBytes() + m_distances.reservedBytes();
+                             " MiB of bricks, ", distanceBytes >> 20, " MiB of distances), more than ",
+                             kBakedBrickBuffers, " storage buffers of this device take (",
+                             range >> 20, " MiB each); bake it at a larger voxel size"));
+    std::uint64_t held = m_table.reservedBytes() + m_distances.reservedBytes();
+    for (const Buffer& b : m_bricks)
+        held += b.reservedBytes();
     if (m_ctx.allocatedBytes() - held + brickBytes + distanceBytes + tableBytes >
         m_ctx.memoryBudget())
         throw InputError(cat("baked: ", file, " needs ",
@@ -234,50 +261,67 @@ void BakedRenderer::loadBake(const std::string& file) {
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; bake it at a larger voxel size"));
     m_table = Buffer();
-    m_bricks = Buffer();
+    for (Buffer& b : m_bricks)
+        b = Buffer();
     m_distances = Buffer();
-    m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked hash tables");
-    m_table.upload(std::span<const glm::ivec4>(table));
-    m_bricks = Buffer(m_ctx, brickBytes, kStorage, kHost, cat("baked bricks (", brickCount, ")"));
-    for (int l = 0; l < levels; ++l)
-        if (!bricks[std::size_t(l)].empty())
-            m_bricks.upload(bricks[std::size_t(l)].data(),
-                            bricks[std::size_t(l)].size() * sizeof(glm::vec4),
-                            VkDeviceSize(firstBrick[std::size_t(l)]) * kBakedLeafVoxels * 16);
+    m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
+    m_table.upload(std::span<const std::int32_t>(table));
+    const std::uint64_t brickBytesEach = std::uint64_t(kBakedLeafVoxels) * 16;
+    for (std::uint64_t i = 0; i < bufferCount; ++i) {
+        const std::uint64_t n = std::min<std::uint64_t>(perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
+        m_bricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
+                             cat("baked bricks (", n, ", buffer ", i, ")"));
+    }
+    // Level l's bricks are [firstBrick[l], + its leaves), uploaded in pieces at buffer bounds.
+    for (int l = 0; l < levels; ++l) {
+        const auto& data = bricks[std::size_t(l)];
+        const std::uint64_t count = data.size() / kBakedLeafVoxels;
+        for (std::uint64_t done = 0; done < count;) {
+            const std::uint64_t b = firstBrick[std::size_t(l)] + done;
+            const std::uint64_t buffer = b / perBuffer, local = b % perBuffer;
+            const std::uint64_t n = std::min(count - done, perBuffer - local);
+            m_bricks[buffer].upload(data.data() + done * kBakedLeafVoxels, n * brickBytesEach,
+                                    local * brickBytesEach);
+            done += n;
+        }
+    }
+    m_bricksPerBuffer = std::uint32_t(perBuffer);
     m_distances = Buffer(m_ctx, distanceBytes, kStorage, kHost, "baked distance bricks");
     if (!distances.empty())
         m_distances.upload(std::span<const float>(distances));
-    m_offsets = offsets;
-    m_masks = masks;
-    m_probes = probes;
+    m_leafOrigin = origins;
+    m_leafDims = dims;
     m_bakeStats = BakedStats{};
     m_bakeStats.voxelSize = volume.voxelSize(0);
     m_bakeStats.levels = std::uint32_t(levels);
     m_bakeStats.bricks = std::uint32_t(brickCount);
+    m_bakeStats.brickBuffers = std::uint32_t(bufferCount);
     m_bakeStats.distanceBricks = std::uint32_t(distanceLeaves.keys.size());
-    m_bakeStats.longestProbe = longest;
+    m_bakeStats.tableEntries = std::uint32_t(table.size());
     m_bakeStats.gpuBytes = brickBytes + distanceBytes + tableBytes;
 }
 
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     if (m_width == width && m_height == height && m_result.handle())
         return;
-    // Per pixel: base 16, distance 4, 2 depths 8, 2 layer depths 8, layer tet 4, accum 16,
-    // result 16.
-    const std::uint64_t need = std::uint64_t(width) * height * 72;
+    // Per pixel: base 16, distance 4, 2 depths 8, exit depth 4, layer tet 4, accum 16, result 16,
+    // the march's list 4.
+    const std::uint64_t need = std::uint64_t(width) * height * 72 + sizeof(SpotBakedList);
     std::uint64_t held = 0;
-    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_layerDepth[0],
-                           &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
+                           &m_layerTet, &m_accum, &m_result})
         held += i->reservedBytes();
+    held += m_pixelList.reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("baked: a ", width, "x", height, " frame needs ", need >> 20,
                              " MiB of GPU memory for its targets; ",
                              (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; reduce the image size"));
-    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_layerDepth[0],
-                     &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
+                     &m_layerTet, &m_accum, &m_result})
         *i = Image();
+    m_pixelList = Buffer();
     m_width = m_height = 0;
     constexpr VkImageUsageFlags kAttach = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
     constexpr VkImageUsageFlags kStore = VK_IMAGE_USAGE_STORAGE_BIT;
@@ -293,13 +337,15 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
         Image(m_ctx, width, height, kDepthFormat, kDepthUse | kSrc, kDepth, "baked mesh depth");
     m_peelDepth =
         Image(m_ctx, width, height, kDepthFormat, kDepthUse | kDst, kDepth, "baked peel depth");
-    for (Image& d : m_layerDepth)
-        d = Image(m_ctx, width, height, kScalarFormat, kAttach | kStore | kDst, kColor,
-                  "baked layer depth");
+    m_exitDepth = Image(m_ctx, width, height, kScalarFormat, kStore | kDst, kColor, "baked exit depth");
     m_layerTet =
         Image(m_ctx, width, height, kTetFormat, kAttach | kStore, kColor, "baked layer tetrahedra");
     m_accum = Image(m_ctx, width, height, kColorFormat, kStore | kDst, kColor, "baked accumulation");
     m_result = Image(m_ctx, width, height, kColorFormat, kStore | kSrc, kColor, "baked result");
+    m_pixelList = Buffer(m_ctx, sizeof(SpotBakedList) + std::uint64_t(width) * height * 4,
+                         kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                             VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                         kDevice, "baked pixel list");
     m_width = width;
     m_height = height;
 }
@@ -327,8 +373,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         m_bakeTime = time;
     }
 
-    // The tetrahedra, and the most steps one segment can take: the segment lies in its
-    // tetrahedron, whose rest-pose diameter is at most its prism's.
+    // The tetrahedra (rebuilt per frame on the GPU), and per mesh their neighbours and the
+    // boundary faces a ray can enter through (topology only, from the triangles).
     const float thickness = impulses.cells->cellSize;
     const std::uint32_t triangles = m_scene.meshPass().indexCount() / 3;
     const std::uint64_t tetBytes = std::max<std::uint64_t>(triangles, 1) * 3 * sizeof(SpotBakedTet);
@@ -341,54 +387,70 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         m_tets = Buffer();
         m_tets = Buffer(m_ctx, tetBytes, kStorage, kDevice, "baked tetrahedra");
     }
-    if (m_bakeStats.thickness != thickness || m_bakeStats.tetrahedra != 3 * triangles) {
-        const auto* vertices =
-            static_cast<const gpu_splat::SpotMeshVertex*>(m_scene.meshPass().vertices().mapped());
+    if (m_bakeStats.tetrahedra != 3 * triangles || !m_neighbours.handle()) {
         const auto* indices =
             static_cast<const std::uint32_t*>(m_scene.meshPass().indices().mapped());
-        double diameter = 0.0;
-        for (std::uint32_t t = 0; t < triangles; ++t) {
-            std::array<glm::dvec3, 6> c;
-            for (int k = 0; k < 3; ++k) {
-                const gpu_splat::SpotMeshVertex& v = vertices[indices[3 * t + std::uint32_t(k)]];
-                const glm::dvec3 n(v.normal);
-                const double len = glm::length(n);
-                c[std::size_t(k)] = glm::dvec3(v.position);
-                c[std::size_t(k) + 3] =
-                    glm::dvec3(v.position) + (len > 0.0 ? double(thickness) / len : 0.0) * n;
+        const std::uint32_t vertexCount = std::uint32_t(
+            m_scene.meshPass().vertices().size() / sizeof(gpu_splat::SpotMeshVertex));
+        std::vector<glm::uvec3> tris(triangles);
+        for (std::uint32_t t = 0; t < triangles; ++t)
+            tris[t] = glm::uvec3(indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]);
+        const std::vector<noise::ShellTetrahedron> tets = noise::shellTetrahedra(tris, vertexCount);
+        const auto neighbours = noise::shellNeighbours(tets);
+        std::vector<glm::ivec4> packed(std::max<std::size_t>(neighbours.size(), 1), glm::ivec4(-1));
+        std::vector<std::uint32_t> entries;
+        for (std::size_t t = 0; t < tets.size(); ++t)
+            for (std::uint32_t f = 0; f < 4; ++f) {
+                // The neighbour and the face it shares, as that neighbour numbers it.
+                const std::int32_t n = neighbours[t][f];
+                std::int32_t back = 0;
+                while (n >= 0 && back < 3 && neighbours[std::size_t(n)][std::size_t(back)] != std::int32_t(t))
+                    ++back;
+                packed[t][int(f)] = n < 0 ? -1 : n * 4 + back;
+                // Boundary faces but the base (all three corners on the mesh): the top surface
+                // and the sides of open edges.
+                bool base = true;
+                for (std::uint32_t i = 1; i < 4; ++i)
+                    base = base && tets[t].vertices[(f + i) % 4] < vertexCount;
+                if (neighbours[t][f] < 0 && !base)
+                    entries.push_back(std::uint32_t(t) * 4 + f);
             }
-            for (std::size_t i = 0; i < 6; ++i)
-                for (std::size_t j = i + 1; j < 6; ++j)
-                    diameter = std::max(diameter, glm::length(c[i] - c[j]));
-        }
-        m_bakeStats.thickness = thickness;
-        m_bakeStats.tetrahedra = 3 * triangles;
-        m_bakeStats.maxSteps = std::uint32_t(
-            std::ceil(diameter / (double(kBakedStepFraction) * m_bakeStats.voxelSize)) + 1.0);
+        m_entryFaceCount = std::uint32_t(entries.size());
+        if (entries.empty())
+            entries.push_back(0);
+        m_neighbours = Buffer();
+        m_entryFaces = Buffer();
+        m_neighbours = Buffer(m_ctx, packed.size() * sizeof(glm::ivec4), kStorage, kHost,
+                              "baked tetrahedron neighbours");
+        m_neighbours.upload(std::span<const glm::ivec4>(packed));
+        m_entryFaces = Buffer(m_ctx, entries.size() * sizeof(std::uint32_t), kStorage, kHost,
+                              "baked entry faces");
+        m_entryFaces.upload(std::span<const std::uint32_t>(entries));
     }
+    m_bakeStats.thickness = thickness;
+    m_bakeStats.tetrahedra = 3 * triangles;
+    m_bakeStats.entryFaces = m_entryFaceCount;
+    m_bakeStats.maxLayerTets = kBakedMaxLayerTets;
+    m_bakeStats.maxLayerSamples = kBakedMaxLayerSamples;
     const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
-    // baked_march.comp: 4 + N (1 + (P_d + 1) + 8 (1 + P + 1)).
-    const std::uint64_t bound =
-        4 + std::uint64_t(m_bakeStats.maxSteps) *
-                (1 + (section(m_probes, kBakedDistanceSection) + 1) +
-                 8 * (2 + std::uint64_t(m_bakeStats.longestProbe)));
+    // baked_march.comp: M (1 + 4) + S (1 + 8).
+    const std::uint64_t bound = std::uint64_t(kBakedMaxLayerTets) * 5 +
+                                std::uint64_t(kBakedMaxLayerSamples) * 9;
     if (bound > budget)
-        throw InputError(cat("baked: a segment may take ", m_bakeStats.maxSteps,
-                             " steps, so one march invocation may loop ", bound,
-                             " times, more than the budget of ", budget,
-                             " (lavapipe stops an invocation at 65,535); bake at a larger voxel "
-                             "size or use a thinner shell"));
+        throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets, " tetrahedra and take ",
+                             kBakedMaxLayerSamples, " samples, so one march invocation may loop ",
+                             bound, " times, more than the budget of ", budget,
+                             " (lavapipe stops an invocation at 65,535)"));
     m_bakeStats.loopBound = std::uint32_t(bound);
     m_bakeStats.peelPasses = std::uint32_t(settings.peelPasses);
 
     SpotBakedParams params{};
     params.grid = glm::vec4(m_bakeStats.voxelSize, 1.0f / m_bakeStats.voxelSize,
                             noise::kBakeDistanceCap, thickness);
-    params.counts = glm::uvec4(triangles, m_bakeStats.levels, m_bakeStats.maxSteps, 0u);
+    params.counts = glm::uvec4(triangles, m_bakeStats.levels, 3 * triangles, m_bricksPerBuffer);
     for (std::uint32_t s = 0; s < kBakedSections; ++s) {
-        params.tableOffset[s >> 2][s & 3] = m_offsets[s];
-        params.tableMask[s >> 2][s & 3] = m_masks[s];
-        params.probe[s >> 2][s & 3] = m_probes[s];
+        params.leafOrigin[s] = m_leafOrigin[s];
+        params.leafDims[s] = m_leafDims[s];
     }
     m_params.upload(&params, sizeof(params));
 
@@ -397,7 +459,9 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_frame.background = view.background;
     m_frame.peelPasses = std::uint32_t(settings.peelPasses);
     m_frame.count = m_countLoops;
-    marchPipeline(m_frame.count);
+    m_frame.split = m_bakeStats.brickBuffers > 1;
+    marchPipeline(m_frame.count, false, m_frame.split);
+    marchPipeline(m_frame.count, true, m_frame.split);
 }
 
 void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
@@ -406,7 +470,10 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     const std::uint32_t triangles = m_bakeStats.tetrahedra / 3;
     const MeshPass& mesh = m_scene.meshPass();
 
-    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet).
+    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet),
+    // and the tetrahedron holding the eye, if any (the lowest index).
+    vkCmdFillBuffer(cmd, m_eyeTet.handle(), 0, VK_WHOLE_SIZE, kBakedNoTet);
+    fullBarrier(cmd);
     if (triangles > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_shell.handle());
         pushFrame(cmd, m_shell, f.frame);
@@ -416,6 +483,7 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kBakedBindRest, mesh.vertices())
             .buffer(kBakedBindIndices, mesh.indices())
             .buffer(kBakedBindTets, m_tets)
+            .buffer(kBakedBindEyeTet, m_eyeTet)
             .push(m_ctx, cmd, m_shell);
         vkCmdDispatch(cmd, (triangles + 63) / 64, 1, 1);
     }
@@ -440,22 +508,60 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_peelDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                     VK_IMAGE_LAYOUT_UNDEFINED, kGeneral, VK_PIPELINE_STAGE_2_NONE, 0, kAll,
                     VK_ACCESS_2_MEMORY_WRITE_BIT);
-    for (const Image* image : {&m_layerDepth[0], &m_layerDepth[1], &m_layerTet, &m_accum, &m_result})
+    for (const Image* image : {&m_exitDepth, &m_layerTet, &m_accum, &m_result})
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                         VK_PIPELINE_STAGE_2_NONE, 0, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT);
-    // Nothing accumulated; layer 0's "previous depth" is nearer than any face (depth <= 1).
+    // Nothing accumulated; the first peel's "previous exit" is nearer than any face (depth <= 1).
     const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     const VkClearColorValue zero{};
     VkClearColorValue nearest{};
     nearest.float32[0] = 2.0f;
     vkCmdClearColorImage(cmd, m_accum.handle(), kGeneral, &zero, 1, &colorRange);
-    vkCmdClearColorImage(cmd, m_layerDepth[1].handle(), kGeneral, &nearest, 1, &colorRange);
+    vkCmdClearColorImage(cmd, m_exitDepth.handle(), kGeneral, &nearest, 1, &colorRange);
     if (f.count)
         vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
     fullBarrier(cmd);
     timer.mark(cmd, "mesh");
 
-    const Pipeline& march = m_march.at(f.count);
+    // The march of one layer: from its entry faces, or (the first) from the eye, over the list
+    // of the pixels that walk.
+    const auto recordMarch = [&](bool first) {
+        const Pipeline& list = m_list.at(first);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, list.handle());
+        pushFrame(cmd, list, f.frame);
+        Descriptors()
+            .buffer(kBakedBindEyeTet, m_eyeTet)
+            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindList, m_pixelList)
+            .push(m_ctx, cmd, list);
+        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+        fullBarrier(cmd);
+        const Pipeline& march = m_march.at({f.count, first, f.split});
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
+        pushFrame(cmd, march, f.frame);
+        Descriptors()
+            .buffer(kBakedBindParams, m_params)
+            .buffer(kBakedBindTets, m_tets)
+            .buffer(kBakedBindNeighbours, m_neighbours)
+            .buffer(kBakedBindEyeTet, m_eyeTet)
+            .buffer(kBakedBindTable, m_table)
+            .buffer(kBakedBindBricks, m_bricks[0])
+            .buffer(kBakedBindBricks1, m_bricks[m_bricks[1].handle() ? 1 : 0])
+            .buffer(kBakedBindBricks2, m_bricks[m_bricks[2].handle() ? 2 : 0])
+            .buffer(kBakedBindBricks3, m_bricks[m_bricks[3].handle() ? 3 : 0])
+            .buffer(kBakedBindDistances, m_distances)
+            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindLoops, m_loops)
+            .buffer(kBakedBindList, m_pixelList)
+            .push(m_ctx, cmd, march);
+        vkCmdDispatchIndirect(cmd, m_pixelList.handle(), 0);
+        fullBarrier(cmd);
+    };
     VkImageCopy copy{};
     copy.srcSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
     copy.dstSubresource = copy.srcSubresource;
@@ -463,47 +569,33 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
     const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
     for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
-        const Image& prev = m_layerDepth[(k + 1) % 2];
-        const Image& layerDepth = m_layerDepth[k % 2];
-        // Peel: the nearest tetrahedron front face behind the previous layer, before the mesh.
+        // Peel: the nearest entry face behind the previous layer's exit, before the mesh.
         vkCmdCopyImage(cmd, m_meshDepth.handle(), kGeneral, m_peelDepth.handle(), kGeneral, 1,
                        &copy);
+        const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
+        vkCmdUpdateBuffer(cmd, m_pixelList.handle(), 0, sizeof(emptyList), &emptyList);
         fullBarrier(cmd);
         VkRenderingAttachmentInfo tetInfo = colorAttachment(m_layerTet, VK_ATTACHMENT_LOAD_OP_CLEAR);
-        VkRenderingAttachmentInfo depthOut = colorAttachment(layerDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
         VkRenderingAttachmentInfo depthInfo = depthAttachment(m_peelDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
-        tetInfo.imageLayout = depthOut.imageLayout = depthInfo.imageLayout = kGeneral;
-        beginRendering(cmd, m_width, m_height, {tetInfo, depthOut}, &depthInfo);
-        if (triangles > 0) {
+        tetInfo.imageLayout = depthInfo.imageLayout = kGeneral;
+        beginRendering(cmd, m_width, m_height, {tetInfo}, &depthInfo);
+        if (m_entryFaceCount > 0) {
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_peel.handle());
             pushFrame(cmd, m_peel, f.frame);
             Descriptors()
                 .buffer(kBakedBindTets, m_tets)
-                .image(kBakedBindPrevDepth, prev, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+                .buffer(kBakedBindEntryFaces, m_entryFaces)
+                .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
                 .push(m_ctx, cmd, m_peel);
-            vkCmdDraw(cmd, triangles * 3 * 12, 1, 0, 0);
+            vkCmdDraw(cmd, m_entryFaceCount * 3, 1, 0, 0);
         }
         vkCmdEndRendering(cmd);
         fullBarrier(cmd);
         if (markLayers)
             timer.mark(cmd, "peel");
 
-        // March the kept tetrahedron and composite under the earlier layers.
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
-        pushFrame(cmd, march, f.frame);
-        Descriptors()
-            .buffer(kBakedBindParams, m_params)
-            .buffer(kBakedBindTets, m_tets)
-            .buffer(kBakedBindTable, m_table)
-            .buffer(kBakedBindBricks, m_bricks)
-            .buffer(kBakedBindDistances, m_distances)
-            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(kBakedBindLoops, m_loops)
-            .push(m_ctx, cmd, march);
-        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
-        fullBarrier(cmd);
+        // Walk the shell from the kept entry and composite under the earlier layers.
+        recordMarch(k == 0);
         if (markLayers)
             timer.mark(cmd, "march");
     }
@@ -528,6 +620,9 @@ BakedStats BakedRenderer::stats() const {
     BakedStats s = m_bakeStats;
     if (m_frame.count)
         std::memcpy(&s.maxLoopIterations, m_loops.mapped(), sizeof(std::uint32_t));
+    std::uint32_t eye = kBakedNoTet;
+    std::memcpy(&eye, m_eyeTet.mapped(), sizeof(eye));
+    s.eyeTetrahedron = eye == kBakedNoTet ? -1 : std::int64_t(eye);
     return s;
 }
 
@@ -539,11 +634,15 @@ FrameCounters BakedRenderer::counters() const {
                {"thickness", double(s.thickness)},
                {"tetrahedra", double(s.tetrahedra)},
                {"bricks", double(s.bricks)},
+               {"brick_buffers", double(s.brickBuffers)},
                {"distance_bricks", double(s.distanceBricks)},
-               {"max_steps", double(s.maxSteps)},
-               {"longest_probe", double(s.longestProbe)},
+               {"entry_faces", double(s.entryFaces)},
+               {"max_layer_tets", double(s.maxLayerTets)},
+               {"max_layer_samples", double(s.maxLayerSamples)},
+               {"table_entries", double(s.tableEntries)},
                {"loop_bound", double(s.loopBound)},
                {"peel_passes", double(s.peelPasses)},
+               {"eye_tetrahedron", double(s.eyeTetrahedron)},
                {"bake_mib", double(s.gpuBytes) / double(1 << 20)}};
     if (m_frame.count)
         c.extra.emplace_back("max_loop_iterations", double(s.maxLoopIterations));

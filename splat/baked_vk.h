@@ -6,37 +6,52 @@
 /// Per frame, recorded into the caller's command buffer with no host wait:
 ///  1. shell (compute, baked_shell.comp): per triangle its prism (the mesh extruded along its
 ///     vertex normals by the shell thickness) split into 3 tetrahedra with noise/shell.h's rule,
-///     each corner with its position now and at rest (the texture coordinate into the bake).
-///     Rebuilt from the mesh's vertices every frame, so an animated mesh's shell follows it.
+///     each with its corners now, its 4 inward face planes and its affine map from world now to
+///     rest (the texture coordinate into the bake); and the lowest tetrahedron holding the eye,
+///     if any. Rebuilt from the mesh's vertices every frame, so an animated mesh's shell follows
+///     it. Per mesh, on the host (topology only): each tetrahedron's neighbour across each face
+///     (noise::shellNeighbours) and the shell's entry faces, the boundary faces a ray can enter
+///     through (the top surface and the sides of open edges; not the base, the mesh).
 ///  2. mesh (raster): the opaque base mesh's colour, ray distance and depth (MeshPass).
 ///  3. per layer k = 1..N (RenderSettings::peelPasses): peel (raster, baked_tet.vert and
-///     baked_peel.frag): the tetrahedra's faces that face the eye, with the mesh's depth copied
-///     into the depth buffer (z-buffer culling behind the mesh) and a test against layer k-1's
-///     depth, keep per pixel the nearest tetrahedron not yet peeled; march (compute,
-///     baked_march.comp): the view ray's segment inside that tetrahedron, in texture space by its
-///     affine map, marched through the bake at the mip level of the pixel's footprint and
-///     composited under the earlier layers (front to back).
+///     baked_peel.frag): the entry faces that face the eye (one triangle per mesh triangle on a
+///     closed mesh), with the mesh's depth copied into the depth buffer (z-buffer culling behind
+///     the mesh) and a test against where layer k-1's walk left the shell, keep per pixel the
+///     nearest entry; list (compute, baked_list.comp): the pixels with an entry that are not
+///     opaque, compacted; march (compute, baked_march.comp, dispatched indirectly over the
+///     list): from the entry, a walk through the tetrahedra across their shared faces until the
+///     ray leaves the shell, reaches the mesh or is opaque, sampling the bake at one spacing for
+///     the whole layer (the mip level of the pixel's footprint at the entry) through each
+///     tetrahedron's affine map, composited under the earlier layers (front to back); it writes
+///     the walk's exit depth, where the next peel starts. So one layer is the ray's whole
+///     contiguous passage through the shell, and later layers are re-entries (ears,
+///     silhouettes). The first layer starts every pixel at the eye, t = 0, when the eye is
+///     inside the shell.
 ///  4. resolve (compute): the accumulation over the mesh colour, into result().
 ///
-/// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in one storage
-/// buffer (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
-/// found through open-addressed hash tables (one section per level and one for the distance
-/// grid, at most half full, linear probing with the longest probe known on the host). The march
-/// skips the samples the distance grid proves empty.
+/// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in up to 4 storage
+/// buffers of one binding's range each (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
+/// found through dense leaf tables (one int per leaf of each level's box of leaves, and of the
+/// distance grid's: one read, no probing). The march skips the samples the distance grid proves
+/// empty.
 ///
-/// The loop guard: lavapipe stops an invocation after 65,535 loop iterations, so prepare()
-/// bounds what one march invocation can run (baked_march.comp's formula, from the steps per
-/// segment and the tables' longest probes) and refuses a frame above kBakedLoopBudget.
+/// The loop guard: lavapipe stops an invocation after 65,535 loop iterations, so a layer walks at
+/// most kBakedMaxLayerTets tetrahedra and takes at most kBakedMaxLayerSamples samples, prepare()
+/// computes the bound one march invocation can run (baked_march.comp's formula) and refuses a
+/// frame above the budget (kBakedLoopBudget by default).
 ///
-/// Limits: perspective cameras and unlit shading only (the bake stores no normals); a layer
-/// holds one tetrahedron per pixel, so tetrahedra beyond the N-th along a ray are not drawn
-/// (more layers never make the image worse; 4 cover most of the fur at the scenes' views).
-/// Results are deterministic: no float atomics, every pixel independent.
+/// Limits: perspective cameras and unlit shading only (the bake stores no normals); a passage
+/// longer than the per-layer caps, or a walk stopped by a degenerate tetrahedron, leaves the
+/// rest of that passage out (the next layer starts at the next entry face behind it); faces of
+/// non-manifold edges are boundary (the walk stops there). More layers never make the image
+/// worse. Results are deterministic: no float atomics, every pixel independent.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <tuple>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -51,6 +66,7 @@ namespace spot::splat {
 namespace gpu_baked {
 using glm::ivec3;
 using glm::ivec4;
+using glm::uvec3;
 using glm::uvec4;
 using glm::vec4;
 using uint = std::uint32_t;
@@ -59,8 +75,8 @@ using uint = std::uint32_t;
 #include "shaders/baked_layout.glsl"
 #undef SPOT_CONST
 #undef SPOT_FN
-static_assert(sizeof(SpotBakedTet) == 128);
-static_assert(sizeof(SpotBakedParams) == 176);
+static_assert(sizeof(SpotBakedTet) == 176);
+static_assert(sizeof(SpotBakedParams) == 416);
 } // namespace gpu_baked
 
 /// Loop iterations one march invocation may need by default (baked_march.comp).
@@ -75,12 +91,16 @@ struct BakedStats {
     float thickness = 0.0f;      ///< the shell's, world units
     std::uint32_t tetrahedra = 0;
     std::uint32_t bricks = 0;         ///< density leaves of every level
+    std::uint32_t brickBuffers = 0;   ///< storage buffers they are split over
     std::uint32_t distanceBricks = 0; ///< distance leaves
-    std::uint32_t maxSteps = 0;       ///< most march steps per segment
-    std::uint32_t longestProbe = 0;   ///< of every table section
+    std::uint32_t entryFaces = 0;     ///< boundary faces the peel draws (top and open sides)
+    std::uint32_t maxLayerTets = 0;   ///< most tetrahedra one layer walks
+    std::uint32_t maxLayerSamples = 0; ///< most samples one layer takes (skipped ones included)
+    std::uint32_t tableEntries = 0;   ///< of the leaf tables (one int per leaf of each box)
     std::uint32_t loopBound = 0;      ///< what one march invocation may run
     std::uint32_t maxLoopIterations = 0; ///< counted (countLoops) in the last frame
     std::uint32_t peelPasses = 0;
+    std::int64_t eyeTetrahedron = -1; ///< the one holding the eye in the last frame, -1: none
     std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
 };
 
@@ -99,12 +119,19 @@ public:
                  const RenderSettings& settings) override;
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
     const Image& result() const override { return m_result; }
-    /// extra: voxel_size, levels, thickness, tetrahedra, bricks, distance_bricks, max_steps,
-    /// longest_probe, loop_bound, peel_passes, bake_mib (and max_loop_iterations when counting).
+    /// extra: voxel_size, levels, thickness, tetrahedra, bricks, brick_buffers, distance_bricks,
+    /// entry_faces, max_layer_tets, max_layer_samples, table_entries, loop_bound, peel_passes,
+    /// eye_tetrahedron, bake_mib (and max_loop_iterations when counting).
     FrameCounters counters() const override;
 
     /// Count every march invocation's loop iterations from the next frame on (for tests).
     void countLoops(bool on) { m_countLoops = on; }
+    /// Split the density bricks over buffers of at most this many bricks (0: as many as one
+    /// storage buffer takes) from the next bake loaded on (for tests: the split of a small bake).
+    void splitBricks(std::uint32_t bricksPerBuffer) {
+        m_brickSplit = bricksPerBuffer;
+        m_bakeFile.clear();
+    }
     /// After the frame completed.
     BakedStats stats() const;
 
@@ -112,33 +139,38 @@ private:
     struct Bake;
     void loadBake(const std::string& file);
     void ensureTargets(std::uint32_t width, std::uint32_t height);
-    const Pipeline& marchPipeline(bool count);
+    const Pipeline& marchPipeline(bool count, bool first, bool split);
 
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_shell, m_peel, m_resolve;
-    std::map<bool, Pipeline> m_march;
+    std::map<std::tuple<bool, bool, bool>, Pipeline> m_march; ///< by (count loops, first layer, split bricks)
+    std::map<bool, Pipeline> m_list;                    ///< by first layer
     bool m_countLoops = false;
 
     // Per bake file.
     std::string m_bakeFile;
     std::filesystem::file_time_type m_bakeTime{};
     BakedStats m_bakeStats;
-    Buffer m_table, m_bricks, m_distances;
-    std::vector<std::uint32_t> m_offsets, m_masks, m_probes;
-    // Per mesh: the tetrahedra (3 per triangle).
-    Buffer m_tets, m_params;
+    Buffer m_table, m_distances;
+    std::array<Buffer, gpu_baked::kBakedBrickBuffers> m_bricks; ///< the density bricks' buffers
+    std::uint32_t m_bricksPerBuffer = 0, m_brickSplit = 0;
+    std::vector<glm::ivec4> m_leafOrigin, m_leafDims;
+    // Per mesh: the tetrahedra (3 per triangle), their neighbours, the entry faces.
+    Buffer m_tets, m_params, m_neighbours, m_entryFaces, m_eyeTet;
+    std::uint32_t m_entryFaceCount = 0;
     // Per image size.
     std::uint32_t m_width = 0, m_height = 0;
-    Image m_base, m_distance, m_meshDepth, m_peelDepth, m_layerDepth[2], m_layerTet, m_accum,
+    Image m_base, m_distance, m_meshDepth, m_peelDepth, m_exitDepth, m_layerTet, m_accum,
         m_result;
-    Buffer m_loops;
+    Buffer m_loops, m_pixelList;
 
     struct Prepared {
         gpu_splat::SpotSplatFrame frame{};
         glm::vec3 background{0.0f};
         std::uint32_t peelPasses = 1;
         bool count = false;
+        bool split = false; ///< the bricks span several buffers
     } m_frame;
 };
 

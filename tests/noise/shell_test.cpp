@@ -198,3 +198,79 @@ TEST(Shell, RaySegmentsOfAPrismsTetrahedraTileItsChord) {
     }
     EXPECT_GT(hits, 200);
 }
+
+TEST(Shell, NeighboursAreSymmetricAndPairEveryInteriorFaceOnTheBunny) {
+    const Mesh mesh = loadMesh(std::string(SPOT_SOURCE_DIR) + "/presets/meshes/bunny.ply");
+    const ShellMesh shell = buildShell(mesh, 0.06f);
+    const auto neighbours = shellNeighbours(shell.tetrahedra);
+    ASSERT_EQ(neighbours.size(), shell.tetrahedra.size());
+    // Face f of a tetrahedron: the one opposite its vertex f.
+    const auto faceOf = [&](std::size_t t, int f) {
+        const auto& v = shell.tetrahedra[t].vertices;
+        return face(v[std::size_t(f + 1) % 4], v[std::size_t(f + 2) % 4], v[std::size_t(f + 3) % 4]);
+    };
+    std::map<Face, int> holders;
+    for (std::size_t t = 0; t < shell.tetrahedra.size(); ++t)
+        for (int f = 0; f < 4; ++f)
+            ++holders[faceOf(t, f)];
+    const std::uint32_t n = shell.baseCount;
+    std::size_t interior = 0, top = 0, base = 0, other = 0;
+    for (std::size_t t = 0; t < shell.tetrahedra.size(); ++t)
+        for (int f = 0; f < 4; ++f) {
+            const Face key = faceOf(t, f);
+            const std::int32_t b = neighbours[t][std::size_t(f)];
+            int tops = 0;
+            for (const std::uint32_t v : key)
+                tops += v >= n;
+            if (b < 0) {
+                // Only the top and base surfaces are boundary on the closed bunny.
+                EXPECT_EQ(holders[key], 1) << t << " " << f;
+                top += tops == 3;
+                base += tops == 0;
+                other += tops == 1 || tops == 2;
+                continue;
+            }
+            ++interior;
+            EXPECT_EQ(holders[key], 2) << t << " " << f;
+            ASSERT_NE(std::size_t(b), t);
+            // B holds the same face, and its neighbour across it is A, exactly once.
+            int back = 0;
+            for (int g = 0; g < 4; ++g)
+                if (neighbours[std::size_t(b)][std::size_t(g)] == std::int32_t(t)) {
+                    ++back;
+                    EXPECT_EQ(faceOf(std::size_t(b), g), key) << t << " " << f;
+                }
+            EXPECT_EQ(back, 1) << t << " " << f;
+        }
+    // Every face held twice is paired (interior), every face held once is not.
+    std::size_t twice = 0;
+    for (const auto& [key, c] : holders)
+        twice += c == 2;
+    EXPECT_EQ(interior, 2 * twice);
+    EXPECT_EQ(top, mesh.triangles.size());
+    EXPECT_EQ(base, mesh.triangles.size());
+    EXPECT_EQ(other, 0u);
+    std::printf("bunny shell: %zu paired faces, %zu top and %zu base boundary faces\n", interior,
+                top, base);
+}
+
+TEST(Shell, NeighboursOfAnOpenSquareLeaveItsRimOpen) {
+    // Two triangles sharing one edge: the side faces on the 4 open edges (2 each) are boundary,
+    // the 2 on the shared edge are paired, and each prism pairs its 3 tetrahedra with 2 faces.
+    const std::vector<glm::uvec3> triangles = {{0, 2, 1}, {1, 2, 3}};
+    const auto tets = shellTetrahedra(triangles, 4);
+    const auto neighbours = shellNeighbours(tets);
+    int paired = 0, open = 0;
+    for (std::size_t t = 0; t < tets.size(); ++t)
+        for (int f = 0; f < 4; ++f) {
+            int tops = 0;
+            for (int i = 1; i < 4; ++i)
+                tops += tets[t].vertices[std::size_t(f + i) % 4] >= 4;
+            if (neighbours[t][std::size_t(f)] >= 0)
+                ++paired;
+            else
+                open += tops == 1 || tops == 2;
+        }
+    EXPECT_EQ(paired, 2 * (2 * 2 + 2)); // 2 inner faces per prism, 2 faces on the shared quad
+    EXPECT_EQ(open, 4 * 2);
+}
