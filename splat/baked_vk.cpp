@@ -350,15 +350,19 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     m_height = height;
 }
 
-void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
-                            const RenderSettings& settings) {
-    if (settings.bakeFile.empty())
-        throw InputError("baked: no bake file (render --bake FILE.vdb; spotshell bake makes one)");
+void requireBakedView(const View& view) {
     if (view.camera.projection == noise::Projection::Orthographic)
         throw InputError("baked: orthographic cameras are not supported yet");
     if (view.shading.mode == noise::Shading::Mode::Lambert)
         throw InputError("baked: Lambert shading needs normals the bake does not store; use "
                          "unlit shading");
+}
+
+void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
+                            const RenderSettings& settings) {
+    if (settings.bakeFile.empty())
+        throw InputError("baked: no bake file (render --bake FILE.vdb; spotshell bake makes one)");
+    requireBakedView(view);
     if (settings.peelPasses < 1 || settings.peelPasses > kBakedMaxPeelPasses)
         throw InputError(cat("baked: ", settings.peelPasses, " peel passes; 1 to ",
                              kBakedMaxPeelPasses, " are accepted"));

@@ -104,6 +104,10 @@ struct BakedStats {
     std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
 };
 
+/// Throws InputError, with the reason, when `baked` cannot render `view` (an orthographic camera;
+/// Lambert shading, which needs normals the bake does not store).
+void requireBakedView(const View& view);
+
 class BakedRenderer final : public Renderer {
 public:
     /// `scene` must outlive the renderer.
