@@ -18,10 +18,10 @@
 // tetrahedron holding the eye (found by baked_shell.comp), and the next peel continues behind.
 //
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
-//   M (1 + 4) + S (1 + 8)
+//   M (1 + 4) + S
 // with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
-// distance lookup and, when not skipped, a trilinear sample of 8 voxels; a lookup is one read
-// of the leaf table, no loop). Empty-space skipping only lowers it.
+// distance lookup and, when not skipped, a trilinear sample of 8 voxels, unrolled; a lookup is
+// one read of the leaf table, no loop). Empty-space skipping only lowers it.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
@@ -82,29 +82,25 @@ vec4 brickVoxel(uint b, uint offset) {
     return bricks3[i];
 }
 
-// (extinction x colour, extinction) of voxel ijk of `level`, 0 where not stored.
+// (extinction x colour, extinction) of voxel ijk of `level`, 0 where not stored. Branchless:
+// an empty leaf reads brick 0 and weighs it 0.
 vec4 voxel(ivec3 ijk, uint level) {
     int b = findBrick(ijk, level);
-    return b < 0 ? vec4(0.0) : brickVoxel(uint(b), voxelOffset(ijk));
+    return float(b >= 0) * brickVoxel(uint(max(b, 0)), voxelOffset(ijk));
 }
 
-// Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`.
+// Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`: the 8 corners
+// unrolled (no loop; lavapipe runs every branch a lane of the batch takes, so none either).
 vec4 sampleLevel(vec3 x, uint level, float inverseSize) {
     vec3 g = x * inverseSize - 0.5;
     vec3 f = floor(g);
     vec3 w = g - f;
     ivec3 c = ivec3(f);
-    vec4 sum = vec4(0.0);
-    for (uint i = 0u; i < 8u; ++i) {
-        if (kCountLoops)
-            ++loops;
-        ivec3 o = ivec3(int(i >> 2u) & 1, int(i >> 1u) & 1, int(i) & 1);
-        vec3 wo = mix(1.0 - w, w, vec3(o));
-        float weight = wo.x * wo.y * wo.z;
-        if (weight > 0.0)
-            sum += weight * voxel(c + o, level);
-    }
-    return sum;
+    vec4 z0 = mix(voxel(c, level), voxel(c + ivec3(0, 0, 1), level), w.z);
+    vec4 z1 = mix(voxel(c + ivec3(0, 1, 0), level), voxel(c + ivec3(0, 1, 1), level), w.z);
+    vec4 z2 = mix(voxel(c + ivec3(1, 0, 0), level), voxel(c + ivec3(1, 0, 1), level), w.z);
+    vec4 z3 = mix(voxel(c + ivec3(1, 1, 0), level), voxel(c + ivec3(1, 1, 1), level), w.z);
+    return mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
 }
 
 // Level-0 voxels to the nearest non-empty one (bake.h), the cap where not stored.
