@@ -162,10 +162,16 @@ void main() {
     float voxel0 = params.grid.x;
     float footprint = frame.size.z * tIn * viewCos;
     uint levels = params.counts.y;
-    uint level = uint(clamp(floor(log2(max(footprint / voxel0, 1.0))), 0.0, float(levels - 1u)));
+    float fine = clamp(log2(max(footprint / voxel0, 1.0)), 0.0, float(levels - 1u));
+    uint level = uint(floor(fine));
     float size = voxel0 * float(1u << level);
     float inverseSize = 1.0 / size;
     float dt = kBakedStepFraction * size;
+    // A coarse voxel's mean extinction makes the mean optical depth of its footprint, and so
+    // exp(-mean tau), at most the mean transmittance of the rays it stands for (Jensen): coarse
+    // levels are too opaque. kBakedCoarseExtinction^fine (the footprint's level) scales the
+    // extinction back (measured, baked_layout.glsl).
+    float extinctionScale = pow(kBakedCoarseExtinction, fine);
     float tStart = tIn;
     // A sample at level L reads voxels whose level-0 children lie within 1.5 x size of it
     // (Chebyshev): with the distance d there, the next (d - 1) voxel0 - 1.5 size along the ray
@@ -224,7 +230,7 @@ void main() {
                 }
                 vec4 s = sampleLevel(x, level, inverseSize);
                 if (s.w > 0.0) {
-                    float alpha = 1.0 - exp(-s.w * dt);
+                    float alpha = 1.0 - exp(-extinctionScale * s.w * dt);
                     radiance += transmittance * alpha * (s.rgb / s.w);
                     transmittance *= 1.0 - alpha;
                 }
