@@ -20,8 +20,7 @@
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
 //   M (1 + 4) + S
 // with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
-// distance lookup and, when not skipped, a trilinear sample of 8 voxels, unrolled; a lookup is
-// one read of the leaf table, no loop). Empty-space skipping only lowers it.
+// trilinear sample of 8 voxels, unrolled; a voxel's leaf is one read of the leaf table, no loop).
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
@@ -41,7 +40,6 @@ layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { vec4 bricks
 layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { vec4 bricks1[]; };
 layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { vec4 bricks2[]; };
 layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { vec4 bricks3[]; };
-layout(std430, binding = kBakedBindDistances) readonly buffer Distances { float distances[]; };
 layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
@@ -101,13 +99,6 @@ vec4 sampleLevel(vec3 x, uint level, float inverseSize) {
     vec4 z2 = mix(voxel(c + ivec3(1, 0, 0), level), voxel(c + ivec3(1, 0, 1), level), w.z);
     vec4 z3 = mix(voxel(c + ivec3(1, 1, 0), level), voxel(c + ivec3(1, 1, 1), level), w.z);
     return mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
-}
-
-// Level-0 voxels to the nearest non-empty one (bake.h), the cap where not stored.
-float distanceAt(vec3 x) {
-    ivec3 ijk = ivec3(floor(x * params.grid.y));
-    int b = findBrick(ijk, kBakedDistanceSection);
-    return b < 0 ? params.grid.z : distances[uint(b) * kBakedLeafVoxels + voxelOffset(ijk)];
 }
 
 // Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where
@@ -173,15 +164,10 @@ void main() {
     // extinction back (measured, baked_layout.glsl).
     float extinctionScale = pow(kBakedCoarseExtinction, fine);
     float tStart = tIn;
-    // A sample at level L reads voxels whose level-0 children lie within 1.5 x size of it
-    // (Chebyshev): with the distance d there, the next (d - 1) voxel0 - 1.5 size along the ray
-    // (rest units) read only empty voxels, so those samples are skipped (they add nothing).
-    float reach = 1.5 * size;
-    // The distance grid stores at most its cap: at the coarser levels no sample can be skipped,
-    // and the lookup is left out.
-    bool skipping = (params.grid.z - 1.0) * voxel0 - reach >= 0.0;
+    // No empty-space skipping: the distance grid (capped at 4 voxels) could skip at most 2 steps
+    // at level 0 and none above, and its lookup cost more than it saved (docs/design.md 5).
     uint k = 0u;       // the next sample
-    uint samples = 0u; // taken or skipped
+    uint samples = 0u; // taken
     vec3 radiance = vec3(0.0);
     float transmittance = 1.0;
     float tEnd = tIn;
@@ -213,7 +199,6 @@ void main() {
             // The segment's ends at rest.
             vec3 ra = toRest(tet, origin + tIn * dir);
             vec3 rb = toRest(tet, origin + tOut * dir);
-            float restPerWorld = length(rb - ra) / (tOut - tIn);
             float inverseLength = 1.0 / (tOut - tIn);
             for (; samples < kBakedMaxLayerSamples; ++samples) {
                 if (kCountLoops)
@@ -222,12 +207,6 @@ void main() {
                 if (t >= tOut)
                     break;
                 vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
-                float skip = skipping ? (distanceAt(x) - 1.0) * voxel0 - reach : -1.0;
-                if (skip >= 0.0) {
-                    // (clamped: a flat tetrahedron's map has no length)
-                    k += 1u + uint(min(floor(skip / max(restPerWorld * dt, 1e-30)), 65536.0));
-                    continue;
-                }
                 vec4 s = sampleLevel(x, level, inverseSize);
                 if (s.w > 0.0) {
                     float alpha = 1.0 - exp(-extinctionScale * s.w * dt);
