@@ -20,7 +20,9 @@
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
 //   M (1 + 4) + S
 // with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
-// trilinear sample of 8 voxels, unrolled; a voxel's leaf is one read of the leaf table, no loop).
+// trilinear sample of 8 voxels, unrolled; a voxel's leaf is one read of the leaf table, no loop):
+// the walk's one loop takes a sample or enters a tetrahedron per iteration (M + S, the last
+// one's break included, since the walk ends at S samples on the next step).
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
@@ -171,62 +173,78 @@ void main() {
     vec3 radiance = vec3(0.0);
     float transmittance = 1.0;
     float tEnd = tIn;
-    for (uint walked = 0u; walked < kBakedMaxLayerTets; ++walked) {
+    // One flat loop: each iteration takes a sample or, where the tetrahedron has none left,
+    // steps into the next one (a new tetrahedron's exit computed first). So a SIMD batch runs to
+    // its longest lane's tetrahedra plus samples, not per tetrahedron to its lanes' most samples.
+    uint walked = 0u;
+    bool inTet = false;
+    float tOut = tIn;
+    bool atMesh = false;
+    uint exitFace = 4u;
+    vec3 ra = vec3(0.0), rb = vec3(0.0);
+    float inverseLength = 0.0;
+    for (uint step = 0u; step <= kBakedMaxLayerTets + kBakedMaxLayerSamples; ++step) {
         if (kCountLoops)
             ++loops;
-        // The exit: the nearest plane the ray leaves through, the entry face excluded.
-        float tOut = 3.0e38;
-        uint exitFace = 4u;
-        for (uint f = 0u; f < 4u; ++f) {
-            if (kCountLoops)
-                ++loops;
-            if (f == entryFace)
-                continue;
-            float num, den;
-            facePlane(tet, f, origin, dir, num, den);
-            if (den < 0.0 && num / den < tOut) {
-                tOut = num / den;
-                exitFace = f;
-            }
-        }
-        if (exitFace == 4u)
-            break; // flat or degenerate: the walk stops here
-        tOut = max(tOut, tIn);
-        bool atMesh = tOut >= tMesh;
-        tOut = min(tOut, tMesh);
-        float tFirst = tStart + (float(k) + 0.5) * dt;
-        if (tOut > tIn && tFirst < tOut && samples < kBakedMaxLayerSamples) {
-            // The segment's ends at rest.
-            vec3 ra = toRest(tet, origin + tIn * dir);
-            vec3 rb = toRest(tet, origin + tOut * dir);
-            float inverseLength = 1.0 / (tOut - tIn);
-            for (; samples < kBakedMaxLayerSamples; ++samples) {
+        if (!inTet) {
+            if (walked == kBakedMaxLayerTets)
+                break;
+            ++walked;
+            // The exit: the nearest plane the ray leaves through, the entry face excluded.
+            tOut = 3.0e38;
+            exitFace = 4u;
+            for (uint f = 0u; f < 4u; ++f) {
                 if (kCountLoops)
                     ++loops;
-                float t = tStart + (float(k) + 0.5) * dt;
-                if (t >= tOut)
-                    break;
-                vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
-                vec4 s = sampleLevel(x, level, inverseSize);
-                if (s.w > 0.0) {
-                    float alpha = 1.0 - exp(-extinctionScale * s.w * dt);
-                    radiance += transmittance * alpha * (s.rgb / s.w);
-                    transmittance *= 1.0 - alpha;
+                if (f == entryFace)
+                    continue;
+                float num, den;
+                facePlane(tet, f, origin, dir, num, den);
+                if (den < 0.0 && num / den < tOut) {
+                    tOut = num / den;
+                    exitFace = f;
                 }
-                ++k;
-                if (transmittance < kBakedOpaque)
-                    break;
+            }
+            if (exitFace == 4u)
+                break; // flat or degenerate: the walk stops here
+            tOut = max(tOut, tIn);
+            atMesh = tOut >= tMesh;
+            tOut = min(tOut, tMesh);
+            inTet = true;
+            if (tStart + (float(k) + 0.5) * dt < tOut) {
+                // The segment's ends at rest (a sample follows, so tOut > tIn).
+                ra = toRest(tet, origin + tIn * dir);
+                rb = toRest(tet, origin + tOut * dir);
+                inverseLength = 1.0 / (tOut - tIn);
             }
         }
-        tEnd = tOut;
-        tIn = tOut;
-        if (atMesh || transmittance < kBakedOpaque || samples >= kBakedMaxLayerSamples)
-            break;
-        int next = neighbours[tet][exitFace];
-        if (next < 0)
-            break; // left the shell
-        tet = uint(next) >> 2u;
-        entryFace = uint(next) & 3u;
+        float t = tStart + (float(k) + 0.5) * dt;
+        if (t < tOut && samples < kBakedMaxLayerSamples) {
+            vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
+            vec4 s = sampleLevel(x, level, inverseSize);
+            if (s.w > 0.0) {
+                float alpha = 1.0 - exp(-extinctionScale * s.w * dt);
+                radiance += transmittance * alpha * (s.rgb / s.w);
+                transmittance *= 1.0 - alpha;
+            }
+            ++k;
+            ++samples;
+            if (transmittance < kBakedOpaque) {
+                tEnd = tOut;
+                break;
+            }
+        } else {
+            tEnd = tOut;
+            tIn = tOut;
+            if (atMesh || samples >= kBakedMaxLayerSamples)
+                break;
+            int next = neighbours[tet][exitFace];
+            if (next < 0)
+                break; // left the shell
+            tet = uint(next) >> 2u;
+            entryFace = uint(next) & 3u;
+            inTet = false;
+        }
     }
     acc.rgb += (1.0 - acc.a) * radiance;
     acc.a += (1.0 - acc.a) * (1.0 - transmittance);
