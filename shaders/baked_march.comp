@@ -18,10 +18,11 @@
 // tetrahedron holding the eye (found by baked_shell.comp), and the next peel continues behind.
 //
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
-//   M (1 + 4) + S (1 + 8)
+//   M (1 + 4) + S
 // with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
-// distance lookup and, when not skipped, a trilinear sample of 8 voxels; a lookup is one read
-// of the leaf table, no loop). Empty-space skipping only lowers it.
+// trilinear sample of 8 voxels, unrolled; a voxel's leaf is one read of the leaf table, no loop):
+// the walk's one loop takes a sample or enters a tetrahedron per iteration (M + S, the last
+// one's break included, since the walk ends at S samples on the next step).
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
@@ -41,7 +42,6 @@ layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { vec4 bricks
 layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { vec4 bricks1[]; };
 layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { vec4 bricks2[]; };
 layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { vec4 bricks3[]; };
-layout(std430, binding = kBakedBindDistances) readonly buffer Distances { float distances[]; };
 layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
@@ -82,36 +82,25 @@ vec4 brickVoxel(uint b, uint offset) {
     return bricks3[i];
 }
 
-// (extinction x colour, extinction) of voxel ijk of `level`, 0 where not stored.
+// (extinction x colour, extinction) of voxel ijk of `level`, 0 where not stored. Branchless:
+// an empty leaf reads brick 0 and weighs it 0.
 vec4 voxel(ivec3 ijk, uint level) {
     int b = findBrick(ijk, level);
-    return b < 0 ? vec4(0.0) : brickVoxel(uint(b), voxelOffset(ijk));
+    return float(b >= 0) * brickVoxel(uint(max(b, 0)), voxelOffset(ijk));
 }
 
-// Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`.
+// Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`: the 8 corners
+// unrolled (no loop; lavapipe runs every branch a lane of the batch takes, so none either).
 vec4 sampleLevel(vec3 x, uint level, float inverseSize) {
     vec3 g = x * inverseSize - 0.5;
     vec3 f = floor(g);
     vec3 w = g - f;
     ivec3 c = ivec3(f);
-    vec4 sum = vec4(0.0);
-    for (uint i = 0u; i < 8u; ++i) {
-        if (kCountLoops)
-            ++loops;
-        ivec3 o = ivec3(int(i >> 2u) & 1, int(i >> 1u) & 1, int(i) & 1);
-        vec3 wo = mix(1.0 - w, w, vec3(o));
-        float weight = wo.x * wo.y * wo.z;
-        if (weight > 0.0)
-            sum += weight * voxel(c + o, level);
-    }
-    return sum;
-}
-
-// Level-0 voxels to the nearest non-empty one (bake.h), the cap where not stored.
-float distanceAt(vec3 x) {
-    ivec3 ijk = ivec3(floor(x * params.grid.y));
-    int b = findBrick(ijk, kBakedDistanceSection);
-    return b < 0 ? params.grid.z : distances[uint(b) * kBakedLeafVoxels + voxelOffset(ijk)];
+    vec4 z0 = mix(voxel(c, level), voxel(c + ivec3(0, 0, 1), level), w.z);
+    vec4 z1 = mix(voxel(c + ivec3(0, 1, 0), level), voxel(c + ivec3(0, 1, 1), level), w.z);
+    vec4 z2 = mix(voxel(c + ivec3(1, 0, 0), level), voxel(c + ivec3(1, 0, 1), level), w.z);
+    vec4 z3 = mix(voxel(c + ivec3(1, 1, 0), level), voxel(c + ivec3(1, 1, 1), level), w.z);
+    return mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
 }
 
 // Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where
@@ -166,86 +155,96 @@ void main() {
     float voxel0 = params.grid.x;
     float footprint = frame.size.z * tIn * viewCos;
     uint levels = params.counts.y;
-    uint level = uint(clamp(floor(log2(max(footprint / voxel0, 1.0))), 0.0, float(levels - 1u)));
+    float fine = clamp(log2(max(footprint / voxel0, 1.0)), 0.0, float(levels - 1u));
+    uint level = uint(floor(fine));
     float size = voxel0 * float(1u << level);
     float inverseSize = 1.0 / size;
     float dt = kBakedStepFraction * size;
+    // A coarse voxel's mean extinction makes the mean optical depth of its footprint, and so
+    // exp(-mean tau), at most the mean transmittance of the rays it stands for (Jensen): coarse
+    // levels are too opaque. kBakedCoarseExtinction^fine (the footprint's level) scales the
+    // extinction back (measured, baked_layout.glsl).
+    float extinctionScale = pow(kBakedCoarseExtinction, fine);
     float tStart = tIn;
-    // A sample at level L reads voxels whose level-0 children lie within 1.5 x size of it
-    // (Chebyshev): with the distance d there, the next (d - 1) voxel0 - 1.5 size along the ray
-    // (rest units) read only empty voxels, so those samples are skipped (they add nothing).
-    float reach = 1.5 * size;
-    // The distance grid stores at most its cap: at the coarser levels no sample can be skipped,
-    // and the lookup is left out.
-    bool skipping = (params.grid.z - 1.0) * voxel0 - reach >= 0.0;
+    // No empty-space skipping: the distance grid (capped at 4 voxels) could skip at most 2 steps
+    // at level 0 and none above, and its lookup cost more than it saved (docs/design.md 5).
     uint k = 0u;       // the next sample
-    uint samples = 0u; // taken or skipped
+    uint samples = 0u; // taken
     vec3 radiance = vec3(0.0);
     float transmittance = 1.0;
     float tEnd = tIn;
-    for (uint walked = 0u; walked < kBakedMaxLayerTets; ++walked) {
+    // One flat loop: each iteration takes a sample or, where the tetrahedron has none left,
+    // steps into the next one (a new tetrahedron's exit computed first). So a SIMD batch runs to
+    // its longest lane's tetrahedra plus samples, not per tetrahedron to its lanes' most samples.
+    uint walked = 0u;
+    bool inTet = false;
+    float tOut = tIn;
+    bool atMesh = false;
+    uint exitFace = 4u;
+    vec3 ra = vec3(0.0), rb = vec3(0.0);
+    float inverseLength = 0.0;
+    for (uint step = 0u; step <= kBakedMaxLayerTets + kBakedMaxLayerSamples; ++step) {
         if (kCountLoops)
             ++loops;
-        // The exit: the nearest plane the ray leaves through, the entry face excluded.
-        float tOut = 3.0e38;
-        uint exitFace = 4u;
-        for (uint f = 0u; f < 4u; ++f) {
-            if (kCountLoops)
-                ++loops;
-            if (f == entryFace)
-                continue;
-            float num, den;
-            facePlane(tet, f, origin, dir, num, den);
-            if (den < 0.0 && num / den < tOut) {
-                tOut = num / den;
-                exitFace = f;
-            }
-        }
-        if (exitFace == 4u)
-            break; // flat or degenerate: the walk stops here
-        tOut = max(tOut, tIn);
-        bool atMesh = tOut >= tMesh;
-        tOut = min(tOut, tMesh);
-        float tFirst = tStart + (float(k) + 0.5) * dt;
-        if (tOut > tIn && tFirst < tOut && samples < kBakedMaxLayerSamples) {
-            // The segment's ends at rest.
-            vec3 ra = toRest(tet, origin + tIn * dir);
-            vec3 rb = toRest(tet, origin + tOut * dir);
-            float restPerWorld = length(rb - ra) / (tOut - tIn);
-            float inverseLength = 1.0 / (tOut - tIn);
-            for (; samples < kBakedMaxLayerSamples; ++samples) {
+        if (!inTet) {
+            if (walked == kBakedMaxLayerTets)
+                break;
+            ++walked;
+            // The exit: the nearest plane the ray leaves through, the entry face excluded.
+            tOut = 3.0e38;
+            exitFace = 4u;
+            for (uint f = 0u; f < 4u; ++f) {
                 if (kCountLoops)
                     ++loops;
-                float t = tStart + (float(k) + 0.5) * dt;
-                if (t >= tOut)
-                    break;
-                vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
-                float skip = skipping ? (distanceAt(x) - 1.0) * voxel0 - reach : -1.0;
-                if (skip >= 0.0) {
-                    // (clamped: a flat tetrahedron's map has no length)
-                    k += 1u + uint(min(floor(skip / max(restPerWorld * dt, 1e-30)), 65536.0));
+                if (f == entryFace)
                     continue;
+                float num, den;
+                facePlane(tet, f, origin, dir, num, den);
+                if (den < 0.0 && num / den < tOut) {
+                    tOut = num / den;
+                    exitFace = f;
                 }
-                vec4 s = sampleLevel(x, level, inverseSize);
-                if (s.w > 0.0) {
-                    float alpha = 1.0 - exp(-s.w * dt);
-                    radiance += transmittance * alpha * (s.rgb / s.w);
-                    transmittance *= 1.0 - alpha;
-                }
-                ++k;
-                if (transmittance < kBakedOpaque)
-                    break;
+            }
+            if (exitFace == 4u)
+                break; // flat or degenerate: the walk stops here
+            tOut = max(tOut, tIn);
+            atMesh = tOut >= tMesh;
+            tOut = min(tOut, tMesh);
+            inTet = true;
+            if (tStart + (float(k) + 0.5) * dt < tOut) {
+                // The segment's ends at rest (a sample follows, so tOut > tIn).
+                ra = toRest(tet, origin + tIn * dir);
+                rb = toRest(tet, origin + tOut * dir);
+                inverseLength = 1.0 / (tOut - tIn);
             }
         }
-        tEnd = tOut;
-        tIn = tOut;
-        if (atMesh || transmittance < kBakedOpaque || samples >= kBakedMaxLayerSamples)
-            break;
-        int next = neighbours[tet][exitFace];
-        if (next < 0)
-            break; // left the shell
-        tet = uint(next) >> 2u;
-        entryFace = uint(next) & 3u;
+        float t = tStart + (float(k) + 0.5) * dt;
+        if (t < tOut && samples < kBakedMaxLayerSamples) {
+            vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
+            vec4 s = sampleLevel(x, level, inverseSize);
+            if (s.w > 0.0) {
+                float alpha = 1.0 - exp(-extinctionScale * s.w * dt);
+                radiance += transmittance * alpha * (s.rgb / s.w);
+                transmittance *= 1.0 - alpha;
+            }
+            ++k;
+            ++samples;
+            if (transmittance < kBakedOpaque) {
+                tEnd = tOut;
+                break;
+            }
+        } else {
+            tEnd = tOut;
+            tIn = tOut;
+            if (atMesh || samples >= kBakedMaxLayerSamples)
+                break;
+            int next = neighbours[tet][exitFace];
+            if (next < 0)
+                break; // left the shell
+            tet = uint(next) >> 2u;
+            entryFace = uint(next) & 3u;
+            inTet = false;
+        }
     }
     acc.rgb += (1.0 - acc.a) * radiance;
     acc.a += (1.0 - acc.a) * (1.0 - transmittance);

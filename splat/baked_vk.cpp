@@ -437,9 +437,9 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_bakeStats.maxLayerTets = kBakedMaxLayerTets;
     m_bakeStats.maxLayerSamples = kBakedMaxLayerSamples;
     const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
-    // baked_march.comp: M (1 + 4) + S (1 + 8).
+    // baked_march.comp: M (1 + 4) + S (the trilinear sample is unrolled, no loop).
     const std::uint64_t bound = std::uint64_t(kBakedMaxLayerTets) * 5 +
-                                std::uint64_t(kBakedMaxLayerSamples) * 9;
+                                std::uint64_t(kBakedMaxLayerSamples);
     if (bound > budget)
         throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets, " tetrahedra and take ",
                              kBakedMaxLayerSamples, " samples, so one march invocation may loop ",

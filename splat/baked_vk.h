@@ -21,8 +21,9 @@
 ///     opaque, compacted; march (compute, baked_march.comp, dispatched indirectly over the
 ///     list): from the entry, a walk through the tetrahedra across their shared faces until the
 ///     ray leaves the shell, reaches the mesh or is opaque, sampling the bake at one spacing for
-///     the whole layer (the mip level of the pixel's footprint at the entry) through each
-///     tetrahedron's affine map, composited under the earlier layers (front to back); it writes
+///     the whole layer (the mip level of the pixel's footprint at the entry, a coarse level's
+///     extinction scaled by kBakedCoarseExtinction per level against its opacity bias) through
+///     each tetrahedron's affine map, composited under the earlier layers (front to back); it writes
 ///     the walk's exit depth, where the next peel starts. So one layer is the ray's whole
 ///     contiguous passage through the shell, and later layers are re-entries (ears,
 ///     silhouettes). The first layer starts every pixel at the eye, t = 0, when the eye is
@@ -32,8 +33,8 @@
 /// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in up to 4 storage
 /// buffers of one binding's range each (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
 /// found through dense leaf tables (one int per leaf of each level's box of leaves, and of the
-/// distance grid's: one read, no probing). The march skips the samples the distance grid proves
-/// empty.
+/// distance grid's: one read, no probing). The march no longer reads the distance grid (its
+/// skip, capped at 4 voxels, cost more than it saved; docs/design.md 5); it is still uploaded.
 ///
 /// The loop guard: lavapipe stops an invocation after 65,535 loop iterations, so a layer walks at
 /// most kBakedMaxLayerTets tetrahedra and takes at most kBakedMaxLayerSamples samples, prepare()
