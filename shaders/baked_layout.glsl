@@ -25,13 +25,6 @@ SPOT_CONST uint kBakedBrickBuffers = 4u;
  * on fur-bunny at 128x128 (16 layers) 31.36 dB against the reference, half a voxel 31.33 dB
  * at 1.2 times the cost (the trilinear reconstruction, not the step, limits the error). */
 SPOT_CONST float kBakedStepFraction = 1.0f;
-/* The march scales extinction by this to the power of the footprint's mip level (fractional,
- * clamped to the bake's levels; 1 at level 0): a coarse voxel's mean extinction gives the mean
- * optical depth of what it covers, and exp(-mean tau) is at most the mean transmittance
- * (Jensen), so unscaled the coarse levels render too opaque. Measured on fur-bunny-far against
- * the reference (docs/design.md 5): 0.8 best at 128x128 (levels 2.5-3) and near best at 640x480
- * (levels 0.5-1.5), for bakes at 128 and 256 voxels along the bunny. */
-SPOT_CONST float kBakedCoarseExtinction = 0.8f;
 /* Loop iterations one invocation may run (lavapipe stops one at 65,535; docs/design.md 8). */
 SPOT_CONST uint kBakedLoopBudget = 60000u;
 /* A layer's walk (baked_march.comp): at most this many tetrahedra and this many samples (skipped

@@ -155,16 +155,10 @@ void main() {
     float voxel0 = params.grid.x;
     float footprint = frame.size.z * tIn * viewCos;
     uint levels = params.counts.y;
-    float fine = clamp(log2(max(footprint / voxel0, 1.0)), 0.0, float(levels - 1u));
-    uint level = uint(floor(fine));
+    uint level = uint(clamp(floor(log2(max(footprint / voxel0, 1.0))), 0.0, float(levels - 1u)));
     float size = voxel0 * float(1u << level);
     float inverseSize = 1.0 / size;
     float dt = kBakedStepFraction * size;
-    // A coarse voxel's mean extinction makes the mean optical depth of its footprint, and so
-    // exp(-mean tau), at most the mean transmittance of the rays it stands for (Jensen): coarse
-    // levels are too opaque. kBakedCoarseExtinction^fine (the footprint's level) scales the
-    // extinction back (measured, baked_layout.glsl).
-    float extinctionScale = pow(kBakedCoarseExtinction, fine);
     float tStart = tIn;
     // No empty-space skipping: the distance grid (capped at 4 voxels) could skip at most 2 steps
     // at level 0 and none above, and its lookup cost more than it saved (docs/design.md 5).
@@ -223,7 +217,7 @@ void main() {
             vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
             vec4 s = sampleLevel(x, level, inverseSize);
             if (s.w > 0.0) {
-                float alpha = 1.0 - exp(-extinctionScale * s.w * dt);
+                float alpha = 1.0 - exp(-s.w * dt);
                 radiance += transmittance * alpha * (s.rgb / s.w);
                 transmittance *= 1.0 - alpha;
             }

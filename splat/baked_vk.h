@@ -21,8 +21,7 @@
 ///     opaque, compacted; march (compute, baked_march.comp, dispatched indirectly over the
 ///     list): from the entry, a walk through the tetrahedra across their shared faces until the
 ///     ray leaves the shell, reaches the mesh or is opaque, sampling the bake at one spacing for
-///     the whole layer (the mip level of the pixel's footprint at the entry, a coarse level's
-///     extinction scaled by kBakedCoarseExtinction per level against its opacity bias) through
+///     the whole layer (the mip level of the pixel's footprint at the entry) through
 ///     each tetrahedron's affine map, composited under the earlier layers (front to back); it writes
 ///     the walk's exit depth, where the next peel starts. So one layer is the ray's whole
 ///     contiguous passage through the shell, and later layers are re-entries (ears,
