@@ -1,5 +1,6 @@
 #version 450
-// The final image, one thread per pixel, into the linear float RGBA result image.
+// The final image, one thread per pixel, into the linear float RGBA result image. OIT and hybrid
+// first add the small kernels' fixed-point sums (splat_small.comp) to the raster targets'.
 // Sorted (kSplatResolveCopy): the base colour image (kernels were drawn onto it). Instanced: the
 // nearest kernel whose alpha reaches 0.5 (splat_instanced.frag) re-evaluated, its mean colour
 // premul / alpha over the base.
@@ -29,6 +30,9 @@ layout(std430, binding = kSplatBindClosest) readonly buffer Closest { uint64_t c
 // The closest kernel from the depth pass (kSplatResolveHybridPass).
 layout(binding = kSplatBindClosestKernel, r32ui) uniform readonly uimage2D closestKernel;
 layout(binding = kSplatBindResult, rgba32f) uniform writeonly image2D result;
+// The small kernels' OIT sums in fixed point (splat_small.comp; kSmallPixels > 0), added to the
+// raster targets' and cleared for the next frame (only where set: most pixels have none).
+layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed[]; };
 
 vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
 
@@ -55,6 +59,21 @@ void main() {
     } else if (kResolve != kSplatResolveCopy) {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
+        if (kSmallPixels > 0u) {
+            uint base = (p.y * width + p.x) * kSplatFixedChannels;
+            uint64_t r = oitFixed[base + 0u];
+            uint64_t g = oitFixed[base + 1u];
+            uint64_t b = oitFixed[base + 2u];
+            uint64_t a = oitFixed[base + 3u];
+            uint64_t t = oitFixed[base + 4u];
+            if ((r | g | b | a | t) != uint64_t(0)) {
+                const float unit = 1.0 / kSplatFixedScale;
+                accum += vec4(float(r), float(g), float(b), float(a)) * unit;
+                tau += float(t) * unit;
+                for (uint c = 0u; c < kSplatFixedChannels; ++c)
+                    oitFixed[base + c] = uint64_t(0);
+            }
+        }
         uint64_t key = ~uint64_t(0);
         if (kResolve == kSplatResolveHybrid)
             key = closest[p.y * width + p.x];
