@@ -33,6 +33,8 @@ layout(binding = kSplatBindResult, rgba32f) uniform writeonly image2D result;
 // The small kernels' OIT sums in fixed point (splat_small.comp; kSmallPixels > 0), added to the
 // raster targets' and cleared for the next frame (only where set: most pixels have none).
 layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed[]; };
+// [7]: how many kernels took the compute path (none: the sums are all zero, and not read).
+layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[8]; };
 
 vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
 
@@ -59,7 +61,7 @@ void main() {
     } else if (kResolve != kSplatResolveCopy) {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
-        if (kSmallPixels > 0u) {
+        if (kSmallPixels > 0u && draw[7] > 0u) {
             uint base = (p.y * width + p.x) * kSplatFixedChannels;
             uint64_t r = oitFixed[base + 0u];
             uint64_t g = oitFixed[base + 1u];

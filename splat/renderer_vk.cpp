@@ -128,7 +128,8 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
                    {storageImage(kSplatBindBase), storageImage(kSplatBindAccum),
                     storageImage(kSplatBindOpticalDepth), storageImage(kSplatBindMeshDistance),
                     storageBuffer(kSplatBindClosest), storageImage(kSplatBindClosestKernel),
-                    storageImage(kSplatBindResult), storageBuffer(kSplatBindOitFixed)});
+                    storageImage(kSplatBindResult), storageBuffer(kSplatBindOitFixed),
+                    storageBuffer(kSplatBindDraw)});
     p.resolve = makeComputePipeline(m_ctx, spirv(spv_splat_resolve_comp), resolve, push, spec);
     if (s.smallPixels > 0 && !roofline) {
         Bindings small = lobes;
@@ -595,6 +596,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .image(kSplatBindClosestKernel, m_closestKernel, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .image(kSplatBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .buffer(kSplatBindOitFixed, m_oitFixed.handle() ? m_oitFixed : m_counters)
+        .buffer(kSplatBindDraw, m_draw)
         .push(m_ctx, cmd, p.resolve);
     vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
