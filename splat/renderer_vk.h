@@ -31,8 +31,8 @@
 ///  4. resolve (compute): the final image (paper eq. 12 or 13) into result().
 ///
 /// Every pipeline is specialized for its setting (lobes per kernel, analytic or N samples,
-/// Lambert, projection, EWA, OIT weight, hybrid, counting): lavapipe compiles each at its first
-/// use, and a shader carrying every path pays for the branches of all.
+/// Lambert, projection, EWA, OIT weight, hybrid, counting, the small kernels' threshold): lavapipe
+/// compiles each at its first use, and a shader carrying every path pays for the branches of all.
 ///
 /// Results are deterministic: blending in a fixed primitive order, integer atomics only, a sort
 /// without atomics.
