@@ -1,8 +1,8 @@
 #version 450
 // Deterministic stream compaction of the kernels prepare.comp kept (non-empty quad): their
 // indices in increasing order, and the indirect draw of one 4-vertex strip per kept kernel. With
-// the compute path (kSmallPixels > 0), the small kernels go to a second list, also in increasing
-// order, with the indirect dispatch of splat_small.comp. One
+// the compute path (kSmallPixels > 0), the small kernels go to a second list, in increasing
+// order within each of four size classes, with the indirect dispatch of splat_small.comp. One
 // workgroup: each thread counts a contiguous chunk, a shared-memory scan gives the chunk's output
 // offset, then each thread writes its chunk in order. No atomics, so the draw order (and with it
 // the blended result) is the same on every run. Loop iterations per thread: 2 x chunk + 16, with
@@ -19,10 +19,10 @@ layout(std430, binding = kSplatBindCount) readonly buffer Count { uint impulseCo
 layout(std430, binding = kSplatBindSmall) writeonly buffer Small { uint small[]; };
 
 shared uint sums[kSplatCompactThreads];
-shared uint smallSums[kSplatCompactThreads];
+shared uvec4 smallSums[kSplatCompactThreads];
 
-// 0: culled (an empty quad, or one whose pixel box holds no pixel centre); 1: drawn; 2: small
-// (kSmallPixels > 0: the compute path, splat_small.comp).
+// 0: culled (an empty quad, or one whose pixel box holds no pixel centre); 1: drawn; 2 + c:
+// small (kSmallPixels > 0: the compute path, splat_small.comp), c its size class.
 uint kind(uint i) {
     SpotKernelBound b = bounds[i];
     if (!(b.quad.z > 0.0))
@@ -32,7 +32,16 @@ uint kind(uint i) {
     ivec2 lo;
     ivec2 hi;
     uint pixels = splatQuadPixelBox(b, lo, hi);
-    return pixels == 0u ? 0u : pixels <= kSmallPixels ? 2u : 1u;
+    if (pixels == 0u)
+        return 0u;
+    if (pixels > kSmallPixels)
+        return 1u;
+    return 2u + (pixels <= 2u ? 0u : pixels <= 6u ? 1u : pixels <= 16u ? 2u : 3u);
+}
+
+// One-hot of a small kernel's size class (zero for the others).
+uvec4 smallClass(uint k) {
+    return uvec4(equal(uvec4(k), uvec4(2u, 3u, 4u, 5u)));
 }
 
 void main() {
@@ -42,11 +51,11 @@ void main() {
     uint begin = min(t * chunk, n);
     uint end = min(begin + chunk, n);
     uint count = 0u;
-    uint smallCount = 0u;
+    uvec4 smallCount = uvec4(0u);
     for (uint i = begin; i < end; ++i) {
         uint k = kind(i);
         count += k == 1u ? 1u : 0u;
-        smallCount += k == 2u ? 1u : 0u;
+        smallCount += smallClass(k);
     }
     sums[t] = count;
     smallSums[t] = smallCount;
@@ -54,27 +63,34 @@ void main() {
     // Inclusive Hillis-Steele scans over the 256 chunk counts.
     for (uint offset = 1u; offset < kSplatCompactThreads; offset <<= 1u) {
         uint add = t >= offset ? sums[t - offset] : 0u;
-        uint addSmall = t >= offset ? smallSums[t - offset] : 0u;
+        uvec4 addSmall = t >= offset ? smallSums[t - offset] : uvec4(0u);
         barrier();
         sums[t] += add;
         smallSums[t] += addSmall;
         barrier();
     }
     uint out_ = sums[t] - count;
-    uint outSmall = smallSums[t] - smallCount;
+    // The small list holds the size classes one after the other (each in impulse order), so the
+    // compute path's neighbouring invocations, which share a SIMD vector, loop about as long.
+    uvec4 total = smallSums[kSplatCompactThreads - 1u];
+    uvec4 outSmall = uvec4(0u, total.x, total.x + total.y, total.x + total.y + total.z) +
+                     smallSums[t] - smallCount;
     for (uint i = begin; i < end; ++i) {
         uint k = kind(i);
-        if (k == 1u)
+        if (k == 1u) {
             visible[out_++] = i;
-        else if (k == 2u)
-            small[outSmall++] = i;
+        } else if (k >= 2u) {
+            uint c = k - 2u;
+            small[outSmall[c]] = i;
+            outSmall[c] += 1u;
+        }
     }
     if (t == kSplatCompactThreads - 1u) {
         draw[0] = 4u;
         draw[1] = sums[t];
         draw[2] = 0u;
         draw[3] = 0u;
-        uint smallTotal = smallSums[t];
+        uint smallTotal = total.x + total.y + total.z + total.w;
         draw[4] = (smallTotal + kSplatSmallThreads - 1u) / kSplatSmallThreads;
         draw[5] = 1u;
         draw[6] = 1u;

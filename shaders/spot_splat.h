@@ -93,8 +93,8 @@ SPOT_CONST uint kSplatBindClosestKernel = 14u; /* r32ui image: hybrid depth pass
 SPOT_CONST uint kSplatBindResult = 15u;      /* rgba32f image: the frame's result */
 SPOT_CONST uint kSplatBindCounters = 16u;    /* SpotSplatCounters (counted frames) */
 SPOT_CONST uint kSplatBindVertices = 17u;    /* SpotMeshVertex[] (the base mesh pass) */
-SPOT_CONST uint kSplatBindSmall = 18u;       /* uint[]: the small kernels (compute path), in
-                                                impulse order */
+SPOT_CONST uint kSplatBindSmall = 18u;       /* uint[]: the small kernels (compute path), by
+                                                size class, each in impulse order */
 SPOT_CONST uint kSplatBindOitFixed = 19u;    /* uint64_t[pixel * kSplatFixedChannels + c]: the
                                                 small kernels' OIT sums in fixed point */
 
