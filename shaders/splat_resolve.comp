@@ -20,7 +20,7 @@
 #define SPLAT_READS_LOBES
 #include "splat_common.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = kSplatResolveTile, local_size_y = kSplatResolveTile) in;
 
 layout(binding = kSplatBindBase, rgba32f) uniform readonly image2D baseColor;
 layout(binding = kSplatBindAccum, rgba32f) uniform readonly image2D accumulation;
@@ -33,8 +33,11 @@ layout(binding = kSplatBindResult, rgba32f) uniform writeonly image2D result;
 // The small kernels' OIT sums in fixed point (splat_small.comp; kSmallPixels > 0), added to the
 // raster targets' and cleared for the next frame (only where set: most pixels have none).
 layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed[]; };
-// [7]: how many kernels took the compute path (none: the sums are all zero, and not read).
-layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[8]; };
+// Non-zero where a tile (this workgroup's pixels) has sums: most have none, and reading 40 bytes
+// a pixel for nothing would cost more than the compute path saves at 640x480. (Cleared by a fill
+// each frame: clearing them here would need a barrier, and llvmpipe runs a shader with a barrier
+// as coroutines, much slower.)
+layout(std430, binding = kSplatBindOitTiles) readonly buffer OitTiles { uint oitTiles[]; };
 
 vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
 
@@ -44,6 +47,9 @@ vec3 oitComposite(vec3 average, float tau, vec3 behind) {
 }
 
 void main() {
+    bool fixedSums = kSmallPixels > 0u &&
+                     (kResolve == kSplatResolveOit || kResolve == kSplatResolveHybrid) &&
+                     oitTiles[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] != 0u;
     uvec2 p = gl_GlobalInvocationID.xy;
     uint width = uint(frame.size.x);
     if (p.x >= width || p.y >= uint(frame.size.y))
@@ -61,7 +67,7 @@ void main() {
     } else if (kResolve != kSplatResolveCopy) {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
-        if (kSmallPixels > 0u && draw[7] > 0u) {
+        if (fixedSums) {
             uint base = (p.y * width + p.x) * kSplatFixedChannels;
             uint64_t r = oitFixed[base + 0u];
             uint64_t g = oitFixed[base + 1u];

@@ -29,6 +29,7 @@ layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[8]
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };
 layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed[]; };
+layout(std430, binding = kSplatBindOitTiles) buffer OitTiles { uint oitTiles[]; };
 
 // One contribution in fixed point (spot_splat.h: clamped to [0, kSplatFixedMax]; NaN adds 0).
 uint64_t splatFixed(float value) {
@@ -84,6 +85,8 @@ void main() {
             if (kHybridAtomic && s.alpha > kSplatHybridMinAlpha)
                 atomicMin(closest[index], key);
             vec4 accum = vec4(s.premul, s.alpha) * splatOitWeight(s);
+            uint tilesX = (width + kSplatResolveTile - 1u) / kSplatResolveTile;
+            atomicOr(oitTiles[uint(y) / kSplatResolveTile * tilesX + uint(x) / kSplatResolveTile], 1u);
             uint base = index * kSplatFixedChannels;
             splatAdd(base + 0u, accum.r);
             splatAdd(base + 1u, accum.g);

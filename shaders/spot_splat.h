@@ -97,6 +97,8 @@ SPOT_CONST uint kSplatBindSmall = 18u;       /* uint[]: the small kernels (compu
                                                 size class, each in impulse order */
 SPOT_CONST uint kSplatBindOitFixed = 19u;    /* uint64_t[pixel * kSplatFixedChannels + c]: the
                                                 small kernels' OIT sums in fixed point */
+SPOT_CONST uint kSplatBindOitTiles = 20u;    /* uint[tile]: non-zero where some pixel of the
+                                                kSplatResolveTile^2 tile has fixed-point sums */
 
 /* Counters the splat pass writes when counting (RenderSettings::countFragments). */
 struct SpotSplatCounters {
@@ -182,6 +184,10 @@ SPOT_CONST uint kSplatSmallThreads = 64u; /* workgroup size of the compute path 
  * holds 2^11 of those, or 2^23 of the largest real one (a McGuire-Bavoil weight of 3e3 x alpha 1),
  * before the unsigned 64-bit sum could wrap. The resolve adds the sums to the raster targets'. */
 SPOT_CONST uint kSplatFixedChannels = 5u;
+/* The resolve's workgroup is a tile of kSplatResolveTile^2 pixels; it reads (and clears) the
+ * fixed-point sums of a tile only where the compute path flagged it (kSplatBindOitTiles, cleared
+ * by a fill every frame). */
+SPOT_CONST uint kSplatResolveTile = 8u;
 SPOT_CONST float kSplatFixedScale = 268435456.0;
 SPOT_CONST float kSplatFixedMax = 16777216.0;
 

@@ -72,7 +72,9 @@ struct RenderSettings {
     /// oit, hybrid (atomic), instanced: a kernel whose quad's pixel box holds at most this many
     /// pixel centres is evaluated by a compute pass instead of drawn (lavapipe's cost per
     /// primitive dwarfs the few fragments of such a quad); 0: every kernel is drawn. In
-    /// [0, kSplatMaxSmallPixels]; the default is kSplatSmallPixels (shaders/spot_splat.h).
+    /// [0, kSplatMaxSmallPixels]; the default is kSplatSmallPixels (shaders/spot_splat.h). oit and
+    /// hybrid draw every kernel in frames over about 1830^2 pixels (their fixed-point sums, 40
+    /// bytes a pixel, would not fit one 128 MiB storage buffer binding).
     int smallPixels = kDefaultSmallPixels;
     /// The roofline instead of the method's splat pass: the same quads over the same pixels into
     /// the `oit` targets with a fragment shader that does nothing (the image is meaningless; the

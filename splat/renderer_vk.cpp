@@ -40,6 +40,11 @@ constexpr std::uint64_t kAtomicBytesPerPixel = 8;
 constexpr std::uint64_t kClosestPassBytesPerPixel = 4 + 4;
 /// The compute path's fixed-point OIT sums (oit, hybrid).
 constexpr std::uint64_t kFixedBytesPerPixel = kSplatFixedChannels * sizeof(std::uint64_t);
+/// Their tiles' flags: one uint per resolve workgroup.
+std::uint64_t fixedTileBytes(std::uint64_t width, std::uint64_t height) {
+    return (width + kSplatResolveTile - 1) / kSplatResolveTile *
+           ((height + kSplatResolveTile - 1) / kSplatResolveTile) * sizeof(std::uint32_t);
+}
 
 bool usesOit(Method m) { return m == Method::Oit || m == Method::Hybrid; }
 
@@ -48,20 +53,21 @@ static_assert(kDefaultSmallPixels == int(kSplatSmallPixels),
 
 /// The compute path's threshold for a frame (0: every kernel drawn): not for `sorted` (ordered
 /// blending), nor the hybrid's depth pass (it draws the same quads), nor the roofline (the raster
-/// cost of every quad).
-std::uint32_t smallPixels(Method m, const RenderSettings& s) {
+/// cost of every quad), nor `oit` and `hybrid` where the fixed-point sums would not fit one
+/// storage buffer binding (`fixedFits`: 128 MiB on lavapipe, 3.3 M pixels, about 1830^2).
+std::uint32_t smallPixels(Method m, const RenderSettings& s, bool fixedFits) {
     if (m == Method::Sorted || s.roofline ||
-        (m == Method::Hybrid && s.closest == ClosestKernel::DepthPass))
+        (m == Method::Hybrid && s.closest == ClosestKernel::DepthPass) || (usesOit(m) && !fixedFits))
         return 0;
     return std::uint32_t(std::max(s.smallPixels, 0));
 }
 
 /// Whether a frame with `s` needs the fixed-point sums (made with the targets; the roofline's
 /// frames keep them).
-bool usesFixed(Method m, const RenderSettings& s) {
+bool usesFixed(Method m, const RenderSettings& s, bool fixedFits) {
     RenderSettings drawn = s;
     drawn.roofline = false;
-    return usesOit(m) && smallPixels(m, drawn) > 0;
+    return usesOit(m) && smallPixels(m, drawn, fixedFits) > 0;
 }
 
 } // namespace
@@ -129,7 +135,7 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
                     storageImage(kSplatBindOpticalDepth), storageImage(kSplatBindMeshDistance),
                     storageBuffer(kSplatBindClosest), storageImage(kSplatBindClosestKernel),
                     storageImage(kSplatBindResult), storageBuffer(kSplatBindOitFixed),
-                    storageBuffer(kSplatBindDraw)});
+                    storageBuffer(kSplatBindOitTiles)});
     p.resolve = makeComputePipeline(m_ctx, spirv(spv_splat_resolve_comp), resolve, push, spec);
     if (s.smallPixels > 0 && !roofline) {
         Bindings small = lobes;
@@ -137,7 +143,7 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
                      {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindSmall),
                       storageBuffer(kSplatBindDraw), storageImage(kSplatBindMeshDistance),
                       storageBuffer(kSplatBindClosest), storageBuffer(kSplatBindOitFixed),
-                      storageBuffer(kSplatBindCounters)});
+                      storageBuffer(kSplatBindOitTiles), storageBuffer(kSplatBindCounters)});
         p.small = makeComputePipeline(m_ctx, spirv(spv_splat_small_comp), small, push, spec);
     }
     if (m_method == Method::Sorted)
@@ -197,6 +203,10 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
     return m_pipelines.emplace(key, std::move(p)).first->second;
 }
 
+bool SplatRenderer::fixedFits(std::uint64_t width, std::uint64_t height) const {
+    return width * height * kFixedBytesPerPixel <= m_ctx.properties().limits.maxStorageBufferRange;
+}
+
 std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t capacity,
                                         const RenderSettings& settings) const {
     const std::uint64_t pixels = std::uint64_t(width) * std::uint64_t(height);
@@ -208,13 +218,17 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
                                                                  : kAtomicBytesPerPixel;
     if (m_method == Method::Instanced)
         perPixel += kAtomicBytesPerPixel;
-    if (usesFixed(m_method, settings))
+    std::uint64_t tileBytes = 0;
+    if (usesFixed(m_method, settings, fixedFits(std::uint64_t(width), std::uint64_t(height)))) {
         perPixel += kFixedBytesPerPixel;
+        tileBytes = fixedTileBytes(std::uint64_t(width), std::uint64_t(height));
+    }
     const std::uint64_t perKernel = std::uint64_t(m_scene.lobeCount()) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
                                     (m_method == Method::Sorted ? 0 : sizeof(std::uint32_t));
-    std::uint64_t bytes = pixels * perPixel + std::uint64_t(capacity) * perKernel + 32 + 16;
+    std::uint64_t bytes =
+        pixels * perPixel + tileBytes + std::uint64_t(capacity) * perKernel + 32 + 16;
     if (m_method == Method::Sorted)
         bytes += std::uint64_t(capacity) * sizeof(std::uint32_t) + RadixSortScratch::bytes(capacity);
     return bytes;
@@ -226,7 +240,7 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     const bool atomic = m_method == Method::Instanced ||
                         (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
     const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
-    const bool fixed = usesFixed(m_method, settings);
+    const bool fixed = usesFixed(m_method, settings, fixedFits(width, height));
     const bool have = m_width == width && m_height == height && m_base.handle() &&
                       (!oit || m_accum.handle()) && (!atomic || m_closest.handle()) &&
                       (!fixed || m_oitFixed.handle()) &&
@@ -239,8 +253,10 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     const std::uint64_t need =
         pixels * (kCommonBytesPerPixel + (oit ? kOitBytesPerPixel : 0) +
                   (atomic ? kAtomicBytesPerPixel : 0) + (pass ? kClosestPassBytesPerPixel : 0) +
-                  (fixed ? kFixedBytesPerPixel : 0));
-    std::uint64_t held = m_closest.reservedBytes() + m_oitFixed.reservedBytes();
+                  (fixed ? kFixedBytesPerPixel : 0)) +
+        (fixed ? fixedTileBytes(width, height) : 0);
+    std::uint64_t held =
+        m_closest.reservedBytes() + m_oitFixed.reservedBytes() + m_oitTiles.reservedBytes();
     for (const Image* i : {&m_base, &m_distance, &m_depth, &m_accum, &m_opticalDepth,
                            &m_closestKernel, &m_closestDepth, &m_result})
         held += i->reservedBytes();
@@ -260,6 +276,7 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     m_result = Image();
     m_closest = Buffer();
     m_oitFixed = Buffer();
+    m_oitTiles = Buffer();
     m_width = m_height = 0;
     constexpr VkImageAspectFlags kColor = VK_IMAGE_ASPECT_COLOR_BIT;
     m_base = Image(m_ctx, width, height, kColorFormat, kTargetUsage, kColor, "splat base colour");
@@ -282,6 +299,9 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
         m_oitFixed = Buffer(m_ctx, pixels * kFixedBytesPerPixel,
                             kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::DeviceLocal,
                             "splat small kernels' fixed-point OIT sums");
+        m_oitTiles = Buffer(m_ctx, fixedTileBytes(width, height),
+                            kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::DeviceLocal,
+                            "splat small kernels' tiles with sums");
         m_oitFixedCleared = false;
     }
     // The depth pass's kernel index (1x1, never read, without the depth pass: the resolve's
@@ -395,7 +415,8 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
     s.ewa = settings.ewa;
     s.hybridAtomic = f.hybridAtomic;
     s.closestPass = f.closestPass;
-    s.smallPixels = smallPixels(m_method, settings);
+    s.smallPixels = smallPixels(m_method, settings,
+                                fixedFits(std::uint64_t(view.camera.width), std::uint64_t(view.camera.height)));
     f.small = s.smallPixels > 0;
     s.count = settings.countFragments && !settings.roofline;
     s.weight = settings.weight == OitWeight::McGuireBavoil ? shared::f32::kSpotWeightMcGuireBavoil
@@ -451,6 +472,8 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         vkCmdFillBuffer(cmd, m_oitFixed.handle(), 0, VK_WHOLE_SIZE, 0u);
         m_oitFixedCleared = true;
     }
+    if (f.small && m_oitTiles.handle()) // a uint per 8x8 tile: cheap to clear every frame
+        vkCmdFillBuffer(cmd, m_oitTiles.handle(), 0, VK_WHOLE_SIZE, 0u);
     memoryBarrier(cmd, kCompute | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
                   VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
@@ -565,6 +588,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .image(kSplatBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .buffer(kSplatBindClosest, m_closest.handle() ? m_closest : m_counters)
             .buffer(kSplatBindOitFixed, m_oitFixed.handle() ? m_oitFixed : m_counters)
+            .buffer(kSplatBindOitTiles, m_oitTiles.handle() ? m_oitTiles : m_counters)
             .buffer(kSplatBindCounters, m_counters)
             .push(m_ctx, cmd, p.small);
         vkCmdDispatchIndirect(cmd, m_draw.handle(), 4 * sizeof(std::uint32_t));
@@ -596,9 +620,10 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .image(kSplatBindClosestKernel, m_closestKernel, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .image(kSplatBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .buffer(kSplatBindOitFixed, m_oitFixed.handle() ? m_oitFixed : m_counters)
-        .buffer(kSplatBindDraw, m_draw)
+        .buffer(kSplatBindOitTiles, m_oitTiles.handle() ? m_oitTiles : m_counters)
         .push(m_ctx, cmd, p.resolve);
-    vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+    vkCmdDispatch(cmd, (width + kSplatResolveTile - 1) / kSplatResolveTile,
+                  (height + kSplatResolveTile - 1) / kSplatResolveTile, 1);
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                   kCompute | kTransfer | kHostStage,
                   kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);

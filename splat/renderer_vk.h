@@ -92,6 +92,9 @@ private:
         Pipeline prepare, compact, splat, small, closest, sortKeys, resolve;
     };
     const Pipelines& pipelines(const Spec& spec, bool roofline);
+    /// Whether a width x height frame's fixed-point sums fit one storage buffer binding (else
+    /// `oit` and `hybrid` draw every kernel).
+    bool fixedFits(std::uint64_t width, std::uint64_t height) const;
     void ensureTargets(std::uint32_t width, std::uint32_t height, const RenderSettings& settings);
     void ensureBuffers(std::uint32_t capacity, const RenderSettings& settings);
 
@@ -108,8 +111,9 @@ private:
     Buffer m_closest; ///< hybrid (atomic): uint64 per pixel
     /// oit, hybrid with the compute path: the small kernels' fixed-point OIT sums
     /// (kSplatFixedChannels uint64 per pixel), zero between frames (the resolve clears what it
-    /// reads); cleared once after it is made.
+    /// reads); cleared once after it is made. The tiles' flags are cleared every frame.
     Buffer m_oitFixed;
+    Buffer m_oitTiles; ///< with m_oitFixed: a uint per kSplatResolveTile^2 tile, non-zero where set
     bool m_oitFixedCleared = false;
     // Per impulse capacity.
     std::uint32_t m_capacity = 0;

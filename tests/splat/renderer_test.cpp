@@ -886,6 +886,29 @@ TEST(SplatRenderer, SmallKernelsRenderAsTheRasterPathDoes) {
     }
 }
 
+TEST(SplatRenderer, SmallKernelsFixedSumsFitOneBinding) {
+    // oit and hybrid's fixed-point sums take 40 bytes a pixel, made with the targets; where they
+    // would not fit one storage buffer binding the frame draws every kernel instead (instanced
+    // has none: its compute path only takes atomicMin).
+    splat::Context ctx(validated());
+    const LobeCase c = isolatedLobe(3.0f);
+    const noise::Mesh empty;
+    const splat::SceneGpu scene(ctx, empty, c.kernel);
+    splat::RenderSettings raster;
+    raster.smallPixels = 0;
+    const std::uint64_t range = ctx.properties().limits.maxStorageBufferRange;
+    for (const splat::Method method :
+         {splat::Method::Oit, splat::Method::Hybrid, splat::Method::Instanced}) {
+        const splat::SplatRenderer r(scene, method);
+        // 40 bytes a pixel and a uint per 8x8 tile.
+        const std::uint64_t fixed = method == splat::Method::Instanced ? 0 : 64 * 64 * 40 + 64 * 4;
+        EXPECT_EQ(r.frameBytes(64, 64, 0, {}) - r.frameBytes(64, 64, 0, raster), fixed);
+        const int side = int(std::sqrt(double(range) / 40.0)) + 2; // just past the limit
+        EXPECT_EQ(r.frameBytes(side, side, 0, {}), r.frameBytes(side, side, 0, raster));
+    }
+    expectNoValidationErrors(ctx);
+}
+
 TEST(SplatRenderer, SmallKernelsAreByteIdenticalOnOneAndTwoThreads) {
     // The compute path's invocations run in any order on lavapipe's threads; its OIT sums are
     // integers (associative) and its closest kernel an atomicMin of a total order, so the image
