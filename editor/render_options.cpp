@@ -14,6 +14,9 @@ std::vector<OptionSpec> renderOptions() {
             {"closest", "HOW", "hybrid: find each pixel's closest kernel with an atomicMin in the "
                                "OIT pass (atomic, default) or in a depth pass of its own "
                                "(depth-pass); the same image either way", false},
+            {"small-pixels", "N", "oit/hybrid/instanced: kernels whose quad covers at most N pixel "
+                                  "centres are evaluated by a compute pass instead of drawn "
+                                  "(default 36, at most 256; 0: draw every kernel)", false},
             {"steps", "N", "raymarch: samples along each ray through the shell (default 32, at "
                            "most 4096; split over dispatches so that no shader invocation loops "
                            "too long)", false},
@@ -50,6 +53,7 @@ splat::RenderSettings renderSettings(const Args& args) {
         s.closest = splat::ClosestKernel::DepthPass;
     else
         throw InputError(cat("--closest must be atomic or depth-pass, not '", closest, "'"));
+    s.smallPixels = int(args.integer("small-pixels", s.smallPixels, 0, splat::gpu_splat::kSplatMaxSmallPixels));
     s.steps = int(args.integer("steps", 32, 1, splat::kRaymarchMaxSteps));
     s.supersample = int(args.integer("supersample", 1, 1, splat::kRaymarchMaxSupersample));
     s.bakeFile = args.str("bake", "");
@@ -66,6 +70,7 @@ nlohmann::json describe(const splat::MethodInfo& method, const splat::RenderSett
         d["kernel_samples"] = s.kernelSamples;
         d["weight"] = s.weight == splat::OitWeight::Constant ? "constant" : "mcguire-bavoil";
         d["closest"] = s.closest == splat::ClosestKernel::Atomic ? "atomic" : "depth-pass";
+        d["small_pixels"] = s.smallPixels;
     }
     if (method.marching) {
         d["steps"] = s.steps;

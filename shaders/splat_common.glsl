@@ -24,6 +24,7 @@ layout(constant_id = kSplatSpecHybridAtomic) const bool kHybridAtomic = false;
 layout(constant_id = kSplatSpecCount) const bool kCount = false;
 layout(constant_id = kSplatSpecResolve) const uint kResolve = kSplatResolveOit;
 layout(constant_id = kSplatSpecScreen) const bool kScreen = true;
+layout(constant_id = kSplatSpecSmallPixels) const uint kSmallPixels = 0u;
 
 // The ray through continuous pixel position p (pixels, (0,0) top-left), as noise::CameraRays:
 // world origin and unit direction. (The projection is also read from the frame: the ray-march's
@@ -49,6 +50,56 @@ float splatRayScale(vec2 p) {
 // View depth (world units along the view direction) of a world point.
 float splatViewDepth(vec3 x) { return dot(x - frame.eye.xyz, frame.forward.xyz); }
 
+// The pixels whose centres lie in the axis-aligned box of a kernel's quad, clamped to the image:
+// [lo, hi] inclusive (empty where hi < lo); returns how many (the compute path's loop length).
+uint splatQuadPixelBox(SpotKernelBound b, out ivec2 lo, out ivec2 hi) {
+    vec2 u = abs(b.axis.xy);
+    vec2 reach = vec2(u.x * b.quad.z + u.y * b.quad.w, u.y * b.quad.z + u.x * b.quad.w);
+    // Pixel x's centre is x + 0.5; clamp in float first (a huge quad must not overflow an int).
+    vec2 first = clamp(ceil(b.quad.xy - reach - 0.5), vec2(0.0), frame.size.xy);
+    vec2 last = clamp(floor(b.quad.xy + reach - 0.5), vec2(-1.0), frame.size.xy - 1.0);
+    lo = ivec2(first);
+    hi = ivec2(last);
+    ivec2 n = max(hi - lo + 1, ivec2(0));
+    return uint(n.x) * uint(n.y);
+}
+
+// The x range (inclusive pixel indices, within [lo, hi]) of the pixel centres in row y whose
+// centres may lie in the kernel's oriented quad: the intersection of the two slabs
+// |dot(p - centre, u)| <= half.x and |dot(p - centre, v)| <= half.y with the row's centre line
+// (a slab parallel to the row is all or nothing). Padded by a hundredth of a pixel; the caller
+// still tests splatInQuad, so only the loop's length depends on it.
+void splatQuadRow(SpotKernelBound b, int y, ivec2 lo, ivec2 hi, out int first, out int last) {
+    vec2 u = b.axis.xy;
+    float dy = float(y) + 0.5 - b.quad.y;
+    float xa = float(lo.x);
+    float xb = float(hi.x) + 1.0;
+    // Slab u: |u.x dx + u.y dy| <= half.x; slab v: |-u.y dx + u.x dy| <= half.y.
+    vec2 slope = vec2(u.x, -u.y);
+    vec2 offset = vec2(u.y * dy, u.x * dy);
+    vec2 halfExtent = b.quad.zw;
+    for (int i = 0; i < 2; ++i) {
+        if (abs(slope[i]) > 1e-6) {
+            float e0 = (-halfExtent[i] - offset[i]) / slope[i];
+            float e1 = (halfExtent[i] - offset[i]) / slope[i];
+            xa = max(xa, b.quad.x + min(e0, e1) - 0.01);
+            xb = min(xb, b.quad.x + max(e0, e1) + 0.01);
+        } else if (abs(offset[i]) > halfExtent[i]) {
+            xb = xa - 1.0; // the row misses this slab
+        }
+    }
+    first = max(int(ceil(xa - 0.5)), lo.x);
+    last = min(int(floor(xb - 0.5)), hi.x);
+}
+
+// Whether pixel position p lies in the kernel's oriented quad (the compute path's coverage; the
+// rasterizer's differs only on the quad's edges, where the kernel is all but zero).
+bool splatInQuad(SpotKernelBound b, vec2 p) {
+    vec2 d = p - b.quad.xy;
+    vec2 u = b.axis.xy;
+    return abs(dot(d, u)) <= b.quad.z && abs(d.x * -u.y + d.y * u.x) <= b.quad.w;
+}
+
 #ifdef SPLAT_READS_LOBES
 layout(std430, binding = kSplatBindWorldLobes) readonly buffer WorldLobes { SpotWorldLobe worldLobes[]; };
 layout(std430, binding = kSplatBindScreenLobes) readonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
@@ -64,6 +115,18 @@ struct SplatKernelSample {
 
 mat3 splatLobeMatrix(SpotWorldLobe w) { return mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz); }
 vec3 splatLobeCentre(SpotWorldLobe w) { return vec3(w.a0.w, w.a1.w, w.a2.w); }
+
+#ifdef SPLAT_CACHED_LOBES
+// The kernel's lobes, loaded once by a shader that evaluates one kernel at many pixels
+// (splat_small.comp) and read instead of the buffers (constant indices once the lobe loops
+// unroll, so they stay in registers): the screen lobes (analytic path), the world lobes (Lambert
+// shading, N samples).
+SpotScreenLobe splatCachedLobes[kLobes];
+SpotWorldLobe splatCachedWorldLobes[kLobes];
+SpotWorldLobe splatWorldLobe(uint first, uint l) { return splatCachedWorldLobes[l]; }
+#else
+SpotWorldLobe splatWorldLobe(uint first, uint l) { return worldLobes[first + l]; }
+#endif
 
 vec3 splatShade(vec3 color, vec3 normal) {
     if (!kLambert)
@@ -92,7 +155,7 @@ void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float 
     float vv[kLobes];
     float amps[kLobes];
     for (uint m = 0u; m < kLobes; ++m) {
-        SpotWorldLobe w = worldLobes[first + m];
+        SpotWorldLobe w = splatWorldLobe(first, m);
         mat3 At = transpose(mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz));
         P[m] = At * origins[m];
         Q[m] = At * dirs[m];
@@ -210,7 +273,11 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
         vec4 wo = vec4(cross(ol, v), dot(ol, v));
         vec4 c = vec4(splatLobeColor(l) * vColor, vLobeB[l].w);
 #else
+#ifdef SPLAT_CACHED_LOBES
+        SpotScreenLobe s = splatCachedLobes[l];
+#else
         SpotScreenLobe s = screenLobes[first + l];
+#endif
         vec2 delta = p - vec2(s.k0.w, s.kx.w);
         vec4 wo = vec4(s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz,
                        s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w);
@@ -282,7 +349,7 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
     float ta = kSplatNoMesh;
     float tb = -kSplatNoMesh;
     for (uint l = 0u; l < kLobes; ++l) {
-        SpotWorldLobe w = worldLobes[first + l];
+        SpotWorldLobe w = splatWorldLobe(first, l);
         if (!(w.color.w > 0.0))
             continue;
         mat3 A = splatLobeMatrix(w);
@@ -313,7 +380,7 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
         vec3 emitted = vec3(0.0);
         vec3 g = vec3(0.0);
         for (uint l = 0u; l < kLobes; ++l) {
-            SpotWorldLobe w = worldLobes[first + l];
+            SpotWorldLobe w = splatWorldLobe(first, l);
             if (!(w.color.w > 0.0))
                 continue;
             mat3 A = splatLobeMatrix(w);

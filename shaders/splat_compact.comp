@@ -1,6 +1,8 @@
 #version 450
 // Deterministic stream compaction of the kernels prepare.comp kept (non-empty quad): their
-// indices in increasing order, and the indirect draw of one 4-vertex strip per kept kernel. One
+// indices in increasing order, and the indirect draw of one 4-vertex strip per kept kernel. With
+// the compute path (kSmallPixels > 0), the small kernels go to a second list, in increasing
+// order within each of four size classes, with the indirect dispatch of splat_small.comp. One
 // workgroup: each thread counts a contiguous chunk, a shared-memory scan gives the chunk's output
 // offset, then each thread writes its chunk in order. No atomics, so the draw order (and with it
 // the blended result) is the same on every run. Loop iterations per thread: 2 x chunk + 16, with
@@ -12,12 +14,35 @@ layout(local_size_x = 256) in;
 
 layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
 layout(std430, binding = kSplatBindVisible) writeonly buffer Visible { uint visible[]; };
-layout(std430, binding = kSplatBindDraw) writeonly buffer Indirect { uint draw[4]; }; // VkDrawIndirectCommand
+layout(std430, binding = kSplatBindDraw) writeonly buffer Indirect { uint draw[8]; }; // kSplatBindDraw
 layout(std430, binding = kSplatBindCount) readonly buffer Count { uint impulseCount; };
+layout(std430, binding = kSplatBindSmall) writeonly buffer Small { uint small[]; };
 
 shared uint sums[kSplatCompactThreads];
+shared uvec4 smallSums[kSplatCompactThreads];
 
-bool kept(uint i) { return bounds[i].quad.z > 0.0; }
+// 0: culled (an empty quad, or one whose pixel box holds no pixel centre); 1: drawn; 2 + c:
+// small (kSmallPixels > 0: the compute path, splat_small.comp), c its size class.
+uint kind(uint i) {
+    SpotKernelBound b = bounds[i];
+    if (!(b.quad.z > 0.0))
+        return 0u;
+    if (kSmallPixels == 0u)
+        return 1u;
+    ivec2 lo;
+    ivec2 hi;
+    uint pixels = splatQuadPixelBox(b, lo, hi);
+    if (pixels == 0u)
+        return 0u;
+    if (pixels > kSmallPixels)
+        return 1u;
+    return 2u + (pixels <= 2u ? 0u : pixels <= 6u ? 1u : pixels <= 16u ? 2u : 3u);
+}
+
+// One-hot of a small kernel's size class (zero for the others).
+uvec4 smallClass(uint k) {
+    return uvec4(equal(uvec4(k), uvec4(2u, 3u, 4u, 5u)));
+}
 
 void main() {
     uint n = min(impulseCount, frame.counts.x);
@@ -26,25 +51,49 @@ void main() {
     uint begin = min(t * chunk, n);
     uint end = min(begin + chunk, n);
     uint count = 0u;
-    for (uint i = begin; i < end; ++i)
-        count += kept(i) ? 1u : 0u;
+    uvec4 smallCount = uvec4(0u);
+    for (uint i = begin; i < end; ++i) {
+        uint k = kind(i);
+        count += k == 1u ? 1u : 0u;
+        smallCount += smallClass(k);
+    }
     sums[t] = count;
+    smallSums[t] = smallCount;
     barrier();
-    // Inclusive Hillis-Steele scan over the 256 chunk counts.
+    // Inclusive Hillis-Steele scans over the 256 chunk counts.
     for (uint offset = 1u; offset < kSplatCompactThreads; offset <<= 1u) {
         uint add = t >= offset ? sums[t - offset] : 0u;
+        uvec4 addSmall = t >= offset ? smallSums[t - offset] : uvec4(0u);
         barrier();
         sums[t] += add;
+        smallSums[t] += addSmall;
         barrier();
     }
     uint out_ = sums[t] - count;
-    for (uint i = begin; i < end; ++i)
-        if (kept(i))
+    // The small list holds the size classes one after the other (each in impulse order), so the
+    // compute path's neighbouring invocations, which share a SIMD vector, loop about as long.
+    uvec4 total = smallSums[kSplatCompactThreads - 1u];
+    uvec4 outSmall = uvec4(0u, total.x, total.x + total.y, total.x + total.y + total.z) +
+                     smallSums[t] - smallCount;
+    for (uint i = begin; i < end; ++i) {
+        uint k = kind(i);
+        if (k == 1u) {
             visible[out_++] = i;
+        } else if (k >= 2u) {
+            uint c = k - 2u;
+            small[outSmall[c]] = i;
+            outSmall[c] += 1u;
+        }
+    }
     if (t == kSplatCompactThreads - 1u) {
         draw[0] = 4u;
         draw[1] = sums[t];
         draw[2] = 0u;
         draw[3] = 0u;
+        uint smallTotal = total.x + total.y + total.z + total.w;
+        draw[4] = (smallTotal + kSplatSmallThreads - 1u) / kSplatSmallThreads;
+        draw[5] = 1u;
+        draw[6] = 1u;
+        draw[7] = smallTotal;
     }
 }

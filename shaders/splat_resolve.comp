@@ -1,5 +1,6 @@
 #version 450
-// The final image, one thread per pixel, into the linear float RGBA result image.
+// The final image, one thread per pixel, into the linear float RGBA result image. OIT and hybrid
+// first add the small kernels' fixed-point sums (splat_small.comp) to the raster targets'.
 // Sorted (kSplatResolveCopy): the base colour image (kernels were drawn onto it). Instanced: the
 // nearest kernel whose alpha reaches 0.5 (splat_instanced.frag) re-evaluated, its mean colour
 // premul / alpha over the base.
@@ -19,7 +20,7 @@
 #define SPLAT_READS_LOBES
 #include "splat_common.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = kSplatResolveTile, local_size_y = kSplatResolveTile) in;
 
 layout(binding = kSplatBindBase, rgba32f) uniform readonly image2D baseColor;
 layout(binding = kSplatBindAccum, rgba32f) uniform readonly image2D accumulation;
@@ -29,6 +30,14 @@ layout(std430, binding = kSplatBindClosest) readonly buffer Closest { uint64_t c
 // The closest kernel from the depth pass (kSplatResolveHybridPass).
 layout(binding = kSplatBindClosestKernel, r32ui) uniform readonly uimage2D closestKernel;
 layout(binding = kSplatBindResult, rgba32f) uniform writeonly image2D result;
+// The small kernels' OIT sums in fixed point (splat_small.comp; kSmallPixels > 0), added to the
+// raster targets' and cleared for the next frame (only where set: most pixels have none).
+layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed[]; };
+// Non-zero where a tile (this workgroup's pixels) has sums: most have none, and reading 40 bytes
+// a pixel for nothing would cost more than the compute path saves at 640x480. (Cleared by a fill
+// each frame: clearing them here would need a barrier, and llvmpipe runs a shader with a barrier
+// as coroutines, much slower.)
+layout(std430, binding = kSplatBindOitTiles) readonly buffer OitTiles { uint oitTiles[]; };
 
 vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
 
@@ -38,6 +47,9 @@ vec3 oitComposite(vec3 average, float tau, vec3 behind) {
 }
 
 void main() {
+    bool fixedSums = kSmallPixels > 0u &&
+                     (kResolve == kSplatResolveOit || kResolve == kSplatResolveHybrid) &&
+                     oitTiles[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] != 0u;
     uvec2 p = gl_GlobalInvocationID.xy;
     uint width = uint(frame.size.x);
     if (p.x >= width || p.y >= uint(frame.size.y))
@@ -55,6 +67,21 @@ void main() {
     } else if (kResolve != kSplatResolveCopy) {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
+        if (fixedSums) {
+            uint base = (p.y * width + p.x) * kSplatFixedChannels;
+            uint64_t r = oitFixed[base + 0u];
+            uint64_t g = oitFixed[base + 1u];
+            uint64_t b = oitFixed[base + 2u];
+            uint64_t a = oitFixed[base + 3u];
+            uint64_t t = oitFixed[base + 4u];
+            if ((r | g | b | a | t) != uint64_t(0)) {
+                const float unit = 1.0 / kSplatFixedScale;
+                accum += vec4(float(r), float(g), float(b), float(a)) * unit;
+                tau += float(t) * unit;
+                for (uint c = 0u; c < kSplatFixedChannels; ++c)
+                    oitFixed[base + c] = uint64_t(0);
+            }
+        }
         uint64_t key = ~uint64_t(0);
         if (kResolve == kSplatResolveHybrid)
             key = closest[p.y * width + p.x];

@@ -80,7 +80,9 @@ SPOT_CONST uint kSplatBindScreenLobes = 3u;  /* SpotScreenLobe[kernel * lobes + 
 SPOT_CONST uint kSplatBindBounds = 4u;       /* SpotKernelBound[kernel] */
 SPOT_CONST uint kSplatBindCount = 5u;        /* uint: the impulse count */
 SPOT_CONST uint kSplatBindVisible = 6u;      /* uint[]: kept kernels, in draw order */
-SPOT_CONST uint kSplatBindDraw = 7u;         /* VkDrawIndirectCommand of the quads */
+SPOT_CONST uint kSplatBindDraw = 7u;         /* uint[8]: [0, 4) VkDrawIndirectCommand of the quads;
+                                                [4, 7) VkDispatchIndirectCommand of the small
+                                                kernels' pass; [7] the small kernel count */
 SPOT_CONST uint kSplatBindMeshDistance = 8u; /* r32f image: ray distance to the mesh */
 SPOT_CONST uint kSplatBindClosest = 9u;      /* uint64_t[pixel]: hybrid's closest (depth, kernel) */
 SPOT_CONST uint kSplatBindKeys = 10u;        /* uint[]: sorted's sort keys */
@@ -91,6 +93,12 @@ SPOT_CONST uint kSplatBindClosestKernel = 14u; /* r32ui image: hybrid depth pass
 SPOT_CONST uint kSplatBindResult = 15u;      /* rgba32f image: the frame's result */
 SPOT_CONST uint kSplatBindCounters = 16u;    /* SpotSplatCounters (counted frames) */
 SPOT_CONST uint kSplatBindVertices = 17u;    /* SpotMeshVertex[] (the base mesh pass) */
+SPOT_CONST uint kSplatBindSmall = 18u;       /* uint[]: the small kernels (compute path), by
+                                                size class, each in impulse order */
+SPOT_CONST uint kSplatBindOitFixed = 19u;    /* uint64_t[pixel * kSplatFixedChannels + c]: the
+                                                small kernels' OIT sums in fixed point */
+SPOT_CONST uint kSplatBindOitTiles = 20u;    /* uint[tile]: non-zero where some pixel of the
+                                                kSplatResolveTile^2 tile has fixed-point sums */
 
 /* Counters the splat pass writes when counting (RenderSettings::countFragments). */
 struct SpotSplatCounters {
@@ -110,6 +118,9 @@ SPOT_CONST uint kSplatSpecCount = 7u;        /* bool: count fragments and covere
 SPOT_CONST uint kSplatSpecResolve = 8u;      /* uint: kSplatResolve* (resolve) */
 SPOT_CONST uint kSplatSpecScreen = 9u;       /* bool: prepare writes screen lobes and bounds too
                                                 (the ray-march reads world lobes only) */
+SPOT_CONST uint kSplatSpecSmallPixels = 10u; /* uint: kernels whose quad's pixel box holds at most
+                                                this many pixel centres take the compute path
+                                                (splat_small.comp); 0: every kernel is drawn */
 SPOT_CONST uint kSplatSpecLobeColor = 16u;   /* float x 24: the kernel lobes' colours, lobe l's
                                                 r, g, b at ids 16 + 3 l + 0, 1, 2 (constants in
                                                 the fragment shaders: llvmpipe pays dearly for
@@ -155,6 +166,30 @@ SPOT_CONST float kSplatInstancedMinAlpha = 0.5;
 
 /* Ray distance stored where no mesh is hit. */
 SPOT_CONST float kSplatNoMesh = 3.0e38;
+
+/* The small kernels' compute path (splat_small.comp, docs/design.md section 4). A kept kernel whose
+ * quad's axis-aligned pixel box (clamped to the image) holds at most RenderSettings::smallPixels
+ * pixel centres (default kSplatSmallPixels) is not drawn: one compute invocation loops over those
+ * centres, so its loop never exceeds kSplatMaxSmallPixels iterations (lavapipe allows 65,535; the
+ * lobe loops inside add at most about 300 each). */
+SPOT_CONST uint kSplatSmallPixels = 36u;
+SPOT_CONST uint kSplatMaxSmallPixels = 256u;
+SPOT_CONST uint kSplatSmallThreads = 64u; /* workgroup size of the compute path */
+
+/* The compute path's OIT sums: per pixel premul.rgb x w, alpha x w and tau (5 channels), each
+ * contribution clamped to [0, kSplatFixedMax] and added as round-down(value x kSplatFixedScale)
+ * with a 64-bit integer atomicAdd: integer addition is associative, so the sums do not depend on
+ * the order the invocations run in. Scale 2^28: a resolution of 3.7e-9 (the raster target's
+ * float32 has 6e-8 relative to a sum of 1); the largest contribution (2^24) is 2^52, so a pixel
+ * holds 2^11 of those, or 2^23 of the largest real one (a McGuire-Bavoil weight of 3e3 x alpha 1),
+ * before the unsigned 64-bit sum could wrap. The resolve adds the sums to the raster targets'. */
+SPOT_CONST uint kSplatFixedChannels = 5u;
+/* The resolve's workgroup is a tile of kSplatResolveTile^2 pixels; it reads (and clears) the
+ * fixed-point sums of a tile only where the compute path flagged it (kSplatBindOitTiles, cleared
+ * by a fill every frame). */
+SPOT_CONST uint kSplatResolveTile = 8u;
+SPOT_CONST float kSplatFixedScale = 268435456.0;
+SPOT_CONST float kSplatFixedMax = 16777216.0;
 
 /* Workgroup size of the deterministic stream compaction (one workgroup). */
 SPOT_CONST uint kSplatCompactThreads = 256u;

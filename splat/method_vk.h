@@ -59,12 +59,23 @@ enum class OitWeight {
 
 /// Every method's settings, flat: a method reads the ones it uses and ignores the others (the
 /// registry says which method uses which).
+/// RenderSettings::smallPixels's default: kSplatSmallPixels (shaders/spot_splat.h; renderer_vk.cpp
+/// holds them equal).
+inline constexpr int kDefaultSmallPixels = 36;
+
 struct RenderSettings {
     // Splatting (instanced, oit, hybrid, sorted).
     bool ewa = true;       ///< widen lobes by the pixel footprint (anti-aliasing)
     int kernelSamples = 0; ///< 0: analytic optical depths; N in [1, 2048]: paper eq. 10's N_s
     OitWeight weight = OitWeight::McGuireBavoil;       ///< oit, hybrid
     ClosestKernel closest = ClosestKernel::Atomic;     ///< hybrid
+    /// oit, hybrid (atomic), instanced: a kernel whose quad's pixel box holds at most this many
+    /// pixel centres is evaluated by a compute pass instead of drawn (lavapipe's cost per
+    /// primitive dwarfs the few fragments of such a quad); 0: every kernel is drawn. In
+    /// [0, kSplatMaxSmallPixels]; the default is kSplatSmallPixels (shaders/spot_splat.h). oit and
+    /// hybrid draw every kernel in frames over about 1830^2 pixels (their fixed-point sums, 40
+    /// bytes a pixel, would not fit one 128 MiB storage buffer binding).
+    int smallPixels = kDefaultSmallPixels;
     /// The roofline instead of the method's splat pass: the same quads over the same pixels into
     /// the `oit` targets with a fragment shader that does nothing (the image is meaningless; the
     /// splat pass time is what lavapipe's rasterizer itself costs for this frame).

@@ -14,6 +14,7 @@
 #include "splat_quad.vert.h"
 #include "splat_resolve.comp.h"
 #include "splat_roofline.frag.h"
+#include "splat_small.comp.h"
 #include "splat_sorted.frag.h"
 #include "splat_sorted_keys.comp.h"
 
@@ -37,8 +38,37 @@ constexpr std::uint64_t kCommonBytesPerPixel = 16 + 4 + 4 + 16;
 constexpr std::uint64_t kOitBytesPerPixel = 16 + 4;
 constexpr std::uint64_t kAtomicBytesPerPixel = 8;
 constexpr std::uint64_t kClosestPassBytesPerPixel = 4 + 4;
+/// The compute path's fixed-point OIT sums (oit, hybrid).
+constexpr std::uint64_t kFixedBytesPerPixel = kSplatFixedChannels * sizeof(std::uint64_t);
+/// Their tiles' flags: one uint per resolve workgroup.
+std::uint64_t fixedTileBytes(std::uint64_t width, std::uint64_t height) {
+    return (width + kSplatResolveTile - 1) / kSplatResolveTile *
+           ((height + kSplatResolveTile - 1) / kSplatResolveTile) * sizeof(std::uint32_t);
+}
 
 bool usesOit(Method m) { return m == Method::Oit || m == Method::Hybrid; }
+
+static_assert(kDefaultSmallPixels == int(kSplatSmallPixels),
+              "the default threshold is the shared header's");
+
+/// The compute path's threshold for a frame (0: every kernel drawn): not for `sorted` (ordered
+/// blending), nor the hybrid's depth pass (it draws the same quads), nor the roofline (the raster
+/// cost of every quad), nor `oit` and `hybrid` where the fixed-point sums would not fit one
+/// storage buffer binding (`fixedFits`: 128 MiB on lavapipe, 3.3 M pixels, about 1830^2).
+std::uint32_t smallPixels(Method m, const RenderSettings& s, bool fixedFits) {
+    if (m == Method::Sorted || s.roofline ||
+        (m == Method::Hybrid && s.closest == ClosestKernel::DepthPass) || (usesOit(m) && !fixedFits))
+        return 0;
+    return std::uint32_t(std::max(s.smallPixels, 0));
+}
+
+/// Whether a frame with `s` needs the fixed-point sums (made with the targets; the roofline's
+/// frames keep them).
+bool usesFixed(Method m, const RenderSettings& s, bool fixedFits) {
+    RenderSettings drawn = s;
+    drawn.roofline = false;
+    return usesOit(m) && smallPixels(m, drawn, fixedFits) > 0;
+}
 
 } // namespace
 
@@ -85,7 +115,8 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
         .set(kSplatSpecHybridAtomic, s.hybridAtomic)
         .set(kSplatSpecCount, s.count)
         .set(kSplatSpecResolve, s.resolve)
-        .set(kSplatSpecScreen, true);
+        .set(kSplatSpecScreen, true)
+        .set(kSplatSpecSmallPixels, s.smallPixels);
     const noise::Kernel& kernel = m_scene.kernel();
     for (std::uint32_t l = 0; l < kernel.lobes.size(); ++l)
         for (std::uint32_t c = 0; c < 3; ++c)
@@ -94,7 +125,8 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
     p.prepare = makePreparePipeline(m_ctx, m_scene.lobeCount(), true, s.ewa, s.orthographic);
     p.compact = makeComputePipeline(m_ctx, spirv(spv_splat_compact_comp),
                                     {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindVisible),
-                                     storageBuffer(kSplatBindDraw), storageBuffer(kSplatBindCount)},
+                                     storageBuffer(kSplatBindDraw), storageBuffer(kSplatBindCount),
+                                     storageBuffer(kSplatBindSmall)},
                                     push, spec);
     const Bindings lobes = {storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes)};
     Bindings resolve = lobes;
@@ -102,8 +134,18 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
                    {storageImage(kSplatBindBase), storageImage(kSplatBindAccum),
                     storageImage(kSplatBindOpticalDepth), storageImage(kSplatBindMeshDistance),
                     storageBuffer(kSplatBindClosest), storageImage(kSplatBindClosestKernel),
-                    storageImage(kSplatBindResult)});
+                    storageImage(kSplatBindResult), storageBuffer(kSplatBindOitFixed),
+                    storageBuffer(kSplatBindOitTiles)});
     p.resolve = makeComputePipeline(m_ctx, spirv(spv_splat_resolve_comp), resolve, push, spec);
+    if (s.smallPixels > 0 && !roofline) {
+        Bindings small = lobes;
+        small.insert(small.end(),
+                     {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindSmall),
+                      storageBuffer(kSplatBindDraw), storageImage(kSplatBindMeshDistance),
+                      storageBuffer(kSplatBindClosest), storageBuffer(kSplatBindOitFixed),
+                      storageBuffer(kSplatBindOitTiles), storageBuffer(kSplatBindCounters)});
+        p.small = makeComputePipeline(m_ctx, spirv(spv_splat_small_comp), small, push, spec);
+    }
     if (m_method == Method::Sorted)
         p.sortKeys = makeComputePipeline(
             m_ctx, spirv(spv_splat_sorted_keys_comp),
@@ -135,7 +177,7 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
     } else if (m_method == Method::Instanced) {
         splat.fragment = spirv(spv_splat_instanced_frag);
         splat.bindings.push_back(storageBuffer(kSplatBindClosest));
-        } else if (m_method == Method::Sorted) {
+    } else if (m_method == Method::Sorted) {
         splat.fragment = spirv(spv_splat_sorted_frag);
         splat.colorFormats = {kColorFormat};
         splat.blends = {overBlend()};
@@ -161,6 +203,10 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
     return m_pipelines.emplace(key, std::move(p)).first->second;
 }
 
+bool SplatRenderer::fixedFits(std::uint64_t width, std::uint64_t height) const {
+    return width * height * kFixedBytesPerPixel <= m_ctx.properties().limits.maxStorageBufferRange;
+}
+
 std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t capacity,
                                         const RenderSettings& settings) const {
     const std::uint64_t pixels = std::uint64_t(width) * std::uint64_t(height);
@@ -172,10 +218,17 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
                                                                  : kAtomicBytesPerPixel;
     if (m_method == Method::Instanced)
         perPixel += kAtomicBytesPerPixel;
+    std::uint64_t tileBytes = 0;
+    if (usesFixed(m_method, settings, fixedFits(std::uint64_t(width), std::uint64_t(height)))) {
+        perPixel += kFixedBytesPerPixel;
+        tileBytes = fixedTileBytes(std::uint64_t(width), std::uint64_t(height));
+    }
     const std::uint64_t perKernel = std::uint64_t(m_scene.lobeCount()) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
-                                    sizeof(SpotKernelBound) + sizeof(std::uint32_t);
-    std::uint64_t bytes = pixels * perPixel + std::uint64_t(capacity) * perKernel + 16 + 16;
+                                    sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
+                                    (m_method == Method::Sorted ? 0 : sizeof(std::uint32_t));
+    std::uint64_t bytes =
+        pixels * perPixel + tileBytes + std::uint64_t(capacity) * perKernel + 32 + 16;
     if (m_method == Method::Sorted)
         bytes += std::uint64_t(capacity) * sizeof(std::uint32_t) + RadixSortScratch::bytes(capacity);
     return bytes;
@@ -187,8 +240,10 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     const bool atomic = m_method == Method::Instanced ||
                         (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
     const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
+    const bool fixed = usesFixed(m_method, settings, fixedFits(width, height));
     const bool have = m_width == width && m_height == height && m_base.handle() &&
                       (!oit || m_accum.handle()) && (!atomic || m_closest.handle()) &&
+                      (!fixed || m_oitFixed.handle()) &&
                       (m_closestKernel.width() == (pass ? width : 1));
     if (have)
         return;
@@ -197,8 +252,11 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     const std::uint64_t pixels = std::uint64_t(width) * height;
     const std::uint64_t need =
         pixels * (kCommonBytesPerPixel + (oit ? kOitBytesPerPixel : 0) +
-                  (atomic ? kAtomicBytesPerPixel : 0) + (pass ? kClosestPassBytesPerPixel : 0));
-    std::uint64_t held = m_closest.reservedBytes();
+                  (atomic ? kAtomicBytesPerPixel : 0) + (pass ? kClosestPassBytesPerPixel : 0) +
+                  (fixed ? kFixedBytesPerPixel : 0)) +
+        (fixed ? fixedTileBytes(width, height) : 0);
+    std::uint64_t held =
+        m_closest.reservedBytes() + m_oitFixed.reservedBytes() + m_oitTiles.reservedBytes();
     for (const Image* i : {&m_base, &m_distance, &m_depth, &m_accum, &m_opticalDepth,
                            &m_closestKernel, &m_closestDepth, &m_result})
         held += i->reservedBytes();
@@ -217,6 +275,8 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     m_closestDepth = Image();
     m_result = Image();
     m_closest = Buffer();
+    m_oitFixed = Buffer();
+    m_oitTiles = Buffer();
     m_width = m_height = 0;
     constexpr VkImageAspectFlags kColor = VK_IMAGE_ASPECT_COLOR_BIT;
     m_base = Image(m_ctx, width, height, kColorFormat, kTargetUsage, kColor, "splat base colour");
@@ -235,6 +295,15 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
         m_closest = Buffer(m_ctx, pixels * sizeof(std::uint64_t),
                            kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::DeviceLocal,
                            "splat closest kernels");
+    if (fixed) {
+        m_oitFixed = Buffer(m_ctx, pixels * kFixedBytesPerPixel,
+                            kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::DeviceLocal,
+                            "splat small kernels' fixed-point OIT sums");
+        m_oitTiles = Buffer(m_ctx, fixedTileBytes(width, height),
+                            kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::DeviceLocal,
+                            "splat small kernels' tiles with sums");
+        m_oitFixedCleared = false;
+    }
     // The depth pass's kernel index (1x1, never read, without the depth pass: the resolve's
     // binding needs an image of its format).
     m_closestKernel = Image(m_ctx, pass ? width : 1, pass ? height : 1, kKernelIndexFormat,
@@ -250,7 +319,8 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
 
 void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& settings) {
     const bool sorted = m_method == Method::Sorted;
-    if (capacity <= m_capacity && m_draw.handle() && (!sorted || m_sortKeys.handle()))
+    if (capacity <= m_capacity && m_draw.handle() && (!sorted || m_sortKeys.handle()) &&
+        (sorted || m_small.handle()))
         return;
     static_cast<void>(settings);
     // Grow with a margin, so a capacity creeping up does not reallocate every frame.
@@ -260,11 +330,12 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
     const std::uint64_t perKernel = std::uint64_t(lobes) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
-                                    (sorted ? sizeof(std::uint32_t) : 0);
+                                    sizeof(std::uint32_t); // sorted: keys; else the small list
     const std::uint64_t need = std::uint64_t(grown) * perKernel +
                                (sorted ? RadixSortScratch::bytes(grown) : 0);
     std::uint64_t held = m_sortScratch.reservedBytes();
-    for (const Buffer* b : {&m_worldLobes, &m_screenLobes, &m_bounds, &m_visible, &m_sortKeys})
+    for (const Buffer* b :
+         {&m_worldLobes, &m_screenLobes, &m_bounds, &m_visible, &m_small, &m_sortKeys})
         held += b->reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("splat renderer: ", capacity, " kernels need ", need >> 20,
@@ -275,6 +346,7 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
     m_screenLobes = Buffer();
     m_bounds = Buffer();
     m_visible = Buffer();
+    m_small = Buffer();
     m_sortKeys = Buffer();
     m_sortScratch = RadixSortScratch();
     m_capacity = 0;
@@ -286,10 +358,13 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
                            cat("splat screen lobes (", grown, " kernels)"));
     m_bounds = Buffer(m_ctx, n * sizeof(SpotKernelBound), kStorage, kDevice, "splat kernel bounds");
     m_visible = Buffer(m_ctx, n * sizeof(std::uint32_t), kStorage, kDevice, "splat kept kernels");
+    if (!sorted)
+        m_small = Buffer(m_ctx, n * sizeof(std::uint32_t), kStorage, kDevice, "splat small kernels");
     if (!m_draw.handle()) {
-        m_draw = Buffer(m_ctx, sizeof(VkDrawIndirectCommand),
+        // The quads' indirect draw, the small kernels' indirect dispatch and their count.
+        m_draw = Buffer(m_ctx, 8 * sizeof(std::uint32_t),
                         kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, Buffer::Memory::HostVisible,
-                        "splat indirect draw");
+                        "splat indirect draw and dispatch");
         m_counters = Buffer(m_ctx, sizeof(SpotSplatCounters),
                             kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::HostVisible,
                             "splat fragment counters");
@@ -308,6 +383,9 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
         throw InputError(cat("splat renderer: kernel samples ", settings.kernelSamples,
                              " outside [0, ", kSplatMaxKernelSamples,
                              "] (0 = analytic; more would exceed lavapipe's loop budget)"));
+    if (settings.smallPixels < 0 || settings.smallPixels > int(kSplatMaxSmallPixels))
+        throw InputError(cat("splat renderer: small kernel pixels ", settings.smallPixels,
+                             " outside [0, ", kSplatMaxSmallPixels, "]"));
     if (impulses.capacity > kMaxImpulses)
         throw InputError(cat("splat renderer: ", impulses.capacity, " impulses, more than the ",
                              kMaxImpulses, " one frame can prepare"));
@@ -337,6 +415,9 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
     s.ewa = settings.ewa;
     s.hybridAtomic = f.hybridAtomic;
     s.closestPass = f.closestPass;
+    s.smallPixels = smallPixels(m_method, settings,
+                                fixedFits(std::uint64_t(view.camera.width), std::uint64_t(view.camera.height)));
+    f.small = s.smallPixels > 0;
     s.count = settings.countFragments && !settings.roofline;
     s.weight = settings.weight == OitWeight::McGuireBavoil ? shared::f32::kSpotWeightMcGuireBavoil
                                                            : shared::f32::kSpotWeightConstant;
@@ -380,12 +461,19 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .buffer(kSplatBindVisible, m_visible)
         .buffer(kSplatBindDraw, m_draw)
         .buffer(kSplatBindCount, *f.impulses.count)
+        .buffer(kSplatBindSmall, m_small.handle() ? m_small : m_visible) // sorted: never written
         .push(m_ctx, cmd, p.compact);
     vkCmdDispatch(cmd, 1, 1, 1);
     if (f.hybridAtomic || f.instanced)
         vkCmdFillBuffer(cmd, m_closest.handle(), 0, VK_WHOLE_SIZE, 0xffffffffu); // "no kernel"
     if (f.settings.countFragments)
         vkCmdFillBuffer(cmd, m_counters.handle(), 0, VK_WHOLE_SIZE, 0u);
+    if (m_oitFixed.handle() && !m_oitFixedCleared) { // once: then each resolve clears its sums
+        vkCmdFillBuffer(cmd, m_oitFixed.handle(), 0, VK_WHOLE_SIZE, 0u);
+        m_oitFixedCleared = true;
+    }
+    if (f.small && m_oitTiles.handle()) // a uint per 8x8 tile: cheap to clear every frame
+        vkCmdFillBuffer(cmd, m_oitTiles.handle(), 0, VK_WHOLE_SIZE, 0u);
     memoryBarrier(cmd, kCompute | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
                   VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
@@ -485,12 +573,32 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     quadDescriptors(p.splat, atomics, true);
     vkCmdDrawIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
     vkCmdEndRendering(cmd);
+    // 3b. The small kernels: one invocation each (after the quads: both pass's atomics are
+    // order-independent, and the fixed-point sums are the resolve's to add).
+    if (f.small) {
+        memoryBarrier(cmd, kFragment, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRW);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.small.handle());
+        pushFrame(cmd, p.small, f.frame);
+        Descriptors()
+            .buffer(kSplatBindWorldLobes, m_worldLobes)
+            .buffer(kSplatBindScreenLobes, m_screenLobes)
+            .buffer(kSplatBindBounds, m_bounds)
+            .buffer(kSplatBindSmall, m_small)
+            .buffer(kSplatBindDraw, m_draw)
+            .image(kSplatBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kSplatBindClosest, m_closest.handle() ? m_closest : m_counters)
+            .buffer(kSplatBindOitFixed, m_oitFixed.handle() ? m_oitFixed : m_counters)
+            .buffer(kSplatBindOitTiles, m_oitTiles.handle() ? m_oitTiles : m_counters)
+            .buffer(kSplatBindCounters, m_counters)
+            .push(m_ctx, cmd, p.small);
+        vkCmdDispatchIndirect(cmd, m_draw.handle(), 4 * sizeof(std::uint32_t));
+    }
     for (const Image* image : targets)
         if (image != &m_distance)
             transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                             VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute, kStorageRead);
-    memoryBarrier(cmd, kFragment, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute | kHostStage,
-                  kStorageRead | VK_ACCESS_2_HOST_READ_BIT);
+    memoryBarrier(cmd, kFragment | kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                  kCompute | kHostStage, kStorageRW | VK_ACCESS_2_HOST_READ_BIT);
     timer.mark(cmd, "splat");
 
     // 4. Resolve into the result image.
@@ -511,8 +619,11 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .buffer(kSplatBindClosest, m_closest.handle() ? m_closest : m_counters)
         .image(kSplatBindClosestKernel, m_closestKernel, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .image(kSplatBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .buffer(kSplatBindOitFixed, m_oitFixed.handle() ? m_oitFixed : m_counters)
+        .buffer(kSplatBindOitTiles, m_oitTiles.handle() ? m_oitTiles : m_counters)
         .push(m_ctx, cmd, p.resolve);
-    vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+    vkCmdDispatch(cmd, (width + kSplatResolveTile - 1) / kSplatResolveTile,
+                  (height + kSplatResolveTile - 1) / kSplatResolveTile, 1);
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                   kCompute | kTransfer | kHostStage,
                   kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
@@ -525,7 +636,11 @@ FrameCounters SplatRenderer::counters() const {
         return c;
     VkDrawIndirectCommand command;
     std::memcpy(&command, m_draw.mapped(), sizeof(command));
-    c.kernelsDrawn = command.instanceCount;
+    std::uint32_t small = 0;
+    std::memcpy(&small, static_cast<const char*>(m_draw.mapped()) + 7 * sizeof(std::uint32_t),
+                sizeof(small));
+    c.kernelsDrawn = command.instanceCount + small;
+    c.extra.emplace_back("kernels_small", double(small));
     if (m_frame.settings.countFragments && !m_frame.settings.roofline) {
         SpotSplatCounters counted;
         std::memcpy(&counted, m_counters.mapped(), sizeof(counted));

@@ -15,7 +15,7 @@
 ///     (splat_sorted_keys.comp, then the radix sort of sort_vk.h).
 ///  2. mesh (raster): base colour (or the background), ray distance t to the mesh (R32F) and a
 ///     reversed float depth.
-///  3. splat (raster): one quad per kept kernel; per pixel the kernel's colour and alpha along the
+///  3. splat (raster, and compute for small kernels): one quad per kept kernel; per pixel the kernel's colour and alpha along the
 ///     pixel's ray, through its lobes, up to the mesh (analytic optical depths, or N samples:
 ///     paper eq. 10). `instanced` draws the kernel opaque where alpha >= 0.5 with the depth test;
 ///     `oit` blends w x (premultiplied colour, alpha) additively and the optical depth into a
@@ -24,12 +24,15 @@
 ///     own over the same quads with a depth test before it); `sorted` blends each kernel, back to
 ///     front, over the base colour with premultiplied "over" (C = C_k + (1 - alpha_k) C): exact
 ///     compositing wherever kernels do not interpenetrate along a ray (the accuracy ceiling of
-///     splatting, to show what OIT gives up).
+///     splatting, to show what OIT gives up). `oit`, `hybrid` (atomic) and `instanced` evaluate
+///     the kernels whose quad covers at most RenderSettings::smallPixels pixel centres in a
+///     compute pass instead (splat_small.comp): one invocation per kernel over its pixels, OIT
+///     sums in 64-bit fixed point by integer atomics, added by the resolve.
 ///  4. resolve (compute): the final image (paper eq. 12 or 13) into result().
 ///
 /// Every pipeline is specialized for its setting (lobes per kernel, analytic or N samples,
-/// Lambert, projection, EWA, OIT weight, hybrid, counting): lavapipe compiles each at its first
-/// use, and a shader carrying every path pays for the branches of all.
+/// Lambert, projection, EWA, OIT weight, hybrid, counting, the small kernels' threshold): lavapipe
+/// compiles each at its first use, and a shader carrying every path pays for the branches of all.
 ///
 /// Results are deterministic: blending in a fixed primitive order, integer atomics only, a sort
 /// without atomics.
@@ -78,16 +81,20 @@ private:
         bool lambert = false, orthographic = false, ewa = true, hybridAtomic = false,
              count = false, closestPass = false;
         std::uint32_t weight = 0, resolve = 0;
+        std::uint32_t smallPixels = 0; ///< the compute path's threshold (0: off)
         auto tie() const {
             return std::tie(samples, lambert, orthographic, ewa, hybridAtomic, count, closestPass,
-                            weight, resolve);
+                            weight, resolve, smallPixels);
         }
         bool operator<(const Spec& o) const { return tie() < o.tie(); }
     };
     struct Pipelines {
-        Pipeline prepare, compact, splat, closest, sortKeys, resolve;
+        Pipeline prepare, compact, splat, small, closest, sortKeys, resolve;
     };
     const Pipelines& pipelines(const Spec& spec, bool roofline);
+    /// Whether a width x height frame's fixed-point sums fit one storage buffer binding (else
+    /// `oit` and `hybrid` draw every kernel).
+    bool fixedFits(std::uint64_t width, std::uint64_t height) const;
     void ensureTargets(std::uint32_t width, std::uint32_t height, const RenderSettings& settings);
     void ensureBuffers(std::uint32_t capacity, const RenderSettings& settings);
 
@@ -102,9 +109,15 @@ private:
     Image m_base, m_distance, m_depth, m_accum, m_opticalDepth, m_closestKernel, m_closestDepth,
         m_result;
     Buffer m_closest; ///< hybrid (atomic): uint64 per pixel
+    /// oit, hybrid with the compute path: the small kernels' fixed-point OIT sums
+    /// (kSplatFixedChannels uint64 per pixel), zero between frames (the resolve clears what it
+    /// reads); cleared once after it is made. The tiles' flags are cleared every frame.
+    Buffer m_oitFixed;
+    Buffer m_oitTiles; ///< with m_oitFixed: a uint per kSplatResolveTile^2 tile, non-zero where set
+    bool m_oitFixedCleared = false;
     // Per impulse capacity.
     std::uint32_t m_capacity = 0;
-    Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_draw, m_counters, m_sortKeys;
+    Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_small, m_draw, m_counters, m_sortKeys;
     RadixSortScratch m_sortScratch;
 
     // The frame prepared last.
@@ -115,6 +128,7 @@ private:
         RenderSettings settings;
         const Pipelines* pipelines = nullptr;
         bool sorted = false, instanced = false, closestPass = false, hybridAtomic = false;
+        bool small = false; ///< the small kernels take the compute path
     } m_frame;
 };
 

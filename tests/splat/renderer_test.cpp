@@ -683,7 +683,9 @@ TEST(SplatRendererScenes, SortedBeatsOitWhereStrandsAreResolved) {
 TEST(SplatRendererScenes, HybridFindsTheSameClosestKernelEitherWay) {
     // docs/design.md section 4: the hybrid's closest kernel in the OIT pass (64-bit atomicMin) or in a
     // depth pass of its own: the same kernel per pixel, so the same image, bit for bit, on every
-    // shipped scene (analytic and with kernel samples). And not the OIT image: the closest kernel
+    // shipped scene (analytic and with kernel samples), every kernel drawn (the depth pass has no
+    // compute path for small kernels; with it, the atomic image differs by float rounding:
+    // SmallKernelsRenderAsTheRasterPathDoes). And not the OIT image: the closest kernel
     // changes the result, so the depth pass really found it.
     splat::Context ctx(validated());
     for (const char* name : {"fur-bunny", "fur-bunny-close", "fur-bunny-far", "grass-plane-grazing",
@@ -699,6 +701,7 @@ TEST(SplatRendererScenes, HybridFindsTheSameClosestKernelEitherWay) {
                 settings.method = i == 2 ? splat::Method::Oit : splat::Method::Hybrid;
                 settings.kernelSamples = samples;
                 settings.closest = i == 1 ? splat::ClosestKernel::DepthPass : splat::ClosestKernel::Atomic;
+                settings.smallPixels = 0; // the depth pass draws every kernel
                 splat::FrameStats stats;
                 images[i] = renderer.render(s.scene.camera, s.scene.shading, s.scene.background,
                                             s.scene.baseColor, impulses,
@@ -780,6 +783,173 @@ TEST(SplatRenderer, SortedIsByteIdenticalOnOneAndTwoThreads) {
                               images[0].pixels.size() * sizeof(glm::vec3)),
                   0)
             << i;
+}
+
+// ---- The small kernels' compute path -----------------------------------------------------------
+
+/// A renderer's extra counter (0 when it has none of that name).
+double extraCounter(const splat::FrameStats& stats, const std::string& name) {
+    for (const auto& [key, value] : stats.counters.extra)
+        if (key == name)
+            return value;
+    return 0.0;
+}
+
+struct ImageDifference {
+    double maxAbs = 0.0, meanAbs = 0.0;
+    double changed = 0.0; ///< fraction of pixels with a channel off by more than 1e-3
+};
+
+ImageDifference difference(const noise::Image& a, const noise::Image& b) {
+    ImageDifference d;
+    EXPECT_EQ(a.pixels.size(), b.pixels.size());
+    for (std::size_t i = 0; i < std::min(a.pixels.size(), b.pixels.size()); ++i) {
+        const glm::vec3 e = glm::abs(a.pixels[i] - b.pixels[i]);
+        const double m = std::max({e.x, e.y, e.z});
+        d.maxAbs = std::max(d.maxAbs, m);
+        d.meanAbs += (e.x + e.y + e.z) / 3.0;
+        d.changed += m > 1e-3 ? 1.0 : 0.0;
+    }
+    d.meanAbs /= double(std::max<std::size_t>(a.pixels.size(), 1));
+    d.changed /= double(std::max<std::size_t>(a.pixels.size(), 1));
+    return d;
+}
+
+TEST(SplatRenderer, SmallKernelsRenderAsTheRasterPathDoes) {
+    // fur-bunny at 128x128: kernels from under a pixel to a few dozen, so with a threshold of 16
+    // pixels about 40% take the compute path and the others are drawn; far away, at 32x32, every
+    // kernel is small. Forcing every kernel through the raster path (smallPixels 0) must give the
+    // same image up to float rounding (the compute path evaluates the same code at the same pixel
+    // centres; its OIT sums are fixed point, added in another order) and count the same
+    // fragments (up to the pixel centres on a quad's very edge, where the two cover differently).
+    struct Case {
+        const char* scene;
+        int size;
+        int smallPixels;
+        bool everySmall;
+    };
+    for (const Case& k : {Case{"fur-bunny", 128, 16, false},
+                          Case{"fur-bunny-far", 32, int(splat::gpu_splat::kSplatMaxSmallPixels), true}}) {
+        const SceneSetup s = loadSetup(k.scene, k.size);
+        splat::Context ctx(validated());
+        SplatRig renderer(ctx, s.mesh, s.kernel);
+        const splat::Buffer impulses = upload(ctx, s.impulses);
+        const auto count = std::uint32_t(s.impulses.size());
+        for (const Configuration& c : configurations()) {
+            if (c.settings.method == splat::Method::Sorted)
+                continue;
+            SplatSettings both = c.settings;
+            both.countFragments = true;
+            both.smallPixels = k.smallPixels;
+            SplatSettings raster = both;
+            raster.smallPixels = 0;
+            splat::FrameStats bothStats, rasterStats;
+            const noise::Image a = renderer.render(s.scene.camera, s.scene.shading, s.scene.background,
+                                                   s.scene.baseColor, impulses, count, both, &bothStats);
+            const noise::Image b = renderer.render(s.scene.camera, s.scene.shading, s.scene.background,
+                                                   s.scene.baseColor, impulses, count, raster,
+                                                   &rasterStats);
+            const std::string label = cat(k.scene, " ", c.label);
+            const double small = extraCounter(bothStats, "kernels_small");
+            EXPECT_EQ(extraCounter(rasterStats, "kernels_small"), 0.0) << label;
+            EXPECT_GT(small, 0.0) << label;
+            if (k.everySmall)
+                EXPECT_EQ(small, double(bothStats.counters.kernelsDrawn)) << label;
+            else
+                EXPECT_LT(small, 0.9 * double(bothStats.counters.kernelsDrawn)) << label; // both paths
+            // Kernels whose quad's box holds no pixel centre are culled by the split (the raster
+            // path would draw them and shade nothing).
+            EXPECT_LE(bothStats.counters.kernelsDrawn, rasterStats.counters.kernelsDrawn) << label;
+            EXPECT_GT(rasterStats.counters.fragmentsShaded, 0u) << label;
+            EXPECT_NEAR(double(bothStats.counters.fragmentsShaded),
+                        double(rasterStats.counters.fragmentsShaded),
+                        1e-3 * double(rasterStats.counters.fragmentsShaded) + 2.0)
+                << label;
+            EXPECT_NEAR(double(bothStats.counters.pixelsCovered),
+                        double(rasterStats.counters.pixelsCovered),
+                        1e-3 * double(rasterStats.counters.pixelsCovered) + 2.0)
+                << label;
+            const ImageDifference d = difference(a, b);
+            std::printf("    %s: max %.2e mean %.2e changed %.4f\n", label.c_str(), d.maxAbs,
+                        d.meanAbs, d.changed);
+            if (c.settings.method == splat::Method::Instanced) {
+                // All or nothing per pixel: a kernel at alpha 0.5 +- rounding may cover a pixel
+                // on one path and not on the other.
+                EXPECT_LE(d.changed, 0.001) << label;
+                EXPECT_LT(d.meanAbs, 1e-5) << label;
+            } else { // measured: max 7.4e-4, mean 1.6e-6
+                EXPECT_LT(d.maxAbs, 2e-3) << label;
+                EXPECT_LT(d.meanAbs, 5e-6) << label;
+            }
+        }
+        expectNoValidationErrors(ctx);
+    }
+}
+
+TEST(SplatRenderer, SmallKernelsFixedSumsFitOneBinding) {
+    // oit and hybrid's fixed-point sums take 40 bytes a pixel, made with the targets; where they
+    // would not fit one storage buffer binding the frame draws every kernel instead (instanced
+    // has none: its compute path only takes atomicMin).
+    splat::Context ctx(validated());
+    const LobeCase c = isolatedLobe(3.0f);
+    const noise::Mesh empty;
+    const splat::SceneGpu scene(ctx, empty, c.kernel);
+    splat::RenderSettings raster;
+    raster.smallPixels = 0;
+    const std::uint64_t range = ctx.properties().limits.maxStorageBufferRange;
+    for (const splat::Method method :
+         {splat::Method::Oit, splat::Method::Hybrid, splat::Method::Instanced}) {
+        const splat::SplatRenderer r(scene, method);
+        // 40 bytes a pixel and a uint per 8x8 tile.
+        const std::uint64_t fixed = method == splat::Method::Instanced ? 0 : 64 * 64 * 40 + 64 * 4;
+        EXPECT_EQ(r.frameBytes(64, 64, 0, {}) - r.frameBytes(64, 64, 0, raster), fixed);
+        const int side = int(std::sqrt(double(range) / 40.0)) + 2; // just past the limit
+        EXPECT_EQ(r.frameBytes(side, side, 0, {}), r.frameBytes(side, side, 0, raster));
+    }
+    expectNoValidationErrors(ctx);
+}
+
+TEST(SplatRenderer, SmallKernelsAreByteIdenticalOnOneAndTwoThreads) {
+    // The compute path's invocations run in any order on lavapipe's threads; its OIT sums are
+    // integers (associative) and its closest kernel an atomicMin of a total order, so the image
+    // may not depend on the thread count nor the run. Every kernel small (the most atomics on
+    // shared pixels), and the default split.
+    const char* previous = std::getenv("LP_NUM_THREADS");
+    const std::string saved = previous ? previous : "";
+    const SceneSetup s = loadSetup("fur-bunny", 64);
+    std::vector<std::vector<noise::Image>> images;
+    for (const char* threads : {"1", "2", "1"}) {
+        setenv("LP_NUM_THREADS", threads, 1);
+        splat::Context ctx(validated());
+        SplatRig renderer(ctx, s.mesh, s.kernel);
+        const splat::Buffer impulses = upload(ctx, s.impulses);
+        images.emplace_back();
+        for (const splat::Method method :
+             {splat::Method::Oit, splat::Method::Hybrid, splat::Method::Instanced})
+            for (const int small : {splat::RenderSettings{}.smallPixels,
+                                    int(splat::gpu_splat::kSplatMaxSmallPixels)})
+                for (int repeat = 0; repeat < 2; ++repeat) {
+                    SplatSettings settings;
+                    settings.method = method;
+                    settings.smallPixels = small;
+                    images.back().push_back(renderer.render(
+                        s.scene.camera, s.scene.shading, s.scene.background, s.scene.baseColor,
+                        impulses, std::uint32_t(s.impulses.size()), settings));
+                }
+        expectNoValidationErrors(ctx);
+    }
+    if (previous)
+        setenv("LP_NUM_THREADS", saved.c_str(), 1);
+    else
+        unsetenv("LP_NUM_THREADS");
+    for (std::size_t run = 0; run < images.size(); ++run)
+        for (std::size_t i = 0; i < images[run].size(); ++i) {
+            const noise::Image& first = images[0][i & ~std::size_t(1)];
+            EXPECT_EQ(std::memcmp(first.pixels.data(), images[run][i].pixels.data(),
+                                  first.pixels.size() * sizeof(glm::vec3)),
+                      0)
+                << "run " << run << " image " << i;
+        }
 }
 
 TEST(SplatRenderer, DegenerateLobesGiveFiniteImages) {
@@ -881,6 +1051,14 @@ TEST(SplatRenderer, RefusesWhatItCannotDo) {
     EXPECT_NO_THROW(
         renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 1, s));
     s.kernelSamples = 0;
+    for (int small : {-1, int(splat::gpu_splat::kSplatMaxSmallPixels) + 1}) {
+        s.smallPixels = small;
+        EXPECT_THROW(renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f),
+                                     impulses, 1, s),
+                     InputError)
+            << small;
+    }
+    s.smallPixels = splat::RenderSettings{}.smallPixels;
     // More impulses than the buffer holds.
     EXPECT_THROW(
         renderer.render(cam, noise::Shading{}, glm::vec3(0.0f), glm::vec3(0.0f), impulses, 2, s),
