@@ -94,13 +94,16 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
     const json& hybrid = row(rows, "fur-bunny-close", "hybrid", "ewa mb analytic");
     EXPECT_GE(double(hybrid["psnr"]), double(oit["psnr"]));
     EXPECT_LE(double(hybrid["flip"]), double(oit["flip"]));
-    // The hybrid's closest kernel found by a depth pass of its own: the same image as by the
-    // atomicMin, so the same error (its cost is what the row measures).
+    // The hybrid's closest kernel found by a depth pass of its own: the same closest kernel as
+    // by the atomicMin, so the same error up to rounding (its cost is what the row measures).
+    // The atomic variant evaluates small kernels in a compute pass whose OIT sums are fixed
+    // point, the depth pass draws every kernel (renderer_test holds the two bit-identical with
+    // every kernel drawn); measured apart by 1e-4 dB and 1e-6 FLIP.
     for (const char* scene : {"fur-bunny", "fur-bunny-close"}) {
         const json& atomic = row(rows, scene, "hybrid", "ewa mb analytic");
         const json& depthPass = row(rows, scene, "hybrid", "depth pass ewa mb analytic");
-        EXPECT_EQ(double(atomic["psnr"]), double(depthPass["psnr"])) << scene;
-        EXPECT_EQ(double(atomic["flip"]), double(depthPass["flip"])) << scene;
+        EXPECT_NEAR(double(atomic["psnr"]), double(depthPass["psnr"]), 0.01) << scene;
+        EXPECT_NEAR(double(atomic["flip"]), double(depthPass["flip"]), 1e-5) << scene;
     }
     // At matched error, splatting beats the ray-march: every raymarch setting at least as
     // accurate as oit/hybrid is slower. (The quick suite's longest march is more accurate than
