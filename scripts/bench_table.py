@@ -86,7 +86,18 @@ def main(path):
         print("| scene | setting | ms | PSNR | FLIP | hybrid ms / PSNR / FLIP | bake s | bake MiB "
               "| status |")
         print("| --- " * 9 + "|")
+        refused = {}  # scene -> reason, when every baked row of the scene was refused alike
+        for scene in dict.fromkeys(r["scene"] for r in baked):
+            mine = [r for r in baked if r["scene"] == scene]
+            reasons = {r.get("reason", "") for r in mine}
+            if all(r["status"] == "refused" for r in mine) and len(reasons) == 1:
+                refused[scene] = reasons.pop()
         for r in baked:
+            if r["scene"] in refused:
+                if r is next(x for x in baked if x["scene"] == r["scene"]):
+                    print(f"| {r['scene']} | every setting | - | - | - | - | - | - | refused: "
+                          f"{refused[r['scene']]} |")
+                continue
             h = next((x for x in rows if x["scene"] == r["scene"] and x["method"] == "hybrid"
                       and x["setting"] == DEFAULTS["hybrid"]), None)
             hyb = f"{h['ms_median']:.1f} / {h['psnr']:.2f} / {h['flip']:.3f}" if h else "-"
