@@ -153,6 +153,23 @@ TEST(Baked, SingleLobeMatchesTheReference) {
     expectNoValidationErrors(ctx);
 }
 
+// One frame of `hybrid` and one of `baked` (default settings, the scene's bake) on a validated
+// context; fails the test on any validation error.
+struct HybridAndBaked {
+    noise::Image hybrid, baked;
+};
+HybridAndBaked renderHybridAndBaked(const BakedScene& s) {
+    splat::Context ctx(validated());
+    splat::Frame frame(ctx, s.mesh, *s.generator);
+    splat::RenderSettings settings;
+    settings.bakeFile = s.bake;
+    HybridAndBaked r;
+    frame.render("hybrid", s.view(), settings, &r.hybrid);
+    frame.render("baked", s.view(), settings, &r.baked);
+    expectNoValidationErrors(ctx);
+    return r;
+}
+
 // fur-bunny at 128x128 from a bake at voxel 0.004 with 4 levels (the pixel's footprint picks
 // level 1 on the bunny). Measured against the 16-spp reference: 30.25, 31.10, 31.25, 31.25,
 // 31.25 dB for 1, 2, 4, 8, 16 peel passes (hybrid: 32.5 dB). A ray crosses many tetrahedra of the
@@ -189,18 +206,10 @@ TEST(BakedScenes, FurBunnyMatchesTheReferenceAndMoreLayersNeverHurt) {
 // footprint. Against hybrid (both one sample per pixel): measured 47.5 dB at 4 peel passes, held
 // at 45 dB (one tetrahedron per layer: 38.0 dB).
 TEST(BakedScenes, FarViewMatchesHybrid) {
-    const BakedScene s = loadBakedScene("fur-bunny-far", 128, 0.004f, 4);
-    splat::Context ctx(validated());
-    splat::Frame frame(ctx, s.mesh, *s.generator);
-    splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
-    noise::Image hybrid, baked;
-    frame.render("hybrid", s.view(), settings, &hybrid);
-    frame.render("baked", s.view(), settings, &baked);
-    const double db = splat::psnr(hybrid, baked);
+    const HybridAndBaked r = renderHybridAndBaked(loadBakedScene("fur-bunny-far", 128, 0.004f, 4));
+    const double db = splat::psnr(r.hybrid, r.baked);
     std::printf("fur-bunny-far 128: baked vs hybrid %.2f dB\n", db);
     EXPECT_GT(db, 45.0);
-    expectNoValidationErrors(ctx);
 }
 
 // The far-view target against the 16-spp reference: baked at a FLIP no higher than
@@ -208,20 +217,12 @@ TEST(BakedScenes, FarViewMatchesHybrid) {
 // PSNR 38.4 against 43.7 dB: level 0 aliases, one ray a pixel), not for the 4-level bake of the
 // test above (0.0049; docs/design.md section 5).
 TEST(BakedScenes, FarViewLevelZeroIsNoWorseThanHybridInFlip) {
-    const BakedScene s = loadBakedScene("fur-bunny-far", 128, 0.004f, 1);
+    const HybridAndBaked r = renderHybridAndBaked(loadBakedScene("fur-bunny-far", 128, 0.004f, 1));
     const noise::Image& expected = test::referenceImage("fur-bunny-far", 128, 16);
-    splat::Context ctx(validated());
-    splat::Frame frame(ctx, s.mesh, *s.generator);
-    splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
-    noise::Image hybrid, baked;
-    frame.render("hybrid", s.view(), settings, &hybrid);
-    frame.render("baked", s.view(), settings, &baked);
-    const double bakedFlip = splat::flip(expected, baked, nullptr);
-    const double hybridFlip = splat::flip(expected, hybrid, nullptr);
+    const double bakedFlip = splat::flip(expected, r.baked, nullptr);
+    const double hybridFlip = splat::flip(expected, r.hybrid, nullptr);
     std::printf("fur-bunny-far 128, level 0 only: FLIP baked %.4f, hybrid %.4f\n", bakedFlip, hybridFlip);
     EXPECT_LE(bakedFlip, hybridFlip);
-    expectNoValidationErrors(ctx);
 }
 
 // The camera inside the shell, half its thickness above a vertex facing the scene's camera and
