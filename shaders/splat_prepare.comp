@@ -5,8 +5,11 @@
 // kernel's screen bound (SpotKernelBound): each lobe's k-sigma ellipsoid projects to an ellipse
 // (the conic |w(p)|^2 = k^2 |v(p)|^2 in pixel coordinates, exact), and the kernel's quad is the
 // rectangle around their union along the union's principal axis, so a thin tilted strand is not
-// shaded over its axis-aligned box. An empty quad culls the kernel (off screen, behind the
-// camera, zero weight or no lobe with extinction).
+// shaded over its axis-aligned box. A lobe whose support reaches the eye plane projects to no
+// ellipse: its conic clipped to the image gives an axis-aligned box instead (clippedConicBox), and
+// the kernel's quad is the union of its lobes' boxes (a whole-image quad, as before, cost a grazing
+// view of grass 3.7 times the fragments it needed). An empty quad culls the kernel (off screen,
+// behind the camera, zero weight or no lobe with extinction).
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 
@@ -114,6 +117,121 @@ bool screenEllipse(SpotScreenLobe s, float k, out vec2 centre, out mat2 shape, o
     return true;
 }
 
+// The real roots of a t^2 + 2 h t + c = 0 (a linear equation when a is 0); returns how many.
+int quadraticRoots(float a, float h, float c, out float t0, out float t1) {
+    t0 = 0.0;
+    t1 = 0.0;
+    if (a == 0.0) {
+        if (h == 0.0)
+            return 0;
+        t0 = -c / (2.0 * h);
+        return 1;
+    }
+    float disc = h * h - a * c;
+    if (!(disc >= 0.0))
+        return 0;
+    // The root of larger magnitude first, the other from the product of the roots (no
+    // cancellation).
+    float q = -(h + (h < 0.0 ? -sqrt(disc) : sqrt(disc)));
+    t0 = q / a;
+    t1 = q != 0.0 ? c / q : t0;
+    return 2;
+}
+
+// Grows [lo, hi] by point p when it lies in the image rectangle (offset coordinates: d = p - ref,
+// so the rectangle is [-ref, size - ref]), padded by half a pixel for the rounding of the roots.
+void growInRect(vec2 p, vec2 rectLo, vec2 rectHi, inout vec2 lo, inout vec2 hi) {
+    if (all(greaterThanEqual(p, rectLo - 0.5)) && all(lessThanEqual(p, rectHi + 0.5)) &&
+        !any(isnan(p)) && !any(isinf(p))) {
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+}
+
+// The axis-aligned box (pixels) of the image pixels whose ray line meets the lobe's k-sigma
+// support, for a lobe whose projection is not a bounded ellipse (the support reaches the eye
+// plane): the conic f(d) = d^T M d + 2 b.d + c < 0 (screenEllipse's, d = p - ref) clipped to the
+// image. The region's extremes lie at the image corners inside it, where the conic crosses the
+// image's edges, or where the conic's tangent is vertical (x extremes) or horizontal (y extremes),
+// so the box of those points is exact (a line meeting the support behind the eye counts too:
+// conservative). Returns false when the region misses the image; a box of the whole image when
+// the conic's numbers are not finite.
+bool clippedConicBox(SpotScreenLobe s, float k, out vec2 lo, out vec2 hi) {
+    float k2 = k * k;
+    vec3 k0 = s.k0.xyz;
+    vec3 kx = s.kx.xyz;
+    vec3 ky = s.ky.xyz;
+    float m00 = dot(kx, kx) - k2 * dot(s.vx.xyz, s.vx.xyz);
+    float m01 = dot(kx, ky) - k2 * dot(s.vx.xyz, s.vy.xyz);
+    float m11 = dot(ky, ky) - k2 * dot(s.vy.xyz, s.vy.xyz);
+    float b0 = dot(k0, kx) - k2 * dot(s.v0.xyz, s.vx.xyz);
+    float b1 = dot(k0, ky) - k2 * dot(s.v0.xyz, s.vy.xyz);
+    float c = dot(k0, k0) - k2 * dot(s.v0.xyz, s.v0.xyz);
+    vec2 ref = vec2(s.k0.w, s.kx.w);
+    vec2 rectLo = -ref;
+    vec2 rectHi = frame.size.xy - ref;
+    lo = vec2(3e38);
+    hi = vec2(-3e38);
+    float coeffs[6] = float[6](m00, m01, m11, b0, b1, c);
+    for (int j = 0; j < 6; ++j) {
+        if (isnan(coeffs[j]) || isinf(coeffs[j])) {
+            lo = vec2(0.0);
+            hi = frame.size.xy;
+            return true;
+        }
+    }
+    // Corners inside the region.
+    for (int j = 0; j < 4; ++j) {
+        vec2 d = vec2((j & 1) != 0 ? rectHi.x : rectLo.x, (j & 2) != 0 ? rectHi.y : rectLo.y);
+        if (dot(d, mat2(m00, m01, m01, m11) * d) + 2.0 * dot(vec2(b0, b1), d) + c < 0.0)
+            growInRect(d, rectLo, rectHi, lo, hi);
+    }
+    float t0;
+    float t1;
+    // The conic on the vertical edges x = e: m11 y^2 + 2 (m01 e + b1) y + (m00 e^2 + 2 b0 e + c).
+    for (int j = 0; j < 2; ++j) {
+        float e = j == 0 ? rectLo.x : rectHi.x;
+        int n = quadraticRoots(m11, m01 * e + b1, (m00 * e + 2.0 * b0) * e + c, t0, t1);
+        if (n > 0)
+            growInRect(vec2(e, t0), rectLo, rectHi, lo, hi);
+        if (n > 1)
+            growInRect(vec2(e, t1), rectLo, rectHi, lo, hi);
+    }
+    // The horizontal edges y = e.
+    for (int j = 0; j < 2; ++j) {
+        float e = j == 0 ? rectLo.y : rectHi.y;
+        int n = quadraticRoots(m00, m01 * e + b0, (m11 * e + 2.0 * b1) * e + c, t0, t1);
+        if (n > 0)
+            growInRect(vec2(t0, e), rectLo, rectHi, lo, hi);
+        if (n > 1)
+            growInRect(vec2(t1, e), rectLo, rectHi, lo, hi);
+    }
+    // Vertical tangents (df/dy = 0: y = -(m01 x + b1) / m11) and horizontal ones
+    // (x = -(m01 y + b0) / m00), each met with the conic.
+    float det = m00 * m11 - m01 * m01;
+    if (m11 != 0.0) {
+        int n = quadraticRoots(det / m11, b0 - m01 * b1 / m11, c - b1 * b1 / m11, t0, t1);
+        if (n > 0)
+            growInRect(vec2(t0, -(m01 * t0 + b1) / m11), rectLo, rectHi, lo, hi);
+        if (n > 1)
+            growInRect(vec2(t1, -(m01 * t1 + b1) / m11), rectLo, rectHi, lo, hi);
+    }
+    if (m00 != 0.0) {
+        int n = quadraticRoots(det / m00, b1 - m01 * b0 / m00, c - b0 * b0 / m00, t0, t1);
+        if (n > 0)
+            growInRect(vec2(-(m01 * t0 + b0) / m00, t0), rectLo, rectHi, lo, hi);
+        if (n > 1)
+            growInRect(vec2(-(m01 * t1 + b0) / m00, t1), rectLo, rectHi, lo, hi);
+    }
+    if (!(hi.x >= lo.x) || !(hi.y >= lo.y))
+        return false;
+    // Back to pixels, padded by a pixel (float rounding of large coefficients), clamped to the
+    // image.
+    lo = clamp(lo + ref - 1.0, vec2(0.0), frame.size.xy);
+    hi = clamp(hi + ref + 1.0, vec2(0.0), frame.size.xy);
+    return true;
+}
+
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= impulseCount)
@@ -125,6 +243,10 @@ void main() {
     vec2 centres[kLobes];
     mat2 shapes[kLobes];
     bool live[kLobes];
+    // Per lobe, an axis-aligned box in pixels; with one lobe unbounded, the kernel's quad is the
+    // boxes' union.
+    vec2 boxLo[kLobes];
+    vec2 boxHi[kLobes];
     bool unbounded = false;
     float zNear = 3e38;
     float massSum = 0.0;
@@ -159,6 +281,8 @@ void main() {
         live[l] = false;
         centres[l] = vec2(0.0);
         shapes[l] = mat2(0.0);
+        boxLo[l] = vec2(0.0);
+        boxHi[l] = vec2(0.0);
         if (!kScreen)
             continue;
         vec2 ref;
@@ -186,9 +310,17 @@ void main() {
             bounded = false; // reaches the eye plane: the projection is unbounded
         if (!seen)
             continue;
-        zNear = min(zNear, zc - zHalf);
-        if (!bounded || any(isnan(centres[l])) || any(isinf(centres[l])))
+        if (bounded && !any(isnan(centres[l])) && !any(isinf(centres[l]))) {
+            vec2 e = sqrt(max(vec2(shapes[l][0][0], shapes[l][1][1]), vec2(0.0)));
+            boxLo[l] = centres[l] - e;
+            boxHi[l] = centres[l] + e;
+        } else {
+            // Not an ellipse: the part of the conic in the image (none: the lobe is not seen).
+            if (!clippedConicBox(s, k, boxLo[l], boxHi[l]))
+                continue;
             unbounded = true;
+        }
+        zNear = min(zNear, zc - zHalf);
         live[l] = true;
     }
     if (!kScreen)
@@ -213,7 +345,18 @@ void main() {
     b.axis.w = zNear;
     b.color = vec4(imp.color.rgb, 0.0);
     if (n > 0u && unbounded) {
-        b.quad = vec4(0.5 * frame.size.xy, 0.5 * frame.size.xy + 1.0);
+        vec2 lo = vec2(3e38);
+        vec2 hi = vec2(-3e38);
+        for (uint l = 0u; l < kLobes; ++l) {
+            if (live[l]) {
+                lo = min(lo, boxLo[l]);
+                hi = max(hi, boxHi[l]);
+            }
+        }
+        lo = clamp(lo - kSplatBoundPadding, vec2(0.0), frame.size.xy);
+        hi = clamp(hi + kSplatBoundPadding, vec2(0.0), frame.size.xy);
+        if (all(greaterThan(hi, lo)))
+            b.quad = vec4(0.5 * (lo + hi), 0.5 * (hi - lo));
     } else if (n > 0u) {
         mean /= float(n);
         mat2 cov = second / float(n) - outerProduct(mean, mean);

@@ -379,6 +379,95 @@ TEST(SplatRenderer, MeshEndsTheKernelAndOccludesIt) {
     expectNoValidationErrors(ctx);
 }
 
+TEST(SplatRenderer, LobeReachingTheEyePlaneIsClippedToTheImage) {
+    // A lobe whose support reaches behind the camera projects to no ellipse. Its quad is the box
+    // of the image pixels whose ray line meets the support, not the whole image (a grazing view of
+    // grass shaded 3.7 times the fragments it needed): a long lobe along the view axis, beside the
+    // eye, its support from behind the eye to past its centre, shows in the image's left part
+    // only. The image is still the closed form of the truncated lobe over the ray's half line
+    // t >= 0.
+    const double k = 3.0;
+    const noise::Kernel kernel =
+        oneLobeKernel({0.15f, 0.15f, 0.6f}, glm::vec3(0.0f), 3.0f, glm::vec3(1.0f), float(k));
+    const std::vector<noise::Impulse> imps{impulseAt(glm::vec3(0.0f))};
+    const glm::vec3 background(0.1f, 0.2f, 0.3f);
+    splat::Context ctx(validated());
+    const noise::Mesh empty;
+    SplatRig renderer(ctx, empty, kernel);
+    const splat::Buffer impulses = upload(ctx, imps);
+    noise::Camera cam;
+    cam.projection = noise::Projection::Perspective;
+    cam.eye = glm::dvec3(0.8, 0.0, 1.0);
+    cam.target = glm::dvec3(0.8, 0.0, 0.0);
+    cam.fovYDeg = 100.0;
+    cam.width = cam.height = 48;
+    const noise::WorldLobe w = noise::placeLobe(kernel, 0, imps[0]);
+    const glm::dmat3 toLobe(w.toLobe);
+    const noise::CameraRays rays(cam);
+    // The support reaches behind the eye plane (its depth range is 1 +- 1.8), and the eye is
+    // outside it (else every pixel's line would meet it).
+    ASSERT_GT(glm::length(toLobe * (cam.eye - glm::dvec3(w.centre))), k);
+    int lineMeets = 0;
+    double alphaSum = 0.0;
+    glm::ivec2 lo(cam.width, cam.height), hi(-1, -1); // their box
+    std::vector<double> alpha(std::size_t(cam.width * cam.height), 0.0);
+    for (int y = 0; y < cam.height; ++y)
+        for (int x = 0; x < cam.width; ++x) {
+            const noise::Ray r = rays.ray(x + 0.5, y + 0.5);
+            const glm::dvec3 op = toLobe * (r.origin - glm::dvec3(w.centre));
+            const glm::dvec3 dp = toLobe * r.dir;
+            const double dd = glm::dot(dp, dp), od = glm::dot(op, dp);
+            const double perp2 = glm::dot(op, op) - od * od / dd;
+            if (!(perp2 < k * k))
+                continue;
+            ++lineMeets;
+            lo = glm::min(lo, glm::ivec2(x, y));
+            hi = glm::max(hi, glm::ivec2(x, y));
+            // Arc length s = (t - t*) |dp| over the chord |s| < h, from the eye (t = 0) on.
+            const double h = std::sqrt(k * k - perp2);
+            const double s0 = std::max(-h, (od / dd) * std::sqrt(dd)); // t = 0: s = -t* |dp|
+            if (!(h > s0))
+                continue;
+            const double tau = w.extinction * std::exp(-0.5 * perp2) / std::sqrt(dd) *
+                               std::sqrt(M_PI / 2.0) *
+                               (std::erf(h / std::sqrt(2.0)) - std::erf(s0 / std::sqrt(2.0)));
+            alpha[std::size_t(y * cam.width + x)] = 1.0 - std::exp(-tau);
+            alphaSum += 1.0 - std::exp(-tau);
+        }
+    const int pixels = cam.width * cam.height;
+    // The box's pixels, with the bound's padding of a pixel on each side.
+    const glm::ivec2 boxSize = hi - lo + 1;
+    const int padded = std::min(boxSize.x + 2, cam.width) * std::min(boxSize.y + 2, cam.height);
+    ASSERT_GT(lineMeets, pixels / 10);
+    ASSERT_LT(padded, 3 * pixels / 4);
+    ASSERT_GT(alphaSum, 20.0); // a visible lobe
+    for (splat::Method method : {splat::Method::Oit, splat::Method::Hybrid, splat::Method::Sorted}) {
+        SplatSettings s;
+        s.method = method;
+        s.ewa = false;
+        s.smallPixels = 0;
+        s.countFragments = true;
+        splat::FrameStats stats;
+        const noise::Image image = renderer.render(cam, noise::Shading{}, background,
+                                                   glm::vec3(0.0f), impulses, 1, s, &stats);
+        EXPECT_EQ(stats.counters.kernelsDrawn, 1u) << splat::methodName(method);
+        double worst = 0.0;
+        for (int y = 0; y < cam.height; ++y)
+            for (int x = 0; x < cam.width; ++x) {
+                const double a = alpha[std::size_t(y * cam.width + x)];
+                for (int ch = 0; ch < 3; ++ch)
+                    worst = std::max(worst, std::abs(image.at(x, y)[ch] -
+                                                     (a + (1.0 - a) * background[ch])));
+            }
+        EXPECT_LT(worst, 1e-4) << splat::methodName(method);
+        // The box of the pixels whose line meets the support (measured: 1536 fragments, that box
+        // being 32 x 48 pixels), not the whole image (2304).
+        EXPECT_GE(stats.counters.fragmentsShaded, std::uint64_t(lineMeets)) << splat::methodName(method);
+        EXPECT_LE(stats.counters.fragmentsShaded, std::uint64_t(padded)) << splat::methodName(method);
+    }
+    expectNoValidationErrors(ctx);
+}
+
 TEST(SplatRenderer, SortedCompositesStackedKernelsBackToFront) {
     // Three semi-transparent lobes of different colours stacked along the view axis, overlapping
     // on screen but 4 units apart in depth (support 6 sigma = 1.8 units), so no ray crosses two
