@@ -25,6 +25,7 @@ layout(constant_id = kSplatSpecCount) const bool kCount = false;
 layout(constant_id = kSplatSpecResolve) const uint kResolve = kSplatResolveOit;
 layout(constant_id = kSplatSpecScreen) const bool kScreen = true;
 layout(constant_id = kSplatSpecSmallPixels) const uint kSmallPixels = 0u;
+layout(constant_id = kSplatSpecResolveList) const bool kResolveList = false;
 
 // The ray through continuous pixel position p (pixels, (0,0) top-left), as noise::CameraRays:
 // world origin and unit direction. (The projection is also read from the frame: the ray-march's

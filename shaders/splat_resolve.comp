@@ -1,6 +1,8 @@
 #version 450
 // The final image, one thread per pixel, into the linear float RGBA result image. OIT and hybrid
 // first add the small kernels' fixed-point sums (splat_small.comp) to the raster targets'.
+// Pixels with a closest kernel (hybrid, instanced) are listed, and a second dispatch over the list
+// evaluates that kernel and writes them (kResolveList; see SpotSplatList for why).
 // Sorted (kSplatResolveCopy): the base colour image (kernels were drawn onto it). Instanced: the
 // nearest kernel whose alpha reaches 0.5 (splat_instanced.frag) re-evaluated, its mean colour
 // premul / alpha over the base.
@@ -23,8 +25,10 @@
 layout(local_size_x = kSplatResolveTile, local_size_y = kSplatResolveTile) in;
 
 layout(binding = kSplatBindBase, rgba32f) uniform readonly image2D baseColor;
-layout(binding = kSplatBindAccum, rgba32f) uniform readonly image2D accumulation;
-layout(binding = kSplatBindOpticalDepth, r32f) uniform readonly image2D opticalDepth;
+// The OIT sums; the first dispatch writes back those of listed pixels with the small kernels'
+// sums added (the fixed-point sums are cleared as they are read).
+layout(binding = kSplatBindAccum, rgba32f) uniform image2D accumulation;
+layout(binding = kSplatBindOpticalDepth, r32f) uniform image2D opticalDepth;
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = kSplatBindClosest) readonly buffer Closest { uint64_t closest[]; };
 // The closest kernel from the depth pass (kSplatResolveHybridPass).
@@ -38,6 +42,9 @@ layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed
 // each frame: clearing them here would need a barrier, and llvmpipe runs a shader with a barrier
 // as coroutines, much slower.)
 layout(std430, binding = kSplatBindOitTiles) readonly buffer OitTiles { uint oitTiles[]; };
+// The pixels with a closest kernel (spot_splat.h: SpotSplatList; hybrid, instanced), listed by the
+// first dispatch, resolved by the second.
+layout(std430, binding = kSplatBindClosestList) buffer ClosestList { SpotSplatList list; uint listPixels[]; };
 
 vec3 oitAverage(vec4 accum) { return accum.rgb / max(accum.a, 1e-30); }
 
@@ -46,7 +53,52 @@ vec3 oitComposite(vec3 average, float tau, vec3 behind) {
     return average * (1.0 - reveal) + behind * reveal;
 }
 
+// The closest kernel's key at pixel p (hybrid, instanced), or ~0 where none.
+uint64_t closestKey(uvec2 p, uint width) {
+    uint64_t key = ~uint64_t(0);
+    if (kResolve == kSplatResolveHybrid || kResolve == kSplatResolveInstanced)
+        key = closest[p.y * width + p.x];
+    if (kResolve == kSplatResolveHybridPass) {
+        uint id = imageLoad(closestKernel, ivec2(p)).r;
+        key = id == 0xffffffffu ? ~uint64_t(0) : uint64_t(id);
+    }
+    return key;
+}
+
+// The second dispatch (kResolveList): one listed pixel per invocation, its closest kernel f
+// evaluated and composited.
+void resolveListed() {
+    uint i = gl_WorkGroupID.x * (kSplatResolveTile * kSplatResolveTile) + gl_LocalInvocationIndex;
+    if (i >= list.count)
+        return;
+    uint packedPixel = listPixels[i];
+    uvec2 p = uvec2(packedPixel & 0xffffu, packedPixel >> 16u);
+    ivec2 pixel = ivec2(p);
+    uint64_t key = closestKey(p, uint(frame.size.x));
+    SplatKernelSample f = splatKernel(uint(key & 0xffffffffUL), vec2(p) + 0.5,
+                                      imageLoad(meshDistance, pixel).r);
+    vec3 color;
+    if (kResolve == kSplatResolveInstanced) {
+        color = f.premul / f.alpha;
+    } else {
+        // The first dispatch stored the sums with the small kernels' added.
+        vec4 accum = imageLoad(accumulation, pixel);
+        float tau = imageLoad(opticalDepth, pixel).r;
+        vec4 rest = accum - splatOitWeight(f) * vec4(f.premul, f.alpha);
+        // Below about 1e-6 of accum.a the difference is float noise and the others' mean
+        // colour cannot be told: take the mean of all (f's, mostly) there.
+        vec3 average = rest.a > 1e-5 * accum.a ? max(rest.rgb, vec3(0.0)) / rest.a : oitAverage(accum);
+        color = f.premul + (1.0 - f.alpha) * oitComposite(average, max(tau - f.tau, 0.0),
+                                                          imageLoad(baseColor, pixel).rgb);
+    }
+    imageStore(result, pixel, vec4(color, 1.0));
+}
+
 void main() {
+    if (kResolveList) {
+        resolveListed();
+        return;
+    }
     bool fixedSums = kSmallPixels > 0u &&
                      (kResolve == kSplatResolveOit || kResolve == kSplatResolveHybrid) &&
                      oitTiles[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] != 0u;
@@ -57,14 +109,9 @@ void main() {
     ivec2 pixel = ivec2(p);
     vec3 base = imageLoad(baseColor, pixel).rgb;
     vec3 color = base;
-    if (kResolve == kSplatResolveInstanced) {
-        uint64_t key = closest[p.y * width + p.x];
-        if (key != ~uint64_t(0)) {
-            SplatKernelSample f = splatKernel(uint(key & 0xffffffffUL), vec2(p) + 0.5,
-                                              imageLoad(meshDistance, pixel).r);
-            color = f.premul / f.alpha;
-        }
-    } else if (kResolve != kSplatResolveCopy) {
+    uint64_t key = closestKey(p, width);
+    bool listed = key != ~uint64_t(0);
+    if (kResolve != kSplatResolveCopy && kResolve != kSplatResolveInstanced) {
         vec4 accum = imageLoad(accumulation, pixel);
         float tau = imageLoad(opticalDepth, pixel).r;
         if (fixedSums) {
@@ -80,26 +127,19 @@ void main() {
                 tau += float(t) * unit;
                 for (uint c = 0u; c < kSplatFixedChannels; ++c)
                     oitFixed[base + c] = uint64_t(0);
+                if (listed) { // for the second dispatch
+                    imageStore(accumulation, pixel, accum);
+                    imageStore(opticalDepth, pixel, vec4(tau));
+                }
             }
         }
-        uint64_t key = ~uint64_t(0);
-        if (kResolve == kSplatResolveHybrid)
-            key = closest[p.y * width + p.x];
-        if (kResolve == kSplatResolveHybridPass) {
-            uint id = imageLoad(closestKernel, pixel).r;
-            key = id == 0xffffffffu ? ~uint64_t(0) : uint64_t(id);
-        }
-        if (key != ~uint64_t(0)) {
-            uint kernel = uint(key & 0xffffffffUL);
-            SplatKernelSample f = splatKernel(kernel, vec2(p) + 0.5, imageLoad(meshDistance, pixel).r);
-            vec4 rest = accum - splatOitWeight(f) * vec4(f.premul, f.alpha);
-            // Below about 1e-6 of accum.a the difference is float noise and the others' mean
-            // colour cannot be told: take the mean of all (f's, mostly) there.
-            vec3 average = rest.a > 1e-5 * accum.a ? max(rest.rgb, vec3(0.0)) / rest.a : oitAverage(accum);
-            color = f.premul + (1.0 - f.alpha) * oitComposite(average, max(tau - f.tau, 0.0), base);
-        } else {
-            color = oitComposite(oitAverage(accum), tau, base);
-        }
+        color = oitComposite(oitAverage(accum), tau, base);
+    }
+    if (listed) {
+        uint i = atomicAdd(list.count, 1u);
+        listPixels[i] = p.x | p.y << 16u;
+        atomicMax(list.groupsX, i / (kSplatResolveTile * kSplatResolveTile) + 1u);
+        return; // the second dispatch writes the result
     }
     imageStore(result, pixel, vec4(color, 1.0));
 }

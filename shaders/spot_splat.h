@@ -99,6 +99,20 @@ SPOT_CONST uint kSplatBindOitFixed = 19u;    /* uint64_t[pixel * kSplatFixedChan
                                                 small kernels' OIT sums in fixed point */
 SPOT_CONST uint kSplatBindOitTiles = 20u;    /* uint[tile]: non-zero where some pixel of the
                                                 kSplatResolveTile^2 tile has fixed-point sums */
+SPOT_CONST uint kSplatBindClosestList = 21u; /* SpotSplatList, then uint[pixel]: the pixels with a
+                                                closest kernel (hybrid, instanced resolve) */
+
+/* The resolve's list of the pixels with a closest kernel (hybrid, instanced): its first dispatch
+ * resolves every other pixel and lists these, packed x | y << 16; its second, indirect, evaluates
+ * the closest kernel at each listed pixel (kSplatSpecResolveList). lavapipe runs a shader's
+ * straight-line code for every SIMD batch of 8 pixels, whether or not a lane needs it, so one
+ * dispatch evaluating the kernel where a pixel has one cost that evaluation at every pixel. */
+struct SpotSplatList {
+    uint groupsX; /* the second dispatch's VkDispatchIndirectCommand: (count + 63) / 64, 1, 1 */
+    uint groupsY;
+    uint groupsZ;
+    uint count; /* listed pixels */
+};
 
 /* Counters the splat pass writes when counting (RenderSettings::countFragments). */
 struct SpotSplatCounters {
@@ -118,6 +132,8 @@ SPOT_CONST uint kSplatSpecCount = 7u;        /* bool: count fragments and covere
 SPOT_CONST uint kSplatSpecResolve = 8u;      /* uint: kSplatResolve* (resolve) */
 SPOT_CONST uint kSplatSpecScreen = 9u;       /* bool: prepare writes screen lobes and bounds too
                                                 (the ray-march reads world lobes only) */
+SPOT_CONST uint kSplatSpecResolveList = 11u; /* bool: the resolve's second dispatch, over the
+                                                listed pixels (SpotSplatList) */
 SPOT_CONST uint kSplatSpecSmallPixels = 10u; /* uint: kernels whose quad's pixel box holds at most
                                                 this many pixel centres take the compute path
                                                 (splat_small.comp); 0: every kernel is drawn */

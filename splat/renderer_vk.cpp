@@ -38,6 +38,11 @@ constexpr std::uint64_t kCommonBytesPerPixel = 16 + 4 + 4 + 16;
 constexpr std::uint64_t kOitBytesPerPixel = 16 + 4;
 constexpr std::uint64_t kAtomicBytesPerPixel = 8;
 constexpr std::uint64_t kClosestPassBytesPerPixel = 4 + 4;
+/// With either, the resolve's list of the pixels with a closest kernel (and its header).
+constexpr std::uint64_t kListBytesPerPixel = 4;
+
+/// Whether the method resolves a closest kernel per pixel (the resolve's list).
+bool usesClosest(Method m) { return m == Method::Hybrid || m == Method::Instanced; }
 /// The compute path's fixed-point OIT sums (oit, hybrid).
 constexpr std::uint64_t kFixedBytesPerPixel = kSplatFixedChannels * sizeof(std::uint64_t);
 /// Their tiles' flags: one uint per resolve workgroup.
@@ -135,8 +140,14 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
                     storageImage(kSplatBindOpticalDepth), storageImage(kSplatBindMeshDistance),
                     storageBuffer(kSplatBindClosest), storageImage(kSplatBindClosestKernel),
                     storageImage(kSplatBindResult), storageBuffer(kSplatBindOitFixed),
-                    storageBuffer(kSplatBindOitTiles)});
+                    storageBuffer(kSplatBindOitTiles), storageBuffer(kSplatBindClosestList)});
     p.resolve = makeComputePipeline(m_ctx, spirv(spv_splat_resolve_comp), resolve, push, spec);
+    if (!roofline && (s.resolve == kSplatResolveHybrid || s.resolve == kSplatResolveHybridPass ||
+                      s.resolve == kSplatResolveInstanced)) {
+        Specialization listed = spec;
+        listed.set(kSplatSpecResolveList, true);
+        p.resolveList = makeComputePipeline(m_ctx, spirv(spv_splat_resolve_comp), resolve, push, listed);
+    }
     if (s.smallPixels > 0 && !roofline) {
         Bindings small = lobes;
         small.insert(small.end(),
@@ -218,6 +229,8 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
                                                                  : kAtomicBytesPerPixel;
     if (m_method == Method::Instanced)
         perPixel += kAtomicBytesPerPixel;
+    if (usesClosest(m_method))
+        perPixel += kListBytesPerPixel;
     std::uint64_t tileBytes = 0;
     if (usesFixed(m_method, settings, fixedFits(std::uint64_t(width), std::uint64_t(height)))) {
         perPixel += kFixedBytesPerPixel;
@@ -241,8 +254,10 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
                         (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
     const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
     const bool fixed = usesFixed(m_method, settings, fixedFits(width, height));
+    const bool list = usesClosest(m_method);
     const bool have = m_width == width && m_height == height && m_base.handle() &&
                       (!oit || m_accum.handle()) && (!atomic || m_closest.handle()) &&
+                      (!list || m_closestList.handle()) &&
                       (!fixed || m_oitFixed.handle()) &&
                       (m_closestKernel.width() == (pass ? width : 1));
     if (have)
@@ -253,10 +268,11 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     const std::uint64_t need =
         pixels * (kCommonBytesPerPixel + (oit ? kOitBytesPerPixel : 0) +
                   (atomic ? kAtomicBytesPerPixel : 0) + (pass ? kClosestPassBytesPerPixel : 0) +
+                  (list ? kListBytesPerPixel : 0) +
                   (fixed ? kFixedBytesPerPixel : 0)) +
-        (fixed ? fixedTileBytes(width, height) : 0);
-    std::uint64_t held =
-        m_closest.reservedBytes() + m_oitFixed.reservedBytes() + m_oitTiles.reservedBytes();
+        (fixed ? fixedTileBytes(width, height) : 0) + (list ? sizeof(SpotSplatList) : 0);
+    std::uint64_t held = m_closest.reservedBytes() + m_closestList.reservedBytes() +
+                         m_oitFixed.reservedBytes() + m_oitTiles.reservedBytes();
     for (const Image* i : {&m_base, &m_distance, &m_depth, &m_accum, &m_opticalDepth,
                            &m_closestKernel, &m_closestDepth, &m_result})
         held += i->reservedBytes();
@@ -275,6 +291,7 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     m_closestDepth = Image();
     m_result = Image();
     m_closest = Buffer();
+    m_closestList = Buffer();
     m_oitFixed = Buffer();
     m_oitTiles = Buffer();
     m_width = m_height = 0;
@@ -295,6 +312,11 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
         m_closest = Buffer(m_ctx, pixels * sizeof(std::uint64_t),
                            kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::DeviceLocal,
                            "splat closest kernels");
+    if (list)
+        m_closestList = Buffer(m_ctx, sizeof(SpotSplatList) + pixels * kListBytesPerPixel,
+                               kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                   VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                               Buffer::Memory::DeviceLocal, "splat resolve's listed pixels");
     if (fixed) {
         m_oitFixed = Buffer(m_ctx, pixels * kFixedBytesPerPixel,
                             kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::DeviceLocal,
@@ -601,7 +623,17 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
                   kCompute | kHostStage, kStorageRW | VK_ACCESS_2_HOST_READ_BIT);
     timer.mark(cmd, "splat");
 
-    // 4. Resolve into the result image.
+    // 4. Resolve into the result image (hybrid, instanced: in two dispatches, SpotSplatList).
+    const bool listed = p.resolveList.handle() != VK_NULL_HANDLE;
+    if (listed) {
+        // (after the previous frame's second dispatch read it)
+        memoryBarrier(cmd, kCompute | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+                      kStorageRW | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT, kTransfer,
+                      VK_ACCESS_2_TRANSFER_WRITE_BIT);
+        const SpotSplatList emptyList{0u, 1u, 1u, 0u};
+        vkCmdUpdateBuffer(cmd, m_closestList.handle(), 0, sizeof(emptyList), &emptyList);
+        memoryBarrier(cmd, kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute, kStorageRW);
+    }
     transitionImage(cmd, m_result.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                     VK_PIPELINE_STAGE_2_NONE, 0, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.resolve.handle());
@@ -621,9 +653,19 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .image(kSplatBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .buffer(kSplatBindOitFixed, m_oitFixed.handle() ? m_oitFixed : m_counters)
         .buffer(kSplatBindOitTiles, m_oitTiles.handle() ? m_oitTiles : m_counters)
-        .push(m_ctx, cmd, p.resolve);
+        .buffer(kSplatBindClosestList, listed ? m_closestList : m_counters);
+    resolve.push(m_ctx, cmd, p.resolve);
     vkCmdDispatch(cmd, (width + kSplatResolveTile - 1) / kSplatResolveTile,
                   (height + kSplatResolveTile - 1) / kSplatResolveTile, 1);
+    if (listed) {
+        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      kCompute | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+                      kStorageRW | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.resolveList.handle());
+        pushFrame(cmd, p.resolveList, f.frame);
+        resolve.push(m_ctx, cmd, p.resolveList);
+        vkCmdDispatchIndirect(cmd, m_closestList.handle(), 0);
+    }
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                   kCompute | kTransfer | kHostStage,
                   kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);

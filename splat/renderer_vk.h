@@ -90,6 +90,7 @@ private:
     };
     struct Pipelines {
         Pipeline prepare, compact, splat, small, closest, sortKeys, resolve;
+        Pipeline resolveList; ///< hybrid, instanced: the resolve's second dispatch (the listed pixels)
     };
     const Pipelines& pipelines(const Spec& spec, bool roofline);
     /// Whether a width x height frame's fixed-point sums fit one storage buffer binding (else
@@ -109,6 +110,7 @@ private:
     Image m_base, m_distance, m_depth, m_accum, m_opticalDepth, m_closestKernel, m_closestDepth,
         m_result;
     Buffer m_closest; ///< hybrid (atomic): uint64 per pixel
+    Buffer m_closestList; ///< hybrid, instanced: SpotSplatList and a uint per pixel
     /// oit, hybrid with the compute path: the small kernels' fixed-point OIT sums
     /// (kSplatFixedChannels uint64 per pixel), zero between frames (the resolve clears what it
     /// reads); cleared once after it is made. The tiles' flags are cleared every frame.
