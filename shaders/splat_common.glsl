@@ -26,6 +26,10 @@ layout(constant_id = kSplatSpecResolve) const uint kResolve = kSplatResolveOit;
 layout(constant_id = kSplatSpecScreen) const bool kScreen = true;
 layout(constant_id = kSplatSpecSmallPixels) const uint kSmallPixels = 0u;
 layout(constant_id = kSplatSpecResolveList) const bool kResolveList = false;
+// Lambert's gradient terms as varyings (splatShadeLobes; spot_splat.h
+// kSplatMaxShadeVaryingLobes), and the size of their arrays (1 when unused).
+const bool kShadeVaryings = kLambert && kLobes <= kSplatMaxShadeVaryingLobes;
+const uint kShadeLobes = kShadeVaryings ? kLobes : 1u;
 
 // The ray through continuous pixel position p (pixels, (0,0) top-left), as noise::CameraRays:
 // world origin and unit direction. (The projection is also read from the frame: the ray-march's
@@ -147,6 +151,9 @@ vec3 splatShade(vec3 color, vec3 normal) {
 // G_m(t) = exp(-(p_m + |v_m|^2 (t - t*_m)^2) / 2), p_m = |w_m|^2 / |v_m|^2, and its world gradient
 // direction A_m^T u_m(t) = P_m + t Q_m with P_m = A_m^T o'_m and Q_m = A_m^T v_m: a point costs
 // a few multiplies and one exp per lobe, A_m^T being loaded and applied once per pixel.
+#ifdef SPLAT_FRAGMENT
+void splatShadeTerms(uint m, out vec3 P, out vec3 Q, out float amplitude); // below
+#endif
 void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float peaks[kLobes],
                      float depths[kLobes], float tEnd, vec3 d, inout float shades[kLobes]) {
     float k = frame.size.w;
@@ -156,14 +163,21 @@ void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float 
     float vv[kLobes];
     float amps[kLobes];
     for (uint m = 0u; m < kLobes; ++m) {
-        SpotWorldLobe w = splatWorldLobe(first, m);
-        mat3 At = transpose(mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz));
-        P[m] = At * origins[m];
-        Q[m] = At * dirs[m];
+#ifdef SPLAT_FRAGMENT
+        if (kShadeVaryings) // from splat_quad.vert: no per-pixel loads or matrix products
+            splatShadeTerms(m, P[m], Q[m], amps[m]);
+        else
+#endif
+        {
+            SpotWorldLobe w = splatWorldLobe(first, m);
+            mat3 At = transpose(mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz));
+            P[m] = At * origins[m];
+            Q[m] = At * dirs[m];
+            amps[m] = w.color.w;
+        }
         vv[m] = dot(dirs[m], dirs[m]);
         vec3 perp = origins[m] + peaks[m] * dirs[m];
         perp2[m] = dot(perp, perp);
-        amps[m] = w.color.w;
     }
     for (uint l = 0u; l < kLobes; ++l) {
         if (!(depths[l] > 0.0))
@@ -209,7 +223,19 @@ layout(location = 1) noperspective in vec3 vLobeA[kLobes];
 layout(location = 9) flat in vec4 vLobeB[kLobes];
 layout(location = 17) flat in vec3 vColor;
 // The view depth of the kernel support's nearest point (SpotKernelBound.axis.w).
-layout(location = 25) flat in float vNearDepth;
+layout(location = 18) flat in float vNearDepth;
+// Lambert (kShadeVaryings): each lobe's gradient terms P = A^T o' and Q = A^T v (splatShadeLobes),
+// the one affine in the pixel interpolated (vShadeA: Q in perspective, P in orthographic), the
+// other constant (vShadeB). Locations 19 to 30 at most (6 lobes).
+layout(location = 19) noperspective in vec3 vShadeA[kShadeLobes];
+layout(location = 25) flat in vec3 vShadeB[kShadeLobes];
+
+// Lobe m's gradient terms and amplitude from the varyings (kShadeVaryings).
+void splatShadeTerms(uint m, out vec3 P, out vec3 Q, out float amplitude) {
+    P = kOrthographic ? vShadeA[m] : vShadeB[m];
+    Q = kOrthographic ? vShadeB[m] : vShadeA[m];
+    amplitude = vLobeB[m].w;
+}
 // The kernel lobes' colours (kSplatSpecLobeColor).
 layout(constant_id = 16) const float kLobeColor0r = 1.0;
 layout(constant_id = 17) const float kLobeColor0g = 1.0;

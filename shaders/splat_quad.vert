@@ -11,12 +11,17 @@
 layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
 layout(std430, binding = kSplatBindVisible) readonly buffer Visible { uint visible[]; };
 layout(std430, binding = kSplatBindScreenLobes) readonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
+layout(std430, binding = kSplatBindWorldLobes) readonly buffer WorldLobes { SpotWorldLobe worldLobes[]; };
 
 layout(location = 0) flat out uint vKernel;
 layout(location = 1) noperspective out vec3 vLobeA[kLobes];
 layout(location = 9) flat out vec4 vLobeB[kLobes];
 layout(location = 17) flat out vec3 vColor;
-layout(location = 25) flat out float vNearDepth;
+layout(location = 18) flat out float vNearDepth;
+// Lambert (kShadeVaryings, splat_common.glsl): per lobe A^T applied to the lobe-space ray, the
+// part affine in the pixel (vShadeA) and the constant one (vShadeB).
+layout(location = 19) noperspective out vec3 vShadeA[kShadeLobes];
+layout(location = 25) flat out vec3 vShadeB[kShadeLobes];
 
 void main() {
     uint kernel = visible[gl_InstanceIndex];
@@ -40,5 +45,15 @@ void main() {
         vec3 o = (cross(v, w) + on * v) / dot(v, v); // w = o x v, on = o.v
         vLobeA[l] = kOrthographic ? o : v;
         vLobeB[l] = vec4(kOrthographic ? v : o, s.ky.w);
+        if (kShadeVaryings) {
+            SpotWorldLobe wl = worldLobes[kernel * kLobes + l];
+            mat3 At = transpose(mat3(wl.a0.xyz, wl.a1.xyz, wl.a2.xyz));
+            vShadeA[l] = At * vLobeA[l];
+            vShadeB[l] = At * vLobeB[l].xyz;
+        }
+    }
+    if (!kShadeVaryings) {
+        vShadeA[0] = vec3(0.0);
+        vShadeB[0] = vec3(0.0);
     }
 }

@@ -157,6 +157,11 @@ SPOT_CONST uint kSplatFlagLambert = 2u;     /* Lambert + ambient shading, else u
 /* Lobes per kernel at most (the kernel's varyings are sized for them). */
 SPOT_CONST uint kSplatMaxLobes = 8u;
 
+/* Lambert shading's per-lobe gradient terms reach the fragment shader as varyings for kernels of
+ * at most this many lobes (splat_common.glsl, vShadeA and vShadeB); with more they would exceed
+ * lavapipe's 32 varying locations, and the fragment shader loads the world lobes instead. */
+SPOT_CONST uint kSplatMaxShadeVaryingLobes = 6u;
+
 /* Kernel samples (paper eq. 10's N_s) at most. Every shader invocation stays far below lavapipe's
  * 65,535 loop iterations: a march costs N x (lobes + 1) <= 2048 x 9 = 18,432 iterations, the
  * analytic path at most about 300. */
