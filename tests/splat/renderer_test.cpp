@@ -975,6 +975,55 @@ TEST(SplatRenderer, SmallKernelsRenderAsTheRasterPathDoes) {
     }
 }
 
+TEST(SplatRenderer, LambertTermsFromTheVertexShaderMatchTheLoadedOnes) {
+    // Lambert shading: a drawn kernel of up to kSplatMaxShadeVaryingLobes lobes gets each lobe's
+    // gradient terms from the vertex shader (varyings), one with more lobes loads its world lobes
+    // per fragment, and the compute path of small kernels loads them once per kernel. On lichen's
+    // impulses at 48x48 (every kernel small), with lichen's 3 lobes and a 7-lobe variant, drawing
+    // every kernel (smallPixels 0) must give the compute path's image up to float rounding.
+    const SceneSetup s = loadSetup("lichen-torus", 48);
+    ASSERT_EQ(s.scene.shading.mode, noise::Shading::Mode::Lambert);
+    const noise::PresetDesc preset = noise::loadPreset(s.scene.preset);
+    const noise::KernelDesc three = preset.kernel;
+    noise::KernelDesc seven = three;
+    for (int i = 0; seven.lobes.size() < 7; ++i) {
+        noise::LobeDesc lobe = preset.kernel.lobes[std::size_t(i) % preset.kernel.lobes.size()];
+        lobe.offset += glm::vec3(0.15f * float(i + 1), -0.1f * float(i), 0.02f * float(i));
+        lobe.color = glm::vec3(0.3f + 0.1f * float(i), 0.5f, 0.7f - 0.1f * float(i));
+        seven.lobes.push_back(lobe);
+    }
+    ASSERT_GT(seven.lobes.size(), std::size_t(splat::gpu_splat::kSplatMaxShadeVaryingLobes));
+    ASSERT_LE(preset.kernel.lobes.size(), std::size_t(splat::gpu_splat::kSplatMaxShadeVaryingLobes));
+    splat::Context ctx(validated());
+    const splat::Buffer impulses = upload(ctx, s.impulses);
+    const auto count = std::uint32_t(s.impulses.size());
+    for (const noise::KernelDesc* desc : {&three, static_cast<const noise::KernelDesc*>(&seven)}) {
+        SplatRig renderer(ctx, s.mesh, noise::buildKernel(*desc));
+        for (splat::Method method : {splat::Method::Oit, splat::Method::Hybrid}) {
+            SplatSettings drawn;
+            drawn.method = method;
+            drawn.smallPixels = 0;
+            SplatSettings small = drawn;
+            small.smallPixels = int(splat::gpu_splat::kSplatMaxSmallPixels);
+            splat::FrameStats drawnStats, smallStats;
+            const noise::Image a = renderer.render(s.scene.camera, s.scene.shading, s.scene.background,
+                                                   s.scene.baseColor, impulses, count, drawn, &drawnStats);
+            const noise::Image b = renderer.render(s.scene.camera, s.scene.shading, s.scene.background,
+                                                   s.scene.baseColor, impulses, count, small, &smallStats);
+            const std::string label = cat(desc->lobes.size(), " lobes ", splat::methodName(method));
+            EXPECT_EQ(extraCounter(drawnStats, "kernels_small"), 0.0) << label;
+            EXPECT_GT(extraCounter(smallStats, "kernels_small"),
+                      0.9 * double(smallStats.counters.kernelsDrawn)) << label;
+            const ImageDifference d = difference(a, b);
+            std::printf("    %s: max %.2e mean %.2e changed %.4f\n", label.c_str(), d.maxAbs,
+                        d.meanAbs, d.changed);
+            EXPECT_LT(d.maxAbs, 2e-3) << label;
+            EXPECT_LT(d.meanAbs, 5e-6) << label;
+        }
+    }
+    expectNoValidationErrors(ctx);
+}
+
 TEST(SplatRenderer, SmallKernelsFixedSumsFitOneBinding) {
     // oit and hybrid's fixed-point sums take 40 bytes a pixel, made with the targets; where they
     // would not fit one storage buffer binding the frame draws every kernel instead (instanced
