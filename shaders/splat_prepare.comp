@@ -173,13 +173,25 @@ bool clippedConicBox(SpotScreenLobe s, float k, out vec2 lo, out vec2 hi) {
     lo = vec2(3e38);
     hi = vec2(-3e38);
     float coeffs[6] = float[6](m00, m01, m11, b0, b1, c);
+    float largest = 0.0;
     for (int j = 0; j < 6; ++j) {
         if (isnan(coeffs[j]) || isinf(coeffs[j])) {
             lo = vec2(0.0);
             hi = frame.size.xy;
             return true;
         }
+        largest = max(largest, abs(coeffs[j]));
     }
+    if (!(largest > 0.0))
+        return false;
+    // A positive scale leaves the region f < 0 as it is; scaled to at most 1, the products below
+    // (squares of coefficients times squared pixel offsets) cannot overflow.
+    m00 /= largest;
+    m01 /= largest;
+    m11 /= largest;
+    b0 /= largest;
+    b1 /= largest;
+    c /= largest;
     // Corners inside the region.
     for (int j = 0; j < 4; ++j) {
         vec2 d = vec2((j & 1) != 0 ? rectHi.x : rectLo.x, (j & 2) != 0 ? rectHi.y : rectLo.y);
