@@ -84,21 +84,36 @@ SpotScreenLobe screenLobe(mat3 A, vec3 c, vec3 color, float amplitude, out vec2 
     return s;
 }
 
-// The screen ellipse of a lobe: pixels p = ref + d with |w|^2 < k^2 |v|^2, the conic
-// d^T M d + 2 b.d + c < 0. Returns false when it is not a bounded ellipse (the support reaches
-// the eye plane, or is degenerate); else `centre` (pixels) and `shape` S, the ellipse being
-// (x - centre)^T S^-1 (x - centre) <= 1. `seen` is false when no pixel ray meets the support.
-bool screenEllipse(SpotScreenLobe s, float k, out vec2 centre, out mat2 shape, out bool seen) {
+// The pixels p = ref + d whose ray line meets a lobe's k-sigma support: |w|^2 < k^2 |v|^2 with
+// w and v affine in d (SpotScreenLobe), the conic f(d) = d^T M d + 2 b.d + c < 0.
+struct SupportConic {
+    float m00, m01, m11; // M
+    float b0, b1;        // b
+    float c;
+};
+
+SupportConic supportConic(SpotScreenLobe s, float k) {
     float k2 = k * k;
     vec3 k0 = s.k0.xyz;
     vec3 kx = s.kx.xyz;
     vec3 ky = s.ky.xyz;
-    float m00 = dot(kx, kx) - k2 * dot(s.vx.xyz, s.vx.xyz);
-    float m01 = dot(kx, ky) - k2 * dot(s.vx.xyz, s.vy.xyz);
-    float m11 = dot(ky, ky) - k2 * dot(s.vy.xyz, s.vy.xyz);
-    float b0 = dot(k0, kx) - k2 * dot(s.v0.xyz, s.vx.xyz);
-    float b1 = dot(k0, ky) - k2 * dot(s.v0.xyz, s.vy.xyz);
-    float c = dot(k0, k0) - k2 * dot(s.v0.xyz, s.v0.xyz);
+    SupportConic q;
+    q.m00 = dot(kx, kx) - k2 * dot(s.vx.xyz, s.vx.xyz);
+    q.m01 = dot(kx, ky) - k2 * dot(s.vx.xyz, s.vy.xyz);
+    q.m11 = dot(ky, ky) - k2 * dot(s.vy.xyz, s.vy.xyz);
+    q.b0 = dot(k0, kx) - k2 * dot(s.v0.xyz, s.vx.xyz);
+    q.b1 = dot(k0, ky) - k2 * dot(s.v0.xyz, s.vy.xyz);
+    q.c = dot(k0, k0) - k2 * dot(s.v0.xyz, s.v0.xyz);
+    return q;
+}
+
+// The screen ellipse of a lobe (supportConic's region). Returns false when it is not a bounded
+// ellipse (the support reaches the eye plane, or is degenerate); else `centre` (pixels) and
+// `shape` S, the ellipse being (x - centre)^T S^-1 (x - centre) <= 1. `seen` is false when no
+// pixel ray meets the support.
+bool screenEllipse(SpotScreenLobe s, float k, out vec2 centre, out mat2 shape, out bool seen) {
+    SupportConic q = supportConic(s, k);
+    float m00 = q.m00, m01 = q.m01, m11 = q.m11, b0 = q.b0, b1 = q.b1, c = q.c;
     float det = m00 * m11 - m01 * m01;
     centre = vec2(s.k0.w, s.kx.w);
     shape = mat2(0.0);
@@ -150,23 +165,14 @@ void growInRect(vec2 p, vec2 rectLo, vec2 rectHi, inout vec2 lo, inout vec2 hi) 
 
 // The axis-aligned box (pixels) of the image pixels whose ray line meets the lobe's k-sigma
 // support, for a lobe whose projection is not a bounded ellipse (the support reaches the eye
-// plane): the conic f(d) = d^T M d + 2 b.d + c < 0 (screenEllipse's, d = p - ref) clipped to the
-// image. The region's extremes lie at the image corners inside it, where the conic crosses the
-// image's edges, or where the conic's tangent is vertical (x extremes) or horizontal (y extremes),
-// so the box of those points is exact (a line meeting the support behind the eye counts too:
+// plane): supportConic's region clipped to the image. The region's extremes lie at the image
+// corners inside it, where the conic crosses the image's edges, or where the conic's tangent is
+// vertical (x extremes) or horizontal (y extremes), so the box of those points is exact (a line meeting the support behind the eye counts too:
 // conservative). Returns false when the region misses the image; a box of the whole image when
 // the conic's numbers are not finite.
 bool clippedConicBox(SpotScreenLobe s, float k, out vec2 lo, out vec2 hi) {
-    float k2 = k * k;
-    vec3 k0 = s.k0.xyz;
-    vec3 kx = s.kx.xyz;
-    vec3 ky = s.ky.xyz;
-    float m00 = dot(kx, kx) - k2 * dot(s.vx.xyz, s.vx.xyz);
-    float m01 = dot(kx, ky) - k2 * dot(s.vx.xyz, s.vy.xyz);
-    float m11 = dot(ky, ky) - k2 * dot(s.vy.xyz, s.vy.xyz);
-    float b0 = dot(k0, kx) - k2 * dot(s.v0.xyz, s.vx.xyz);
-    float b1 = dot(k0, ky) - k2 * dot(s.v0.xyz, s.vy.xyz);
-    float c = dot(k0, k0) - k2 * dot(s.v0.xyz, s.v0.xyz);
+    SupportConic q = supportConic(s, k);
+    float m00 = q.m00, m01 = q.m01, m11 = q.m11, b0 = q.b0, b1 = q.b1, c = q.c;
     vec2 ref = vec2(s.k0.w, s.kx.w);
     vec2 rectLo = -ref;
     vec2 rectHi = frame.size.xy - ref;

@@ -736,7 +736,8 @@ TEST(RaymarchFrame, ThroughTheRegistryAndTheFrame) {
 // ---- Determinism, refused input -----------------------------------------------------------------
 
 TEST(Raymarch, ImagesAreByteIdenticalAcrossRuns) {
-    setenv("LP_NUM_THREADS", "2", 1); // lavapipe's threads: pinned before any context exists here
+    ScopedLavapipeThreads lavapipe; // lavapipe's threads: pinned before any context exists here
+    lavapipe.set("2");
     std::vector<noise::Image> images[2];
     for (int run = 0; run < 2; ++run) {
         splat::Context ctx(validated());

@@ -818,7 +818,8 @@ TEST(SplatRendererScenes, HybridFindsTheSameClosestKernelEitherWay) {
 
 TEST(SplatRenderer, ImagesAreByteIdenticalAcrossRuns) {
     // lavapipe's rasterizer threads: pinned before any context exists in this test.
-    setenv("LP_NUM_THREADS", "2", 1);
+    ScopedLavapipeThreads lavapipe;
+    lavapipe.set("2");
     const SceneSetup s = loadSetup("fur-bunny-close", 64);
     std::vector<noise::Image> images[2];
     for (int run = 0; run < 2; ++run) {
@@ -847,12 +848,11 @@ TEST(SplatRenderer, SortedIsByteIdenticalOnOneAndTwoThreads) {
     // lavapipe reads LP_NUM_THREADS when an instance creates its device: each Context below has
     // its own thread count. The sort has no atomics and blending follows primitive order, so the
     // image may not depend on it.
-    const char* previous = std::getenv("LP_NUM_THREADS");
-    const std::string saved = previous ? previous : "";
+    ScopedLavapipeThreads lavapipe;
     const SceneSetup s = loadSetup("fur-bunny", 64);
     std::vector<noise::Image> images;
     for (const char* threads : {"1", "2", "1"}) {
-        setenv("LP_NUM_THREADS", threads, 1);
+        lavapipe.set(threads);
         splat::Context ctx(validated());
         SplatRig renderer(ctx, s.mesh, s.kernel);
         const splat::Buffer impulses = upload(ctx, s.impulses);
@@ -863,10 +863,6 @@ TEST(SplatRenderer, SortedIsByteIdenticalOnOneAndTwoThreads) {
                                          std::uint32_t(s.impulses.size()), settings));
         expectNoValidationErrors(ctx);
     }
-    if (previous)
-        setenv("LP_NUM_THREADS", saved.c_str(), 1);
-    else
-        unsetenv("LP_NUM_THREADS");
     for (std::size_t i = 1; i < images.size(); ++i)
         EXPECT_EQ(std::memcmp(images[0].pixels.data(), images[i].pixels.data(),
                               images[0].pixels.size() * sizeof(glm::vec3)),
@@ -1052,12 +1048,11 @@ TEST(SplatRenderer, SmallKernelsAreByteIdenticalOnOneAndTwoThreads) {
     // integers (associative) and its closest kernel an atomicMin of a total order, so the image
     // may not depend on the thread count nor the run. Every kernel small (the most atomics on
     // shared pixels), and the default split.
-    const char* previous = std::getenv("LP_NUM_THREADS");
-    const std::string saved = previous ? previous : "";
+    ScopedLavapipeThreads lavapipe;
     const SceneSetup s = loadSetup("fur-bunny", 64);
     std::vector<std::vector<noise::Image>> images;
     for (const char* threads : {"1", "2", "1"}) {
-        setenv("LP_NUM_THREADS", threads, 1);
+        lavapipe.set(threads);
         splat::Context ctx(validated());
         SplatRig renderer(ctx, s.mesh, s.kernel);
         const splat::Buffer impulses = upload(ctx, s.impulses);
@@ -1076,10 +1071,6 @@ TEST(SplatRenderer, SmallKernelsAreByteIdenticalOnOneAndTwoThreads) {
                 }
         expectNoValidationErrors(ctx);
     }
-    if (previous)
-        setenv("LP_NUM_THREADS", saved.c_str(), 1);
-    else
-        unsetenv("LP_NUM_THREADS");
     for (std::size_t run = 0; run < images.size(); ++run)
         for (std::size_t i = 0; i < images[run].size(); ++i) {
             const noise::Image& first = images[0][i & ~std::size_t(1)];

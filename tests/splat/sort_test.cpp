@@ -17,16 +17,12 @@
 
 #include "noise/error.h"
 #include "splat/sort_vk.h"
+#include "splat_test_support.h"
 
 namespace {
 
 using namespace spot;
-
-splat::ContextOptions validated() {
-    splat::ContextOptions o;
-    o.validation = true;
-    return o;
-}
+using spot::test::validated;
 
 struct Pairs {
     std::vector<std::uint32_t> keys, values;
@@ -194,13 +190,12 @@ TEST(RadixSort, Throughput) {
 TEST(RadixSort, ByteIdenticalOnOneAndTwoThreads) {
     // lavapipe reads LP_NUM_THREADS when an instance creates its device: each Context is a new
     // instance, so each run below has its own thread count.
-    const char* previous = std::getenv("LP_NUM_THREADS");
-    const std::string saved = previous ? previous : "";
+    spot::test::ScopedLavapipeThreads lavapipe;
     const Pairs in = randomPairs(777'777, 3, 0x00ff0fffu); // many duplicates
     Pairs runs[3];
     const char* threads[3] = {"1", "2", "2"};
     for (int r = 0; r < 3; ++r) {
-        setenv("LP_NUM_THREADS", threads[r], 1);
+        lavapipe.set(threads[r]);
         splat::Context ctx(validated());
         splat::RadixSort sort(ctx);
         runs[r] = in;
@@ -209,10 +204,6 @@ TEST(RadixSort, ByteIdenticalOnOneAndTwoThreads) {
         std::printf("LP_NUM_THREADS=%s: %.1f ms\n", threads[r], ms);
         EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
     }
-    if (previous)
-        setenv("LP_NUM_THREADS", saved.c_str(), 1);
-    else
-        unsetenv("LP_NUM_THREADS");
     for (int r = 1; r < 3; ++r) {
         EXPECT_EQ(runs[r].keys, runs[0].keys) << r;
         EXPECT_EQ(runs[r].values, runs[0].values) << r;

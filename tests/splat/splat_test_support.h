@@ -2,7 +2,9 @@
 // references (rendered once per test process).
 #pragma once
 
+#include <cstdlib>
 #include <map>
+#include <optional>
 #include <memory>
 #include <span>
 #include <string>
@@ -32,6 +34,29 @@ inline splat::ContextOptions validated() {
 inline void expectNoValidationErrors(const splat::Context& ctx) {
     EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
 }
+
+/// lavapipe's thread count (LP_NUM_THREADS, read when a Context creates its device) for this
+/// object's life: set() before each Context; the value found at construction comes back at
+/// destruction (or the variable is unset again).
+class ScopedLavapipeThreads {
+public:
+    ScopedLavapipeThreads() {
+        if (const char* previous = std::getenv("LP_NUM_THREADS"))
+            m_saved = previous;
+    }
+    ~ScopedLavapipeThreads() {
+        if (m_saved)
+            setenv("LP_NUM_THREADS", m_saved->c_str(), 1);
+        else
+            unsetenv("LP_NUM_THREADS");
+    }
+    ScopedLavapipeThreads(const ScopedLavapipeThreads&) = delete;
+    ScopedLavapipeThreads& operator=(const ScopedLavapipeThreads&) = delete;
+    void set(const char* threads) { setenv("LP_NUM_THREADS", threads, 1); }
+
+private:
+    std::optional<std::string> m_saved;
+};
 
 /// CPU impulses in a host-visible storage buffer, in the GPU layout.
 inline splat::Buffer upload(splat::Context& ctx, const std::vector<noise::Impulse>& impulses) {
