@@ -1,12 +1,9 @@
 // Image metrics on pairs with known answers, and the `compare` command's behaviour.
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <random>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -14,6 +11,7 @@
 #include "noise/error.h"
 #include "noise/image.h"
 #include "splat/image_compare.h"
+#include "cli_run.h"
 
 namespace {
 
@@ -119,26 +117,10 @@ TEST(Compare, DifferentSizesAreAnInputError) {
 
 // ---- the command ---------------------------------------------------------------------------
 
-struct Result {
-    int code = -1;
-    std::string out, err;
-};
-
 std::string tmp(const std::string& name) { return std::string(SPOT_TEST_TMP_DIR) + "/" + name; }
 
-Result run(const std::string& args) {
-    const std::string errFile = tmp("compare-stderr-" + std::to_string(::getpid()) + ".txt");
-    FILE* pipe = popen((std::string(SPOT_SPOTSHELL) + " " + args + " 2>" + errFile).c_str(), "r");
-    Result r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), int(buf.size()), pipe))
-        r.out += buf.data();
-    const int status = pclose(pipe);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(errFile);
-    r.err.assign(std::istreambuf_iterator<char>(in), {});
-    return r;
-}
+using Result = spot::test::CliResult;
+Result run(const std::string& args) { return spot::test::runSpotshell(args); }
 
 TEST(CompareCommand, MetricsAsJsonAndTheDiffImage) {
     const Image a = uniformDisplay(32, 32, glm::vec3(0.3f, 0.5f, 0.2f));
