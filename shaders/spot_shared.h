@@ -272,43 +272,32 @@ SPOT_FN real spotScaledErfHalfSqrt2(real u, real g) {
  * t* = -on / |v|^2, and the lobe-space arc length s = (t - t*) |v| runs over the chord
  * |s| < h = sqrt(k^2 - |w|^2 / |v|^2) clipped to t in [0, tEnd]. Returns the integral over t (per
  * unit peak extinction; multiply by |e| for world units), 0 when the ray misses; `tPeak` receives
- * t*.
+ * t* (0 where the line misses the support).
  * Cost matters here (the splat fragment shaders run it per lobe and pixel), so erf is
- * Abramowitz and Stegun's (absolute error 1.5e-7 on the chord's fraction), and at an unclipped
- * end of the chord the Gaussian's own exponential does for erf's: with G = exp(-|w|^2/(2|v|^2)),
- * exp(-h^2 / 2) = exp(-k^2 / 2) / G, so G erf(h / sqrt 2) = G - poly exp(-k^2 / 2). An unclipped
- * lobe costs one exp, one sqrt and two divisions. */
+ * Abramowitz and Stegun's (absolute error 1.5e-7 on the chord's fraction), and each end s of the
+ * clipped chord costs one division and one exponential: with G = exp(-|w|^2 / (2 |v|^2)),
+ * G erf(|s| / sqrt 2) = G - poly exp(-(|w|^2 / |v|^2 + s^2) / 2). There is no branch: lavapipe
+ * runs the code of every branch that any of its 8 lanes takes, so the clipped and unclipped ends
+ * take the same formula (at an unclipped end, s = +-h, the exponential is exp(-k^2 / 2)). */
 SPOT_FN real spotScreenLobeDepth(rvec3 w, rvec3 v, real on, real tEnd, real k, SPOT_OUT(real) tPeak) {
     real vv = dot(v, v);
     real ww = dot(w, w);
-    tPeak = real(0.0);
-    if (!(ww < k * k * vv))
-        return real(0.0);
     real rs = real(1.0) / sqrt(vv);
     real inv = rs * rs;
     real len = vv * rs;
     real perp2 = ww * inv;
     real tStar = -on * inv;
-    tPeak = tStar;
-    real h = sqrt(k * k - perp2);
+    real h = sqrt(max(k * k - perp2, real(0.0)));
+    real ua = max(-tStar * len, -h);         /* the ray's start, t = 0, or the chord's */
+    real ub = min((tEnd - tStar) * len, h);  /* the mesh, or the chord's end */
     real gauss = exp(real(-0.5) * perp2);
-    real ua = -tStar * len;          /* the ray's start, t = 0 */
-    real ub = (tEnd - tStar) * len;  /* the mesh */
-    if (!(min(ub, h) > max(ua, -h)))
-        return real(0.0);
-    /* G x erf at each end of the chord (the lower end negative). */
-    real ga = -gauss;
-    real gb = gauss;
-    if (ua <= -h || ub >= h) {
-        real full = gauss - spotErfPoly(h * kInvSqrtTwo) * exp(real(-0.5) * k * k);
-        ga = -full;
-        gb = full;
-    }
-    if (ua > -h)
-        ga = spotScaledErfHalfSqrt2(ua, gauss);
-    if (ub < h)
-        gb = spotScaledErfHalfSqrt2(ub, gauss);
-    return kSqrtTwoPi * real(0.5) * (gb - ga) * rs;
+    real ga = gauss - spotErfPoly(abs(ua) * kInvSqrtTwo) * exp(real(-0.5) * (perp2 + ua * ua));
+    real gb = gauss - spotErfPoly(abs(ub) * kInvSqrtTwo) * exp(real(-0.5) * (perp2 + ub * ub));
+    ga = ua < real(0.0) ? -ga : ga;
+    gb = ub < real(0.0) ? -gb : gb;
+    bool meets = ww < k * k * vv; /* the line meets the support */
+    tPeak = meets ? tStar : real(0.0);
+    return meets && ub > ua ? kSqrtTwoPi * real(0.5) * (gb - ga) * rs : real(0.0);
 }
 
 /* Density of a lobe at lobe-space point u, per unit peak extinction, truncated at k. */

@@ -121,7 +121,7 @@ TEST(SplatShared, LobeDepthQuantileInvertsTheDepth) {
 
 TEST(SplatShared, ScreenLobeDepthMatchesTheExactLineIntegral) {
     // The splat shaders' form of a lobe's optical depth (w = o' x v, on = o'.v, v = A e with e the
-    // ray direction at unit view depth; A&S erf, the Gaussian's exponential reused) against the
+    // ray direction at unit view depth; A&S erf, no branch) against the
     // double-precision erfc form of the same integral, on random anisotropic lobes, rays through
     // and beside them, clipped by a mesh before, inside and after the chord, and by the eye.
     std::mt19937 rng(7);
@@ -155,7 +155,7 @@ TEST(SplatShared, ScreenLobeDepthMatchesTheExactLineIntegral) {
                                                    float(glm::dot(o, v)), float(tEnd), float(k), peak);
         // Absolute against the lobe's whole-line depth: erf to 1.5e-7 and float rounding of the
         // inputs and the arithmetic. (The world-space float form, spotLobeDepth in float, reaches
-        // 5.1e-6 on these rays; the screen form 4.0e-6.)
+        // 5.1e-6 on these rays; the screen form 4.7e-6.)
         const double scale = std::sqrt(2.0 * M_PI) / glm::length(v);
         const double error = std::abs(fast - exact) / scale;
         worst = std::max(worst, error);
