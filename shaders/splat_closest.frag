@@ -18,6 +18,8 @@ layout(location = 0) flat in uint vKernel;
 layout(location = 0) out uint outKernel;
 
 void main() {
+    if (!splatMeetsSupport())
+        discard; // alpha 0 (splatMeetsSupport)
     SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, ivec2(gl_FragCoord.xy)).r);
     if (!(s.alpha > kSplatHybridMinAlpha))
         discard;

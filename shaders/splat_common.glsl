@@ -236,6 +236,23 @@ void splatShadeTerms(uint m, out vec3 P, out vec3 Q, out float amplitude) {
     Q = kOrthographic ? vShadeB[m] : vShadeA[m];
     amplitude = vLobeB[m].w;
 }
+// Whether this pixel's ray meets some lobe's support (|w|^2 < k^2 |v|^2, spotScreenLobeDepth's
+// test) at all: a few multiplies per lobe from the varyings. A fragment where it does not has
+// alpha 0 in every path (analytic or sampled), so it can be discarded before the kernel's math;
+// and lavapipe, which runs every branch one of its lanes takes, does skip the rest of a fragment
+// shader for a batch of lanes that are all discarded.
+bool splatMeetsSupport() {
+    float k2 = frame.size.w * frame.size.w;
+    bool meets = false;
+    for (uint l = 0u; l < kLobes; ++l) {
+        vec3 v = kOrthographic ? vLobeB[l].xyz : vLobeA[l];
+        vec3 o = kOrthographic ? vLobeA[l] : vLobeB[l].xyz;
+        vec3 w = cross(o, v);
+        meets = meets || dot(w, w) < k2 * dot(v, v);
+    }
+    return meets;
+}
+
 // The kernel lobes' colours (kSplatSpecLobeColor).
 layout(constant_id = 16) const float kLobeColor0r = 1.0;
 layout(constant_id = 17) const float kLobeColor0g = 1.0;
@@ -455,12 +472,19 @@ float splatOitWeight(SplatKernelSample s) { return spotOitWeight(s.depth, s.alph
 // Fragment efficiency (RenderSettings::countFragments): fragments shaded, and those where the
 // kernel's alpha reaches kSplatHybridMinAlpha. 64-bit counts from two 32-bit atomics each.
 layout(std430, binding = kSplatBindCounters) buffer Counters { SpotSplatCounters counters; };
-void splatCount(float alpha) {
-    if (!kCount)
-        return;
-    if (atomicAdd(counters.fragments.x, 1u) == 0xffffffffu)
+// A fragment (or a compute path's pixel) that reached the shader, counted as shaded whether or
+// not it is discarded before the kernel's math (splatMeetsSupport).
+void splatCountFragment() {
+    if (kCount && atomicAdd(counters.fragments.x, 1u) == 0xffffffffu)
         atomicAdd(counters.fragments.y, 1u);
-    if (alpha >= kSplatHybridMinAlpha && atomicAdd(counters.fragments.z, 1u) == 0xffffffffu)
+}
+// Whether the kernel covers it (alpha at least kSplatHybridMinAlpha).
+void splatCountCovered(float alpha) {
+    if (kCount && alpha >= kSplatHybridMinAlpha && atomicAdd(counters.fragments.z, 1u) == 0xffffffffu)
         atomicAdd(counters.fragments.w, 1u);
+}
+void splatCount(float alpha) {
+    splatCountFragment();
+    splatCountCovered(alpha);
 }
 #endif

@@ -23,8 +23,11 @@ layout(location = 0) flat in uint vKernel;
 
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
+    splatCountFragment();
+    if (!splatMeetsSupport())
+        discard; // alpha 0 (splatMeetsSupport)
     SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, pixel).r);
-    splatCount(s.alpha);
+    splatCountCovered(s.alpha);
     if (s.alpha >= kSplatInstancedMinAlpha) {
         uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
         atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);

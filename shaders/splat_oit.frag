@@ -29,8 +29,11 @@ layout(location = 1) out float outOpticalDepth;
 
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
+    splatCountFragment();
+    if (!splatMeetsSupport())
+        discard; // alpha 0 (splatMeetsSupport)
     SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, pixel).r);
-    splatCount(s.alpha);
+    splatCountCovered(s.alpha);
     if (!(s.alpha > 0.0))
         discard;
     if (kHybridAtomic && s.alpha > kSplatHybridMinAlpha) {

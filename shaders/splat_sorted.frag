@@ -21,8 +21,11 @@ layout(location = 0) flat in uint vKernel;
 layout(location = 0) out vec4 outColor;
 
 void main() {
+    splatCountFragment();
+    if (!splatMeetsSupport())
+        discard; // alpha 0 (splatMeetsSupport)
     SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, ivec2(gl_FragCoord.xy)).r);
-    splatCount(s.alpha);
+    splatCountCovered(s.alpha);
     if (!(s.alpha > 0.0))
         discard;
     outColor = vec4(s.premul, s.alpha);
