@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstdlib>
 #include <cstring>
+#include <malloc.h>
 #include <stdexcept>
 #include <string_view>
 
@@ -32,6 +33,22 @@ struct Context::Messenger {
 };
 
 namespace {
+
+/// lavapipe allocates each draw's vertex shader outputs on the host (about 6 MB for 14,000
+/// instanced quads) and frees them after the draw; glibc then returns the pages to the kernel
+/// (madvise DONTNEED on a thread arena's heap, or munmap above the mmap threshold), so the next
+/// frame's vertex shader faults on every page afresh: 4-5 ms of a 128x128 frame
+/// (docs/design.md section 8). Keep freed memory in the process instead: trim only above 256 MiB
+/// of free heap top, and serve blocks up to 32 MiB (glibc's most) from the heap. Process-wide,
+/// set once when a CPU device is chosen.
+void keepFreedHostMemory() {
+    static const bool done = [] {
+        mallopt(M_TRIM_THRESHOLD, 256 << 20);
+        mallopt(M_MMAP_THRESHOLD, 32 << 20);
+        return true;
+    }();
+    (void)done;
+}
 
 VKAPI_ATTR VkBool32 VKAPI_CALL onMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                          VkDebugUtilsMessageTypeFlagsEXT,
@@ -208,6 +225,8 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
         throw std::runtime_error(message);
     }
     vkGetPhysicalDeviceMemoryProperties(m_physical, &m_memory);
+    if (m_properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU)
+        keepFreedHostMemory();
 
     VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
     VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
