@@ -37,7 +37,7 @@ namespace {
 /// lavapipe allocates each draw's vertex shader outputs on the host (about 6 MB for 14,000
 /// instanced quads) and frees them after the draw; glibc then returns the pages to the kernel
 /// (madvise DONTNEED on a thread arena's heap, or munmap above the mmap threshold), so the next
-/// frame's vertex shader faults on every page afresh: 4-5 ms of a 128x128 frame
+/// frame's vertex shader faults on every page afresh: 3-9 ms of a 128x128 frame
 /// (docs/design.md section 8). Keep freed memory in the process instead: trim only above 256 MiB
 /// of free heap top, and serve blocks up to 32 MiB (glibc's most) from the heap. Process-wide,
 /// set once when a CPU device is chosen.
