@@ -218,30 +218,28 @@ bool SplatRenderer::fixedFits(std::uint64_t width, std::uint64_t height) const {
     return width * height * kFixedBytesPerPixel <= m_ctx.properties().limits.maxStorageBufferRange;
 }
 
+std::uint64_t SplatRenderer::targetBytes(std::uint64_t width, std::uint64_t height,
+                                         const RenderSettings& settings) const {
+    const bool atomic = m_method == Method::Instanced ||
+                        (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
+    const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
+    const bool fixed = usesFixed(m_method, settings, fixedFits(width, height));
+    const bool list = usesClosest(m_method);
+    return width * height *
+               (kCommonBytesPerPixel + (usesOit(m_method) ? kOitBytesPerPixel : 0) +
+                (atomic ? kAtomicBytesPerPixel : 0) + (pass ? kClosestPassBytesPerPixel : 0) +
+                (list ? kListBytesPerPixel : 0) + (fixed ? kFixedBytesPerPixel : 0)) +
+           (fixed ? fixedTileBytes(width, height) : 0) + (list ? sizeof(SpotSplatList) : 0);
+}
+
 std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t capacity,
                                         const RenderSettings& settings) const {
-    const std::uint64_t pixels = std::uint64_t(width) * std::uint64_t(height);
-    std::uint64_t perPixel = kCommonBytesPerPixel;
-    if (usesOit(m_method))
-        perPixel += kOitBytesPerPixel;
-    if (m_method == Method::Hybrid)
-        perPixel += settings.closest == ClosestKernel::DepthPass ? kClosestPassBytesPerPixel
-                                                                 : kAtomicBytesPerPixel;
-    if (m_method == Method::Instanced)
-        perPixel += kAtomicBytesPerPixel;
-    if (usesClosest(m_method))
-        perPixel += kListBytesPerPixel;
-    std::uint64_t tileBytes = 0;
-    if (usesFixed(m_method, settings, fixedFits(std::uint64_t(width), std::uint64_t(height)))) {
-        perPixel += kFixedBytesPerPixel;
-        tileBytes = fixedTileBytes(std::uint64_t(width), std::uint64_t(height));
-    }
     const std::uint64_t perKernel = std::uint64_t(m_scene.lobeCount()) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
                                     (m_method == Method::Sorted ? 0 : sizeof(std::uint32_t));
-    std::uint64_t bytes =
-        pixels * perPixel + tileBytes + std::uint64_t(capacity) * perKernel + 32 + 16;
+    std::uint64_t bytes = targetBytes(std::uint64_t(width), std::uint64_t(height), settings) +
+                          std::uint64_t(capacity) * perKernel + 32 + 16;
     if (m_method == Method::Sorted)
         bytes += std::uint64_t(capacity) * sizeof(std::uint32_t) + RadixSortScratch::bytes(capacity);
     return bytes;
@@ -265,12 +263,7 @@ void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
     // Check the budget for the new size as if the old one were freed (a refused frame keeps the
     // old targets), then free, then allocate.
     const std::uint64_t pixels = std::uint64_t(width) * height;
-    const std::uint64_t need =
-        pixels * (kCommonBytesPerPixel + (oit ? kOitBytesPerPixel : 0) +
-                  (atomic ? kAtomicBytesPerPixel : 0) + (pass ? kClosestPassBytesPerPixel : 0) +
-                  (list ? kListBytesPerPixel : 0) +
-                  (fixed ? kFixedBytesPerPixel : 0)) +
-        (fixed ? fixedTileBytes(width, height) : 0) + (list ? sizeof(SpotSplatList) : 0);
+    const std::uint64_t need = targetBytes(width, height, settings);
     std::uint64_t held = m_closest.reservedBytes() + m_closestList.reservedBytes() +
                          m_oitFixed.reservedBytes() + m_oitTiles.reservedBytes();
     for (const Image* i : {&m_base, &m_distance, &m_depth, &m_accum, &m_opticalDepth,

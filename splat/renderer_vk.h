@@ -96,6 +96,11 @@ private:
     /// Whether a width x height frame's fixed-point sums fit one storage buffer binding (else
     /// `oit` and `hybrid` draw every kernel).
     bool fixedFits(std::uint64_t width, std::uint64_t height) const;
+    /// GPU bytes of a width x height frame's targets with these settings (images, the closest
+    /// kernels and their list, the fixed-point sums): what ensureTargets makes and frameBytes
+    /// counts.
+    std::uint64_t targetBytes(std::uint64_t width, std::uint64_t height,
+                              const RenderSettings& settings) const;
     void ensureTargets(std::uint32_t width, std::uint32_t height, const RenderSettings& settings);
     void ensureBuffers(std::uint32_t capacity, const RenderSettings& settings);
 
