@@ -163,13 +163,22 @@ void growInRect(vec2 p, vec2 rectLo, vec2 rectHi, inout vec2 lo, inout vec2 hi) 
     }
 }
 
+// Grows [lo, hi] by the points origin + t dir at the first n of the roots t0, t1.
+void growAtRoots(int n, float t0, float t1, vec2 origin, vec2 dir, vec2 rectLo, vec2 rectHi,
+                 inout vec2 lo, inout vec2 hi) {
+    if (n > 0)
+        growInRect(origin + t0 * dir, rectLo, rectHi, lo, hi);
+    if (n > 1)
+        growInRect(origin + t1 * dir, rectLo, rectHi, lo, hi);
+}
+
 // The axis-aligned box (pixels) of the image pixels whose ray line meets the lobe's k-sigma
 // support, for a lobe whose projection is not a bounded ellipse (the support reaches the eye
 // plane): supportConic's region clipped to the image. The region's extremes lie at the image
 // corners inside it, where the conic crosses the image's edges, or where the conic's tangent is
-// vertical (x extremes) or horizontal (y extremes), so the box of those points is exact (a line meeting the support behind the eye counts too:
-// conservative). Returns false when the region misses the image; a box of the whole image when
-// the conic's numbers are not finite.
+// vertical (x extremes) or horizontal (y extremes), so the box of those points is exact (a line
+// meeting the support behind the eye counts too: conservative). Returns false when the region
+// misses the image; a box of the whole image when the conic's numbers are not finite.
 bool clippedConicBox(SpotScreenLobe s, float k, out vec2 lo, out vec2 hi) {
     SupportConic q = supportConic(s, k);
     float m00 = q.m00, m01 = q.m01, m11 = q.m11, b0 = q.b0, b1 = q.b1, c = q.c;
@@ -210,36 +219,24 @@ bool clippedConicBox(SpotScreenLobe s, float k, out vec2 lo, out vec2 hi) {
     for (int j = 0; j < 2; ++j) {
         float e = j == 0 ? rectLo.x : rectHi.x;
         int n = quadraticRoots(m11, m01 * e + b1, (m00 * e + 2.0 * b0) * e + c, t0, t1);
-        if (n > 0)
-            growInRect(vec2(e, t0), rectLo, rectHi, lo, hi);
-        if (n > 1)
-            growInRect(vec2(e, t1), rectLo, rectHi, lo, hi);
+        growAtRoots(n, t0, t1, vec2(e, 0.0), vec2(0.0, 1.0), rectLo, rectHi, lo, hi);
     }
     // The horizontal edges y = e.
     for (int j = 0; j < 2; ++j) {
         float e = j == 0 ? rectLo.y : rectHi.y;
         int n = quadraticRoots(m00, m01 * e + b0, (m11 * e + 2.0 * b1) * e + c, t0, t1);
-        if (n > 0)
-            growInRect(vec2(t0, e), rectLo, rectHi, lo, hi);
-        if (n > 1)
-            growInRect(vec2(t1, e), rectLo, rectHi, lo, hi);
+        growAtRoots(n, t0, t1, vec2(0.0, e), vec2(1.0, 0.0), rectLo, rectHi, lo, hi);
     }
-    // Vertical tangents (df/dy = 0: y = -(m01 x + b1) / m11) and horizontal ones
+    // Vertical tangents (df/dy = 0: the line y = -(m01 x + b1) / m11) and horizontal ones
     // (x = -(m01 y + b0) / m00), each met with the conic.
     float det = m00 * m11 - m01 * m01;
     if (m11 != 0.0) {
         int n = quadraticRoots(det / m11, b0 - m01 * b1 / m11, c - b1 * b1 / m11, t0, t1);
-        if (n > 0)
-            growInRect(vec2(t0, -(m01 * t0 + b1) / m11), rectLo, rectHi, lo, hi);
-        if (n > 1)
-            growInRect(vec2(t1, -(m01 * t1 + b1) / m11), rectLo, rectHi, lo, hi);
+        growAtRoots(n, t0, t1, vec2(0.0, -b1 / m11), vec2(1.0, -m01 / m11), rectLo, rectHi, lo, hi);
     }
     if (m00 != 0.0) {
         int n = quadraticRoots(det / m00, b1 - m01 * b0 / m00, c - b0 * b0 / m00, t0, t1);
-        if (n > 0)
-            growInRect(vec2(-(m01 * t0 + b0) / m00, t0), rectLo, rectHi, lo, hi);
-        if (n > 1)
-            growInRect(vec2(-(m01 * t1 + b0) / m00, t1), rectLo, rectHi, lo, hi);
+        growAtRoots(n, t0, t1, vec2(-b0 / m00, 0.0), vec2(-m01 / m00, 1.0), rectLo, rectHi, lo, hi);
     }
     if (!(hi.x >= lo.x) || !(hi.y >= lo.y))
         return false;
