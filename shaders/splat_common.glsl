@@ -464,6 +464,15 @@ SplatKernelSample splatKernel(uint kernel, vec2 p, float tMesh) {
     return splatKernelAnalytic(kernel, p, o, d, tMesh, scale);
 }
 
+// Instanced (paper fig. 4 left): whether the kernel's sample at pixel position p covers it as an
+// opaque splat. Its alpha reaches kSplatInstancedMinAlpha, and its depth is strictly nearer than
+// the mesh at world distance tMesh. The splat is opaque at that depth, so the mesh hides it there,
+// as a depth test would. A kernel whose lobes all peak at or behind the mesh has its depth
+// clamped to the mesh, and stays hidden.
+bool splatInstancedCovers(SplatKernelSample s, vec2 p, float tMesh) {
+    return s.alpha >= kSplatInstancedMinAlpha && s.depth * splatRayScale(p) < tMesh;
+}
+
 // The OIT weight of a kernel sample (view depth z), as the pipeline is specialized.
 float splatOitWeight(SplatKernelSample s) { return spotOitWeight(s.depth, s.alpha, kWeight); }
 #endif

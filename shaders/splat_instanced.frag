@@ -1,7 +1,7 @@
 #version 450
 // Instanced opaque kernels (paper fig. 4 left): a kernel covers a pixel, opaque with its mean
-// colour, where its alpha there reaches kSplatInstancedMinAlpha, and the nearest covering kernel
-// wins. The nearest is found as the hybrid finds its closest kernel: a 64-bit atomicMin of
+// colour, where its alpha there reaches kSplatInstancedMinAlpha and its depth is nearer than the
+// mesh's (splatInstancedCovers), and the nearest covering kernel wins. The nearest is found as the hybrid finds its closest kernel: a 64-bit atomicMin of
 // (depth bits << 32 | kernel index) into a storage buffer (the index breaks ties as a depth test
 // does, the first drawn kernel winning); the resolve paints the winner's colour over the mesh. No
 // depth is written, so the test against the mesh (the quad at its kernel's nearest depth) runs
@@ -26,9 +26,10 @@ void main() {
     splatCountFragment();
     if (!splatMeetsSupport())
         discard; // alpha 0 (splatMeetsSupport)
-    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, imageLoad(meshDistance, pixel).r);
+    float tMesh = imageLoad(meshDistance, pixel).r;
+    SplatKernelSample s = splatKernel(vKernel, gl_FragCoord.xy, tMesh);
     splatCountCovered(s.alpha);
-    if (s.alpha >= kSplatInstancedMinAlpha) {
+    if (splatInstancedCovers(s, gl_FragCoord.xy, tMesh)) {
         uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
         atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);
     }

@@ -78,7 +78,7 @@ void main() {
             uint index = uint(y) * width + uint(x);
             uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(kernel);
             if (kResolve == kSplatResolveInstanced) {
-                if (s.alpha >= kSplatInstancedMinAlpha)
+                if (splatInstancedCovers(s, p, tMesh))
                     atomicMin(closest[index], key);
                 continue;
             }

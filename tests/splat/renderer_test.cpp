@@ -379,6 +379,55 @@ TEST(SplatRenderer, MeshEndsTheKernelAndOccludesIt) {
     expectNoValidationErrors(ctx);
 }
 
+/// A renderer's extra counter (0 when it has none of that name).
+double extraCounter(const splat::FrameStats& stats, const std::string& name) {
+    for (const auto& [key, value] : stats.counters.extra)
+        if (key == name)
+            return value;
+    return 0.0;
+}
+
+TEST(SplatRenderer, InstancedHidesAKernelWhoseDepthIsAtTheMesh) {
+    // Instanced splats are opaque at their kernel's depth (the mean of its lobes' peaks along the
+    // ray, clamped to the mesh), so the mesh hides a kernel whose peaks lie behind it, even where
+    // the part in front of the mesh is opaque enough (alpha over 0.5). A lobe centred just above
+    // the plane shows; the same lobe just below it does not. On the raster path and on the compute
+    // path of small kernels.
+    const noise::Mesh plane = noise::makePlane(2.0f, 2); // y = 0, normal +y
+    const noise::Kernel kernel =
+        oneLobeKernel(glm::vec3(0.1f), glm::vec3(0.0f), 20.0f, glm::vec3(1.0f), 6.0f);
+    splat::Context ctx(validated());
+    SplatRig renderer(ctx, plane, kernel);
+    const noise::Camera cam = topDownCamera();
+    const glm::vec3 base(0.2f, 0.5f, 0.1f), background(1.0f, 0.0f, 1.0f);
+    for (float height : {0.05f, -0.05f}) {
+        const splat::Buffer impulses = upload(ctx, {impulseAt(glm::vec3(0.0f, height, 0.0f))});
+        // The premise: in front of the plane the lobe's alpha passes 0.5 either way
+        // (OIT: red = alpha + (1 - alpha) 0.2).
+        SplatSettings oit;
+        oit.method = splat::Method::Oit;
+        oit.ewa = false;
+        const noise::Image blended =
+            renderer.render(cam, noise::Shading{}, background, base, impulses, 1, oit);
+        EXPECT_GT(blended.at(16, 16).r, 0.2f + 0.8f * 0.5f) << height;
+        for (int smallPixels : {0, int(splat::gpu_splat::kSplatMaxSmallPixels)}) {
+            SplatSettings s;
+            s.method = splat::Method::Instanced;
+            s.ewa = false;
+            s.smallPixels = smallPixels;
+            splat::FrameStats stats;
+            const noise::Image image =
+                renderer.render(cam, noise::Shading{}, background, base, impulses, 1, s, &stats);
+            EXPECT_EQ(extraCounter(stats, "kernels_small"), smallPixels > 0 ? 1.0 : 0.0);
+            const glm::vec3 expected = height > 0.0f ? glm::vec3(1.0f) : base;
+            EXPECT_LT(glm::length(image.at(16, 16) - expected), 1e-5f)
+                << "height " << height << " smallPixels " << smallPixels;
+            EXPECT_LT(glm::length(image.at(22, 16) - base), 1e-5f); // plane beside the lobe
+        }
+    }
+    expectNoValidationErrors(ctx);
+}
+
 TEST(SplatRenderer, LobeReachingTheEyePlaneIsClippedToTheImage) {
     // A lobe whose support reaches behind the camera projects to no ellipse. Its quad is the box
     // of the image pixels whose ray line meets the support, not the whole image (a grazing view of
@@ -871,14 +920,6 @@ TEST(SplatRenderer, SortedIsByteIdenticalOnOneAndTwoThreads) {
 }
 
 // ---- The small kernels' compute path -----------------------------------------------------------
-
-/// A renderer's extra counter (0 when it has none of that name).
-double extraCounter(const splat::FrameStats& stats, const std::string& name) {
-    for (const auto& [key, value] : stats.counters.extra)
-        if (key == name)
-            return value;
-    return 0.0;
-}
 
 struct ImageDifference {
     double maxAbs = 0.0, meanAbs = 0.0;
