@@ -1,6 +1,7 @@
 #include "noise/mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -233,6 +234,73 @@ double Mesh::surfaceArea() const {
     return area;
 }
 
+bool closedOutward(const Mesh& mesh) {
+    if (mesh.triangles.empty())
+        return false;
+    // Welded ids: vertices sorted by position (-0 read as +0), equal positions one id.
+    const auto key = [&](std::uint32_t v) {
+        const glm::vec3 p = mesh.positions[v] + glm::vec3(0.0f);
+        return std::array<float, 3>{p.x, p.y, p.z};
+    };
+    std::vector<std::uint32_t> order(mesh.positions.size());
+    for (std::uint32_t v = 0; v < order.size(); ++v)
+        order[v] = v;
+    std::sort(order.begin(), order.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+    std::vector<std::uint32_t> weld(mesh.positions.size());
+    std::uint32_t ids = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        if (i > 0 && key(order[i]) != key(order[i - 1]))
+            ++ids;
+        weld[order[i]] = ids;
+    }
+    ++ids;
+    // Directed edges: each once, each with its reverse.
+    std::vector<std::uint64_t> edges;
+    edges.reserve(3 * mesh.triangles.size());
+    for (const glm::uvec3& t : mesh.triangles) {
+        const std::uint32_t c[3] = {weld[t.x], weld[t.y], weld[t.z]};
+        if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0])
+            return false;
+        for (int i = 0; i < 3; ++i)
+            edges.push_back(std::uint64_t(c[i]) << 32 | c[(i + 1) % 3]);
+    }
+    std::sort(edges.begin(), edges.end());
+    if (std::adjacent_find(edges.begin(), edges.end()) != edges.end())
+        return false;
+    std::vector<std::uint32_t> parent(ids);
+    for (std::uint32_t i = 0; i < ids; ++i)
+        parent[i] = i;
+    const auto root = [&](std::uint32_t i) {
+        while (parent[i] != i)
+            i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (const std::uint64_t e : edges) {
+        const std::uint32_t a = std::uint32_t(e >> 32), b = std::uint32_t(e);
+        if (!std::binary_search(edges.begin(), edges.end(), std::uint64_t(b) << 32 | a))
+            return false;
+        parent[root(a)] = root(b);
+    }
+    // Each piece's signed volume (divergence theorem: the sum of p0 . (p1 x p2) / 6, about the
+    // bounds' centre for precision). Vertices no triangle uses belong to no piece.
+    const Bounds b = mesh.bounds();
+    const glm::dvec3 centre = 0.5 * (glm::dvec3(b.lo) + glm::dvec3(b.hi));
+    std::vector<double> volume(ids, 0.0);
+    std::vector<bool> used(ids, false);
+    for (const glm::uvec3& t : mesh.triangles) {
+        const std::uint32_t piece = root(weld[t.x]);
+        used[piece] = true;
+        volume[piece] += glm::dot(glm::dvec3(mesh.positions[t.x]) - centre,
+                                  glm::cross(glm::dvec3(mesh.positions[t.y]) - centre,
+                                             glm::dvec3(mesh.positions[t.z]) - centre));
+    }
+    for (std::uint32_t i = 0; i < ids; ++i)
+        if (used[i] && !(volume[i] > 0.0))
+            return false;
+    return true;
+}
+
 void finalizeMesh(Mesh& mesh) {
     const std::string name = meshName(mesh);
     checkSizes(mesh, name);
@@ -327,11 +395,15 @@ Mesh makeSphere(float radius, int rings, int segments) {
     Mesh mesh;
     mesh.name = "sphere";
     const double pi = std::numbers::pi;
+    // The seam (u = 1) takes u = 0's angle and the poles lie exactly on the axis, so that the
+    // repeated vertices there have equal positions (the surface is closed: noise::closedOutward).
     auto addVertex = [&](double u, double v) {
-        const double theta = pi * (1.0 - v); // from +y
-        const double phi = 2.0 * pi * u;     // from +z towards +x
-        const glm::dvec3 n(std::sin(theta) * std::sin(phi), std::cos(theta),
-                           std::sin(theta) * std::cos(phi));
+        const double theta = pi * (1.0 - v);           // from +y
+        const double phi = 2.0 * pi * (u < 1.0 ? u : 0.0); // from +z towards +x
+        const bool pole = v == 0.0 || v == 1.0;
+        const double sinTheta = pole ? 0.0 : std::sin(theta);
+        const double cosTheta = pole ? (v > 0.0 ? 1.0 : -1.0) : std::cos(theta);
+        const glm::dvec3 n(sinTheta * std::sin(phi), cosTheta, sinTheta * std::cos(phi));
         mesh.positions.push_back(glm::vec3(n * static_cast<double>(radius)));
         mesh.normals.push_back(glm::vec3(n));
         mesh.uvs.push_back(glm::vec2(static_cast<float>(u), static_cast<float>(v)));
@@ -378,16 +450,18 @@ Mesh makeTorus(float majorRadius, float minorRadius, int majorSegments, int mino
     checkGeneratorSize("torus", (static_cast<long long>(majorSegments) + 1) *
                                     (static_cast<long long>(minorSegments) + 1));
 
-    // u goes around the y axis, v around the tube; the seams are duplicated so uv stays in [0,1].
+    // u goes around the y axis, v around the tube; the seams are duplicated so uv stays in [0,1],
+    // each copy at its first vertex's angle, so that they have equal positions (the surface is
+    // closed: noise::closedOutward).
     Mesh mesh;
     mesh.name = "torus";
     const double pi = std::numbers::pi;
     for (int i = 0; i <= majorSegments; ++i) {
         const double u = static_cast<double>(i) / majorSegments;
-        const double phi = 2.0 * pi * u; // from +z towards +x
+        const double phi = 2.0 * pi * static_cast<double>(i % majorSegments) / majorSegments;
         for (int j = 0; j <= minorSegments; ++j) {
             const double v = static_cast<double>(j) / minorSegments;
-            const double theta = 2.0 * pi * v; // from the outer equator towards +y
+            const double theta = 2.0 * pi * static_cast<double>(j % minorSegments) / minorSegments;
             const glm::dvec3 n(std::cos(theta) * std::sin(phi), std::sin(theta),
                                std::cos(theta) * std::cos(phi));
             const glm::dvec3 centre(majorRadius * std::sin(phi), 0.0, majorRadius * std::cos(phi));

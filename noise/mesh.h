@@ -43,6 +43,14 @@ struct Mesh {
     double surfaceArea() const;
 };
 
+/// Whether the mesh's triangles bound solids and face out of them: with vertices welded where
+/// their positions are equal (uv seams and poles repeat positions), every edge is shared by
+/// exactly two triangles that run it in opposite directions, no triangle has two welded corners,
+/// and each connected piece encloses a positive volume (counter-clockwise seen from outside).
+/// Then a ray from a point outside every piece meets a triangle's front before any back, so the
+/// back faces can be culled without changing what the ray sees first. O(n log n).
+bool closedOutward(const Mesh& mesh);
+
 /// Caps checked before anything is allocated from a count read in a file.
 struct MeshLimits {
     std::size_t maxVertices = 20'000'000;

@@ -241,6 +241,55 @@ TEST(MeshGenerate, PlaneIsExactAndFacesUp) {
     EXPECT_EQ(b.hi, glm::vec3(1.5f, 0.0f, 1.5f));
 }
 
+TEST(MeshClosed, GeneratedSolidsAreClosedAndOutward) {
+    // The sphere repeats positions at its uv seam and poles, the torus at both seams: welded,
+    // every edge pairs up.
+    EXPECT_TRUE(closedOutward(makeSphere(1.0f, 12, 24)));
+    EXPECT_TRUE(closedOutward(makeTorus(1.0f, 0.35f, 24, 12)));
+    // Far from the origin too (the volume is taken about the bounds' centre).
+    Mesh moved = makeSphere(0.01f, 8, 16);
+    for (glm::vec3& p : moved.positions)
+        p += glm::vec3(1.0e4f, -2.0e4f, 3.0e4f);
+    EXPECT_TRUE(closedOutward(moved));
+    // The shipped bunny is closed; a plane has a boundary.
+    EXPECT_TRUE(closedOutward(loadMesh(kSource / "presets/meshes/bunny.ply")));
+    EXPECT_FALSE(closedOutward(makePlane(2.0f, 4)));
+    EXPECT_FALSE(closedOutward(Mesh{}));
+}
+
+TEST(MeshClosed, HolesInsideOutAndNonManifoldEdgesAreNot) {
+    const Mesh sphere = makeSphere(1.0f, 12, 24);
+    Mesh holed = sphere;
+    holed.triangles.erase(holed.triangles.begin() + 40);
+    EXPECT_FALSE(closedOutward(holed));
+    Mesh flipped = sphere;
+    for (glm::uvec3& t : flipped.triangles)
+        std::swap(t.y, t.z);
+    EXPECT_FALSE(closedOutward(flipped)); // closed, facing in
+    Mesh oneFlipped = sphere;
+    std::swap(oneFlipped.triangles[7].y, oneFlipped.triangles[7].z);
+    EXPECT_FALSE(closedOutward(oneFlipped)); // its edges run the same way as the neighbours'
+    // Two pieces: an outward sphere and, apart from it, an inward one.
+    Mesh pair = sphere;
+    const auto base = std::uint32_t(pair.positions.size());
+    for (const glm::vec3& p : flipped.positions)
+        pair.positions.push_back(p + glm::vec3(5.0f, 0.0f, 0.0f));
+    for (const glm::uvec3& t : flipped.triangles)
+        pair.triangles.push_back(t + base);
+    EXPECT_FALSE(closedOutward(pair));
+    for (std::size_t i = sphere.triangles.size(); i < pair.triangles.size(); ++i)
+        std::swap(pair.triangles[i].y, pair.triangles[i].z);
+    EXPECT_TRUE(closedOutward(pair)); // both outward
+    // A triangle repeated: its edges are shared by three triangles.
+    Mesh doubled = sphere;
+    doubled.triangles.push_back(doubled.triangles.front());
+    EXPECT_FALSE(closedOutward(doubled));
+    // A vertex no triangle uses changes nothing.
+    Mesh extra = sphere;
+    extra.positions.push_back(glm::vec3(9.0f));
+    EXPECT_TRUE(closedOutward(extra));
+}
+
 TEST(MeshGenerate, BadParametersAreInputErrors) {
     expectInputError([] { makeSphere(1.0f, 1, 8); }, "sphere", "at least 2 rings");
     expectInputError([] { makeSphere(-1.0f, 8, 8); }, "sphere", "radius");
