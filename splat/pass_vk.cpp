@@ -72,6 +72,30 @@ MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_c
     desc.depthWrite = true;
     desc.depthCompare = VK_COMPARE_OP_GREATER;
     m_pipeline = makeGraphicsPipeline(ctx, desc);
+    m_closed = noise::closedOutward(mesh);
+    if (m_closed) {
+        const noise::Bounds b = mesh.bounds();
+        m_lo = b.lo;
+        m_hi = b.hi;
+        // Counter-clockwise seen from outside stays so in the framebuffer: the vertex shader
+        // flips y, so that NDC y points down, as framebuffer rows do.
+        desc.cull = VK_CULL_MODE_BACK_BIT;
+        m_culled = makeGraphicsPipeline(ctx, desc);
+    }
+}
+
+bool MeshPass::cullsBackFaces(const gpu_splat::SpotSplatFrame& frame) const {
+    if (!m_closed)
+        return false;
+    const glm::vec3 eye(frame.eye), forward(frame.forward);
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec3 corner((c & 1) ? m_hi.x : m_lo.x, (c & 2) ? m_hi.y : m_lo.y,
+                               (c & 4) ? m_hi.z : m_lo.z);
+        // The near plane for both projections (orthographic rays start at view depth 0).
+        if (!(glm::dot(corner - eye, forward) > frame.forward.w))
+            return false;
+    }
+    return true;
 }
 
 void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
@@ -83,9 +107,10 @@ void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& fram
                                     glm::vec4(gpu_splat::kSplatNoMesh))},
                    &depthInfo);
     if (m_indexCount > 0) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipeline.handle());
-        pushFrame(cmd, m_pipeline, frame);
-        Descriptors().buffer(gpu_splat::kSplatBindVertices, m_vertices).push(*m_ctx, cmd, m_pipeline);
+        const Pipeline& pipeline = cullsBackFaces(frame) ? m_culled : m_pipeline;
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle());
+        pushFrame(cmd, pipeline, frame);
+        Descriptors().buffer(gpu_splat::kSplatBindVertices, m_vertices).push(*m_ctx, cmd, pipeline);
         vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
         vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
     }

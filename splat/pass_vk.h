@@ -85,6 +85,12 @@ public:
     /// (kDepthFormat), all in attachment layouts, cleared first. Nothing else changes layout.
     void record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
                 const Image& distance, const Image& depth, glm::vec3 background) const;
+    /// Whether `record` culls back faces for this frame: when the mesh bounds solids facing out
+    /// (noise::closedOutward) and its bounds lie wholly beyond the near plane (so every ray starts
+    /// outside them, and meets a front face first). Half the triangles are then dropped at setup,
+    /// which is most of the pass on lavapipe (ring-sphere's 36,864 triangles at 128x128: 6.2 to
+    /// 3.1 ms); the colour, distance and depth written are the same.
+    bool cullsBackFaces(const gpu_splat::SpotSplatFrame& frame) const;
     /// gpu_splat::SpotMeshVertex[] (world units, unit normals or zero).
     const Buffer& vertices() const { return m_vertices; }
     /// uint32[3 x triangles], usable as a storage buffer too.
@@ -95,7 +101,9 @@ private:
     Context* m_ctx;
     Buffer m_vertices, m_indices;
     std::uint32_t m_indexCount = 0;
-    Pipeline m_pipeline;
+    bool m_closed = false;
+    glm::vec3 m_lo{0.0f}, m_hi{0.0f};
+    Pipeline m_pipeline, m_culled; ///< m_culled only for a closed mesh
 };
 /// The kernel's lobes (gpu::SpotLobe[]); InputError for 0 or more than 8 lobes or a bad support.
 Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who);

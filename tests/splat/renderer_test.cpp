@@ -428,6 +428,69 @@ TEST(SplatRenderer, InstancedHidesAKernelWhoseDepthIsAtTheMesh) {
     expectNoValidationErrors(ctx);
 }
 
+TEST(SplatRenderer, ClosedMeshCullsBackFacesWithTheSameImage) {
+    // A closed, outward sphere seen from outside: the mesh pass culls its back faces, and every
+    // method's image is that of the same sphere made open by one triangle behind the eye (nothing
+    // culled). Where a ray may start inside the sphere (the eye inside it, or the near plane or
+    // the orthographic eye plane cutting it), nothing is culled and the inside shows.
+    const noise::Mesh sphere = noise::makeSphere(1.0f, 24, 48);
+    noise::Mesh open = sphere;
+    const auto n = std::uint32_t(open.positions.size());
+    for (const glm::vec3 p : {glm::vec3(0.0f, 0.0f, 50.0f), glm::vec3(0.1f, 0.0f, 50.0f),
+                              glm::vec3(0.0f, 0.1f, 50.0f)}) {
+        open.positions.push_back(p);
+        open.normals.push_back(glm::vec3(0.0f, 0.0f, 1.0f));
+        open.uvs.push_back(glm::vec2(0.0f));
+    }
+    open.triangles.push_back({n, n + 1, n + 2});
+    noise::finalizeMesh(open);
+    const noise::Kernel kernel =
+        oneLobeKernel(glm::vec3(0.2f), glm::vec3(0.0f), 4.0f, glm::vec3(1.0f, 0.6f, 0.2f), 4.0f);
+    splat::Context ctx(validated());
+    SplatRig closedRig(ctx, sphere, kernel), openRig(ctx, open, kernel);
+    const splat::Buffer impulses = upload(ctx, {impulseAt(glm::vec3(0.1f, 0.2f, 0.95f))});
+    const glm::vec3 base(0.2f, 0.5f, 0.1f), background(1.0f, 0.0f, 1.0f);
+    const auto culls = [&](const SplatRig& rig, const noise::Camera& cam) {
+        return rig.scene().meshPass().cullsBackFaces(
+            splat::makeSplatFrame(cam, noise::Shading{}, base, 1, 1, kernel.supportSigma, 0, 0));
+    };
+    const noise::Camera outside = lobeCamera(noise::Projection::Perspective, 32);
+    EXPECT_TRUE(culls(closedRig, outside));
+    EXPECT_FALSE(culls(openRig, outside));
+    for (splat::Method method : {splat::Method::Instanced, splat::Method::Oit,
+                                 splat::Method::Hybrid, splat::Method::Sorted}) {
+        SplatSettings s;
+        s.method = method;
+        const noise::Image a =
+            closedRig.render(outside, noise::Shading{}, background, base, impulses, 1, s);
+        const noise::Image b =
+            openRig.render(outside, noise::Shading{}, background, base, impulses, 1, s);
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width; ++x)
+                ASSERT_EQ(a.at(x, y), b.at(x, y)) << splat::methodName(method) << " " << x << "," << y;
+        EXPECT_EQ(a.at(2, 2), background); // the test sees both the sphere and the background
+        EXPECT_NE(a.at(16, 16), background);
+    }
+    noise::Camera inside = outside;
+    inside.eye = glm::dvec3(0.0, 0.0, 0.5);
+    inside.target = glm::dvec3(0.0, 0.0, -1.0);
+    noise::Camera grazing = outside; // the eye just outside, the near plane cutting the sphere
+    grazing.eye = glm::dvec3(0.0, 0.0, 1.0 + 0.5 * splat::kNearPlane);
+    grazing.target = glm::dvec3(0.0);
+    noise::Camera cut = inside; // orthographic rays start on the eye's plane, inside the sphere
+    cut.projection = noise::Projection::Orthographic;
+    cut.orthoHeight = 0.5;
+    for (const noise::Camera& cam : {inside, grazing, cut}) {
+        EXPECT_FALSE(culls(closedRig, cam));
+        SplatSettings s;
+        s.method = splat::Method::Oit;
+        const noise::Image image =
+            closedRig.render(cam, noise::Shading{}, background, base, impulses, 0, s);
+        EXPECT_LT(glm::length(image.at(16, 16) - base), 1e-6f); // the sphere's inside
+    }
+    expectNoValidationErrors(ctx);
+}
+
 TEST(SplatRenderer, LobeReachingTheEyePlaneIsClippedToTheImage) {
     // A lobe whose support reaches behind the camera projects to no ellipse. Its quad is the box
     // of the image pixels whose ray line meets the support, not the whole image (a grazing view of

@@ -154,6 +154,7 @@ public:
         return splat::renderImpulses(m_ctx, *r, splat::View{camera, shading, background, baseColor},
                                      impulses, count, settings, stats);
     }
+    const splat::SceneGpu& scene() const { return m_scene; }
 
 private:
     splat::Context& m_ctx;
