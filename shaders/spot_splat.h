@@ -190,7 +190,8 @@ SPOT_CONST float kSplatNoMesh = 3.0e38;
 
 /* The small kernels' compute path (splat_small.comp, docs/design.md section 4). A kept kernel whose
  * quad's axis-aligned pixel box (clamped to the image) holds at most RenderSettings::smallPixels
- * pixel centres (default kSplatSmallPixels) is not drawn: one compute invocation loops over those
+ * pixel centres (default kSplatSmallPixels) is not drawn, nor is any kernel when every box holds
+ * at most kSplatMaxSmallPixels (splat_compact.comp): one compute invocation loops over those
  * centres, so its loop never exceeds kSplatMaxSmallPixels iterations (lavapipe allows 65,535; the
  * lobe loops inside add at most about 300 each). */
 SPOT_CONST uint kSplatSmallPixels = 36u;
