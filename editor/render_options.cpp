@@ -16,8 +16,8 @@ std::vector<OptionSpec> renderOptions() {
                                "(depth-pass); the same image either way", false},
             {"small-pixels", "N", "oit/hybrid/instanced: kernels whose quad covers at most N pixel "
                                   "centres are evaluated by a compute pass instead of drawn, and "
-                                  "all are when each covers at most 256 (default 36, at most "
-                                  "256; 0: draw every kernel)", false},
+                                  "so are thin ones (at most 3 pixels wide) covering at most 256 "
+                                  "(default 36, at most 256; 0: draw every kernel)", false},
             {"steps", "N", "raymarch: samples along each ray through the shell (default 32, at "
                            "most 4096; split over dispatches so that no shader invocation loops "
                            "too long)", false},

@@ -190,12 +190,16 @@ SPOT_CONST float kSplatNoMesh = 3.0e38;
 
 /* The small kernels' compute path (splat_small.comp, docs/design.md section 4). A kept kernel whose
  * quad's axis-aligned pixel box (clamped to the image) holds at most RenderSettings::smallPixels
- * pixel centres (default kSplatSmallPixels) is not drawn, nor is any kernel when every box holds
- * at most kSplatMaxSmallPixels (splat_compact.comp): one compute invocation loops over those
+ * pixel centres (default kSplatSmallPixels) is not drawn, nor is a thin one whose box holds at
+ * most kSplatMaxSmallPixels (kSplatThinHalfWidth, splat_compact.comp): one compute invocation
+ * loops over those
  * centres, so its loop never exceeds kSplatMaxSmallPixels iterations (lavapipe allows 65,535; the
  * lobe loops inside add at most about 300 each). */
 SPOT_CONST uint kSplatSmallPixels = 36u;
 SPOT_CONST uint kSplatMaxSmallPixels = 256u;
+/* A kept kernel whose quad is thin, half as wide as this in pixels or less (a strand, a blade seen
+ * edge-on), takes the compute path too when its box holds at most kSplatMaxSmallPixels centres. */
+SPOT_CONST float kSplatThinHalfWidth = 1.5;
 SPOT_CONST uint kSplatSmallThreads = 64u; /* workgroup size of the compute path */
 
 /* The compute path's OIT sums: per pixel premul.rgb x w, alpha x w and tau (5 channels), each

@@ -71,9 +71,10 @@ struct RenderSettings {
     ClosestKernel closest = ClosestKernel::Atomic;     ///< hybrid
     /// oit, hybrid (atomic), instanced: a kernel whose quad's pixel box holds at most this many
     /// pixel centres is evaluated by a compute pass instead of drawn (lavapipe's cost per
-    /// primitive dwarfs the few fragments of such a quad), and so is every kernel when each box
-    /// holds at most kSplatMaxSmallPixels (a frame that draws any kernel pays a fixed cost that
-    /// grows with the kernel count: docs/design.md section 4); 0: every kernel is drawn. In
+    /// primitive dwarfs the few fragments of such a quad), and so is a thin quad (at most 3
+    /// pixels wide) whose box holds at most kSplatMaxSmallPixels (lavapipe shades a quad in 4x4
+    /// blocks, few of whose lanes a thin one fills: docs/design.md section 4); 0: every kernel is
+    /// drawn. In
     /// [0, kSplatMaxSmallPixels]; the default is kSplatSmallPixels (shaders/spot_splat.h). oit and
     /// hybrid draw every kernel in frames over about 1830^2 pixels (their fixed-point sums, 40
     /// bytes a pixel, would not fit one 128 MiB storage buffer binding).

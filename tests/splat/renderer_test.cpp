@@ -1006,10 +1006,11 @@ ImageDifference difference(const noise::Image& a, const noise::Image& b) {
 
 TEST(SplatRenderer, SmallKernelsRenderAsTheRasterPathDoes) {
     // The compute path takes a kernel whose quad's pixel box holds at most smallPixels centres,
-    // and every kernel when each box holds at most kSplatMaxSmallPixels (then nothing is drawn).
-    // fur-bunny at 128x128 (threshold 16): every box fits, so every kernel is small; far away at
-    // 32x32, every kernel is small anyway; close up at 128x128, some boxes are larger, so both
-    // paths run. Forcing every kernel through the raster path (smallPixels 0) must give the same
+    // and a thin one (kSplatThinHalfWidth) whose box holds at most kSplatMaxSmallPixels.
+    // fur-bunny at 128x128 (threshold 16): the strands over 16 pixels are thin, so every kernel is
+    // small; far away at 32x32, every kernel is small anyway; close up at 128x128, wider kernels
+    // are drawn, so both paths run. Forcing every kernel through the raster path (smallPixels 0)
+    // must give the same
     // image up to float rounding (the compute path evaluates the same code at the same pixel
     // centres; its OIT sums are fixed point, added in another order) and count the same
     // fragments (up to the pixel centres on a quad's very edge, where the two cover differently).
