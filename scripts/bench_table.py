@@ -8,8 +8,8 @@ splatting PSNR; the cheapest ray-march whose FLIP is at least as low, and the sp
 over it. Table 2, per scene and splat method at its default setting: the splat pass's time
 against its roofline (the rasterizer's own cost for the same quads) and the fragment efficiency
 (fragments shaded / pixels where a kernel's alpha reaches 1/255). Table 3, when the run has baked
-rows, per scene: each baked setting's time and error against hybrid's default setting, the bake's
-seconds and file size (refused rows with their reason).
+rows, per scene: each baked setting's time (GPU and wall) and error against hybrid's default
+setting, the bake's seconds and file size (refused rows with their reason).
 """
 import json
 import sys
@@ -17,6 +17,13 @@ import sys
 SPLATTERS = ("instanced", "oit", "hybrid", "sorted")
 DEFAULTS = {"instanced": "default", "oit": "ewa mb analytic", "hybrid": "ewa mb analytic",
             "sorted": "ewa analytic"}
+
+
+def ms(row):
+    """GPU milliseconds and, in parentheses, wall milliseconds: lavapipe's timestamps miss work in
+    frames that draw nothing (docs/design.md section 8), so compare those by wall time."""
+    wall = row.get("wall_ms_median")
+    return f"{row['ms_median']:.1f} ({wall:.1f})" if wall else f"{row['ms_median']:.1f}"
 
 
 def label(row):
@@ -83,8 +90,8 @@ def main(path):
     if baked:
         print("\nbaked (resolution: level 0's voxels along the mesh's longest side; levels: mip "
               "levels; peels: depth-peeling passes) against hybrid's default setting:\n")
-        print("| scene | setting | ms | PSNR | FLIP | hybrid ms / PSNR / FLIP | bake s | bake MiB "
-              "| status |")
+        print("| scene | setting | ms (wall) | PSNR | FLIP | hybrid ms (wall) / PSNR / FLIP | bake s "
+              "| bake MiB | status |")
         print("| --- " * 9 + "|")
         refused = {}  # scene -> reason, when every baked row of the scene was refused alike
         for scene in dict.fromkeys(r["scene"] for r in baked):
@@ -100,11 +107,11 @@ def main(path):
                 continue
             h = next((x for x in rows if x["scene"] == r["scene"] and x["method"] == "hybrid"
                       and x["setting"] == DEFAULTS["hybrid"]), None)
-            hyb = f"{h['ms_median']:.1f} / {h['psnr']:.2f} / {h['flip']:.3f}" if h else "-"
+            hyb = f"{ms(h)} / {h['psnr']:.2f} / {h['flip']:.3f}" if h else "-"
             size = f"{r['bake_bytes'] / 2**20:.1f}" if r.get("bake_bytes") else "-"
             secs = f"{r['bake_seconds']:.2f}" if "bake_seconds" in r else "-"
             if "psnr" in r and r["status"] in ("ok", "degraded"):
-                cells = [f"{r['ms_median']:.1f}", f"{r['psnr']:.2f}", f"{r['flip']:.3f}"]
+                cells = [ms(r), f"{r['psnr']:.2f}", f"{r['flip']:.3f}"]
                 status = r["status"]
             else:
                 cells = ["-", "-", "-"]
