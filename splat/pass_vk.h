@@ -89,7 +89,9 @@ public:
     /// (noise::closedOutward) and its bounds lie wholly beyond the near plane (so every ray starts
     /// outside them, and meets a front face first). Half the triangles are then dropped at setup,
     /// which is most of the pass on lavapipe (ring-sphere's 36,864 triangles at 128x128: 6.2 to
-    /// 3.1 ms); the colour, distance and depth written are the same.
+    /// 3.1 ms); the colour, distance and depth written are the same. The closedness and bounds
+    /// are the constructor's mesh's: a mesh that animates (docs/design.md section 6) will have to
+    /// refresh them with its vertices.
     bool cullsBackFaces(const gpu_splat::SpotSplatFrame& frame) const;
     /// gpu_splat::SpotMeshVertex[] (world units, unit normals or zero).
     const Buffer& vertices() const { return m_vertices; }
