@@ -398,7 +398,7 @@ Mesh makeSphere(float radius, int rings, int segments) {
     // The seam (u = 1) takes u = 0's angle and the poles lie exactly on the axis, so that the
     // repeated vertices there have equal positions (the surface is closed: noise::closedOutward).
     auto addVertex = [&](double u, double v) {
-        const double theta = pi * (1.0 - v);           // from +y
+        const double theta = pi * (1.0 - v);               // from +y
         const double phi = 2.0 * pi * (u < 1.0 ? u : 0.0); // from +z towards +x
         const bool pole = v == 0.0 || v == 1.0;
         const double sinTheta = pole ? 0.0 : std::sin(theta);

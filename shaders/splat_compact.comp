@@ -4,11 +4,11 @@
 // the compute path (kSmallPixels > 0), the small kernels go to a second list, in increasing
 // order within each of four size classes, with the indirect dispatch of splat_small.comp: those
 // whose pixel box holds at most kSmallPixels centres, and the thin ones (at most 3 pixels wide)
-// whose box holds at most kSplatMaxSmallPixels. One
-// workgroup: each thread counts a contiguous chunk, a shared-memory scan gives the chunk's output
-// offset, then each thread writes its chunk in order. No atomics, so the draw order (and with it
-// the blended result) is the same on every run. Loop iterations per thread: 2 x chunk + 16, with
-// chunk = ceil(count / 256) <= 3,641 for the most impulses a 128 MiB buffer holds.
+// whose box holds at most kSplatMaxSmallPixels. One workgroup: each thread counts a contiguous
+// chunk, a shared-memory scan gives the chunk's output offset, then each thread writes its chunk
+// in order. No atomics, so the draw order (and with it the blended result) is the same on every
+// run. Loop iterations per thread: 2 x chunk + 16, with chunk = ceil(count / 256) <= 3,641 for
+// the most impulses a 128 MiB buffer holds.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 

@@ -1,11 +1,11 @@
 #version 450
 // Instanced opaque kernels (paper fig. 4 left): a kernel covers a pixel, opaque with its mean
 // colour, where its alpha there reaches kSplatInstancedMinAlpha and its depth is nearer than the
-// mesh's (splatInstancedCovers), and the nearest covering kernel wins. The nearest is found as the hybrid finds its closest kernel: a 64-bit atomicMin of
-// (depth bits << 32 | kernel index) into a storage buffer (the index breaks ties as a depth test
-// does, the first drawn kernel winning); the resolve paints the winner's colour over the mesh. No
-// depth is written, so the test against the mesh (the quad at its kernel's nearest depth) runs
-// before shading.
+// mesh's (splatInstancedCovers), and the nearest covering kernel wins. The nearest is found as
+// the hybrid finds its closest kernel: a 64-bit atomicMin of (depth bits << 32 | kernel index)
+// into a storage buffer (the index breaks ties as a depth test does, the first drawn kernel
+// winning); the resolve paints the winner's colour over the mesh. No depth is written, so the
+// test against the mesh (the quad at its kernel's nearest depth) runs before shading.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require

@@ -192,9 +192,8 @@ SPOT_CONST float kSplatNoMesh = 3.0e38;
  * quad's axis-aligned pixel box (clamped to the image) holds at most RenderSettings::smallPixels
  * pixel centres (default kSplatSmallPixels) is not drawn, nor is a thin one whose box holds at
  * most kSplatMaxSmallPixels (kSplatThinHalfWidth, splat_compact.comp): one compute invocation
- * loops over those
- * centres, so its loop never exceeds kSplatMaxSmallPixels iterations (lavapipe allows 65,535; the
- * lobe loops inside add at most about 300 each). */
+ * loops over those centres, so its loop never exceeds kSplatMaxSmallPixels iterations (lavapipe
+ * allows 65,535; the lobe loops inside add at most about 300 each). */
 SPOT_CONST uint kSplatSmallPixels = 36u;
 SPOT_CONST uint kSplatMaxSmallPixels = 256u;
 /* A kept kernel whose quad is thin, half as wide as this in pixels or less (a strand, a blade seen

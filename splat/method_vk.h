@@ -74,10 +74,10 @@ struct RenderSettings {
     /// primitive dwarfs the few fragments of such a quad), and so is a thin quad (at most 3
     /// pixels wide) whose box holds at most kSplatMaxSmallPixels (lavapipe shades a quad in 4x4
     /// blocks, few of whose lanes a thin one fills: docs/design.md section 4); 0: every kernel is
-    /// drawn. In
-    /// [0, kSplatMaxSmallPixels]; the default is kSplatSmallPixels (shaders/spot_splat.h). oit and
-    /// hybrid draw every kernel in frames over about 1830^2 pixels (their fixed-point sums, 40
-    /// bytes a pixel, would not fit one 128 MiB storage buffer binding).
+    /// drawn. In [0, kSplatMaxSmallPixels]; the default is kSplatSmallPixels
+    /// (shaders/spot_splat.h). oit and hybrid draw every kernel in frames over about 1830^2 pixels
+    /// (their fixed-point sums, 40 bytes a pixel, would not fit one 128 MiB storage buffer
+    /// binding).
     int smallPixels = kDefaultSmallPixels;
     /// The roofline instead of the method's splat pass: the same quads over the same pixels into
     /// the `oit` targets with a fragment shader that does nothing (the image is meaningless; the
