@@ -218,18 +218,26 @@ bool SplatRenderer::fixedFits(std::uint64_t width, std::uint64_t height) const {
     return width * height * kFixedBytesPerPixel <= m_ctx.properties().limits.maxStorageBufferRange;
 }
 
+SplatRenderer::Targets SplatRenderer::targets(std::uint64_t width, std::uint64_t height,
+                                              const RenderSettings& settings) const {
+    Targets t;
+    t.oit = usesOit(m_method);
+    t.atomic = m_method == Method::Instanced ||
+               (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
+    t.pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
+    t.fixed = usesFixed(m_method, settings, fixedFits(width, height));
+    t.list = usesClosest(m_method);
+    return t;
+}
+
 std::uint64_t SplatRenderer::targetBytes(std::uint64_t width, std::uint64_t height,
                                          const RenderSettings& settings) const {
-    const bool atomic = m_method == Method::Instanced ||
-                        (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
-    const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
-    const bool fixed = usesFixed(m_method, settings, fixedFits(width, height));
-    const bool list = usesClosest(m_method);
+    const Targets t = targets(width, height, settings);
     return width * height *
-               (kCommonBytesPerPixel + (usesOit(m_method) ? kOitBytesPerPixel : 0) +
-                (atomic ? kAtomicBytesPerPixel : 0) + (pass ? kClosestPassBytesPerPixel : 0) +
-                (list ? kListBytesPerPixel : 0) + (fixed ? kFixedBytesPerPixel : 0)) +
-           (fixed ? fixedTileBytes(width, height) : 0) + (list ? sizeof(SpotSplatList) : 0);
+               (kCommonBytesPerPixel + (t.oit ? kOitBytesPerPixel : 0) +
+                (t.atomic ? kAtomicBytesPerPixel : 0) + (t.pass ? kClosestPassBytesPerPixel : 0) +
+                (t.list ? kListBytesPerPixel : 0) + (t.fixed ? kFixedBytesPerPixel : 0)) +
+           (t.fixed ? fixedTileBytes(width, height) : 0) + (t.list ? sizeof(SpotSplatList) : 0);
 }
 
 std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t capacity,
@@ -247,12 +255,7 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
 
 void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
                                   const RenderSettings& settings) {
-    const bool oit = usesOit(m_method);
-    const bool atomic = m_method == Method::Instanced ||
-                        (m_method == Method::Hybrid && settings.closest == ClosestKernel::Atomic);
-    const bool pass = m_method == Method::Hybrid && settings.closest == ClosestKernel::DepthPass;
-    const bool fixed = usesFixed(m_method, settings, fixedFits(width, height));
-    const bool list = usesClosest(m_method);
+    const auto [oit, atomic, pass, fixed, list] = targets(width, height, settings);
     const bool have = m_width == width && m_height == height && m_base.handle() &&
                       (!oit || m_accum.handle()) && (!atomic || m_closest.handle()) &&
                       (!list || m_closestList.handle()) &&

@@ -96,6 +96,15 @@ private:
     /// Whether a width x height frame's fixed-point sums fit one storage buffer binding (else
     /// `oit` and `hybrid` draw every kernel).
     bool fixedFits(std::uint64_t width, std::uint64_t height) const;
+    /// Which targets a width x height frame with these settings needs beside the common ones.
+    struct Targets {
+        bool oit = false;    ///< the OIT accumulation and optical-depth images
+        bool atomic = false; ///< the closest kernel by atomicMin (hybrid atomic, instanced)
+        bool pass = false;   ///< the closest kernel by a depth pass (hybrid depth-pass)
+        bool fixed = false;  ///< the compute path's fixed-point sums and tile flags
+        bool list = false;   ///< the list of pixels with a closest kernel
+    };
+    Targets targets(std::uint64_t width, std::uint64_t height, const RenderSettings& settings) const;
     /// GPU bytes of a width x height frame's targets with these settings (images, the closest
     /// kernels and their list, the fixed-point sums): what ensureTargets makes and frameBytes
     /// counts.
