@@ -1078,7 +1078,8 @@ TEST(SplatRenderer, SmallKernelsRenderAsTheRasterPathDoes) {
                 // fragment shader's (o' at the provoking vertex, w = o' x v per pixel) and the
                 // compute path's (w and o'.v affine in the pixel) round apart; with the fragment
                 // shader reading the affine form too, the two images agree to 1e-5 everywhere.
-                EXPECT_LT(d.maxAbs, 1e-2) << label;
+                const bool illConditioned = std::string(k.scene) == "fur-bunny";
+                EXPECT_LT(d.maxAbs, illConditioned ? 1e-2 : 2e-3) << label;
                 EXPECT_LE(d.changed, 3.0 / (128.0 * 128.0)) << label; // pixels over 1e-3
                 EXPECT_LT(d.meanAbs, 5e-6) << label;
             }
