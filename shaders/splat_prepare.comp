@@ -10,6 +10,11 @@
 // the kernel's quad is the union of its lobes' boxes (a whole-image quad, as before, cost a grazing
 // view of grass 3.7 times the fragments it needed). An empty quad culls the kernel (off screen,
 // behind the camera, zero weight or no lobe with extinction).
+// Two dispatches: that clipped box is long code, and lavapipe runs every branch for every SIMD
+// batch, taken or not, so the first dispatch only lists the kernels that need it (kClipped false)
+// and a second, indirect, over that list (kClipped true) computes their bounds again in full.
+// World lobes are stored only where something reads them (kWorldLobes: Lambert shading, N
+// samples, the ray-march): they are 4 of a lobe's 11 stored vectors.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 
@@ -21,6 +26,10 @@ layout(std430, binding = kSplatBindWorldLobes) writeonly buffer WorldLobes { Spo
 layout(std430, binding = kSplatBindScreenLobes) writeonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
 layout(std430, binding = kSplatBindBounds) writeonly buffer Bounds { SpotKernelBound bounds[]; };
 layout(std430, binding = kSplatBindCount) readonly buffer Count { uint impulseCount; };
+layout(std430, binding = kSplatBindClipList) buffer ClipList { SpotSplatList clipList; uint clipped[]; };
+
+layout(constant_id = kSplatSpecWorldLobes) const bool kWorldLobes = true;
+layout(constant_id = kSplatSpecClipped) const bool kClipped = false;
 
 bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
 
@@ -249,8 +258,13 @@ bool clippedConicBox(SpotScreenLobe s, float k, out vec2 lo, out vec2 hi) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= impulseCount)
+    if (kClipped) {
+        if (i >= clipList.count)
+            return;
+        i = clipped[i];
+    } else if (i >= impulseCount) {
         return;
+    }
     SpotImpulse imp = impulses[i];
     float k = frame.size.w;
     mat3 kernelFrame = mat3(imp.frameX.xyz, imp.frameY.xyz, imp.frameZ.xyz);
@@ -263,6 +277,7 @@ void main() {
     vec2 boxLo[kLobes];
     vec2 boxHi[kLobes];
     bool unbounded = false;
+    bool clip = false; // a lobe projects to no ellipse: the second dispatch bounds the kernel
     float zNear = 3e38;
     float massSum = 0.0;
     float depthSum = 0.0;
@@ -292,7 +307,8 @@ void main() {
         w.a1 = ok ? vec4(A[1], centre.y) : vec4(0.0);
         w.a2 = ok ? vec4(A[2], centre.z) : vec4(0.0);
         w.color = vec4(color, ok ? amplitude : 0.0);
-        worldLobes[i * kLobes + l] = w;
+        if (kWorldLobes || !kScreen)
+            worldLobes[i * kLobes + l] = w;
         live[l] = false;
         centres[l] = vec2(0.0);
         shapes[l] = mat2(0.0);
@@ -329,6 +345,9 @@ void main() {
             vec2 e = sqrt(max(vec2(shapes[l][0][0], shapes[l][1][1]), vec2(0.0)));
             boxLo[l] = centres[l] - e;
             boxHi[l] = centres[l] + e;
+        } else if (!kClipped) {
+            clip = true;
+            continue;
         } else {
             // Not an ellipse: the part of the conic in the image (none: the lobe is not seen).
             if (!clippedConicBox(s, k, boxLo[l], boxHi[l]))
@@ -340,6 +359,11 @@ void main() {
     }
     if (!kScreen)
         return;
+    if (clip) { // (never in the second dispatch)
+        uint j = atomicAdd(clipList.count, 1u);
+        clipped[j] = i;
+        atomicMax(clipList.groupsX, j / 64u + 1u);
+    }
 
     // The union's principal axis from its second moments (an ellipse of shape S has S / 4).
     uint n = 0u;

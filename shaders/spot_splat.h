@@ -101,17 +101,22 @@ SPOT_CONST uint kSplatBindOitTiles = 20u;    /* uint[tile]: non-zero where some 
                                                 kSplatResolveTile^2 tile has fixed-point sums */
 SPOT_CONST uint kSplatBindClosestList = 21u; /* SpotSplatList, then uint[pixel]: the pixels with a
                                                 closest kernel (hybrid, instanced resolve) */
+SPOT_CONST uint kSplatBindClipList = 22u;    /* SpotSplatList, then uint[kernel]: the kernels with
+                                                a lobe that projects to no ellipse (prepare) */
 
-/* The resolve's list of the pixels with a closest kernel (hybrid, instanced): its first dispatch
- * resolves every other pixel and lists these, packed x | y << 16; its second, indirect, evaluates
- * the closest kernel at each listed pixel (kSplatSpecResolveList). lavapipe runs a shader's
- * straight-line code for every SIMD batch of 8 pixels, whether or not a lane needs it, so one
- * dispatch evaluating the kernel where a pixel has one cost that evaluation at every pixel. */
+/* A list for an indirect second dispatch over what a first one found. The resolve's list of the
+ * pixels with a closest kernel (hybrid, instanced): its first dispatch resolves every other pixel
+ * and lists these, packed x | y << 16; its second, indirect, evaluates the closest kernel at each
+ * listed pixel (kSplatSpecResolveList). lavapipe runs a shader's straight-line code for every
+ * SIMD batch of 8 pixels, whether or not a lane needs it, so one dispatch evaluating the kernel
+ * where a pixel has one cost that evaluation at every pixel. The prepare's list, the same way: the
+ * kernels with a lobe that projects to no ellipse, bounded by its second dispatch
+ * (kSplatSpecClipped). */
 struct SpotSplatList {
     uint groupsX; /* the second dispatch's VkDispatchIndirectCommand: (count + 63) / 64, 1, 1 */
     uint groupsY;
     uint groupsZ;
-    uint count; /* listed pixels */
+    uint count; /* listed pixels (or kernels) */
 };
 
 /* Counters the splat pass writes when counting (RenderSettings::countFragments). */
@@ -137,6 +142,12 @@ SPOT_CONST uint kSplatSpecResolveList = 11u; /* bool: the resolve's second dispa
 SPOT_CONST uint kSplatSpecSmallPixels = 10u; /* uint: kernels whose quad's pixel box holds at most
                                                 this many pixel centres take the compute path
                                                 (splat_small.comp); 0: every kernel is drawn */
+SPOT_CONST uint kSplatSpecWorldLobes = 12u;  /* bool: prepare stores the world lobes (read by
+                                                Lambert shading and N samples; the ray-march's
+                                                prepare, kSplatSpecScreen false, always does) */
+SPOT_CONST uint kSplatSpecClipped = 13u;     /* bool: prepare's second dispatch, over the kernels
+                                                its first listed (SpotSplatList): those with a
+                                                lobe that projects to no ellipse */
 SPOT_CONST uint kSplatSpecLobeColor = 16u;   /* float x 24: the kernel lobes' colours, lobe l's
                                                 r, g, b at ids 16 + 3 l + 0, 1, 2 (constants in
                                                 the fragment shaders: llvmpipe pays dearly for

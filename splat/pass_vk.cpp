@@ -221,18 +221,21 @@ void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::S
 }
 
 Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, bool ewa,
-                             bool orthographic) {
+                             bool orthographic, bool worldLobes, bool clipped) {
     using namespace gpu_splat;
     Specialization spec;
     spec.set(kSplatSpecLobes, lobes)
         .set(kSplatSpecScreen, screen)
         .set(kSplatSpecEwa, ewa)
-        .set(kSplatSpecOrthographic, orthographic);
+        .set(kSplatSpecOrthographic, orthographic)
+        .set(kSplatSpecWorldLobes, worldLobes || !screen)
+        .set(kSplatSpecClipped, clipped && screen);
     return makeComputePipeline(
         ctx, spirv(spv_splat_prepare_comp),
         {storageBuffer(kSplatBindImpulses), storageBuffer(kSplatBindLobes),
          storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes),
-         storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindCount)},
+         storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindCount),
+         storageBuffer(kSplatBindClipList)},
         sizeof(SpotSplatFrame), spec);
 }
 
@@ -242,17 +245,34 @@ void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
     if (capacity == 0)
         return;
     using namespace gpu_splat;
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, prepare.handle());
-    pushFrame(cmd, prepare, frame);
-    Descriptors()
-        .buffer(kSplatBindImpulses, *b.impulses)
+    using namespace passes;
+    const bool clip = b.clipList && b.clipped;
+    if (clip) {
+        const SpotSplatList empty{0u, 1u, 1u, 0u};
+        vkCmdUpdateBuffer(cmd, b.clipList->handle(), 0, sizeof(empty), &empty);
+        memoryBarrier(cmd, kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute, kStorageRW);
+    }
+    Descriptors descriptors;
+    descriptors.buffer(kSplatBindImpulses, *b.impulses)
         .buffer(kSplatBindCount, *b.count)
         .buffer(kSplatBindLobes, *b.lobes)
         .buffer(kSplatBindWorldLobes, *b.worldLobes)
         .buffer(kSplatBindScreenLobes, *b.screenLobes)
         .buffer(kSplatBindBounds, *b.bounds)
-        .push(ctx, cmd, prepare);
+        .buffer(kSplatBindClipList, clip ? *b.clipList : *b.bounds); // unread without `screen`
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, prepare.handle());
+    pushFrame(cmd, prepare, frame);
+    descriptors.push(ctx, cmd, prepare);
     vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
+    if (!clip)
+        return;
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                  kCompute | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+                  kStorageRW | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, b.clipped->handle());
+    pushFrame(cmd, *b.clipped, frame);
+    descriptors.push(ctx, cmd, *b.clipped);
+    vkCmdDispatchIndirect(cmd, b.clipList->handle(), 0);
 }
 
 } // namespace spot::splat

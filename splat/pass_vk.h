@@ -127,9 +127,11 @@ void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t heig
 void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame);
 
 /// The prepare pass (splat_prepare.comp) specialized for a kernel of `lobes` lobes: `screen` for
-/// the splatting methods (screen lobes and kernel bounds too), `ewa` widening, the projection.
+/// the splatting methods (screen lobes and kernel bounds too), `ewa` widening, the projection,
+/// `worldLobes` whether the world lobes are stored (always without `screen`), and `clipped` for
+/// its second dispatch (the kernels the first listed, with a lobe that projects to no ellipse).
 Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, bool ewa,
-                             bool orthographic);
+                             bool orthographic, bool worldLobes = true, bool clipped = false);
 
 /// What the prepare pass reads and writes. Without `screen`, screenLobes and bounds may be any
 /// storage buffer: nothing is written there.
@@ -140,10 +142,15 @@ struct PrepareBuffers {
     const Buffer* worldLobes = nullptr;  ///< gpu::SpotWorldLobe[capacity * lobes]
     const Buffer* screenLobes = nullptr; ///< gpu_splat::SpotScreenLobe[capacity * lobes]
     const Buffer* bounds = nullptr;      ///< gpu_splat::SpotKernelBound[capacity]
+    /// With `screen`: SpotSplatList then uint[capacity], the kernels the second dispatch bounds.
+    const Buffer* clipList = nullptr;
+    /// With `screen`: the second dispatch's pipeline (makePreparePipeline with `clipped`).
+    const Pipeline* clipped = nullptr;
 };
 
-/// Record the prepare pass over `capacity` impulses (those past the count return at once).
-/// Records nothing for no capacity.
+/// Record the prepare pass over `capacity` impulses (those past the count return at once), and,
+/// with a clip list, its second dispatch over the kernels the first listed (the list is reset
+/// first; barriers between). Records nothing for no capacity.
 void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
                    const gpu_splat::SpotSplatFrame& frame, const PrepareBuffers& buffers,
                    std::uint32_t capacity);

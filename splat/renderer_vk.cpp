@@ -127,7 +127,11 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
         for (std::uint32_t c = 0; c < 3; ++c)
             spec.set(kSplatSpecLobeColor + 3 * l + c, kernel.lobes[l].color[c]);
     Pipelines p;
-    p.prepare = makePreparePipeline(m_ctx, m_scene.lobeCount(), true, s.ewa, s.orthographic);
+    // World lobes are read by Lambert shading and by N samples only.
+    const bool world = s.lambert || s.samples > 0;
+    p.prepare = makePreparePipeline(m_ctx, m_scene.lobeCount(), true, s.ewa, s.orthographic, world);
+    p.prepareClipped =
+        makePreparePipeline(m_ctx, m_scene.lobeCount(), true, s.ewa, s.orthographic, world, true);
     p.compact = makeComputePipeline(m_ctx, spirv(spv_splat_compact_comp),
                                     {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindVisible),
                                      storageBuffer(kSplatBindDraw), storageBuffer(kSplatBindCount),
@@ -348,12 +352,13 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
     const std::uint64_t perKernel = std::uint64_t(lobes) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
-                                    sizeof(std::uint32_t); // sorted: keys; else the small list
+                                    sizeof(std::uint32_t) + // sorted: keys; else the small list
+                                    sizeof(std::uint32_t);  // the clip list
     const std::uint64_t need = std::uint64_t(grown) * perKernel +
                                (sorted ? RadixSortScratch::bytes(grown) : 0);
     std::uint64_t held = m_sortScratch.reservedBytes();
     for (const Buffer* b :
-         {&m_worldLobes, &m_screenLobes, &m_bounds, &m_visible, &m_small, &m_sortKeys})
+         {&m_worldLobes, &m_screenLobes, &m_bounds, &m_visible, &m_small, &m_sortKeys, &m_clipList})
         held += b->reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("splat renderer: ", capacity, " kernels need ", need >> 20,
@@ -366,6 +371,7 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
     m_visible = Buffer();
     m_small = Buffer();
     m_sortKeys = Buffer();
+    m_clipList = Buffer();
     m_sortScratch = RadixSortScratch();
     m_capacity = 0;
     const std::uint64_t n = std::max<std::uint32_t>(grown, 1);
@@ -376,6 +382,9 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
                            cat("splat screen lobes (", grown, " kernels)"));
     m_bounds = Buffer(m_ctx, n * sizeof(SpotKernelBound), kStorage, kDevice, "splat kernel bounds");
     m_visible = Buffer(m_ctx, n * sizeof(std::uint32_t), kStorage, kDevice, "splat kept kernels");
+    m_clipList = Buffer(m_ctx, sizeof(SpotSplatList) + n * sizeof(std::uint32_t),
+                        kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                        kDevice, "splat prepare's clipped kernels");
     if (!sorted)
         m_small = Buffer(m_ctx, n * sizeof(std::uint32_t), kStorage, kDevice, "splat small kernels");
     if (!m_draw.handle()) {
@@ -470,6 +479,8 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     pb.worldLobes = &m_worldLobes;
     pb.screenLobes = &m_screenLobes;
     pb.bounds = &m_bounds;
+    pb.clipList = &m_clipList;
+    pb.clipped = &p.prepareClipped;
     recordPrepare(m_ctx, cmd, p.prepare, f.frame, pb, capacity);
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRead);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.compact.handle());

@@ -90,6 +90,7 @@ private:
     };
     struct Pipelines {
         Pipeline prepare, compact, splat, small, closest, sortKeys, resolve;
+        Pipeline prepareClipped; ///< prepare's second dispatch (the kernels the first listed)
         Pipeline resolveList; ///< hybrid, instanced: the resolve's second dispatch (the listed pixels)
     };
     const Pipelines& pipelines(const Spec& spec, bool roofline);
@@ -134,6 +135,7 @@ private:
     // Per impulse capacity.
     std::uint32_t m_capacity = 0;
     Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_small, m_draw, m_counters, m_sortKeys;
+    Buffer m_clipList; ///< SpotSplatList and a uint per kernel: prepare's second dispatch
     RadixSortScratch m_sortScratch;
 
     // The frame prepared last.
