@@ -249,9 +249,10 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
     const std::uint64_t perKernel = std::uint64_t(m_scene.lobeCount()) *
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
-                                    (m_method == Method::Sorted ? 0 : sizeof(std::uint32_t));
+                                    (m_method == Method::Sorted ? 0 : sizeof(std::uint32_t)) +
+                                    sizeof(std::uint32_t); // prepare's clip list
     std::uint64_t bytes = targetBytes(std::uint64_t(width), std::uint64_t(height), settings) +
-                          std::uint64_t(capacity) * perKernel + 32 + 16;
+                          std::uint64_t(capacity) * perKernel + 32 + 16 + sizeof(SpotSplatList);
     if (m_method == Method::Sorted)
         bytes += std::uint64_t(capacity) * sizeof(std::uint32_t) + RadixSortScratch::bytes(capacity);
     return bytes;
