@@ -580,6 +580,65 @@ TEST(SplatRenderer, LobeReachingTheEyePlaneIsClippedToTheImage) {
     expectNoValidationErrors(ctx);
 }
 
+TEST(SplatRenderer, ClippedKernelAmongBoundedOnesIsBoundedByPrepareSecondDispatch) {
+    // prepare bounds a kernel whose lobe reaches the eye plane in a second dispatch over the
+    // kernels its first one listed (splat_prepare.comp). With that kernel third in the list,
+    // after two that project to ellipses, it must render as it does alone: the second dispatch
+    // has to take the listed kernel, not its own invocation index. Compared where the two others
+    // alone leave the background, which must be where the clipped kernel shows.
+    const noise::Kernel kernel =
+        oneLobeKernel({0.15f, 0.15f, 0.6f}, glm::vec3(0.0f), 3.0f, glm::vec3(1.0f), 3.0f);
+    const std::vector<noise::Impulse> clipped{impulseAt(glm::vec3(0.0f))};
+    const std::vector<noise::Impulse> bounded{impulseAt({1.7f, 0.5f, -1.5f}),
+                                              impulseAt({1.7f, -0.5f, -2.0f})};
+    std::vector<noise::Impulse> all = bounded;
+    all.push_back(clipped[0]);
+    const glm::vec3 background(0.1f, 0.2f, 0.3f);
+    splat::Context ctx(validated());
+    const noise::Mesh empty;
+    SplatRig renderer(ctx, empty, kernel);
+    const splat::Buffer clippedBuffer = upload(ctx, clipped);
+    const splat::Buffer boundedBuffer = upload(ctx, bounded);
+    const splat::Buffer allBuffer = upload(ctx, all);
+    noise::Camera cam; // as in LobeReachingTheEyePlaneIsClippedToTheImage
+    cam.projection = noise::Projection::Perspective;
+    cam.eye = glm::dvec3(0.8, 0.0, 1.0);
+    cam.target = glm::dvec3(0.8, 0.0, 0.0);
+    cam.fovYDeg = 100.0;
+    cam.width = cam.height = 48;
+    for (splat::Method method : {splat::Method::Oit, splat::Method::Hybrid, splat::Method::Sorted,
+                                 splat::Method::Instanced}) {
+        SplatSettings s;
+        s.method = method;
+        s.ewa = false;
+        const auto draw = [&](const splat::Buffer& b, std::size_t n) {
+            return renderer.render(cam, noise::Shading{}, background, glm::vec3(0.0f), b,
+                                   std::uint32_t(n), s);
+        };
+        const noise::Image alone = draw(clippedBuffer, clipped.size());
+        const noise::Image others = draw(boundedBuffer, bounded.size());
+        const noise::Image together = draw(allBuffer, all.size());
+        int compared = 0, shown = 0, othersShown = 0;
+        double worst = 0.0;
+        for (int y = 0; y < cam.height; ++y)
+            for (int x = 0; x < cam.width; ++x) {
+                if (glm::vec3(others.at(x, y)) != background) {
+                    ++othersShown;
+                    continue;
+                }
+                ++compared;
+                shown += glm::length(glm::vec3(alone.at(x, y)) - background) > 1e-3f;
+                worst = std::max(worst, double(glm::length(glm::vec3(together.at(x, y)) -
+                                                           glm::vec3(alone.at(x, y)))));
+            }
+        const std::string name = splat::methodName(method);
+        EXPECT_GT(othersShown, 20) << name; // the bounded kernels are in the image
+        EXPECT_GT(shown, 100) << name;      // and the clipped one shows where they are not
+        EXPECT_LT(worst, 1e-6) << name << " (" << compared << " pixels compared)";
+    }
+    expectNoValidationErrors(ctx);
+}
+
 TEST(SplatRenderer, SortedCompositesStackedKernelsBackToFront) {
     // Three semi-transparent lobes of different colours stacked along the view axis, overlapping
     // on screen but 4 units apart in depth (support 6 sigma = 1.8 units), so no ray crosses two
