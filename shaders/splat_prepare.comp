@@ -307,7 +307,7 @@ void main() {
         w.a1 = ok ? vec4(A[1], centre.y) : vec4(0.0);
         w.a2 = ok ? vec4(A[2], centre.z) : vec4(0.0);
         w.color = vec4(color, ok ? amplitude : 0.0);
-        if (kWorldLobes || !kScreen)
+        if (kWorldLobes) // (makePreparePipeline sets it without kScreen)
             worldLobes[i * kLobes + l] = w;
         live[l] = false;
         centres[l] = vec2(0.0);

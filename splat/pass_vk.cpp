@@ -220,6 +220,16 @@ void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::S
     vkCmdPushConstants(cmd, pipeline.layout(), stages, 0, sizeof(frame), &frame);
 }
 
+void recordListReset(VkCommandBuffer cmd, const Buffer& list) {
+    using namespace passes;
+    memoryBarrier(cmd, kCompute | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+                  kStorageRW | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT, kTransfer,
+                  VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    const gpu_splat::SpotSplatList empty{0u, 1u, 1u, 0u};
+    vkCmdUpdateBuffer(cmd, list.handle(), 0, sizeof(empty), &empty);
+    memoryBarrier(cmd, kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute, kStorageRW);
+}
+
 Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, bool ewa,
                              bool orthographic, bool worldLobes, bool clipped) {
     using namespace gpu_splat;
@@ -247,11 +257,8 @@ void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
     using namespace gpu_splat;
     using namespace passes;
     const bool clip = b.clipList && b.clipped;
-    if (clip) {
-        const SpotSplatList empty{0u, 1u, 1u, 0u};
-        vkCmdUpdateBuffer(cmd, b.clipList->handle(), 0, sizeof(empty), &empty);
-        memoryBarrier(cmd, kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute, kStorageRW);
-    }
+    if (clip)
+        recordListReset(cmd, *b.clipList);
     Descriptors descriptors;
     descriptors.buffer(kSplatBindImpulses, *b.impulses)
         .buffer(kSplatBindCount, *b.count)

@@ -148,6 +148,11 @@ struct PrepareBuffers {
     const Pipeline* clipped = nullptr;
 };
 
+/// Reset a SpotSplatList (count 0, no groups) for a first dispatch to append to and a second,
+/// indirect one to run over: after the previous frame's dispatches read it, before this frame's
+/// compute shaders use it.
+void recordListReset(VkCommandBuffer cmd, const Buffer& list);
+
 /// Record the prepare pass over `capacity` impulses (those past the count return at once), and,
 /// with a clip list, its second dispatch over the kernels the first listed (the list is reset
 /// first; barriers between). Records nothing for no capacity.

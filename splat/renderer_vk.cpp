@@ -633,15 +633,8 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
 
     // 4. Resolve into the result image (hybrid, instanced: in two dispatches, SpotSplatList).
     const bool listed = p.resolveList.handle() != VK_NULL_HANDLE;
-    if (listed) {
-        // (after the previous frame's second dispatch read it)
-        memoryBarrier(cmd, kCompute | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
-                      kStorageRW | VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT, kTransfer,
-                      VK_ACCESS_2_TRANSFER_WRITE_BIT);
-        const SpotSplatList emptyList{0u, 1u, 1u, 0u};
-        vkCmdUpdateBuffer(cmd, m_closestList.handle(), 0, sizeof(emptyList), &emptyList);
-        memoryBarrier(cmd, kTransfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute, kStorageRW);
-    }
+    if (listed)
+        recordListReset(cmd, m_closestList);
     transitionImage(cmd, m_result.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                     VK_PIPELINE_STAGE_2_NONE, 0, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.resolve.handle());
