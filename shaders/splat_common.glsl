@@ -341,27 +341,15 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     }
     if (kLambert)
         splatShadeLobes(first, origins, dirs, peaks, depths, tEnd, d, shades);
-    for (uint i = 0u; i + 1u < kLobes; ++i) {
-        for (uint j = 0u; j + 1u < kLobes; ++j) {
-            bool swap = peaks[j] > peaks[j + 1u];
-            float p0 = peaks[j];
-            float p1 = peaks[j + 1u];
-            peaks[j] = swap ? p1 : p0;
-            peaks[j + 1u] = swap ? p0 : p1;
-            float d0 = depths[j];
-            float d1 = depths[j + 1u];
-            depths[j] = swap ? d1 : d0;
-            depths[j + 1u] = swap ? d0 : d1;
-            vec3 c0 = colors[j];
-            vec3 c1 = colors[j + 1u];
-            colors[j] = swap ? c1 : c0;
-            colors[j + 1u] = swap ? c0 : c1;
-            float s0 = shades[j];
-            float s1 = shades[j + 1u];
-            shades[j] = swap ? s1 : s0;
-            shades[j + 1u] = swap ? s0 : s1;
-        }
-    }
+    // Front to back in the order of the lobes' density peaks along the ray, without sorting them:
+    // lobe i's light is dimmed by the lobes in front of it, those j with peaks[j] < peaks[i]
+    // (on a tie the lower index in front, as a stable sort would order them), so its share is
+    // a_i times the product of their (1 - a_j). Pairs of constant indices once the loops
+    // unroll: a compare and a select per pair, where a sorting network moved every lobe's
+    // peak, depth, colour and shade by selects at each of its (kLobes - 1)^2 steps.
+    float alphas[kLobes];
+    for (uint i = 0u; i < kLobes; ++i)
+        alphas[i] = spotOneMinusExp(depths[i]);
     SplatKernelSample s;
     s.premul = vec3(0.0);
     s.tau = 0.0;
@@ -369,13 +357,19 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     float depthSum = 0.0;
     float weightSum = 0.0;
     for (uint i = 0u; i < kLobes; ++i) {
+        float front = 1.0;
+        for (uint j = 0u; j < kLobes; ++j) {
+            if (j == i)
+                continue;
+            bool inFront = j < i ? peaks[j] <= peaks[i] : peaks[j] < peaks[i];
+            front *= inFront ? 1.0 - alphas[j] : 1.0;
+        }
+        float share = front * alphas[i];
         s.tau += depths[i];
-        float a = spotOneMinusExp(depths[i]);
-        float t = clamp(peaks[i], 0.0, tEnd);
-        s.premul += transmittance * a * shades[i] * colors[i];
-        depthSum += transmittance * a * t;
-        weightSum += transmittance * a;
-        transmittance *= 1.0 - a;
+        s.premul += share * shades[i] * colors[i];
+        depthSum += share * clamp(peaks[i], 0.0, tEnd);
+        weightSum += share;
+        transmittance *= 1.0 - alphas[i];
     }
     // exp(-sum tau) is the product of the lobes' transmittances, already at hand (faint
     // kernels take the series, as spotOneMinusExp does, for relative precision).
