@@ -296,8 +296,8 @@ vec3 splatLobeColor(uint l) {
 // Analytic: each lobe's exact optical depth up to the mesh (spotScreenLobeDepth on the lobe's
 // screen form), lobes composited front to back in the order of their density peaks along the
 // ray. kLobes is a specialization constant, so the loops unroll and the per-lobe arrays stay in
-// registers (llvmpipe keeps dynamically indexed arrays in memory); the order is a stable
-// compare-and-swap network on constant indices, swapping by selects.
+// registers (llvmpipe keeps dynamically indexed arrays in memory); the order is not sorted
+// out but decided pair by pair (below).
 // p: pixel position (its centre); o, d: its world ray (Lambert only); tMesh: world distance to the
 // mesh; scale: splatRayScale(p).
 SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float tMesh, float scale) {
