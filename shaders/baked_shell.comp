@@ -25,10 +25,22 @@ layout(std430, binding = kBakedBindIndices) readonly buffer Indices { uint indic
 layout(std430, binding = kBakedBindTets) writeonly buffer Tets { SpotBakedTet tets[]; };
 layout(std430, binding = kBakedBindEyeTet) buffer EyeTet { uint eyeTet; };
 
-vec3 extrude(SpotMeshVertex v, bool top) {
+vec3 unitNormal(SpotMeshVertex v) {
     float len = length(v.normal.xyz);
-    vec3 n = len > 0.0 ? v.normal.xyz / len : vec3(0.0);
-    return v.position.xyz + (top ? params.grid.w : 0.0) * n;
+    return len > 0.0 ? v.normal.xyz / len : vec3(0.0);
+}
+
+// The prism's 6 corners: base (slot c) and top (slot 3 + c) of sorted corner c.
+void prismCorners(uint v0, uint v1, uint v2, out vec3 world[6], out vec3 atRest[6]) {
+    uint sorted[3] = uint[3](v0, v1, v2);
+    for (uint c = 0u; c < 3u; ++c) {
+        SpotMeshVertex w = vertices[sorted[c]];
+        SpotMeshVertex r = rest[sorted[c]];
+        world[c] = w.position.xyz;
+        atRest[c] = r.position.xyz;
+        world[3u + c] = w.position.xyz + params.grid.w * unitNormal(w);
+        atRest[3u + c] = r.position.xyz + params.grid.w * unitNormal(r);
+    }
 }
 
 void main() {
@@ -38,24 +50,29 @@ void main() {
     uint a = indices[3u * t], b = indices[3u * t + 1u], c = indices[3u * t + 2u];
     uint v0 = min(a, min(b, c)), v2 = max(a, max(b, c));
     uint v1 = a + b + c - v0 - v2;
-    // Corners (vertex, top?) of the three tetrahedra, as in noise::prismTetrahedra.
-    const uvec4 kCorner[3] = uvec4[3](uvec4(0u, 1u, 2u, 2u), uvec4(0u, 1u, 2u, 1u),
-                                      uvec4(0u, 0u, 1u, 2u));
-    const uvec4 kTop[3] = uvec4[3](uvec4(0u, 0u, 0u, 1u), uvec4(0u, 0u, 1u, 1u),
-                                   uvec4(0u, 1u, 1u, 1u));
-    uint sorted[3] = uint[3](v0, v1, v2);
+    // Each corner's slot among the prism's 6 (sorted corner + 3 for the top) in the three
+    // tetrahedra, as in noise::prismTetrahedra; constants once the loops unroll, so the corners
+    // stay in registers (a corner picked by a runtime index would be read from memory).
+    const uvec4 kSlot[3] = uvec4[3](uvec4(0u, 1u, 2u, 5u), uvec4(0u, 1u, 5u, 4u),
+                                    uvec4(0u, 3u, 4u, 5u));
+    vec3 world[6], atRest[6];
+    prismCorners(v0, v1, v2, world, atRest);
     bool reversed = !((a == v0 && b == v1) || (b == v0 && c == v1) || (c == v0 && a == v1));
     for (uint k = 0u; k < 3u; ++k) {
         SpotBakedTet tet;
         vec3 p[4], r[4];
         for (uint i = 0u; i < 4u; ++i) {
-            uint j = reversed && i < 2u ? 1u - i : i;
-            uint v = sorted[kCorner[k][j]];
-            bool top = kTop[k][j] != 0u;
-            p[i] = extrude(vertices[v], top);
-            r[i] = extrude(rest[v], top);
-            tet.world[i] = vec4(p[i], 1.0);
+            p[i] = world[kSlot[k][i]];
+            r[i] = atRest[kSlot[k][i]];
         }
+        // Corners 0 and 1 swapped where sorting reversed the triangle's winding.
+        vec3 p0 = p[0], r0 = r[0];
+        p[0] = reversed ? p[1] : p[0];
+        r[0] = reversed ? r[1] : r[0];
+        p[1] = reversed ? p0 : p[1];
+        r[1] = reversed ? r0 : r[1];
+        for (uint i = 0u; i < 4u; ++i)
+            tet.world[i] = vec4(p[i], 1.0);
         bool holdsEye = true;
         for (uint f = 0u; f < 4u; ++f) {
             vec3 a = p[(f + 1u) % 4u], b = p[(f + 2u) % 4u], c = p[(f + 3u) % 4u];
