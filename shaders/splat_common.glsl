@@ -105,6 +105,25 @@ bool splatInQuad(SpotKernelBound b, vec2 p) {
     return abs(dot(d, u)) <= b.quad.z && abs(d.x * -u.y + d.y * u.x) <= b.quad.w;
 }
 
+// A lobe's ray line through pixel position p from its screen form (spot_splat.h): its
+// lobe-space direction v and origin o' (one of them affine in the pixel, the other constant),
+// and returned, w = o' x v (xyz) and n = o'.v (w) taken as affine functions (their terms at the
+// reference pixel and per pixel step, k0 = o' x v(ref), kx = o' x vx, ...) rather than as a
+// product at p: near the lobe's centre line o' and v are nearly parallel, and the terms keep the
+// compute paths and the vertex shader (which rebuilds o' from them) rounding alike.
+vec4 splatScreenLobeAt(SpotScreenLobe s, vec2 p, out vec3 v, out vec3 o) {
+    vec2 delta = p - vec2(s.a0.w, s.ax.w);
+    vec3 a = s.a0.xyz + delta.x * s.ax.xyz + delta.y * s.ay.xyz;
+    v = kOrthographic ? s.b.xyz : a;
+    o = kOrthographic ? a : s.b.xyz;
+    vec3 k0 = kOrthographic ? cross(s.a0.xyz, s.b.xyz) : cross(s.b.xyz, s.a0.xyz);
+    vec3 kx = kOrthographic ? cross(s.ax.xyz, s.b.xyz) : cross(s.b.xyz, s.ax.xyz);
+    vec3 ky = kOrthographic ? cross(s.ay.xyz, s.b.xyz) : cross(s.b.xyz, s.ay.xyz);
+    return vec4(k0 + delta.x * kx + delta.y * ky,
+                dot(s.a0.xyz, s.b.xyz) + delta.x * dot(s.ax.xyz, s.b.xyz) +
+                    delta.y * dot(s.ay.xyz, s.b.xyz));
+}
+
 #ifdef SPLAT_READS_LOBES
 layout(std430, binding = kSplatBindWorldLobes) readonly buffer WorldLobes { SpotWorldLobe worldLobes[]; };
 layout(std430, binding = kSplatBindScreenLobes) readonly buffer ScreenLobes { SpotScreenLobe screenLobes[]; };
@@ -120,6 +139,57 @@ struct SplatKernelSample {
 
 mat3 splatLobeMatrix(SpotWorldLobe w) { return mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz); }
 vec3 splatLobeCentre(SpotWorldLobe w) { return vec3(w.a0.w, w.a1.w, w.a2.w); }
+
+// The kernel lobes' colours (kSplatSpecLobeColor).
+layout(constant_id = 16) const float kLobeColor0r = 1.0;
+layout(constant_id = 17) const float kLobeColor0g = 1.0;
+layout(constant_id = 18) const float kLobeColor0b = 1.0;
+layout(constant_id = 19) const float kLobeColor1r = 1.0;
+layout(constant_id = 20) const float kLobeColor1g = 1.0;
+layout(constant_id = 21) const float kLobeColor1b = 1.0;
+layout(constant_id = 22) const float kLobeColor2r = 1.0;
+layout(constant_id = 23) const float kLobeColor2g = 1.0;
+layout(constant_id = 24) const float kLobeColor2b = 1.0;
+layout(constant_id = 25) const float kLobeColor3r = 1.0;
+layout(constant_id = 26) const float kLobeColor3g = 1.0;
+layout(constant_id = 27) const float kLobeColor3b = 1.0;
+layout(constant_id = 28) const float kLobeColor4r = 1.0;
+layout(constant_id = 29) const float kLobeColor4g = 1.0;
+layout(constant_id = 30) const float kLobeColor4b = 1.0;
+layout(constant_id = 31) const float kLobeColor5r = 1.0;
+layout(constant_id = 32) const float kLobeColor5g = 1.0;
+layout(constant_id = 33) const float kLobeColor5b = 1.0;
+layout(constant_id = 34) const float kLobeColor6r = 1.0;
+layout(constant_id = 35) const float kLobeColor6g = 1.0;
+layout(constant_id = 36) const float kLobeColor6b = 1.0;
+layout(constant_id = 37) const float kLobeColor7r = 1.0;
+layout(constant_id = 38) const float kLobeColor7g = 1.0;
+layout(constant_id = 39) const float kLobeColor7b = 1.0;
+// Lobe l's colour: l is a constant once the lobe loops unroll, so this folds to a constant.
+vec3 splatLobeColor(uint l) {
+    switch (l) {
+    case 0u: return vec3(kLobeColor0r, kLobeColor0g, kLobeColor0b);
+    case 1u: return vec3(kLobeColor1r, kLobeColor1g, kLobeColor1b);
+    case 2u: return vec3(kLobeColor2r, kLobeColor2g, kLobeColor2b);
+    case 3u: return vec3(kLobeColor3r, kLobeColor3g, kLobeColor3b);
+    case 4u: return vec3(kLobeColor4r, kLobeColor4g, kLobeColor4b);
+    case 5u: return vec3(kLobeColor5r, kLobeColor5g, kLobeColor5b);
+    case 6u: return vec3(kLobeColor6r, kLobeColor6g, kLobeColor6b);
+    default: return vec3(kLobeColor7r, kLobeColor7g, kLobeColor7b);
+    }
+}
+
+#ifndef SPLAT_FRAGMENT
+// The impulse's colour multiplier of a kernel (the compute paths; the fragment shaders get it as
+// vColor).
+#ifdef SPLAT_CACHED_LOBES
+vec3 splatCachedColor; // loaded with the lobes
+vec3 splatKernelColor(uint kernel) { return splatCachedColor; }
+#else
+layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
+vec3 splatKernelColor(uint kernel) { return bounds[kernel].color.rgb; }
+#endif
+#endif
 
 #ifdef SPLAT_CACHED_LOBES
 // The kernel's lobes, loaded once by a shader that evaluates one kernel at many pixels
@@ -253,44 +323,6 @@ bool splatMeetsSupport() {
     return meets;
 }
 
-// The kernel lobes' colours (kSplatSpecLobeColor).
-layout(constant_id = 16) const float kLobeColor0r = 1.0;
-layout(constant_id = 17) const float kLobeColor0g = 1.0;
-layout(constant_id = 18) const float kLobeColor0b = 1.0;
-layout(constant_id = 19) const float kLobeColor1r = 1.0;
-layout(constant_id = 20) const float kLobeColor1g = 1.0;
-layout(constant_id = 21) const float kLobeColor1b = 1.0;
-layout(constant_id = 22) const float kLobeColor2r = 1.0;
-layout(constant_id = 23) const float kLobeColor2g = 1.0;
-layout(constant_id = 24) const float kLobeColor2b = 1.0;
-layout(constant_id = 25) const float kLobeColor3r = 1.0;
-layout(constant_id = 26) const float kLobeColor3g = 1.0;
-layout(constant_id = 27) const float kLobeColor3b = 1.0;
-layout(constant_id = 28) const float kLobeColor4r = 1.0;
-layout(constant_id = 29) const float kLobeColor4g = 1.0;
-layout(constant_id = 30) const float kLobeColor4b = 1.0;
-layout(constant_id = 31) const float kLobeColor5r = 1.0;
-layout(constant_id = 32) const float kLobeColor5g = 1.0;
-layout(constant_id = 33) const float kLobeColor5b = 1.0;
-layout(constant_id = 34) const float kLobeColor6r = 1.0;
-layout(constant_id = 35) const float kLobeColor6g = 1.0;
-layout(constant_id = 36) const float kLobeColor6b = 1.0;
-layout(constant_id = 37) const float kLobeColor7r = 1.0;
-layout(constant_id = 38) const float kLobeColor7g = 1.0;
-layout(constant_id = 39) const float kLobeColor7b = 1.0;
-// Lobe l's colour: l is a constant once the lobe loops unroll, so this folds to a constant.
-vec3 splatLobeColor(uint l) {
-    switch (l) {
-    case 0u: return vec3(kLobeColor0r, kLobeColor0g, kLobeColor0b);
-    case 1u: return vec3(kLobeColor1r, kLobeColor1g, kLobeColor1b);
-    case 2u: return vec3(kLobeColor2r, kLobeColor2g, kLobeColor2b);
-    case 3u: return vec3(kLobeColor3r, kLobeColor3g, kLobeColor3b);
-    case 4u: return vec3(kLobeColor4r, kLobeColor4g, kLobeColor4b);
-    case 5u: return vec3(kLobeColor5r, kLobeColor5g, kLobeColor5b);
-    case 6u: return vec3(kLobeColor6r, kLobeColor6g, kLobeColor6b);
-    default: return vec3(kLobeColor7r, kLobeColor7g, kLobeColor7b);
-    }
-}
 #endif
 
 // Analytic: each lobe's exact optical depth up to the mesh (spotScreenLobeDepth on the lobe's
@@ -322,11 +354,9 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
 #else
         SpotScreenLobe s = screenLobes[first + l];
 #endif
-        vec2 delta = p - vec2(s.k0.w, s.kx.w);
-        vec4 wo = vec4(s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz,
-                       s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w);
-        vec3 v = s.v0.xyz + delta.x * s.vx.xyz + delta.y * s.vy.xyz;
-        vec4 c = vec4(s.color.rgb, s.ky.w);
+        vec3 v, ol;
+        vec4 wo = splatScreenLobeAt(s, p, v, ol);
+        vec4 c = vec4(splatLobeColor(l) * splatKernelColor(kernel), s.ay.w);
 #endif
         float tPeak;
         float tau = c.w * scale * spotScreenLobeDepth(wo.xyz, v, wo.w, tEnd, k, tPeak);
@@ -334,10 +364,8 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
         peaks[l] = tPeak;
         colors[l] = c.rgb;
         shades[l] = 1.0;
-        origins[l] = vec3(0.0);
+        origins[l] = ol;
         dirs[l] = v;
-        if (kLambert)
-            origins[l] = (cross(v, wo.xyz) + wo.w * v) / dot(v, v);
     }
     if (kLambert)
         splatShadeLobes(first, origins, dirs, peaks, depths, tEnd, d, shades);

@@ -14,7 +14,7 @@
 // batch, taken or not, so the first dispatch only lists the kernels that need it (kClipped false)
 // and a second, indirect, over that list (kClipped true) computes their bounds again in full.
 // World lobes are stored only where something reads them (kWorldLobes: Lambert shading, N
-// samples, the ray-march): they are 4 of a lobe's 11 stored vectors.
+// samples, the ray-march): they are 4 of a lobe's 8 stored vectors.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 
@@ -33,9 +33,24 @@ layout(constant_id = kSplatSpecClipped) const bool kClipped = false;
 
 bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
 
-// The lobe's screen form for the world-to-lobe map A and centre c (spot_splat.h). ref: the pixel
-// the affine forms are written around (the centre's projection when it has one).
-SpotScreenLobe screenLobe(mat3 A, vec3 c, vec3 color, float amplitude, out vec2 ref) {
+// The lobe's ray line in pixel terms, for the bounds: with delta = p - ref,
+// w(p) = K0 + delta.x KX + delta.y KY = o'(p) x v(p) and v(p) = V0 + delta.x VX + delta.y VY
+// (spot_splat.h's o' and v), both affine in the pixel (for perspective o' is one point, for
+// orthographic v), so the pixels whose ray line meets the k-sigma support,
+// |w|^2 < k^2 |v|^2, are a conic's region (supportConic) with nothing cancelling.
+struct ScreenForm {
+    vec4 k0; // xyz: K0; w: ref.x (pixels)
+    vec4 kx; // xyz: KX; w: ref.y
+    vec4 ky; // xyz: KY
+    vec4 v0; // xyz: V0
+    vec4 vx; // xyz: VX
+    vec4 vy; // xyz: VY
+};
+
+// The lobe's screen forms for the world-to-lobe map A and centre c: the one the bounds are found
+// from (returned) and the one stored for the pixels (`stored`, spot_splat.h). ref: the pixel the
+// affine forms are written around (the centre's projection when it has one).
+ScreenForm screenLobe(mat3 A, vec3 c, float amplitude, out SpotScreenLobe stored, out vec2 ref) {
     vec3 R = frame.right.xyz * frame.right.w;
     vec3 U = frame.up.xyz * frame.up.w;
     vec3 F = frame.forward.xyz;
@@ -60,7 +75,6 @@ SpotScreenLobe screenLobe(mat3 A, vec3 c, vec3 color, float amplitude, out vec2 
     vec3 k0;
     vec3 kx;
     vec3 ky;
-    vec3 n;
     if (kOrthographic) {
         vec3 o0 = A * (frame.eye.xyz + sx * R + sy * U - c);
         vec3 ox = A * ex;
@@ -71,7 +85,10 @@ SpotScreenLobe screenLobe(mat3 A, vec3 c, vec3 color, float amplitude, out vec2 
         k0 = cross(o0, v0);
         kx = cross(ox, v0);
         ky = cross(oy, v0);
-        n = vec3(dot(o0, v0), dot(ox, v0), dot(oy, v0));
+        stored.a0 = vec4(o0, ref.x);
+        stored.ax = vec4(ox, ref.y);
+        stored.ay = vec4(oy, amplitude);
+        stored.b = vec4(v0, 0.0);
     } else {
         vec3 o = A * (frame.eye.xyz - c);
         v0 = A * (F + sx * R + sy * U);
@@ -80,28 +97,30 @@ SpotScreenLobe screenLobe(mat3 A, vec3 c, vec3 color, float amplitude, out vec2 
         k0 = cross(o, v0);
         kx = cross(o, vx);
         ky = cross(o, vy);
-        n = vec3(dot(o, v0), dot(o, vx), dot(o, vy));
+        stored.a0 = vec4(v0, ref.x);
+        stored.ax = vec4(vx, ref.y);
+        stored.ay = vec4(vy, amplitude);
+        stored.b = vec4(o, 0.0);
     }
-    SpotScreenLobe s;
+    ScreenForm s;
     s.k0 = vec4(k0, ref.x);
     s.kx = vec4(kx, ref.y);
-    s.ky = vec4(ky, amplitude);
-    s.v0 = vec4(v0, n.x);
-    s.vx = vec4(vx, n.y);
-    s.vy = vec4(vy, n.z);
-    s.color = vec4(color, 0.0);
+    s.ky = vec4(ky, 0.0);
+    s.v0 = vec4(v0, 0.0);
+    s.vx = vec4(vx, 0.0);
+    s.vy = vec4(vy, 0.0);
     return s;
 }
 
 // The pixels p = ref + d whose ray line meets a lobe's k-sigma support: |w|^2 < k^2 |v|^2 with
-// w and v affine in d (SpotScreenLobe), the conic f(d) = d^T M d + 2 b.d + c < 0.
+// w and v affine in d (ScreenForm), the conic f(d) = d^T M d + 2 b.d + c < 0.
 struct SupportConic {
     float m00, m01, m11; // M
     float b0, b1;        // b
     float c;
 };
 
-SupportConic supportConic(SpotScreenLobe s, float k) {
+SupportConic supportConic(ScreenForm s, float k) {
     float k2 = k * k;
     vec3 k0 = s.k0.xyz;
     vec3 kx = s.kx.xyz;
@@ -120,7 +139,7 @@ SupportConic supportConic(SpotScreenLobe s, float k) {
 // ellipse (the support reaches the eye plane, or is degenerate); else `centre` (pixels) and
 // `shape` S, the ellipse being (x - centre)^T S^-1 (x - centre) <= 1. `seen` is false when no
 // pixel ray meets the support.
-bool screenEllipse(SpotScreenLobe s, float k, out vec2 centre, out mat2 shape, out bool seen) {
+bool screenEllipse(ScreenForm s, float k, out vec2 centre, out mat2 shape, out bool seen) {
     SupportConic q = supportConic(s, k);
     float m00 = q.m00, m01 = q.m01, m11 = q.m11, b0 = q.b0, b1 = q.b1, c = q.c;
     float det = m00 * m11 - m01 * m01;
@@ -188,7 +207,7 @@ void growAtRoots(int n, float t0, float t1, vec2 origin, vec2 dir, vec2 rectLo, 
 // vertical (x extremes) or horizontal (y extremes), so the box of those points is exact (a line
 // meeting the support behind the eye counts too: conservative). Returns false when the region
 // misses the image; a box of the whole image when the conic's numbers are not finite.
-bool clippedConicBox(SpotScreenLobe s, float k, out vec2 lo, out vec2 hi) {
+bool clippedConicBox(ScreenForm s, float k, out vec2 lo, out vec2 hi) {
     SupportConic q = supportConic(s, k);
     float m00 = q.m00, m01 = q.m01, m11 = q.m11, b0 = q.b0, b1 = q.b1, c = q.c;
     vec2 ref = vec2(s.k0.w, s.kx.w);
@@ -317,13 +336,14 @@ void main() {
         if (!kScreen)
             continue;
         vec2 ref;
-        SpotScreenLobe s = screenLobe(A, centre, color, ok ? amplitude : 0.0, ref);
+        SpotScreenLobe stored;
+        ScreenForm s = screenLobe(A, centre, ok ? amplitude : 0.0, stored, ref);
         if (!ok) {
-            s.ky.w = 0.0;
-            screenLobes[i * kLobes + l] = s;
+            stored.ay.w = 0.0;
+            screenLobes[i * kLobes + l] = stored;
             continue;
         }
-        screenLobes[i * kLobes + l] = s;
+        screenLobes[i * kLobes + l] = stored;
         // The depth range of the support (tangent planes along the view direction).
         vec3 rel = centre - frame.eye.xyz;
         float zc = dot(rel, frame.forward.xyz);

@@ -38,13 +38,13 @@ void main() {
     vColor = b.color.rgb;
     for (uint l = 0u; l < kLobes; ++l) {
         SpotScreenLobe s = screenLobes[kernel * kLobes + l];
-        vec2 delta = corner - vec2(s.k0.w, s.kx.w);
-        vec3 v = s.v0.xyz + delta.x * s.vx.xyz + delta.y * s.vy.xyz;
-        vec3 w = s.k0.xyz + delta.x * s.kx.xyz + delta.y * s.ky.xyz;
-        float on = s.v0.w + delta.x * s.vx.w + delta.y * s.vy.w;
-        vec3 o = (cross(v, w) + on * v) / dot(v, v); // w = o x v, on = o.v
+        // o' rebuilt at this corner from the affine w and n (the stored one differs in
+        // rounding where the form is ill-conditioned; the compute path takes w and n so too).
+        vec3 v, stored;
+        vec4 wo = splatScreenLobeAt(s, corner, v, stored);
+        vec3 o = (cross(v, wo.xyz) + wo.w * v) / dot(v, v); // w = o' x v, n = o'.v
         vLobeA[l] = kOrthographic ? o : v;
-        vLobeB[l] = vec4(kOrthographic ? v : o, s.ky.w);
+        vLobeB[l] = vec4(kOrthographic ? v : o, s.ay.w);
         if (kShadeVaryings) {
             SpotWorldLobe wl = worldLobes[kernel * kLobes + l];
             mat3 At = transpose(mat3(wl.a0.xyz, wl.a1.xyz, wl.a2.xyz));

@@ -52,6 +52,7 @@ void main() {
     ivec2 hi;
     splatQuadPixelBox(b, lo, hi); // at most kSmallPixels centres (splat_compact.comp)
     uint width = uint(frame.size.x);
+    splatCachedColor = b.color.rgb;
     for (uint l = 0u; l < kLobes; ++l) {
         splatCachedLobes[l] = screenLobes[kernel * kLobes + l];
         if (kLambert || kSamples > 0u)

@@ -32,29 +32,27 @@ struct SpotMeshVertex {
     vec4 normal;   /* xyz: unit normal; w unused */
 };
 
-/* One lobe as the pixels of this frame see it (112 bytes), made by splat_prepare.comp from the
- * world lobe (A, c) and the camera. For the pixel at p (pixel units, its centre), with
- * delta = p - ref:
- *   v(p) = V0 + delta.x VX + delta.y VY   the pixel's ray direction in lobe space, A e(p), where
- *                                         e(p) is the ray direction scaled to unit view depth
- *                                         (dot(e, forward) = 1) for perspective, or the unit view
- *                                         direction for orthographic;
- *   w(p) = K0 + delta.x KX + delta.y KY   o'(p) x v(p), o'(p) = A (origin(p) - c): the ray's
- *                                         lobe-space origin crossed with its direction;
- *   n(p) = n0 + delta.x nx + delta.y ny   dot(o'(p), v(p)).
- * Both cross and dot are affine in the pixel (for perspective o' is one point and
- * o' x V0 = 0 at the lobe centre's pixel; for orthographic v is constant), so no pixel pays for
- * a matrix product, and nothing cancels: the ray's squared distance from the lobe centre in lobe
- * units is |w|^2 / |v|^2, exactly. Along the ray origin(p) + t e(p) (t = view depth for both
- * projections), the density peaks at t* = -n / |v|^2. (docs/design.md section 4.) */
+/* One lobe as the pixels of this frame see it (64 bytes), made by splat_prepare.comp from the
+ * world lobe (A, c) and the camera. The pixel at p (pixel units, its centre) looks along the ray
+ * origin(p) + t e(p), t its view depth: e(p) is the direction scaled to unit view depth
+ * (dot(e, forward) = 1) for perspective, the unit view direction for orthographic. In lobe
+ * space that ray is o' + t v with o' = A (origin - c) and v = A e. One of the two is affine in
+ * the pixel and the other one point: for perspective v(p) = A e(p) is affine and o' = A (eye - c)
+ * the same for every pixel; for orthographic the other way round. With delta = p - ref:
+ *   a(p) = a0 + delta.x ax + delta.y ay   the affine one (v for perspective, o' for orthographic);
+ *   b                                     the constant one.
+ * A pixel then takes w = o' x v and n = o'.v: the ray's squared distance from the lobe centre in
+ * lobe units is |w|^2 / |v|^2, and the density peaks at t* = -n / |v|^2 (spotScreenLobeDepth).
+ * The fragment shaders get a(p) interpolated (noperspective, exact for an affine function) and b
+ * flat, so no pixel pays for a matrix product; the compute paths evaluate a(p) themselves. The
+ * lobe's colour is not stored: it is the kernel lobe's (a specialization constant) times the
+ * impulse's (SpotKernelBound.color). (docs/design.md section 4.) */
 struct SpotScreenLobe {
-    vec4 k0;    /* xyz: K0; w: ref.x (pixels) */
-    vec4 kx;    /* xyz: KX; w: ref.y */
-    vec4 ky;    /* xyz: KY; w: peak extinction x weight (x EWA amplitude); 0: the lobe is off */
-    vec4 v0;    /* xyz: V0; w: n0 */
-    vec4 vx;    /* xyz: VX; w: nx */
-    vec4 vy;    /* xyz: VY; w: ny */
-    vec4 color; /* rgb: lobe colour x impulse colour; w: unused */
+    vec4 a0; /* xyz: a at ref; w: ref.x (pixels) */
+    vec4 ax; /* xyz: a's change per pixel along x; w: ref.y */
+    vec4 ay; /* xyz: a's change per pixel along y; w: peak extinction x weight (x EWA amplitude);
+                0: the lobe is off */
+    vec4 b;  /* xyz: b; w: unused */
 };
 
 /* Screen bound of one kernel for the current view (48 bytes): an oriented rectangle holding every

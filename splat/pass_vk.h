@@ -29,7 +29,7 @@ using glm::vec4;
 #undef SPOT_CONST
 static_assert(sizeof(SpotSplatFrame) == 128, "push constants: 128 bytes at most on lavapipe");
 static_assert(sizeof(SpotMeshVertex) == 32);
-static_assert(sizeof(SpotScreenLobe) == 112);
+static_assert(sizeof(SpotScreenLobe) == 64);
 static_assert(sizeof(SpotKernelBound) == 48);
 static_assert(sizeof(SpotSplatCounters) == 16);
 } // namespace gpu_splat

@@ -144,7 +144,8 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
                     storageImage(kSplatBindOpticalDepth), storageImage(kSplatBindMeshDistance),
                     storageBuffer(kSplatBindClosest), storageImage(kSplatBindClosestKernel),
                     storageImage(kSplatBindResult), storageBuffer(kSplatBindOitFixed),
-                    storageBuffer(kSplatBindOitTiles), storageBuffer(kSplatBindClosestList)});
+                    storageBuffer(kSplatBindOitTiles), storageBuffer(kSplatBindClosestList),
+                    storageBuffer(kSplatBindBounds)});
     p.resolve = makeComputePipeline(m_ctx, spirv(spv_splat_resolve_comp), resolve, push, spec);
     if (!roofline && (s.resolve == kSplatResolveHybrid || s.resolve == kSplatResolveHybridPass ||
                       s.resolve == kSplatResolveInstanced)) {
@@ -654,7 +655,8 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .image(kSplatBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .buffer(kSplatBindOitFixed, m_oitFixed.handle() ? m_oitFixed : m_counters)
         .buffer(kSplatBindOitTiles, m_oitTiles.handle() ? m_oitTiles : m_counters)
-        .buffer(kSplatBindClosestList, listed ? m_closestList : m_counters);
+        .buffer(kSplatBindClosestList, listed ? m_closestList : m_counters)
+        .buffer(kSplatBindBounds, m_bounds);
     resolve.push(m_ctx, cmd, p.resolve);
     vkCmdDispatch(cmd, (width + kSplatResolveTile - 1) / kSplatResolveTile,
                   (height + kSplatResolveTile - 1) / kSplatResolveTile, 1);
