@@ -1,6 +1,7 @@
 #version 450
 // Deterministic stream compaction of the kernels prepare.comp kept (non-empty quad): their
-// indices in increasing order, and the indirect draw of one 4-vertex strip per kept kernel. With
+// indices in increasing order, and the indirect indexed draw of one quad per kept kernel
+// (kSplatQuadIndices indices each, spot_splat.h). With
 // the compute path (kSmallPixels > 0), the small kernels go to a second list, in increasing
 // order within each of four size classes, with the indirect dispatch of splat_small.comp: those
 // whose pixel box holds at most kSmallPixels centres, and the thin ones (at most 3 pixels wide)
@@ -16,7 +17,7 @@ layout(local_size_x = 256) in;
 
 layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
 layout(std430, binding = kSplatBindVisible) writeonly buffer Visible { uint visible[]; };
-layout(std430, binding = kSplatBindDraw) writeonly buffer Indirect { uint draw[8]; }; // kSplatBindDraw
+layout(std430, binding = kSplatBindDraw) writeonly buffer Indirect { uint draw[kSplatDrawWords]; }; // kSplatBindDraw
 layout(std430, binding = kSplatBindCount) readonly buffer Count { uint impulseCount; };
 layout(std430, binding = kSplatBindSmall) writeonly buffer Small { uint small[]; };
 
@@ -92,14 +93,15 @@ void main() {
         }
     }
     if (t == kSplatCompactThreads - 1u) {
-        draw[0] = 4u;
-        draw[1] = sums[t];
+        draw[0] = kSplatQuadIndices * sums[t]; // VkDrawIndexedIndirectCommand
+        draw[1] = 1u;
         draw[2] = 0u;
         draw[3] = 0u;
+        draw[4] = 0u;
         uint smallTotal = total.x + total.y + total.z + total.w;
-        draw[4] = (smallTotal + kSplatSmallThreads - 1u) / kSplatSmallThreads;
-        draw[5] = 1u;
-        draw[6] = 1u;
-        draw[7] = smallTotal;
+        draw[kSplatDrawDispatch] = (smallTotal + kSplatSmallThreads - 1u) / kSplatSmallThreads;
+        draw[kSplatDrawDispatch + 1u] = 1u;
+        draw[kSplatDrawDispatch + 2u] = 1u;
+        draw[kSplatDrawSmallCount] = smallTotal;
     }
 }

@@ -1,6 +1,7 @@
 #version 450
-// One oriented quad (a 4-vertex strip) per kept kernel, from its screen bound (centre, half
-// extents along u and v); the instance is the compacted kernel list's entry. Each corner also
+// One oriented quad per kept kernel, from its screen bound (centre, half extents along u and v):
+// vertex 4k + c is corner c of the compacted kernel list's entry k (the indexed draw of
+// spot_splat.h's kSplatQuadIndices; c's bit 0 the +u side, bit 1 the +v side). Each corner also
 // carries the kernel's lobes in screen form (splat_common.glsl: vLobeA, vLobeB): the ray direction
 // in lobe space is affine in the pixel, so the rasterizer interpolates it exactly. The
 // quad lies at the reversed depth of the kernel's nearest point: where the mesh is nearer, the
@@ -24,7 +25,7 @@ layout(location = 19) noperspective out vec3 vShadeA[kShadeLobes];
 layout(location = 25) flat out vec3 vShadeB[kShadeLobes];
 
 void main() {
-    uint kernel = visible[gl_InstanceIndex];
+    uint kernel = visible[uint(gl_VertexIndex) / 4u];
     SpotKernelBound b = bounds[kernel];
     vec2 u = b.axis.xy;
     vec2 v = vec2(-u.y, u.x);

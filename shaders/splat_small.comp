@@ -25,7 +25,7 @@ layout(local_size_x = kSplatSmallThreads) in;
 
 layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
 layout(std430, binding = kSplatBindSmall) readonly buffer Small { uint small[]; };
-layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[8]; };
+layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[kSplatDrawWords]; };
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };
 layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed[]; };
@@ -44,7 +44,7 @@ void splatAdd(uint slot, float value) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= draw[7])
+    if (i >= draw[kSplatDrawSmallCount])
         return;
     uint kernel = small[i];
     SpotKernelBound b = bounds[kernel];

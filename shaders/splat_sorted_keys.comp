@@ -15,14 +15,14 @@ layout(local_size_x = 64) in;
 
 layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBound bounds[]; };
 layout(std430, binding = kSplatBindVisible) buffer Visible { uint visible[]; };
-layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[4]; }; // VkDrawIndirectCommand
+layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[kSplatDrawWords]; };
 layout(std430, binding = kSplatBindKeys) writeonly buffer Keys { uint keys[]; };
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= frame.counts.x)
         return;
-    if (i >= draw[1]) {
+    if (i >= draw[0] / kSplatQuadIndices) { // the quads' index count
         keys[i] = 0xffffffffu;
         visible[i] = 0xffffffffu;
         return;

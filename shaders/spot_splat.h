@@ -69,6 +69,18 @@ struct SpotKernelBound {
                    this); w: unused */
 };
 
+/* The quads' draw: an indexed triangle list, kernel k's quad the vertices 4k .. 4k + 3 (corner
+ * c = index & 3: bit 0 the +u side, bit 1 the +v side) as the triangles (0, 1, 2) and (1, 3, 2),
+ * those of a strip each led by the vertex that led it there (flat inputs come from it). One
+ * draw of 6 indices a kernel rather than one instance of a 4-vertex strip a kernel: lavapipe
+ * pays per instance, and shades each index's vertex once (docs/design.md section 8). */
+SPOT_CONST uint kSplatQuadIndices = 6u;
+/* The indirect buffer (kSplatBindDraw): its length in words and where the small kernels'
+ * dispatch and count lie in it. */
+SPOT_CONST uint kSplatDrawWords = 12u;
+SPOT_CONST uint kSplatDrawDispatch = 8u;
+SPOT_CONST uint kSplatDrawSmallCount = 11u;
+
 /* Descriptor bindings of the splat pipelines (one numbering for all; each pipeline declares the
  * ones it reads). C++ and GLSL use these names, never numbers. */
 SPOT_CONST uint kSplatBindImpulses = 0u;     /* SpotImpulse[] (prepare) */
@@ -78,9 +90,11 @@ SPOT_CONST uint kSplatBindScreenLobes = 3u;  /* SpotScreenLobe[kernel * lobes + 
 SPOT_CONST uint kSplatBindBounds = 4u;       /* SpotKernelBound[kernel] */
 SPOT_CONST uint kSplatBindCount = 5u;        /* uint: the impulse count */
 SPOT_CONST uint kSplatBindVisible = 6u;      /* uint[]: kept kernels, in draw order */
-SPOT_CONST uint kSplatBindDraw = 7u;         /* uint[8]: [0, 4) VkDrawIndirectCommand of the quads;
-                                                [4, 7) VkDispatchIndirectCommand of the small
-                                                kernels' pass; [7] the small kernel count */
+SPOT_CONST uint kSplatBindDraw = 7u;         /* uint[kSplatDrawWords]: [0, 5)
+                                                VkDrawIndexedIndirectCommand of the quads;
+                                                [kSplatDrawDispatch, +3)
+                                                VkDispatchIndirectCommand of the small kernels'
+                                                pass; [kSplatDrawSmallCount] their count */
 SPOT_CONST uint kSplatBindMeshDistance = 8u; /* r32f image: ray distance to the mesh */
 SPOT_CONST uint kSplatBindClosest = 9u;      /* uint64_t[pixel]: hybrid's closest (depth, kernel) */
 SPOT_CONST uint kSplatBindKeys = 10u;        /* uint[]: sorted's sort keys */

@@ -1,6 +1,7 @@
 #include "renderer_vk.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 #include "noise/error.h"
@@ -176,7 +177,7 @@ const SplatRenderer::Pipelines& SplatRenderer::pipelines(const Spec& s, bool roo
                       storageImage(kSplatBindMeshDistance)};
     quads.bindings.insert(quads.bindings.end(), lobes.begin(), lobes.end());
     quads.pushBytes = push;
-    quads.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
+    quads.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
     quads.spec = spec;
     GraphicsPipelineDesc splat = quads;
     splat.bindings.push_back(storageBuffer(kSplatBindCounters)); // read only when counting
@@ -251,9 +252,12 @@ std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t cap
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
                                     (m_method == Method::Sorted ? 0 : sizeof(std::uint32_t)) +
-                                    sizeof(std::uint32_t); // prepare's clip list
+                                    sizeof(std::uint32_t) + // prepare's clip list
+                                    kSplatQuadIndices * sizeof(std::uint32_t); // the quads' indices
     std::uint64_t bytes = targetBytes(std::uint64_t(width), std::uint64_t(height), settings) +
-                          std::uint64_t(capacity) * perKernel + 32 + 16 + sizeof(SpotSplatList);
+                          std::uint64_t(capacity) * perKernel +
+                          kSplatDrawWords * sizeof(std::uint32_t) + sizeof(SpotSplatCounters) +
+                          sizeof(SpotSplatList);
     if (m_method == Method::Sorted)
         bytes += std::uint64_t(capacity) * sizeof(std::uint32_t) + RadixSortScratch::bytes(capacity);
     return bytes;
@@ -355,7 +359,8 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
                                         (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
                                     sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
                                     sizeof(std::uint32_t) + // sorted: keys; else the small list
-                                    sizeof(std::uint32_t);  // the clip list
+                                    sizeof(std::uint32_t) + // the clip list
+                                    kSplatQuadIndices * sizeof(std::uint32_t); // the quads' indices
     const std::uint64_t need = std::uint64_t(grown) * perKernel +
                                (sorted ? RadixSortScratch::bytes(grown) : 0);
     std::uint64_t held = m_sortScratch.reservedBytes();
@@ -389,9 +394,20 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
                         kDevice, "splat prepare's clipped kernels");
     if (!sorted)
         m_small = Buffer(m_ctx, n * sizeof(std::uint32_t), kStorage, kDevice, "splat small kernels");
+    // The quads' indices (spot_splat.h, kSplatQuadIndices), the same every frame: written once.
+    m_quadIndices = Buffer(m_ctx, std::uint64_t(n) * kSplatQuadIndices * sizeof(std::uint32_t),
+                           VK_BUFFER_USAGE_INDEX_BUFFER_BIT, Buffer::Memory::HostVisible,
+                           "splat quad indices");
+    {
+        constexpr std::array<std::uint32_t, kSplatQuadIndices> kQuad{0, 1, 2, 1, 3, 2};
+        auto* index = static_cast<std::uint32_t*>(m_quadIndices.mapped());
+        for (std::uint64_t k = 0; k < n; ++k)
+            for (std::uint32_t c = 0; c < kSplatQuadIndices; ++c)
+                index[k * kSplatQuadIndices + c] = std::uint32_t(4 * k) + kQuad[c];
+    }
     if (!m_draw.handle()) {
         // The quads' indirect draw, the small kernels' indirect dispatch and their count.
-        m_draw = Buffer(m_ctx, 8 * sizeof(std::uint32_t),
+        m_draw = Buffer(m_ctx, kSplatDrawWords * sizeof(std::uint32_t),
                         kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, Buffer::Memory::HostVisible,
                         "splat indirect draw and dispatch");
         m_counters = Buffer(m_ctx, sizeof(SpotSplatCounters),
@@ -563,6 +579,11 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             d.buffer(kSplatBindCounters, m_counters);
         d.push(m_ctx, cmd, pipeline);
     };
+    // One quad per kept kernel: the compaction's indexed draw (spot_splat.h, kSplatQuadIndices).
+    auto drawQuads = [&] {
+        vkCmdBindIndexBuffer(cmd, m_quadIndices.handle(), 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexedIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndexedIndirectCommand));
+    };
 
     // 3a. Hybrid with a depth pass: each pixel's closest kernel (index, depth test LESS).
     transitionImage(cmd, m_closestKernel.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED,
@@ -580,7 +601,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.closest.handle());
         pushFrame(cmd, p.closest, f.frame);
         quadDescriptors(p.closest, false, false);
-        vkCmdDrawIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+        drawQuads();
         vkCmdEndRendering(cmd);
     }
     transitionImage(cmd, m_closestKernel.handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
@@ -602,7 +623,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     pushFrame(cmd, p.splat, f.frame);
     const bool atomics = (usesOit(m_method) || f.instanced) && !f.settings.roofline;
     quadDescriptors(p.splat, atomics, true);
-    vkCmdDrawIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+    drawQuads();
     vkCmdEndRendering(cmd);
     // 3b. The small kernels: one invocation each (after the quads: both pass's atomics are
     // order-independent, and the fixed-point sums are the resolve's to add).
@@ -622,7 +643,7 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kSplatBindOitTiles, m_oitTiles.handle() ? m_oitTiles : m_counters)
             .buffer(kSplatBindCounters, m_counters)
             .push(m_ctx, cmd, p.small);
-        vkCmdDispatchIndirect(cmd, m_draw.handle(), 4 * sizeof(std::uint32_t));
+        vkCmdDispatchIndirect(cmd, m_draw.handle(), kSplatDrawDispatch * sizeof(std::uint32_t));
     }
     for (const Image* image : targets)
         if (image != &m_distance)
@@ -679,12 +700,13 @@ FrameCounters SplatRenderer::counters() const {
     FrameCounters c;
     if (!m_draw.handle())
         return c;
-    VkDrawIndirectCommand command;
+    VkDrawIndexedIndirectCommand command;
     std::memcpy(&command, m_draw.mapped(), sizeof(command));
     std::uint32_t small = 0;
-    std::memcpy(&small, static_cast<const char*>(m_draw.mapped()) + 7 * sizeof(std::uint32_t),
+    std::memcpy(&small,
+                static_cast<const char*>(m_draw.mapped()) + kSplatDrawSmallCount * sizeof(std::uint32_t),
                 sizeof(small));
-    c.kernelsDrawn = command.instanceCount + small;
+    c.kernelsDrawn = command.indexCount / kSplatQuadIndices + small;
     c.extra.emplace_back("kernels_small", double(small));
     if (m_frame.settings.countFragments && !m_frame.settings.roofline) {
         SpotSplatCounters counted;

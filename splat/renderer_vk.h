@@ -134,6 +134,7 @@ private:
     bool m_oitFixedCleared = false;
     // Per impulse capacity.
     std::uint32_t m_capacity = 0;
+    Buffer m_quadIndices;
     Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_small, m_draw, m_counters, m_sortKeys;
     Buffer m_clipList; ///< SpotSplatList and a uint per kernel: prepare's second dispatch
     RadixSortScratch m_sortScratch;
