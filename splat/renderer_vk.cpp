@@ -246,21 +246,21 @@ std::uint64_t SplatRenderer::targetBytes(std::uint64_t width, std::uint64_t heig
            (t.fixed ? fixedTileBytes(width, height) : 0) + (t.list ? sizeof(SpotSplatList) : 0);
 }
 
+std::uint64_t SplatRenderer::kernelBytes() const {
+    return std::uint64_t(m_scene.lobeCount()) * (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
+           sizeof(SpotKernelBound) +
+           sizeof(std::uint32_t) + // the kept list
+           sizeof(std::uint32_t) + // sorted: the keys; else the small kernels' list
+           sizeof(std::uint32_t) + // prepare's clip list
+           kSplatQuadIndices * sizeof(std::uint32_t); // the quads' indices
+}
+
 std::uint64_t SplatRenderer::frameBytes(int width, int height, std::uint32_t capacity,
                                         const RenderSettings& settings) const {
-    const std::uint64_t perKernel = std::uint64_t(m_scene.lobeCount()) *
-                                        (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
-                                    sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
-                                    (m_method == Method::Sorted ? 0 : sizeof(std::uint32_t)) +
-                                    sizeof(std::uint32_t) + // prepare's clip list
-                                    kSplatQuadIndices * sizeof(std::uint32_t); // the quads' indices
-    std::uint64_t bytes = targetBytes(std::uint64_t(width), std::uint64_t(height), settings) +
-                          std::uint64_t(capacity) * perKernel +
-                          kSplatDrawWords * sizeof(std::uint32_t) + sizeof(SpotSplatCounters) +
-                          sizeof(SpotSplatList);
-    if (m_method == Method::Sorted)
-        bytes += std::uint64_t(capacity) * sizeof(std::uint32_t) + RadixSortScratch::bytes(capacity);
-    return bytes;
+    return targetBytes(std::uint64_t(width), std::uint64_t(height), settings) +
+           std::uint64_t(capacity) * kernelBytes() +
+           (m_method == Method::Sorted ? RadixSortScratch::bytes(capacity) : 0) +
+           kSplatDrawWords * sizeof(std::uint32_t) + sizeof(SpotSplatCounters) + sizeof(SpotSplatList);
 }
 
 void SplatRenderer::ensureTargets(std::uint32_t width, std::uint32_t height,
@@ -355,17 +355,12 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
     const std::uint32_t grown =
         std::max(capacity, std::uint32_t(std::min<std::uint64_t>(kMaxImpulses, capacity + capacity / 4)));
     const std::uint32_t lobes = m_scene.lobeCount();
-    const std::uint64_t perKernel = std::uint64_t(lobes) *
-                                        (sizeof(gpu::SpotWorldLobe) + sizeof(SpotScreenLobe)) +
-                                    sizeof(SpotKernelBound) + sizeof(std::uint32_t) +
-                                    sizeof(std::uint32_t) + // sorted: keys; else the small list
-                                    sizeof(std::uint32_t) + // the clip list
-                                    kSplatQuadIndices * sizeof(std::uint32_t); // the quads' indices
-    const std::uint64_t need = std::uint64_t(grown) * perKernel +
+    const std::uint64_t need = std::uint64_t(grown) * kernelBytes() +
                                (sorted ? RadixSortScratch::bytes(grown) : 0);
     std::uint64_t held = m_sortScratch.reservedBytes();
     for (const Buffer* b :
-         {&m_worldLobes, &m_screenLobes, &m_bounds, &m_visible, &m_small, &m_sortKeys, &m_clipList})
+         {&m_worldLobes, &m_screenLobes, &m_bounds, &m_visible, &m_small, &m_sortKeys, &m_clipList,
+          &m_quadIndices})
         held += b->reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("splat renderer: ", capacity, " kernels need ", need >> 20,
@@ -379,6 +374,7 @@ void SplatRenderer::ensureBuffers(std::uint32_t capacity, const RenderSettings& 
     m_small = Buffer();
     m_sortKeys = Buffer();
     m_clipList = Buffer();
+    m_quadIndices = Buffer();
     m_sortScratch = RadixSortScratch();
     m_capacity = 0;
     const std::uint64_t n = std::max<std::uint32_t>(grown, 1);

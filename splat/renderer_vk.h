@@ -113,6 +113,9 @@ private:
                               const RenderSettings& settings) const;
     void ensureTargets(std::uint32_t width, std::uint32_t height, const RenderSettings& settings);
     void ensureBuffers(std::uint32_t capacity, const RenderSettings& settings);
+    /// GPU bytes of the buffers sized per kernel (ensureBuffers), for one kernel: what
+    /// ensureBuffers checks against the budget and frameBytes counts.
+    std::uint64_t kernelBytes() const;
 
     const SceneGpu& m_scene;
     Context& m_ctx;
