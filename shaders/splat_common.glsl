@@ -409,19 +409,36 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
 // Paper eq. 10: N midpoint samples over the kernel's extent along the ray (the union of its lobe
 // chords) clipped to [0, tMesh], each sample's opacity 1 - exp(-density x step), front to back,
 // stopping once opaque. World lobes, world distances; the depth returned is a view depth.
+// Each lobe's ray is taken into its own space once, u(t) = A (o - c) + t A d (as the chord and
+// the analytic path's screen form take it), so a sample costs three multiply-adds a lobe where
+// A (x - c) cost a matrix product and the lobe's loads; Lambert's gradient direction
+// A^T u(t) = P + t Q likewise.
 SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, float scale) {
     uint first = kernel * kLobes;
     float k = frame.size.w;
     float ta = kSplatNoMesh;
     float tb = -kSplatNoMesh;
+    vec3 origins[kLobes];
+    vec3 dirs[kLobes];
+    vec3 colors[kLobes];
+    float amps[kLobes]; // 0 for a lobe that emits nothing (or a NaN amplitude): skipped
+    vec3 P[kLobes];
+    vec3 Q[kLobes];
     for (uint l = 0u; l < kLobes; ++l) {
         SpotWorldLobe w = splatWorldLobe(first, l);
-        if (!(w.color.w > 0.0))
-            continue;
         mat3 A = splatLobeMatrix(w);
+        origins[l] = A * (o - splatLobeCentre(w));
+        dirs[l] = A * d;
+        colors[l] = w.color.rgb;
+        amps[l] = w.color.w > 0.0 ? w.color.w : 0.0;
+        if (kLambert) {
+            mat3 At = transpose(A);
+            P[l] = At * origins[l];
+            Q[l] = At * dirs[l];
+        }
         float a;
         float b;
-        if (spotLobeChord(A * (o - splatLobeCentre(w)), A * d, k, a, b)) {
+        if (amps[l] > 0.0 && spotLobeChord(origins[l], dirs[l], k, a, b)) {
             ta = min(ta, a);
             tb = max(tb, b);
         }
@@ -441,21 +458,16 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
     float weightSum = 0.0;
     for (uint i = 0u; i < kSamples && transmittance > 1e-6; ++i) {
         float t = ta + (float(i) + 0.5) * dt;
-        vec3 x = o + t * d;
         float sigma = 0.0;
         vec3 emitted = vec3(0.0);
         vec3 g = vec3(0.0);
         for (uint l = 0u; l < kLobes; ++l) {
-            SpotWorldLobe w = splatWorldLobe(first, l);
-            if (!(w.color.w > 0.0))
-                continue;
-            mat3 A = splatLobeMatrix(w);
-            vec3 u = A * (x - splatLobeCentre(w));
-            float density = w.color.w * spotLobeDensity(u, k);
+            vec3 u = origins[l] + t * dirs[l];
+            float density = amps[l] > 0.0 ? amps[l] * spotLobeDensity(u, k) : 0.0;
             sigma += density;
-            emitted += density * w.color.rgb;
+            emitted += density * colors[l];
             if (kLambert)
-                g += density * (transpose(A) * u);
+                g += density * (P[l] + t * Q[l]);
         }
         if (!(sigma > 0.0) || isinf(sigma))
             continue;
