@@ -4,11 +4,16 @@
  * defined by the includer) and as GLSL. docs/design.md section 5 describes the renderer. */
 
 /* The sparse grid: the bake's OpenVDB leaves (8^3 voxels) as bricks. Brick b of the density
- * levels holds vec4(extinction x colour, extinction) per voxel at bricks[b * 512 + offset];
- * the density bricks are split over up to kBakedBrickBuffers storage buffers of counts.w bricks
- * each (one buffer's range is limited: 128 MiB on lavapipe), brick b in buffer b / counts.w;
- * brick b of the distance grid a float per voxel at distances[b * 512 + offset], with offset =
- * (i & 7) << 6 | (j & 7) << 3 | (k & 7) for voxel ijk. A leaf is found in a dense table over
+ * levels holds leaf L's voxels and the first of its +x, +y and +z neighbours' (an apron: voxels
+ * L x 8 + [0, 8]^3, 9^3 of them, 0 where the neighbour is not stored), so the 8 voxels of a
+ * trilinear sample whose lowest corner lies in L are all in L's brick: one leaf lookup a sample,
+ * not 8. A voxel is 8 bytes, vec4(extinction x colour, extinction) / unit.x as two
+ * packHalf2x16 words (unit: SpotBakedParams), at bricks[b * kBakedBrickVoxels + offset] with
+ * offset = (x * 9 + y) * 9 + z for its position xyz in the brick; the density bricks are split
+ * over up to kBakedBrickBuffers storage buffers of counts.w bricks each (one buffer's range is
+ * limited: 128 MiB on lavapipe), brick b in buffer b / counts.w. Brick b of the distance grid
+ * is a float per voxel at distances[b * 512 + offset], offset = (i & 7) << 6 | (j & 7) << 3 |
+ * (k & 7) for voxel ijk (no apron). A leaf is found in a dense table over
  * the box of its section's leaves (section s: levels 0..levels-1, then the distance grid at
  * kBakedDistanceSection): leaf L's entry, the brick or kBakedEmptySlot, is
  * table[leafOrigin[s].w + (r.z leafDims[s].y + r.y) leafDims[s].x + r.x] with
@@ -17,6 +22,8 @@
  * where a hash table's probe loops cost lavapipe the longest probe of the SIMD batch. */
 SPOT_CONST uint kBakedLeafBits = 3u;
 SPOT_CONST uint kBakedLeafVoxels = 512u;
+SPOT_CONST uint kBakedBrickSide = 9u;     /* a density brick: its leaf and a voxel of apron */
+SPOT_CONST uint kBakedBrickVoxels = 729u;
 SPOT_CONST int kBakedEmptySlot = -1;
 SPOT_CONST uint kBakedSections = 12u;          /* 8 levels at most, the distance grid, spare */
 SPOT_CONST uint kBakedDistanceSection = 8u;
@@ -43,8 +50,8 @@ SPOT_CONST uint kBakedBindVertices = 1u;    /* SpotMeshVertex[]: the mesh now (w
 SPOT_CONST uint kBakedBindRest = 2u;        /* SpotMeshVertex[]: the mesh at rest (the bake's) */
 SPOT_CONST uint kBakedBindIndices = 3u;     /* uint[3 x triangles] */
 SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
-SPOT_CONST uint kBakedBindTable = 5u;       /* ivec4[]: the hash tables' slots */
-SPOT_CONST uint kBakedBindBricks = 6u;      /* vec4[]: density bricks of every level (the first buffer's) */
+SPOT_CONST uint kBakedBindTable = 5u;       /* int[]: the leaf tables */
+SPOT_CONST uint kBakedBindBricks = 6u;      /* uvec2[]: density bricks of every level (the first buffer's) */
 SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
 SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
 SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's entry, 4 tet + face + 1 */
@@ -57,7 +64,7 @@ SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: across face
 SPOT_CONST uint kBakedBindEntryFaces = 16u; /* uint[]: 4 tet + face of each enterable boundary face */
 SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
 SPOT_CONST uint kBakedBindExitDepth = 18u;  /* r32f image: where this layer's walk left the shell */
-SPOT_CONST uint kBakedBindBricks1 = 20u;    /* vec4[]: the second to fourth buffers of density bricks */
+SPOT_CONST uint kBakedBindBricks1 = 20u;    /* uvec2[]: the second to fourth buffers of density bricks */
 SPOT_CONST uint kBakedBindBricks2 = 21u;
 SPOT_CONST uint kBakedBindBricks3 = 22u;
 SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList, then uint[width x height]: the pixels to march */
@@ -78,6 +85,8 @@ struct SpotBakedTet {
 struct SpotBakedParams {
     vec4 grid;     /* x: level 0's voxel size; y: its inverse; z: distance cap (level-0 voxels); w: shell thickness */
     uvec4 counts;  /* x: triangles; y: levels; z: tetrahedra; w: bricks per brick buffer */
+    vec4 unit;     /* x: what a density brick's stored 1 is (its largest value over 32,768: the
+                      half floats' range, and their relative precision of 2^-11 everywhere) */
     ivec4 leafOrigin[kBakedSections]; /* per section: xyz its lowest leaf; w its first table entry */
     ivec4 leafDims[kBakedSections];   /* per section: xyz the leaves of its box (0 when empty) */
 };

@@ -38,10 +38,10 @@ layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tet
 layout(std430, binding = kBakedBindNeighbours) readonly buffer Neighbours { ivec4 neighbours[]; };
 layout(std430, binding = kBakedBindEyeTet) readonly buffer EyeTet { uint eyeTet; };
 layout(std430, binding = kBakedBindTable) readonly buffer Table { int table[]; };
-layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { vec4 bricks0[]; };
-layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { vec4 bricks1[]; };
-layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { vec4 bricks2[]; };
-layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { vec4 bricks3[]; };
+layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { uvec2 bricks0[]; };
+layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { uvec2 bricks1[]; };
+layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { uvec2 bricks2[]; };
+layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { uvec2 bricks3[]; };
 layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
@@ -61,46 +61,49 @@ int findBrick(ivec3 ijk, uint s) {
     return table[origin.w + (r.z * dims.y + r.y) * dims.x + r.x];
 }
 
+// Where voxel ijk of a leaf lies in the leaf's brick (baked_layout.glsl: the apron layout).
 uint voxelOffset(ivec3 ijk) {
     ivec3 l = ijk & 7;
-    return uint(l.x << 6 | l.y << 3 | l.z);
+    return uint((l.x * int(kBakedBrickSide) + l.y) * int(kBakedBrickSide) + l.z);
 }
 
-// Voxel `offset` of density brick b, from the brick buffer that holds it.
+vec4 unpackVoxel(uvec2 v) { return vec4(unpackHalf2x16(v.x), unpackHalf2x16(v.y)); }
+
+// Voxel `offset` of density brick b (in stored units), from the brick buffer that holds it.
 vec4 brickVoxel(uint b, uint offset) {
     if (!kSplitBricks)
-        return bricks0[b * kBakedLeafVoxels + offset]; // one buffer: no selection (it costs)
+        return unpackVoxel(bricks0[b * kBakedBrickVoxels + offset]); // one buffer: no selection (it costs)
     uint per = params.counts.w;
     uint which = b / per;
-    uint i = (b - which * per) * kBakedLeafVoxels + offset;
+    uint i = (b - which * per) * kBakedBrickVoxels + offset;
     if (which == 0u)
-        return bricks0[i];
+        return unpackVoxel(bricks0[i]);
     if (which == 1u)
-        return bricks1[i];
+        return unpackVoxel(bricks1[i]);
     if (which == 2u)
-        return bricks2[i];
-    return bricks3[i];
-}
-
-// (extinction x colour, extinction) of voxel ijk of `level`, 0 where not stored. Branchless:
-// an empty leaf reads brick 0 and weighs it 0.
-vec4 voxel(ivec3 ijk, uint level) {
-    int b = findBrick(ijk, level);
-    return float(b >= 0) * brickVoxel(uint(max(b, 0)), voxelOffset(ijk));
+        return unpackVoxel(bricks2[i]);
+    return unpackVoxel(bricks3[i]);
 }
 
 // Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`: the 8 corners
-// unrolled (no loop; lavapipe runs every branch a lane of the batch takes, so none either).
+// unrolled. They all lie in the brick of the lowest corner's leaf (its apron holds the rest;
+// a leaf without a brick has no stored voxel in its apron either), so one leaf lookup serves
+// the sample. Branchless: a sample without a brick reads brick 0 and weighs it 0.
 vec4 sampleLevel(vec3 x, uint level, float inverseSize) {
     vec3 g = x * inverseSize - 0.5;
     vec3 f = floor(g);
     vec3 w = g - f;
     ivec3 c = ivec3(f);
-    vec4 z0 = mix(voxel(c, level), voxel(c + ivec3(0, 0, 1), level), w.z);
-    vec4 z1 = mix(voxel(c + ivec3(0, 1, 0), level), voxel(c + ivec3(0, 1, 1), level), w.z);
-    vec4 z2 = mix(voxel(c + ivec3(1, 0, 0), level), voxel(c + ivec3(1, 0, 1), level), w.z);
-    vec4 z3 = mix(voxel(c + ivec3(1, 1, 0), level), voxel(c + ivec3(1, 1, 1), level), w.z);
-    return mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
+    int found = findBrick(c, level);
+    uint b = uint(max(found, 0));
+    uint o = voxelOffset(c);
+    const uint dy = kBakedBrickSide; // a step in y, and one in x
+    const uint dx = kBakedBrickSide * kBakedBrickSide;
+    vec4 z0 = mix(brickVoxel(b, o), brickVoxel(b, o + 1u), w.z);
+    vec4 z1 = mix(brickVoxel(b, o + dy), brickVoxel(b, o + dy + 1u), w.z);
+    vec4 z2 = mix(brickVoxel(b, o + dx), brickVoxel(b, o + dx + 1u), w.z);
+    vec4 z3 = mix(brickVoxel(b, o + dx + dy), brickVoxel(b, o + dx + dy + 1u), w.z);
+    return (float(found >= 0) * params.unit.x) * mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
 }
 
 // Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where

@@ -9,6 +9,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <glm/gtc/packing.hpp>
+
 #include "noise/bake.h"
 #include "noise/error.h"
 #include "noise/shell.h"
@@ -167,6 +169,52 @@ void BakedRenderer::loadBake(const std::string& file) {
         });
         brickCount += leaves[std::size_t(l)].keys.size();
     }
+    // The density bricks (baked_layout.glsl): each leaf's voxels and its apron, the first voxels
+    // of its +x, +y and +z neighbours, as half floats in units of the bake's largest value. A
+    // brick is made for every leaf whose apron holds a stored voxel, stored itself or not (the
+    // bake's leaves and their -x, -y, -z neighbours), so a sample whose lowest corner's leaf has
+    // no brick has no stored voxel at all: one lookup a sample decides it.
+    float largest = 0.0f;
+    for (const auto& data : bricks)
+        for (const glm::vec4& v : data)
+            largest = std::max({largest, std::abs(v.r), std::abs(v.g), std::abs(v.b), std::abs(v.a)});
+    const float unit = largest > 0.0f && std::isfinite(largest) ? largest / 32768.0f : 1.0f;
+    const auto step = [](int n) { return glm::ivec3(n >> 2, (n >> 1) & 1, n & 1); };
+    std::vector<std::vector<glm::uvec2>> packed(static_cast<std::size_t>(levels));
+    brickCount = 0;
+    for (int l = 0; l < levels; ++l) {
+        const Leaves& stored = leaves[std::size_t(l)];
+        Leaves withApron;
+        for (const glm::ivec3& key : stored.keys)
+            for (int n = 0; n < 8; ++n)
+                withApron.brick(key - step(n));
+        const auto& data = bricks[std::size_t(l)];
+        auto& out = packed[std::size_t(l)];
+        out.resize(withApron.keys.size() * kBakedBrickVoxels);
+        for (std::size_t b = 0; b < withApron.keys.size(); ++b) {
+            // The leaf and its neighbours towards +x, +y, +z (index 4 x + 2 y + z), if stored.
+            std::array<const glm::vec4*, 8> around{};
+            for (int n = 0; n < 8; ++n) {
+                const auto it = stored.index.find(LeafKey{withApron.keys[b] + step(n)});
+                around[std::size_t(n)] = it == stored.index.end()
+                                             ? nullptr
+                                             : data.data() + std::size_t(it->second) * kBakedLeafVoxels;
+            }
+            const int side = int(kBakedBrickSide);
+            for (int x = 0; x < side; ++x)
+                for (int y = 0; y < side; ++y)
+                    for (int z = 0; z < side; ++z) {
+                        const glm::vec4* leaf = around[std::size_t((x >> 3) << 2 | (y >> 3) << 1 | (z >> 3))];
+                        const glm::vec4 v = leaf ? leaf[(x & 7) << 6 | (y & 7) << 3 | (z & 7)] / unit : glm::vec4(0.0f);
+                        out[b * kBakedBrickVoxels + std::size_t((x * side + y) * side + z)] =
+                            glm::uvec2(glm::packHalf2x16(glm::vec2(v.r, v.g)), glm::packHalf2x16(glm::vec2(v.b, v.a)));
+                    }
+        }
+        brickCount += withApron.keys.size();
+        leaves[std::size_t(l)] = std::move(withApron);
+    }
+    bricks.clear();
+
     // Distance leaves: every leaf within 3 voxels of a non-empty level-0 voxel (nearer than the
     // cap), filled from the bake's distance grid; leaves that hold only the cap are left out
     // (a lookup that finds no leaf reads the cap).
@@ -237,12 +285,13 @@ void BakedRenderer::loadBake(const std::string& file) {
     if (table.empty())
         table.push_back(kBakedEmptySlot);
 
-    const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * kBakedLeafVoxels * 16;
+    const std::uint64_t brickBytesEach = std::uint64_t(kBakedBrickVoxels) * sizeof(glm::uvec2);
+    const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * brickBytesEach;
     const std::uint64_t distanceBytes =
         std::max<std::uint64_t>(distanceLeaves.keys.size(), 1) * kBakedLeafVoxels * 4;
     const std::uint64_t tableBytes = table.size() * sizeof(std::int32_t);
     // The density bricks over up to kBakedBrickBuffers buffers of one storage buffer's range.
-    const std::uint64_t fits = range / (std::uint64_t(kBakedLeafVoxels) * 16);
+    const std::uint64_t fits = range / brickBytesEach;
     const std::uint64_t perBuffer = m_brickSplit > 0 ? std::min<std::uint64_t>(m_brickSplit, fits) : fits;
     const std::uint64_t bufferCount = std::max<std::uint64_t>((brickCount + perBuffer - 1) / perBuffer, 1);
     if (bufferCount > kBakedBrickBuffers || distanceBytes > range || tableBytes > range)
@@ -266,7 +315,6 @@ void BakedRenderer::loadBake(const std::string& file) {
     m_distances = Buffer();
     m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
     m_table.upload(std::span<const std::int32_t>(table));
-    const std::uint64_t brickBytesEach = std::uint64_t(kBakedLeafVoxels) * 16;
     for (std::uint64_t i = 0; i < bufferCount; ++i) {
         const std::uint64_t n = std::min<std::uint64_t>(perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
         m_bricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
@@ -274,13 +322,13 @@ void BakedRenderer::loadBake(const std::string& file) {
     }
     // Level l's bricks are [firstBrick[l], + its leaves), uploaded in pieces at buffer bounds.
     for (int l = 0; l < levels; ++l) {
-        const auto& data = bricks[std::size_t(l)];
-        const std::uint64_t count = data.size() / kBakedLeafVoxels;
+        const auto& data = packed[std::size_t(l)];
+        const std::uint64_t count = data.size() / kBakedBrickVoxels;
         for (std::uint64_t done = 0; done < count;) {
             const std::uint64_t b = firstBrick[std::size_t(l)] + done;
             const std::uint64_t buffer = b / perBuffer, local = b % perBuffer;
             const std::uint64_t n = std::min(count - done, perBuffer - local);
-            m_bricks[buffer].upload(data.data() + done * kBakedLeafVoxels, n * brickBytesEach,
+            m_bricks[buffer].upload(data.data() + done * kBakedBrickVoxels, n * brickBytesEach,
                                     local * brickBytesEach);
             done += n;
         }
@@ -292,6 +340,7 @@ void BakedRenderer::loadBake(const std::string& file) {
     m_leafOrigin = origins;
     m_leafDims = dims;
     m_bakeStats = BakedStats{};
+    m_brickUnit = unit;
     m_bakeStats.voxelSize = volume.voxelSize(0);
     m_bakeStats.levels = std::uint32_t(levels);
     m_bakeStats.bricks = std::uint32_t(brickCount);
@@ -452,6 +501,7 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     params.grid = glm::vec4(m_bakeStats.voxelSize, 1.0f / m_bakeStats.voxelSize,
                             noise::kBakeDistanceCap, thickness);
     params.counts = glm::uvec4(triangles, m_bakeStats.levels, 3 * triangles, m_bricksPerBuffer);
+    params.unit = glm::vec4(m_brickUnit, 0.0f, 0.0f, 0.0f);
     for (std::uint32_t s = 0; s < kBakedSections; ++s) {
         params.leafOrigin[s] = m_leafOrigin[s];
         params.leafDims[s] = m_leafDims[s];

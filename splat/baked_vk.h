@@ -30,7 +30,8 @@
 ///  4. resolve (compute): the accumulation over the mesh colour, into result().
 ///
 /// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in up to 4 storage
-/// buffers of one binding's range each (16 bytes per voxel of a stored leaf), the distance grid's leaves in another (4 bytes),
+/// buffers of one binding's range each (each leaf with a voxel of apron towards +x, +y, +z, 9^3
+/// voxels of 8 bytes: half floats), the distance grid's leaves in another (4 bytes a voxel),
 /// found through dense leaf tables (one int per leaf of each level's box of leaves, and of the
 /// distance grid's: one read, no probing). The march no longer reads the distance grid (its
 /// skip, capped at 4 voxels, cost more than it saved; docs/design.md 5); it is still uploaded.
@@ -76,7 +77,7 @@ using uint = std::uint32_t;
 #undef SPOT_CONST
 #undef SPOT_FN
 static_assert(sizeof(SpotBakedTet) == 176);
-static_assert(sizeof(SpotBakedParams) == 416);
+static_assert(sizeof(SpotBakedParams) == 432);
 } // namespace gpu_baked
 
 /// Loop iterations one march invocation may need by default (baked_march.comp).
@@ -159,6 +160,7 @@ private:
     Buffer m_table, m_distances;
     std::array<Buffer, gpu_baked::kBakedBrickBuffers> m_bricks; ///< the density bricks' buffers
     std::uint32_t m_bricksPerBuffer = 0, m_brickSplit = 0;
+    float m_brickUnit = 1.0f; ///< what a stored 1 in the density bricks is (SpotBakedParams::unit)
     std::vector<glm::ivec4> m_leafOrigin, m_leafDims;
     // Per mesh: the tetrahedra (3 per triangle), their neighbours, the entry faces.
     Buffer m_tets, m_params, m_neighbours, m_entryFaces, m_eyeTet;

@@ -323,8 +323,9 @@ TEST(BakedFrame, DeterministicWarmFramesAndTheLoopGuard) {
 }
 
 // A bake larger than one storage buffer's range (128 MiB on lavapipe) is split over up to 4
-// buffers. Here the small bake split over 4 (at most 2,500 bricks each) renders byte for byte
-// what it renders from one, and a split that would need 5 is refused with one line.
+// buffers. Here the small bake split over 4 (a quarter of its bricks each, the last fewer)
+// renders byte for byte what it renders from one, and a split that would need 5 is refused with
+// one line.
 TEST(BakedFrame, BricksSplitOverBuffersRenderTheSame) {
     const BakedScene s = loadBakedScene("fur-bunny", 64, 0.004f, 4);
     splat::Context ctx(validated());
@@ -336,9 +337,8 @@ TEST(BakedFrame, BricksSplitOverBuffersRenderTheSame) {
     frame.render("baked", s.view(), settings, &whole);
     EXPECT_EQ(renderer.stats().brickBuffers, 1u);
     const std::uint32_t bricks = renderer.stats().bricks;
-    ASSERT_GT(bricks, 7500u);
-    ASSERT_LE(bricks, 10000u);
-    renderer.splitBricks(2500);
+    ASSERT_GT(bricks, 1000u); // buffers of hundreds of bricks: the split is not a corner case
+    renderer.splitBricks((bricks + 3) / 4);
     frame.render("baked", s.view(), settings, &split);
     EXPECT_EQ(renderer.stats().brickBuffers, 4u);
     ASSERT_EQ(whole.pixels.size(), split.pixels.size());
