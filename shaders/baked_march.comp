@@ -52,9 +52,7 @@ layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList li
 uint loops = 0u;
 
 // The brick holding voxel `ijk` of section `s`, or -1 (baked_layout.glsl's leaf tables).
-int findBrick(ivec3 ijk, uint s) {
-    ivec4 origin = params.leafOrigin[s];
-    ivec3 dims = params.leafDims[s].xyz;
+int findBrickIn(ivec3 ijk, ivec4 origin, ivec3 dims) {
     ivec3 r = (ijk >> int(kBakedLeafBits)) - origin.xyz;
     if (any(lessThan(r, ivec3(0))) || any(greaterThanEqual(r, dims)))
         return -1;
@@ -89,12 +87,13 @@ vec4 brickVoxel(uint b, uint offset) {
 // unrolled. They all lie in the brick of the lowest corner's leaf (its apron holds the rest;
 // a leaf without a brick has no stored voxel in its apron either), so one leaf lookup serves
 // the sample. Branchless: a sample without a brick reads brick 0 and weighs it 0.
-vec4 sampleLevel(vec3 x, uint level, float inverseSize) {
+// origin, dims: the level's leaf table (SpotBakedParams), read once a layer.
+vec4 sampleLevel(vec3 x, ivec4 origin, ivec3 dims, float inverseSize, float unit) {
     vec3 g = x * inverseSize - 0.5;
     vec3 f = floor(g);
     vec3 w = g - f;
     ivec3 c = ivec3(f);
-    int found = findBrick(c, level);
+    int found = findBrickIn(c, origin, dims);
     uint b = uint(max(found, 0));
     uint o = voxelOffset(c);
     const uint dy = kBakedBrickSide; // a step in y, and one in x
@@ -103,7 +102,7 @@ vec4 sampleLevel(vec3 x, uint level, float inverseSize) {
     vec4 z1 = mix(brickVoxel(b, o + dy), brickVoxel(b, o + dy + 1u), w.z);
     vec4 z2 = mix(brickVoxel(b, o + dx), brickVoxel(b, o + dx + 1u), w.z);
     vec4 z3 = mix(brickVoxel(b, o + dx + dy), brickVoxel(b, o + dx + dy + 1u), w.z);
-    return (float(found >= 0) * params.unit.x) * mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
+    return (float(found >= 0) * unit) * mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
 }
 
 // Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where
@@ -161,6 +160,9 @@ void main() {
     uint level = uint(clamp(floor(log2(max(footprint / voxel0, 1.0))), 0.0, float(levels - 1u)));
     float size = voxel0 * float(1u << level);
     float inverseSize = 1.0 / size;
+    ivec4 leafOrigin = params.leafOrigin[level];
+    ivec3 leafDims = params.leafDims[level].xyz;
+    float unit = params.unit.x;
     float dt = kBakedStepFraction * size;
     float tStart = tIn;
     // No empty-space skipping: the distance grid (capped at 4 voxels) could skip at most 2 steps
@@ -218,7 +220,7 @@ void main() {
         float t = tStart + (float(k) + 0.5) * dt;
         if (t < tOut && samples < kBakedMaxLayerSamples) {
             vec3 x = mix(ra, rb, (t - tIn) * inverseLength);
-            vec4 s = sampleLevel(x, level, inverseSize);
+            vec4 s = sampleLevel(x, leafOrigin, leafDims, inverseSize, unit);
             if (s.w > 0.0) {
                 float alpha = 1.0 - exp(-s.w * dt);
                 radiance += transmittance * alpha * (s.rgb / s.w);
