@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <span>
 #include <system_error>
 #include <unordered_map>
@@ -150,6 +151,47 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split)
     return m_march.emplace(std::tuple{count, first, split}, std::move(p)).first->second;
 }
 
+float brickUnit(float largest) {
+    if (!(largest > 0.0f) || !std::isfinite(largest))
+        return 1.0f;
+    return std::max(largest / 32768.0f, std::numeric_limits<float>::min());
+}
+
+ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves, const std::vector<glm::vec4>& data,
+                            float unit) {
+    Leaves stored;
+    for (const glm::ivec3& key : leaves)
+        stored.brick(key);
+    const auto step = [](int n) { return glm::ivec3(n >> 2, (n >> 1) & 1, n & 1); };
+    Leaves withApron;
+    for (const glm::ivec3& key : leaves)
+        for (int n = 0; n < 8; ++n)
+            withApron.brick(key - step(n));
+    ApronBricks out;
+    out.voxels.resize(withApron.keys.size() * kBakedBrickVoxels);
+    const int side = int(kBakedBrickSide);
+    for (std::size_t b = 0; b < withApron.keys.size(); ++b) {
+        // The leaf and its neighbours towards +x, +y, +z (index 4 x + 2 y + z), if stored.
+        std::array<const glm::vec4*, 8> around{};
+        for (int n = 0; n < 8; ++n) {
+            const auto it = stored.index.find(LeafKey{withApron.keys[b] + step(n)});
+            around[std::size_t(n)] =
+                it == stored.index.end() ? nullptr : data.data() + std::size_t(it->second) * kBakedLeafVoxels;
+        }
+        for (int x = 0; x < side; ++x)
+            for (int y = 0; y < side; ++y)
+                for (int z = 0; z < side; ++z) {
+                    const glm::vec4* leaf = around[std::size_t((x >> 3) << 2 | (y >> 3) << 1 | (z >> 3))];
+                    const glm::vec4 v =
+                        leaf ? leaf[(x & 7) << 6 | (y & 7) << 3 | (z & 7)] / unit : glm::vec4(0.0f);
+                    out.voxels[b * kBakedBrickVoxels + std::size_t((x * side + y) * side + z)] = glm::uvec2(
+                        glm::packHalf2x16(glm::vec2(v.r, v.g)), glm::packHalf2x16(glm::vec2(v.b, v.a)));
+                }
+    }
+    out.leaves = std::move(withApron.keys);
+    return out;
+}
+
 void BakedRenderer::loadBake(const std::string& file) {
     const noise::BakedVolume volume = noise::readBakedGrids(file);
     const int levels = volume.levels();
@@ -169,47 +211,21 @@ void BakedRenderer::loadBake(const std::string& file) {
         });
         brickCount += leaves[std::size_t(l)].keys.size();
     }
-    // The density bricks (baked_layout.glsl): each leaf's voxels and its apron, the first voxels
-    // of its +x, +y and +z neighbours, as half floats in units of the bake's largest value. A
-    // brick is made for every leaf whose apron holds a stored voxel, stored itself or not (the
-    // bake's leaves and their -x, -y, -z neighbours), so a sample whose lowest corner's leaf has
-    // no brick has no stored voxel at all: one lookup a sample decides it.
+    // The density bricks with their aprons (packApronBricks), in units of the bake's largest
+    // value: one leaf lookup a sample.
     float largest = 0.0f;
     for (const auto& data : bricks)
         for (const glm::vec4& v : data)
             largest = std::max({largest, std::abs(v.r), std::abs(v.g), std::abs(v.b), std::abs(v.a)});
-    const float unit = largest > 0.0f && std::isfinite(largest) ? largest / 32768.0f : 1.0f;
-    const auto step = [](int n) { return glm::ivec3(n >> 2, (n >> 1) & 1, n & 1); };
+    const float unit = brickUnit(largest);
     std::vector<std::vector<glm::uvec2>> packed(static_cast<std::size_t>(levels));
     brickCount = 0;
     for (int l = 0; l < levels; ++l) {
-        const Leaves& stored = leaves[std::size_t(l)];
+        ApronBricks level = packApronBricks(leaves[std::size_t(l)].keys, bricks[std::size_t(l)], unit);
         Leaves withApron;
-        for (const glm::ivec3& key : stored.keys)
-            for (int n = 0; n < 8; ++n)
-                withApron.brick(key - step(n));
-        const auto& data = bricks[std::size_t(l)];
-        auto& out = packed[std::size_t(l)];
-        out.resize(withApron.keys.size() * kBakedBrickVoxels);
-        for (std::size_t b = 0; b < withApron.keys.size(); ++b) {
-            // The leaf and its neighbours towards +x, +y, +z (index 4 x + 2 y + z), if stored.
-            std::array<const glm::vec4*, 8> around{};
-            for (int n = 0; n < 8; ++n) {
-                const auto it = stored.index.find(LeafKey{withApron.keys[b] + step(n)});
-                around[std::size_t(n)] = it == stored.index.end()
-                                             ? nullptr
-                                             : data.data() + std::size_t(it->second) * kBakedLeafVoxels;
-            }
-            const int side = int(kBakedBrickSide);
-            for (int x = 0; x < side; ++x)
-                for (int y = 0; y < side; ++y)
-                    for (int z = 0; z < side; ++z) {
-                        const glm::vec4* leaf = around[std::size_t((x >> 3) << 2 | (y >> 3) << 1 | (z >> 3))];
-                        const glm::vec4 v = leaf ? leaf[(x & 7) << 6 | (y & 7) << 3 | (z & 7)] / unit : glm::vec4(0.0f);
-                        out[b * kBakedBrickVoxels + std::size_t((x * side + y) * side + z)] =
-                            glm::uvec2(glm::packHalf2x16(glm::vec2(v.r, v.g)), glm::packHalf2x16(glm::vec2(v.b, v.a)));
-                    }
-        }
+        for (const glm::ivec3& key : level.leaves)
+            withApron.brick(key);
+        packed[std::size_t(l)] = std::move(level.voxels);
         brickCount += withApron.keys.size();
         leaves[std::size_t(l)] = std::move(withApron);
     }

@@ -53,6 +53,7 @@
 #include <filesystem>
 #include <map>
 #include <tuple>
+#include <vector>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -104,6 +105,23 @@ struct BakedStats {
     std::int64_t eyeTetrahedron = -1; ///< the one holding the eye in the last frame, -1: none
     std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
 };
+
+/// One level's density bricks as the march reads them (baked_layout.glsl): a brick for every leaf
+/// whose apron (the leaf and the first voxels of its +x, +y and +z neighbours, 9^3 voxels) holds
+/// a stored voxel, that is every stored leaf and its -x, -y, -z neighbours, in the order first
+/// met walking `leaves`; each voxel vec4(extinction x colour, extinction) / unit as two
+/// packHalf2x16 words, 0 where no stored leaf holds it.
+struct ApronBricks {
+    std::vector<glm::ivec3> leaves;  ///< brick b's leaf
+    std::vector<glm::uvec2> voxels;  ///< brick b's at [b x 729, +729), (x * 9 + y) * 9 + z
+};
+/// `leaves`: the level's stored leaves (distinct); `data`: 512 values per leaf, voxel xyz of
+/// leaf i at i x 512 + (x << 6 | y << 3 | z); `unit`: what a stored 1 is (> 0).
+ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves, const std::vector<glm::vec4>& data,
+                            float unit);
+/// The unit of a bake's bricks: its largest magnitude over 32,768 (the half floats' range, with
+/// room to spare), never below the smallest normal float; 1 for an empty bake.
+float brickUnit(float largest);
 
 /// Throws InputError, with the reason, when `baked` cannot render `view` (an orthographic camera;
 /// Lambert shading, which needs normals the bake does not store).

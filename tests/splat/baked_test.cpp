@@ -6,11 +6,14 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <random>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+#include <glm/gtc/packing.hpp>
 
 #include "noise/bake.h"
 #include "noise/error.h"
@@ -353,6 +356,73 @@ TEST(BakedFrame, BricksSplitOverBuffersRenderTheSame) {
         EXPECT_NE(std::string(e.what()).find("storage buffers"), std::string::npos) << e.what();
     }
     expectNoValidationErrors(ctx);
+}
+
+// The density bricks' aprons (packApronBricks): on a random sparse set of leaves (clustered, so
+// that many leaves have stored neighbours on every side), every brick's 9^3 voxels are the stored
+// voxels at its leaf x 8 + [0, 8]^3 (0 where no stored leaf holds one) to half-float precision,
+// and the bricks are exactly the leaves whose apron holds a stored voxel: a sample of the march,
+// whose 8 voxels it reads from the brick of its lowest corner's leaf, sees the grid's voxels.
+TEST(BakedBricks, ApronsHoldTheNeighboursVoxelsAndEveryLeafThatNeedsOne) {
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> coord(-3, 3);
+    std::uniform_real_distribution<float> value(0.0f, 1000.0f);
+    std::vector<glm::ivec3> leaves;
+    std::map<std::array<int, 3>, std::size_t> index;
+    for (int i = 0; i < 120; ++i) {
+        const glm::ivec3 leaf(coord(rng), coord(rng), coord(rng));
+        if (index.emplace(std::array<int, 3>{leaf.x, leaf.y, leaf.z}, leaves.size()).second)
+            leaves.push_back(leaf);
+    }
+    ASSERT_GT(leaves.size(), 60u);
+    std::vector<glm::vec4> data(leaves.size() * 512);
+    for (glm::vec4& v : data)
+        v = value(rng) < 400.0f ? glm::vec4(0.0f) : glm::vec4(value(rng), value(rng), value(rng), value(rng));
+    const auto stored = [&](glm::ivec3 voxel) -> glm::vec4 {
+        const glm::ivec3 leaf = voxel >> 3;
+        const auto it = index.find({leaf.x, leaf.y, leaf.z});
+        if (it == index.end())
+            return glm::vec4(0.0f);
+        const glm::ivec3 o = voxel & 7;
+        return data[it->second * 512 + std::size_t(o.x << 6 | o.y << 3 | o.z)];
+    };
+    const float unit = splat::brickUnit(1000.0f);
+    const splat::ApronBricks bricks = splat::packApronBricks(leaves, data, unit);
+    ASSERT_EQ(bricks.voxels.size(), bricks.leaves.size() * 729);
+    // The bricks: every leaf with a stored leaf among itself and its +x, +y, +z neighbours.
+    std::map<std::array<int, 3>, std::size_t> made;
+    for (std::size_t b = 0; b < bricks.leaves.size(); ++b)
+        EXPECT_TRUE(made.emplace(std::array<int, 3>{bricks.leaves[b].x, bricks.leaves[b].y,
+                                                    bricks.leaves[b].z}, b).second);
+    for (int x = -5; x <= 4; ++x)
+        for (int y = -5; y <= 4; ++y)
+            for (int z = -5; z <= 4; ++z) {
+                bool needed = false;
+                for (int n = 0; n < 8; ++n)
+                    needed = needed || index.count({x + (n >> 2), y + ((n >> 1) & 1), z + (n & 1)}) > 0;
+                EXPECT_EQ(made.count({x, y, z}) > 0, needed) << x << " " << y << " " << z;
+            }
+    // Their voxels.
+    double worst = 0.0;
+    std::size_t nonZero = 0;
+    for (std::size_t b = 0; b < bricks.leaves.size(); ++b)
+        for (int x = 0; x < 9; ++x)
+            for (int y = 0; y < 9; ++y)
+                for (int z = 0; z < 9; ++z) {
+                    const glm::uvec2 w = bricks.voxels[b * 729 + std::size_t((x * 9 + y) * 9 + z)];
+                    const glm::vec4 got =
+                        unit * glm::vec4(glm::unpackHalf2x16(w.x), glm::unpackHalf2x16(w.y));
+                    const glm::vec4 want = stored(bricks.leaves[b] * 8 + glm::ivec3(x, y, z));
+                    nonZero += want != glm::vec4(0.0f);
+                    for (int c = 0; c < 4; ++c)
+                        worst = std::max(worst, double(std::abs(got[c] - want[c])) / 1000.0);
+                }
+    EXPECT_GT(nonZero, 10000u);
+    EXPECT_LT(worst, 1.0 / 2048.0); // half floats: 11 bits of mantissa, relative to the largest
+    // The unit keeps tiny and empty bakes finite.
+    EXPECT_EQ(splat::brickUnit(0.0f), 1.0f);
+    EXPECT_GT(splat::brickUnit(1e-42f), 0.0f);
+    EXPECT_LE(1e-42f / splat::brickUnit(1e-42f), 65504.0f);
 }
 
 struct CliRun {
