@@ -20,7 +20,7 @@
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
 //   M (1 + 4) + S
 // with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
-// trilinear sample of 8 voxels, unrolled; a voxel's leaf is one read of the leaf table, no loop):
+// trilinear sample of 8 voxels, unrolled; its leaf is one read of the leaf table, no loop):
 // the walk's one loop takes a sample or enters a tetrahedron per iteration (M + S, the last
 // one's break included, since the walk ends at S samples on the next step).
 #extension GL_GOOGLE_include_directive : require
@@ -51,7 +51,8 @@ layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList li
 
 uint loops = 0u;
 
-// The brick holding voxel `ijk` of section `s`, or -1 (baked_layout.glsl's leaf tables).
+// The brick of the leaf holding voxel `ijk`, or -1, from a section's leaf table (origin, dims:
+// its SpotBakedParams leafOrigin and leafDims; baked_layout.glsl).
 int findBrickIn(ivec3 ijk, ivec4 origin, ivec3 dims) {
     ivec3 r = (ijk >> int(kBakedLeafBits)) - origin.xyz;
     if (any(lessThan(r, ivec3(0))) || any(greaterThanEqual(r, dims)))
