@@ -157,8 +157,8 @@ float brickUnit(float largest) {
     return std::max(largest / 32768.0f, std::numeric_limits<float>::min());
 }
 
-ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves, const std::vector<glm::vec4>& data,
-                            float unit) {
+ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves,
+                            const std::vector<glm::vec4>& data, float unit) {
     Leaves stored;
     for (const glm::ivec3& key : leaves)
         stored.brick(key);
@@ -175,17 +175,20 @@ ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves, const std::ve
         std::array<const glm::vec4*, 8> around{};
         for (int n = 0; n < 8; ++n) {
             const auto it = stored.index.find(LeafKey{withApron.keys[b] + step(n)});
-            around[std::size_t(n)] =
-                it == stored.index.end() ? nullptr : data.data() + std::size_t(it->second) * kBakedLeafVoxels;
+            around[std::size_t(n)] = it == stored.index.end()
+                                         ? nullptr
+                                         : data.data() + std::size_t(it->second) * kBakedLeafVoxels;
         }
         for (int x = 0; x < side; ++x)
             for (int y = 0; y < side; ++y)
                 for (int z = 0; z < side; ++z) {
-                    const glm::vec4* leaf = around[std::size_t((x >> 3) << 2 | (y >> 3) << 1 | (z >> 3))];
+                    const glm::vec4* leaf =
+                        around[std::size_t((x >> 3) << 2 | (y >> 3) << 1 | (z >> 3))];
                     const glm::vec4 v =
                         leaf ? leaf[(x & 7) << 6 | (y & 7) << 3 | (z & 7)] / unit : glm::vec4(0.0f);
-                    out.voxels[b * kBakedBrickVoxels + std::size_t((x * side + y) * side + z)] = glm::uvec2(
-                        glm::packHalf2x16(glm::vec2(v.r, v.g)), glm::packHalf2x16(glm::vec2(v.b, v.a)));
+                    out.voxels[b * kBakedBrickVoxels + std::size_t((x * side + y) * side + z)] =
+                        glm::uvec2(glm::packHalf2x16(glm::vec2(v.r, v.g)),
+                                   glm::packHalf2x16(glm::vec2(v.b, v.a)));
                 }
     }
     out.leaves = std::move(withApron.keys);
@@ -216,12 +219,14 @@ void BakedRenderer::loadBake(const std::string& file) {
     float largest = 0.0f;
     for (const auto& data : bricks)
         for (const glm::vec4& v : data)
-            largest = std::max({largest, std::abs(v.r), std::abs(v.g), std::abs(v.b), std::abs(v.a)});
+            largest =
+                std::max({largest, std::abs(v.r), std::abs(v.g), std::abs(v.b), std::abs(v.a)});
     const float unit = brickUnit(largest);
     std::vector<std::vector<glm::uvec2>> packed(static_cast<std::size_t>(levels));
     brickCount = 0;
     for (int l = 0; l < levels; ++l) {
-        ApronBricks level = packApronBricks(leaves[std::size_t(l)].keys, bricks[std::size_t(l)], unit);
+        ApronBricks level =
+            packApronBricks(leaves[std::size_t(l)].keys, bricks[std::size_t(l)], unit);
         Leaves withApron;
         for (const glm::ivec3& key : level.leaves)
             withApron.brick(key);

@@ -22,8 +22,8 @@
 ///     list): from the entry, a walk through the tetrahedra across their shared faces until the
 ///     ray leaves the shell, reaches the mesh or is opaque, sampling the bake at one spacing for
 ///     the whole layer (the mip level of the pixel's footprint at the entry) through
-///     each tetrahedron's affine map, composited under the earlier layers (front to back); it writes
-///     the walk's exit depth, where the next peel starts. So one layer is the ray's whole
+///     each tetrahedron's affine map, composited under the earlier layers (front to back); it
+///     writes the walk's exit depth, where the next peel starts. So one layer is the ray's whole
 ///     contiguous passage through the shell, and later layers are re-entries (ears,
 ///     silhouettes). The first layer starts every pixel at the eye, t = 0, when the eye is
 ///     inside the shell.
@@ -52,9 +52,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <string>
 #include <tuple>
 #include <vector>
-#include <string>
 
 #include <glm/glm.hpp>
 
@@ -112,13 +112,13 @@ struct BakedStats {
 /// met walking `leaves`; each voxel vec4(extinction x colour, extinction) / unit as two
 /// packHalf2x16 words, 0 where no stored leaf holds it.
 struct ApronBricks {
-    std::vector<glm::ivec3> leaves;  ///< brick b's leaf
-    std::vector<glm::uvec2> voxels;  ///< brick b's at [b x 729, +729), (x * 9 + y) * 9 + z
+    std::vector<glm::ivec3> leaves; ///< brick b's leaf
+    std::vector<glm::uvec2> voxels; ///< brick b's at [b x 729, +729), (x * 9 + y) * 9 + z
 };
 /// `leaves`: the level's stored leaves (distinct); `data`: 512 values per leaf, voxel xyz of
 /// leaf i at i x 512 + (x << 6 | y << 3 | z); `unit`: what a stored 1 is (> 0).
-ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves, const std::vector<glm::vec4>& data,
-                            float unit);
+ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves,
+                            const std::vector<glm::vec4>& data, float unit);
 /// The unit of a bake's bricks: its largest magnitude over 32,768 (the half floats' range, with
 /// room to spare), never below the smallest normal float; 1 for an empty bake.
 float brickUnit(float largest);

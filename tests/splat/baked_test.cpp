@@ -12,8 +12,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
 #include <glm/gtc/packing.hpp>
+#include <gtest/gtest.h>
 
 #include "noise/bake.h"
 #include "noise/error.h"
@@ -377,7 +377,8 @@ TEST(BakedBricks, ApronsHoldTheNeighboursVoxelsAndEveryLeafThatNeedsOne) {
     ASSERT_GT(leaves.size(), 60u);
     std::vector<glm::vec4> data(leaves.size() * 512);
     for (glm::vec4& v : data)
-        v = value(rng) < 400.0f ? glm::vec4(0.0f) : glm::vec4(value(rng), value(rng), value(rng), value(rng));
+        v = value(rng) < 400.0f ? glm::vec4(0.0f)
+                                : glm::vec4(value(rng), value(rng), value(rng), value(rng));
     const auto stored = [&](glm::ivec3 voxel) -> glm::vec4 {
         const glm::ivec3 leaf = voxel >> 3;
         const auto it = index.find({leaf.x, leaf.y, leaf.z});
@@ -393,13 +394,16 @@ TEST(BakedBricks, ApronsHoldTheNeighboursVoxelsAndEveryLeafThatNeedsOne) {
     std::map<std::array<int, 3>, std::size_t> made;
     for (std::size_t b = 0; b < bricks.leaves.size(); ++b)
         EXPECT_TRUE(made.emplace(std::array<int, 3>{bricks.leaves[b].x, bricks.leaves[b].y,
-                                                    bricks.leaves[b].z}, b).second);
+                                                    bricks.leaves[b].z},
+                                 b)
+                        .second);
     for (int x = -5; x <= 4; ++x)
         for (int y = -5; y <= 4; ++y)
             for (int z = -5; z <= 4; ++z) {
                 bool needed = false;
                 for (int n = 0; n < 8; ++n)
-                    needed = needed || index.count({x + (n >> 2), y + ((n >> 1) & 1), z + (n & 1)}) > 0;
+                    needed =
+                        needed || index.count({x + (n >> 2), y + ((n >> 1) & 1), z + (n & 1)}) > 0;
                 EXPECT_EQ(made.count({x, y, z}) > 0, needed) << x << " " << y << " " << z;
             }
     // Their voxels.
