@@ -201,7 +201,6 @@ void BakedRenderer::loadBake(const std::string& file) {
     // Density leaves per level: vec4(extinction x colour, extinction) per voxel.
     std::vector<Leaves> leaves(std::size_t(levels) + 1);
     std::vector<std::vector<glm::vec4>> bricks(static_cast<std::size_t>(levels));
-    std::uint64_t brickCount = 0;
     for (int l = 0; l < levels; ++l) {
         volume.forEachActive(l, [&](glm::ivec3 ijk, float density, glm::vec3 color) {
             const std::uint32_t b = leaves[std::size_t(l)].brick(ijk >> int(kBakedLeafBits));
@@ -212,7 +211,6 @@ void BakedRenderer::loadBake(const std::string& file) {
             data[std::size_t(b) * kBakedLeafVoxels + std::size_t(o.x << 6 | o.y << 3 | o.z)] =
                 glm::vec4(density * color, density);
         });
-        brickCount += leaves[std::size_t(l)].keys.size();
     }
     // The density bricks with their aprons (packApronBricks), in units of the bake's largest
     // value: one leaf lookup a sample.
@@ -222,17 +220,16 @@ void BakedRenderer::loadBake(const std::string& file) {
             largest =
                 std::max({largest, std::abs(v.r), std::abs(v.g), std::abs(v.b), std::abs(v.a)});
     const float unit = brickUnit(largest);
+    // Each section's leaves in brick order: the levels' bricks, then the distance grid's.
+    std::vector<std::vector<glm::ivec3>> sections(std::size_t(levels) + 1);
     std::vector<std::vector<glm::uvec2>> packed(static_cast<std::size_t>(levels));
-    brickCount = 0;
+    std::uint64_t brickCount = 0;
     for (int l = 0; l < levels; ++l) {
         ApronBricks level =
             packApronBricks(leaves[std::size_t(l)].keys, bricks[std::size_t(l)], unit);
-        Leaves withApron;
-        for (const glm::ivec3& key : level.leaves)
-            withApron.brick(key);
+        brickCount += level.leaves.size();
+        sections[std::size_t(l)] = std::move(level.leaves);
         packed[std::size_t(l)] = std::move(level.voxels);
-        brickCount += withApron.keys.size();
-        leaves[std::size_t(l)] = std::move(withApron);
     }
     bricks.clear();
 
@@ -265,21 +262,21 @@ void BakedRenderer::loadBake(const std::string& file) {
         distances.insert(distances.end(), one.begin(), one.end());
     }
 
-    // Hash tables: one section per level, then the distance grid's.
+    sections.back() = distanceLeaves.keys;
     // Leaf tables: per section the dense box of its leaves, an int each (the brick, or empty).
     const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
     std::vector<std::int32_t> table;
     std::vector<glm::ivec4> origins(kBakedSections, glm::ivec4(0)), dims(kBakedSections, glm::ivec4(0));
     std::vector<std::uint32_t> firstBrick(std::size_t(levels) + 1, 0);
     std::uint32_t base = 0;
-    for (std::size_t s = 0; s < leaves.size(); ++s) {
+    for (std::size_t s = 0; s < sections.size(); ++s) {
         const std::uint32_t id = s < std::size_t(levels) ? std::uint32_t(s) : kBakedDistanceSection;
-        const Leaves& L = leaves[s];
+        const std::vector<glm::ivec3>& keys = sections[s];
         firstBrick[s] = s < std::size_t(levels) ? base : 0;
         origins[id].w = std::int32_t(table.size());
-        if (!L.keys.empty()) {
-            glm::ivec3 lo = L.keys[0], hi = L.keys[0];
-            for (const glm::ivec3& k : L.keys) {
+        if (!keys.empty()) {
+            glm::ivec3 lo = keys[0], hi = keys[0];
+            for (const glm::ivec3& k : keys) {
                 lo = glm::min(lo, k);
                 hi = glm::max(hi, k);
             }
@@ -292,8 +289,8 @@ void BakedRenderer::loadBake(const std::string& file) {
                                      range >> 20, " MiB)"));
             const std::size_t offset = table.size();
             table.resize(offset + entries, kBakedEmptySlot);
-            for (std::uint32_t b = 0; b < L.keys.size(); ++b) {
-                const glm::i64vec3 r = glm::i64vec3(L.keys[b]) - glm::i64vec3(lo);
+            for (std::uint32_t b = 0; b < keys.size(); ++b) {
+                const glm::i64vec3 r = glm::i64vec3(keys[b]) - glm::i64vec3(lo);
                 table[offset + std::size_t((r.z * d.y + r.y) * d.x + r.x)] =
                     std::int32_t(firstBrick[s] + b);
             }
@@ -301,7 +298,7 @@ void BakedRenderer::loadBake(const std::string& file) {
             dims[id] = glm::ivec4(glm::ivec3(d), 0);
         }
         if (s < std::size_t(levels))
-            base += std::uint32_t(L.keys.size());
+            base += std::uint32_t(keys.size());
     }
     if (table.empty())
         table.push_back(kBakedEmptySlot);
