@@ -173,9 +173,10 @@ void main() {
     vec3 radiance = vec3(0.0);
     float transmittance = 1.0;
     float tEnd = tIn;
-    // One flat loop: each iteration takes a sample or, where the tetrahedron has none left,
-    // steps into the next one (a new tetrahedron's exit computed first). So a SIMD batch runs to
-    // its longest lane's tetrahedra plus samples, not per tetrahedron to its lanes' most samples.
+    // One flat loop: each iteration takes a sample and, where the tetrahedron then has none left,
+    // steps into the next one (whose exit the next iteration computes first). So a SIMD batch runs
+    // to its longest lane's samples plus sampleless tetrahedra, not per tetrahedron to its lanes'
+    // most samples.
     uint walked = 0u;
     bool inTet = false;
     float tOut = tIn;
@@ -233,7 +234,11 @@ void main() {
                 tEnd = tOut;
                 break;
             }
-        } else {
+            t = tStart + (float(k) + 0.5) * dt;
+        }
+        // No sample left in this tetrahedron: on to the next one, in the same iteration as its
+        // last sample (an iteration apart, a tetrahedron with n samples cost n + 1 of them).
+        if (!(t < tOut && samples < kBakedMaxLayerSamples)) {
             tEnd = tOut;
             tIn = tOut;
             if (atMesh || samples >= kBakedMaxLayerSamples)
