@@ -194,16 +194,26 @@ void main() {
             // The exit: the nearest plane the ray leaves through, the entry face excluded.
             tOut = 3.0e38;
             exitFace = 4u;
-            for (uint f = 0u; f < 4u; ++f) {
+            // The 3 faces after the entry face (from the eye, entry face 4: faces 1 to 3, and 0).
+            for (uint i = 1u; i < 4u; ++i) {
                 if (kCountLoops)
                     ++loops;
-                if (f == entryFace)
-                    continue;
+                uint f = (entryFace + i) & 3u;
                 float num, den;
                 facePlane(tet, f, origin, dir, num, den);
                 if (den < 0.0 && num / den < tOut) {
                     tOut = num / den;
                     exitFace = f;
+                }
+            }
+            if (entryFace == 4u) {
+                if (kCountLoops)
+                    ++loops;
+                float num, den;
+                facePlane(tet, 0u, origin, dir, num, den);
+                if (den < 0.0 && num / den < tOut) {
+                    tOut = num / den;
+                    exitFace = 0u;
                 }
             }
             if (exitFace == 4u)
