@@ -19,7 +19,8 @@
 //
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
 //   M (1 + 4) + S
-// with M = kBakedMaxLayerTets (the walk, 4 planes each) and S = kBakedMaxLayerSamples (each a
+// with M = kBakedMaxLayerTets (the walk, at most 4 planes each: the 3 after the entry face, and
+// face 0 too from the eye) and S = kBakedMaxLayerSamples (each a
 // trilinear sample of 8 voxels, unrolled; its leaf is one read of the leaf table, no loop):
 // the walk's one loop takes a sample or enters a tetrahedron per iteration (M + S, the last
 // one's break included, since the walk ends at S samples on the next step).
