@@ -248,7 +248,8 @@ void main() {
             t = tStart + (float(k) + 0.5) * dt;
         }
         // No sample left in this tetrahedron: on to the next one, in the same iteration as its
-        // last sample (an iteration apart, a tetrahedron with n samples cost n + 1 of them).
+        // last sample (a step in an iteration of its own made a tetrahedron of n samples take
+        // n + 1).
         if (!(t < tOut && samples < kBakedMaxLayerSamples)) {
             tEnd = tOut;
             tIn = tOut;
