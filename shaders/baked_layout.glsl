@@ -54,19 +54,23 @@ SPOT_CONST uint kBakedBindTable = 5u;       /* int[]: the leaf tables */
 SPOT_CONST uint kBakedBindBricks = 6u;      /* uvec2[]: density bricks of every level (the first buffer's) */
 SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
 SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
-SPOT_CONST uint kBakedBindLayerTet = 9u;    /* r32ui image: this layer's entry, 4 tet + face + 1 */
+SPOT_CONST uint kBakedBindLayerEntry = 9u;  /* uvec2 per pixel (row-major): this layer's entry, x 4 tet + face + 1 (0: none), y its depth's bits (baked_peel.frag) */
 SPOT_CONST uint kBakedBindMeshDistance = 10u; /* r32f image: ray distance to the mesh */
 SPOT_CONST uint kBakedBindAccum = 11u;      /* rgba32f image: premultiplied colour, alpha */
 SPOT_CONST uint kBakedBindBase = 12u;       /* rgba32f image: the mesh's colour */
 SPOT_CONST uint kBakedBindResult = 13u;     /* rgba32f image: the frame's result */
 SPOT_CONST uint kBakedBindLoops = 14u;      /* uint: the most loop iterations (counted frames) */
 SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: across face f, 4 tet + its face there, or -1 */
-SPOT_CONST uint kBakedBindEntryFaces = 16u; /* uint[]: 4 tet + face of each enterable boundary face */
 SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
 SPOT_CONST uint kBakedBindExitDepth = 18u;  /* r32f image: where this layer's walk left the shell */
 SPOT_CONST uint kBakedBindBricks1 = 20u;    /* uvec2[]: the second to fourth buffers of density bricks */
 SPOT_CONST uint kBakedBindBricks2 = 21u;
 SPOT_CONST uint kBakedBindBricks3 = 22u;
+SPOT_CONST uint kBakedBindEntryMasks = 16u; /* uint[triangles]: bit 4 k + f where face f of the
+                                               triangle's tetrahedron k is an entry face (host) */
+SPOT_CONST uint kBakedBindPeelDraw = 23u;   /* VkDrawIndirectCommand (16 bytes), then uint[]: the
+                                               entry faces that face the eye, 4 tet + face each
+                                               (baked_shell.comp, this frame) */
 SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList, then uint[width x height]: the pixels to march */
 
 /* Specialization ids. */

@@ -17,7 +17,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = kBakedSpecFirstLayer) const bool kFirstLayer = false;
 
 layout(std430, binding = kBakedBindEyeTet) readonly buffer EyeTet { uint eyeTet; };
-layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
+layout(std430, binding = kBakedBindLayerEntry) readonly buffer LayerEntry { uvec2 layerEntry[]; };
 layout(binding = kBakedBindAccum, rgba32f) uniform readonly image2D accum;
 layout(binding = kBakedBindExitDepth, r32f) uniform writeonly image2D exitDepth;
 layout(std430, binding = kBakedBindList) buffer List { SpotBakedList list; uint listPixels[]; };
@@ -27,7 +27,8 @@ void main() {
     if (pixel.x >= int(frame.size.x) || pixel.y >= int(frame.size.y))
         return;
     bool walk = (kFirstLayer && eyeTet != kBakedNoTet) ||
-                (imageLoad(layerTet, pixel).r != 0u && imageLoad(accum, pixel).a < 1.0);
+                (layerEntry[pixel.y * int(frame.size.x) + pixel.x].x != 0u &&
+                 imageLoad(accum, pixel).a < 1.0);
     if (!walk) {
         imageStore(exitDepth, pixel, vec4(0.0));
         return;

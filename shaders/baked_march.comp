@@ -13,7 +13,7 @@
 // the exit depth it writes is where the next layer's peel starts (0 when nothing behind can
 // show: the pixel became opaque, or the walk reached the mesh).
 //
-// A layer starts at the entry face the peel kept (the layer-tet image); but the first layer
+// A layer starts at the entry face the peel kept (the layer's entries); but the first layer
 // (kFirstLayer), when the eye is inside the shell, starts every pixel at t = 0 in the
 // tetrahedron holding the eye (found by baked_shell.comp), and the next peel continues behind.
 //
@@ -43,7 +43,7 @@ layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { uvec2 brick
 layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { uvec2 bricks1[]; };
 layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { uvec2 bricks2[]; };
 layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { uvec2 bricks3[]; };
-layout(binding = kBakedBindLayerTet, r32ui) uniform readonly uimage2D layerTet;
+layout(std430, binding = kBakedBindLayerEntry) readonly buffer LayerEntry { uvec2 layerEntry[]; };
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
 layout(binding = kBakedBindExitDepth, r32f) uniform writeonly image2D exitDepth;
@@ -138,7 +138,8 @@ void main() {
     uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = 4u; // 4: none (from the eye)
     bool fromEye = tet != kBakedNoTet;
     if (!fromEye) {
-        uint id = imageLoad(layerTet, pixel).r; // not 0: the list holds pixels with an entry
+        // Not 0: the list holds pixels with an entry.
+        uint id = layerEntry[pixel.y * int(frame.size.x) + pixel.x].x;
         tet = (id - 1u) >> 2u;
         entryFace = (id - 1u) & 3u;
     }

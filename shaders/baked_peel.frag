@@ -1,20 +1,29 @@
 #version 450
 // Baked renderer, one depth-peeling layer (docs/design.md section 5): of the shell's entry faces
 // strictly farther than where the previous layer's walk left the shell (its exit depth; reversed
-// depth: smaller is farther), the depth test keeps the nearest; the mesh's depth, copied into the
-// depth buffer first, culls those behind the mesh. Writes the entry (4 tet + face, + 1; 0 where
-// none). The march (baked_march.comp) then walks the shell from there.
+// depth: smaller is farther), the nearest is kept; the mesh's depth (the depth attachment, tested
+// before the shader runs, not written) culls those behind the mesh. The nearest is kept by a 64-bit
+// atomicMax of (depth bits << 32 | 4 tet + face + 1) per pixel (depth >= 0, so its bits order as
+// the floats do): the same entry whatever order the faces are drawn in, the larger entry on a tie
+// (the faces that face the eye are listed by baked_shell.comp's atomics). The march
+// (baked_march.comp) then walks the shell from there.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
 
+layout(early_fragment_tests) in;
+
 layout(binding = kBakedBindPrevDepth, r32f) uniform readonly image2D prevDepth;
+layout(std430, binding = kBakedBindLayerEntry) buffer LayerEntry { uint64_t layerEntry[]; };
 
 layout(location = 0) flat in uint vEntry;
-layout(location = 0) out uint outEntry;
 
 void main() {
-    if (gl_FragCoord.z >= imageLoad(prevDepth, ivec2(gl_FragCoord.xy)).r)
-        discard; // before the previous layer's exit: walked already
-    outEntry = vEntry + 1u;
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    if (gl_FragCoord.z >= imageLoad(prevDepth, pixel).r)
+        return; // before the previous layer's exit: walked already
+    uint64_t key = (uint64_t(floatBitsToUint(gl_FragCoord.z)) << 32) | uint64_t(vEntry + 1u);
+    atomicMax(layerEntry[pixel.y * int(frame.size.x) + pixel.x], key);
 }

@@ -8,6 +8,11 @@
 // whose neighbours the host uploads). Each corner carries its position now (world) and at rest
 // (the texture coordinate into the bake): its 4 face planes, normals inwards, and its affine map
 // from world now to rest, for the march.
+// The peel's faces: of its tetrahedra's entry faces (the host's mask), those that face the eye
+// (the eye on the face's outer side, or within 1e-3 of its distance of the face's plane: the
+// peel's vertex shader decides those) are appended to the peel's draw, all of an invocation's
+// with one atomicAdd. The list's order depends on the atomics' order; the peel keeps the same
+// entry in any order (baked_peel.frag).
 // The eye test: each invocation also tests its 3 tetrahedra against the eye, and the lowest
 // index of those whose 4 face planes hold it is kept (atomicMin on an integer: deterministic;
 // the host fills kBakedNoTet first). The first layer's march (baked_march.comp) starts every
@@ -24,6 +29,8 @@ layout(std430, binding = kBakedBindRest) readonly buffer Rest { SpotMeshVertex r
 layout(std430, binding = kBakedBindIndices) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = kBakedBindTets) writeonly buffer Tets { SpotBakedTet tets[]; };
 layout(std430, binding = kBakedBindEyeTet) buffer EyeTet { uint eyeTet; };
+layout(std430, binding = kBakedBindEntryMasks) readonly buffer EntryMasks { uint entryMasks[]; };
+layout(std430, binding = kBakedBindPeelDraw) buffer PeelDraw { uvec4 peelDraw; uint peelFaces[]; };
 
 vec3 unitNormal(SpotMeshVertex v) {
     float len = length(v.normal.xyz);
@@ -58,6 +65,8 @@ void main() {
     vec3 world[6], atRest[6];
     prismCorners(v0, v1, v2, world, atRest);
     bool reversed = !((a == v0 && b == v1) || (b == v0 && c == v1) || (c == v0 && a == v1));
+    uint mask = entryMasks[t];
+    uint front = 0u; // the entry faces that face the eye, bit 4 k + f
     for (uint k = 0u; k < 3u; ++k) {
         SpotBakedTet tet;
         vec3 p[4], r[4];
@@ -81,7 +90,11 @@ void main() {
             if (side < 0.0)
                 n = -n;
             tet.plane[f] = side == 0.0 ? vec4(0.0, 0.0, 0.0, -1.0) : vec4(n, -dot(n, a));
-            holdsEye = holdsEye && dot(tet.plane[f].xyz, frame.eye.xyz) + tet.plane[f].w >= 0.0;
+            float eyeSide = dot(tet.plane[f].xyz, frame.eye.xyz) + tet.plane[f].w;
+            holdsEye = holdsEye && eyeSide >= 0.0;
+            // Faces the eye (or nearly: the peel's vertex shader decides), so the peel draws it.
+            if (eyeSide <= 1e-3 * length(tet.plane[f].xyz) * length(frame.eye.xyz - a))
+                front |= 1u << (4u * k + f);
         }
         mat3 pm = mat3(p[1] - p[0], p[2] - p[0], p[3] - p[0]);
         mat3 m = determinant(pm) != 0.0 ? mat3(r[1] - r[0], r[2] - r[0], r[3] - r[0]) * inverse(pm)
@@ -92,5 +105,13 @@ void main() {
         tets[3u * t + k] = tet;
         if (holdsEye)
             atomicMin(eyeTet, 3u * t + k);
+    }
+    front &= mask;
+    if (front != 0u) {
+        uint n = bitCount(front);
+        uint slot = atomicAdd(peelDraw.x, 3u * n) / 3u;
+        for (uint bit = 0u; bit < 12u; ++bit)
+            if ((front & (1u << bit)) != 0u)
+                peelFaces[slot++] = 4u * (3u * t + bit / 4u) + bit % 4u;
     }
 }

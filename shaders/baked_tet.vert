@@ -1,15 +1,16 @@
 #version 450
 // Baked renderer, the peel passes' vertices: the shell's boundary faces that a ray can enter
-// through (the top surface, one face per triangle, and the side faces of open mesh edges; the
-// host lists them as 4 tet + face), 3 vertices each pulled from the shell. Only faces that face
-// the eye are drawn (a back face's three vertices collapse to one point, so it covers no pixel).
+// through (the top surface, one face per triangle, and the side faces of open mesh edges) that
+// face the eye, as baked_shell.comp listed them this frame (4 tet + face; it lists nearly
+// edge-on ones too), 3 vertices each pulled from the shell. Only faces that face the eye are
+// drawn (a back face's three vertices collapse to one point, so it covers no pixel).
 // Reversed depth near / z as the base mesh's (splat_mesh.vert); perspective cameras only.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
 
 layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tets[]; };
-layout(std430, binding = kBakedBindEntryFaces) readonly buffer EntryFaces { uint entryFaces[]; };
+layout(std430, binding = kBakedBindPeelDraw) readonly buffer PeelDraw { uvec4 peelDraw; uint entryFaces[]; };
 
 layout(location = 0) flat out uint vEntry;
 

@@ -32,7 +32,6 @@ using namespace gpu_baked;
 constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 constexpr Buffer::Memory kHost = Buffer::Memory::HostVisible;
 constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
-constexpr VkFormat kTetFormat = VK_FORMAT_R32_UINT;
 /// Layers whose peel and march passes are timed apart (2 marks each, within PassTimer's 32).
 constexpr std::uint32_t kBakedMarkedLayers = 12;
 
@@ -79,31 +78,26 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
     requireFormat(m_ctx, kScalarFormat,
                   VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
                   "stored R32F targets");
-    requireFormat(m_ctx, kTetFormat,
-                  VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
-                  "stored R32UI targets");
-    requireFormat(m_ctx, kDepthFormat,
-                  VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT |
-                      VK_FORMAT_FEATURE_TRANSFER_SRC_BIT | VK_FORMAT_FEATURE_TRANSFER_DST_BIT,
-                  "copied depth");
+    requireFormat(m_ctx, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth");
     const std::uint32_t push = sizeof(gpu_splat::SpotSplatFrame);
     m_shell = makeComputePipeline(
         m_ctx, spirv(spv_baked_shell_comp),
         {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindVertices),
          storageBuffer(kBakedBindRest), storageBuffer(kBakedBindIndices),
-         storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEyeTet)},
+         storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEyeTet),
+         storageBuffer(kBakedBindEntryMasks), storageBuffer(kBakedBindPeelDraw)},
         push);
     GraphicsPipelineDesc desc;
     desc.vertex = spirv(spv_baked_tet_vert);
     desc.fragment = spirv(spv_baked_peel_frag);
-    desc.bindings = {storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEntryFaces),
-                     storageImage(kBakedBindPrevDepth)};
+    desc.bindings = {storageBuffer(kBakedBindTets), storageBuffer(kBakedBindPeelDraw),
+                     storageImage(kBakedBindPrevDepth), storageBuffer(kBakedBindLayerEntry)};
     desc.pushBytes = push;
-    desc.colorFormats = {kTetFormat};
-    desc.blends = {opaqueBlend()};
+    // No colour target: the nearest entry is an atomicMax per pixel (baked_peel.frag). The depth
+    // attachment is the mesh's, tested (nearer than the mesh) and never written.
     desc.depthFormat = kDepthFormat;
     desc.depthTest = true;
-    desc.depthWrite = true;
+    desc.depthWrite = false;
     desc.depthCompare = VK_COMPARE_OP_GREATER;
     m_peel = makeGraphicsPipeline(m_ctx, desc);
     m_resolve = makeComputePipeline(m_ctx, spirv(spv_baked_resolve_comp),
@@ -133,7 +127,7 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split)
          storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
          storageBuffer(kBakedBindBricks1), storageBuffer(kBakedBindBricks2),
          storageBuffer(kBakedBindBricks3),
-         storageBuffer(kBakedBindDistances), storageImage(kBakedBindLayerTet),
+         storageBuffer(kBakedBindDistances), storageBuffer(kBakedBindLayerEntry),
          storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
          storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops),
          storageBuffer(kBakedBindList)},
@@ -143,7 +137,7 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split)
         listSpec.set(kBakedSpecFirstLayer, first);
         m_list.emplace(first, makeComputePipeline(
                                   m_ctx, spirv(spv_baked_list_comp),
-                                  {storageBuffer(kBakedBindEyeTet), storageImage(kBakedBindLayerTet),
+                                  {storageBuffer(kBakedBindEyeTet), storageBuffer(kBakedBindLayerEntry),
                                    storageImage(kBakedBindAccum), storageImage(kBakedBindExitDepth),
                                    storageBuffer(kBakedBindList)},
                                   sizeof(gpu_splat::SpotSplatFrame), listSpec));
@@ -371,24 +365,23 @@ void BakedRenderer::loadBake(const std::string& file) {
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     if (m_width == width && m_height == height && m_result.handle())
         return;
-    // Per pixel: base 16, distance 4, 2 depths 8, exit depth 4, layer tet 4, accum 16, result 16,
+    // Per pixel: base 16, distance 4, depth 4, exit depth 4, layer entry 8, accum 16, result 16,
     // the march's list 4.
     const std::uint64_t need = std::uint64_t(width) * height * 72 + sizeof(SpotBakedList);
     std::uint64_t held = 0;
-    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
-                           &m_layerTet, &m_accum, &m_result})
+    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_exitDepth, &m_accum, &m_result})
         held += i->reservedBytes();
-    held += m_pixelList.reservedBytes();
+    held += m_pixelList.reservedBytes() + m_layerEntry.reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("baked: a ", width, "x", height, " frame needs ", need >> 20,
                              " MiB of GPU memory for its targets; ",
                              (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; reduce the image size"));
-    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_peelDepth, &m_exitDepth,
-                     &m_layerTet, &m_accum, &m_result})
+    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_exitDepth, &m_accum, &m_result})
         *i = Image();
     m_pixelList = Buffer();
+    m_layerEntry = Buffer();
     m_width = m_height = 0;
     constexpr VkImageUsageFlags kAttach = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
     constexpr VkImageUsageFlags kStore = VK_IMAGE_USAGE_STORAGE_BIT;
@@ -400,13 +393,10 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     m_base = Image(m_ctx, width, height, kColorFormat, kAttach | kStore, kColor, "baked base colour");
     m_distance =
         Image(m_ctx, width, height, kScalarFormat, kAttach | kStore, kColor, "baked mesh distance");
-    m_meshDepth =
-        Image(m_ctx, width, height, kDepthFormat, kDepthUse | kSrc, kDepth, "baked mesh depth");
-    m_peelDepth =
-        Image(m_ctx, width, height, kDepthFormat, kDepthUse | kDst, kDepth, "baked peel depth");
+    m_meshDepth = Image(m_ctx, width, height, kDepthFormat, kDepthUse, kDepth, "baked mesh depth");
     m_exitDepth = Image(m_ctx, width, height, kScalarFormat, kStore | kDst, kColor, "baked exit depth");
-    m_layerTet =
-        Image(m_ctx, width, height, kTetFormat, kAttach | kStore, kColor, "baked layer tetrahedra");
+    m_layerEntry = Buffer(m_ctx, std::uint64_t(width) * height * 8,
+                          kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice, "baked layer entries");
     m_accum = Image(m_ctx, width, height, kColorFormat, kStore | kDst, kColor, "baked accumulation");
     m_result = Image(m_ctx, width, height, kColorFormat, kStore | kSrc, kColor, "baked result");
     m_pixelList = Buffer(m_ctx, sizeof(SpotBakedList) + std::uint64_t(width) * height * 4,
@@ -487,16 +477,22 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                     entries.push_back(std::uint32_t(t) * 4 + f);
             }
         m_entryFaceCount = std::uint32_t(entries.size());
-        if (entries.empty())
-            entries.push_back(0);
+        std::vector<std::uint32_t> masks(std::max<std::size_t>(triangles, 1), 0u);
+        for (const std::uint32_t e : entries)
+            masks[(e >> 2) / 3] |= 1u << ((e >> 2) % 3 * 4 + (e & 3));
         m_neighbours = Buffer();
-        m_entryFaces = Buffer();
+        m_entryMasks = Buffer();
+        m_peelDraw = Buffer();
         m_neighbours = Buffer(m_ctx, packed.size() * sizeof(glm::ivec4), kStorage, kHost,
                               "baked tetrahedron neighbours");
         m_neighbours.upload(std::span<const glm::ivec4>(packed));
-        m_entryFaces = Buffer(m_ctx, entries.size() * sizeof(std::uint32_t), kStorage, kHost,
-                              "baked entry faces");
-        m_entryFaces.upload(std::span<const std::uint32_t>(entries));
+        m_entryMasks = Buffer(m_ctx, masks.size() * sizeof(std::uint32_t), kStorage, kHost,
+                              "baked entry face masks");
+        m_entryMasks.upload(std::span<const std::uint32_t>(masks));
+        m_peelDraw = Buffer(m_ctx, 16 + (std::size_t(m_entryFaceCount) + 1) * sizeof(std::uint32_t),
+                            kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            kDevice, "baked peel draw");
     }
     m_bakeStats.thickness = thickness;
     m_bakeStats.tetrahedra = 3 * triangles;
@@ -545,6 +541,8 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet),
     // and the tetrahedron holding the eye, if any (the lowest index).
     vkCmdFillBuffer(cmd, m_eyeTet.handle(), 0, VK_WHOLE_SIZE, kBakedNoTet);
+    const VkDrawIndirectCommand noFaces{0, 1, 0, 0};
+    vkCmdUpdateBuffer(cmd, m_peelDraw.handle(), 0, sizeof(noFaces), &noFaces);
     fullBarrier(cmd);
     if (triangles > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_shell.handle());
@@ -556,6 +554,8 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kBakedBindIndices, mesh.indices())
             .buffer(kBakedBindTets, m_tets)
             .buffer(kBakedBindEyeTet, m_eyeTet)
+            .buffer(kBakedBindEntryMasks, m_entryMasks)
+            .buffer(kBakedBindPeelDraw, m_peelDraw)
             .push(m_ctx, cmd, m_shell);
         vkCmdDispatch(cmd, (triangles + 63) / 64, 1, 1);
     }
@@ -577,10 +577,7 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kGeneral, kTests, kDepthRW, kAll,
                     VK_ACCESS_2_MEMORY_READ_BIT);
-    transitionImage(cmd, m_peelDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
-                    VK_IMAGE_LAYOUT_UNDEFINED, kGeneral, VK_PIPELINE_STAGE_2_NONE, 0, kAll,
-                    VK_ACCESS_2_MEMORY_WRITE_BIT);
-    for (const Image* image : {&m_exitDepth, &m_layerTet, &m_accum, &m_result})
+    for (const Image* image : {&m_exitDepth, &m_accum, &m_result})
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                         VK_PIPELINE_STAGE_2_NONE, 0, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT);
     // Nothing accumulated; the first peel's "previous exit" is nearer than any face (depth <= 1).
@@ -603,7 +600,7 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         pushFrame(cmd, list, f.frame);
         Descriptors()
             .buffer(kBakedBindEyeTet, m_eyeTet)
-            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindLayerEntry, m_layerEntry)
             .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .buffer(kBakedBindList, m_pixelList)
@@ -624,7 +621,7 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kBakedBindBricks2, m_bricks[m_bricks[2].handle() ? 2 : 0])
             .buffer(kBakedBindBricks3, m_bricks[m_bricks[3].handle() ? 3 : 0])
             .buffer(kBakedBindDistances, m_distances)
-            .image(kBakedBindLayerTet, m_layerTet, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindLayerEntry, m_layerEntry)
             .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
@@ -634,32 +631,28 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         vkCmdDispatchIndirect(cmd, m_pixelList.handle(), 0);
         fullBarrier(cmd);
     };
-    VkImageCopy copy{};
-    copy.srcSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
-    copy.dstSubresource = copy.srcSubresource;
-    copy.extent = {m_width, m_height, 1};
     // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
     const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
     for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
-        // Peel: the nearest entry face behind the previous layer's exit, before the mesh.
-        vkCmdCopyImage(cmd, m_meshDepth.handle(), kGeneral, m_peelDepth.handle(), kGeneral, 1,
-                       &copy);
+        // Peel: the nearest entry face behind the previous layer's exit, before the mesh (the
+        // mesh's depth, tested and not written; the entry an atomicMax per pixel).
+        vkCmdFillBuffer(cmd, m_layerEntry.handle(), 0, VK_WHOLE_SIZE, 0u);
         const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
         vkCmdUpdateBuffer(cmd, m_pixelList.handle(), 0, sizeof(emptyList), &emptyList);
         fullBarrier(cmd);
-        VkRenderingAttachmentInfo tetInfo = colorAttachment(m_layerTet, VK_ATTACHMENT_LOAD_OP_CLEAR);
-        VkRenderingAttachmentInfo depthInfo = depthAttachment(m_peelDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
-        tetInfo.imageLayout = depthInfo.imageLayout = kGeneral;
-        beginRendering(cmd, m_width, m_height, {tetInfo}, &depthInfo);
+        VkRenderingAttachmentInfo depthInfo = depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
+        depthInfo.imageLayout = kGeneral;
+        beginRendering(cmd, m_width, m_height, {}, &depthInfo);
         if (m_entryFaceCount > 0) {
             vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_peel.handle());
             pushFrame(cmd, m_peel, f.frame);
             Descriptors()
                 .buffer(kBakedBindTets, m_tets)
-                .buffer(kBakedBindEntryFaces, m_entryFaces)
+                .buffer(kBakedBindPeelDraw, m_peelDraw)
                 .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+                .buffer(kBakedBindLayerEntry, m_layerEntry)
                 .push(m_ctx, cmd, m_peel);
-            vkCmdDraw(cmd, m_entryFaceCount * 3, 1, 0, 0);
+            vkCmdDrawIndirect(cmd, m_peelDraw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
         }
         vkCmdEndRendering(cmd);
         fullBarrier(cmd);

@@ -8,16 +8,18 @@
 ///     vertex normals by the shell thickness) split into 3 tetrahedra with noise/shell.h's rule,
 ///     each with its corners now, its 4 inward face planes and its affine map from world now to
 ///     rest (the texture coordinate into the bake); and the lowest tetrahedron holding the eye,
-///     if any. Rebuilt from the mesh's vertices every frame, so an animated mesh's shell follows
-///     it. Per mesh, on the host (topology only): each tetrahedron's neighbour across each face
-///     (noise::shellNeighbours) and the shell's entry faces, the boundary faces a ray can enter
-///     through (the top surface and the sides of open edges; not the base, the mesh).
+///     if any; and the list of the shell's entry faces that face the eye, with the peel's
+///     indirect draw. Rebuilt from the mesh's vertices every frame, so an animated mesh's shell
+///     follows it. Per mesh, on the host (topology only): each tetrahedron's neighbour across each
+///     face (noise::shellNeighbours) and the shell's entry faces, the boundary faces a ray can
+///     enter through (the top surface and the sides of open edges; not the base, the mesh), as a
+///     mask per triangle.
 ///  2. mesh (raster): the opaque base mesh's colour, ray distance and depth (MeshPass).
 ///  3. per layer k = 1..N (RenderSettings::peelPasses): peel (raster, baked_tet.vert and
 ///     baked_peel.frag): the entry faces that face the eye (one triangle per mesh triangle on a
-///     closed mesh), with the mesh's depth copied into the depth buffer (z-buffer culling behind
-///     the mesh) and a test against where layer k-1's walk left the shell, keep per pixel the
-///     nearest entry; list (compute, baked_list.comp): the pixels with an entry that are not
+///     closed mesh), tested against the mesh's depth (z-buffer culling behind the mesh, no
+///     depth written) and against where layer k-1's walk left the shell, keep per pixel the
+///     nearest entry by a 64-bit atomicMax (the same entry in any drawing order); list (compute, baked_list.comp): the pixels with an entry that are not
 ///     opaque, compacted; march (compute, baked_march.comp, dispatched indirectly over the
 ///     list): from the entry, a walk through the tetrahedra across their shared faces until the
 ///     ray leaves the shell, reaches the mesh or is opaque, sampling the bake at one spacing for
@@ -180,14 +182,15 @@ private:
     std::uint32_t m_bricksPerBuffer = 0, m_brickSplit = 0;
     float m_brickUnit = 1.0f; ///< what a stored 1 in the density bricks is (SpotBakedParams::unit)
     std::vector<glm::ivec4> m_leafOrigin, m_leafDims;
-    // Per mesh: the tetrahedra (3 per triangle), their neighbours, the entry faces.
-    Buffer m_tets, m_params, m_neighbours, m_entryFaces, m_eyeTet;
+    // Per mesh: the tetrahedra (3 per triangle), their neighbours, the entry faces (a mask per
+    // triangle) and the peel's draw of those that face the eye (baked_shell.comp).
+    Buffer m_tets, m_params, m_neighbours, m_entryMasks, m_peelDraw, m_eyeTet;
     std::uint32_t m_entryFaceCount = 0;
     // Per image size.
     std::uint32_t m_width = 0, m_height = 0;
-    Image m_base, m_distance, m_meshDepth, m_peelDepth, m_exitDepth, m_layerTet, m_accum,
+    Image m_base, m_distance, m_meshDepth, m_exitDepth, m_accum,
         m_result;
-    Buffer m_loops, m_pixelList;
+    Buffer m_loops, m_pixelList, m_layerEntry;
 
     struct Prepared {
         gpu_splat::SpotSplatFrame frame{};
