@@ -126,21 +126,21 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split)
          storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
          storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
          storageBuffer(kBakedBindBricks1), storageBuffer(kBakedBindBricks2),
-         storageBuffer(kBakedBindBricks3),
-         storageBuffer(kBakedBindDistances), storageBuffer(kBakedBindLayerEntry),
-         storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
-         storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops),
-         storageBuffer(kBakedBindList)},
+         storageBuffer(kBakedBindBricks3), storageBuffer(kBakedBindDistances),
+         storageBuffer(kBakedBindLayerEntry), storageImage(kBakedBindMeshDistance),
+         storageImage(kBakedBindAccum), storageImage(kBakedBindExitDepth),
+         storageBuffer(kBakedBindLoops), storageBuffer(kBakedBindList)},
         sizeof(gpu_splat::SpotSplatFrame), spec);
     if (!m_list.count(first)) {
         Specialization listSpec;
         listSpec.set(kBakedSpecFirstLayer, first);
-        m_list.emplace(first, makeComputePipeline(
-                                  m_ctx, spirv(spv_baked_list_comp),
-                                  {storageBuffer(kBakedBindEyeTet), storageBuffer(kBakedBindLayerEntry),
-                                   storageImage(kBakedBindAccum), storageImage(kBakedBindExitDepth),
-                                   storageBuffer(kBakedBindList)},
-                                  sizeof(gpu_splat::SpotSplatFrame), listSpec));
+        m_list.emplace(
+            first,
+            makeComputePipeline(m_ctx, spirv(spv_baked_list_comp),
+                                {storageBuffer(kBakedBindEyeTet),
+                                 storageBuffer(kBakedBindLayerEntry), storageImage(kBakedBindAccum),
+                                 storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindList)},
+                                sizeof(gpu_splat::SpotSplatFrame), listSpec));
     }
     return m_march.emplace(std::tuple{count, first, split}, std::move(p)).first->second;
 }
@@ -395,8 +395,9 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
         Image(m_ctx, width, height, kScalarFormat, kAttach | kStore, kColor, "baked mesh distance");
     m_meshDepth = Image(m_ctx, width, height, kDepthFormat, kDepthUse, kDepth, "baked mesh depth");
     m_exitDepth = Image(m_ctx, width, height, kScalarFormat, kStore | kDst, kColor, "baked exit depth");
-    m_layerEntry = Buffer(m_ctx, std::uint64_t(width) * height * 8,
-                          kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice, "baked layer entries");
+    m_layerEntry =
+        Buffer(m_ctx, std::uint64_t(width) * height * 8,
+               kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice, "baked layer entries");
     m_accum = Image(m_ctx, width, height, kColorFormat, kStore | kDst, kColor, "baked accumulation");
     m_result = Image(m_ctx, width, height, kColorFormat, kStore | kSrc, kColor, "baked result");
     m_pixelList = Buffer(m_ctx, sizeof(SpotBakedList) + std::uint64_t(width) * height * 4,
@@ -640,7 +641,8 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
         vkCmdUpdateBuffer(cmd, m_pixelList.handle(), 0, sizeof(emptyList), &emptyList);
         fullBarrier(cmd);
-        VkRenderingAttachmentInfo depthInfo = depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
+        VkRenderingAttachmentInfo depthInfo =
+            depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
         depthInfo.imageLayout = kGeneral;
         beginRendering(cmd, m_width, m_height, {}, &depthInfo);
         if (m_entryFaceCount > 0) {

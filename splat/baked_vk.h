@@ -19,16 +19,16 @@
 ///     baked_peel.frag): the entry faces that face the eye (one triangle per mesh triangle on a
 ///     closed mesh), tested against the mesh's depth (z-buffer culling behind the mesh, no
 ///     depth written) and against where layer k-1's walk left the shell, keep per pixel the
-///     nearest entry by a 64-bit atomicMax (the same entry in any drawing order); list (compute, baked_list.comp): the pixels with an entry that are not
-///     opaque, compacted; march (compute, baked_march.comp, dispatched indirectly over the
-///     list): from the entry, a walk through the tetrahedra across their shared faces until the
-///     ray leaves the shell, reaches the mesh or is opaque, sampling the bake at one spacing for
-///     the whole layer (the mip level of the pixel's footprint at the entry) through
-///     each tetrahedron's affine map, composited under the earlier layers (front to back); it
-///     writes the walk's exit depth, where the next peel starts. So one layer is the ray's whole
-///     contiguous passage through the shell, and later layers are re-entries (ears,
-///     silhouettes). The first layer starts every pixel at the eye, t = 0, when the eye is
-///     inside the shell.
+///     nearest entry by a 64-bit atomicMax (the same entry in any drawing order); list (compute,
+///     baked_list.comp): the pixels with an entry that are not opaque, compacted; march (compute,
+///     baked_march.comp, dispatched indirectly over the list): from the entry, a walk through the
+///     tetrahedra across their shared faces until the ray leaves the shell, reaches the mesh or is
+///     opaque, sampling the bake at one spacing for the whole layer (the mip level of the pixel's
+///     footprint at the entry) through each tetrahedron's affine map, composited under the earlier
+///     layers (front to back); it writes the walk's exit depth, where the next peel starts. So one
+///     layer is the ray's whole contiguous passage through the shell, and later layers are
+///     re-entries (ears, silhouettes). The first layer starts every pixel at the eye, t = 0, when
+///     the eye is inside the shell.
 ///  4. resolve (compute): the accumulation over the mesh colour, into result().
 ///
 /// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in up to 4 storage
@@ -97,7 +97,8 @@ struct BakedStats {
     std::uint32_t bricks = 0;         ///< density leaves of every level
     std::uint32_t brickBuffers = 0;   ///< storage buffers they are split over
     std::uint32_t distanceBricks = 0; ///< distance leaves
-    std::uint32_t entryFaces = 0;     ///< boundary faces a ray can enter (top and open sides); the peel draws those facing the eye
+    std::uint32_t entryFaces = 0; ///< boundary faces a ray can enter (top and open sides); the peel
+                                  ///< draws those facing the eye
     std::uint32_t maxLayerTets = 0;   ///< most tetrahedra one layer walks
     std::uint32_t maxLayerSamples = 0; ///< most samples one layer takes (skipped ones included)
     std::uint32_t tableEntries = 0;   ///< of the leaf tables (one int per leaf of each box)
@@ -188,8 +189,7 @@ private:
     std::uint32_t m_entryFaceCount = 0;
     // Per image size.
     std::uint32_t m_width = 0, m_height = 0;
-    Image m_base, m_distance, m_meshDepth, m_exitDepth, m_accum,
-        m_result;
+    Image m_base, m_distance, m_meshDepth, m_exitDepth, m_accum, m_result;
     Buffer m_loops, m_pixelList, m_layerEntry;
 
     struct Prepared {
