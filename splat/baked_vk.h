@@ -97,8 +97,7 @@ struct BakedStats {
     std::uint32_t bricks = 0;         ///< density leaves of every level
     std::uint32_t brickBuffers = 0;   ///< storage buffers they are split over
     std::uint32_t distanceBricks = 0; ///< distance leaves
-    std::uint32_t entryFaces = 0; ///< boundary faces a ray can enter (top and open sides); the peel
-                                  ///< draws those facing the eye
+    std::uint32_t entryFaces = 0;     ///< enterable boundary faces (the peel draws eye-facing ones)
     std::uint32_t maxLayerTets = 0;   ///< most tetrahedra one layer walks
     std::uint32_t maxLayerSamples = 0; ///< most samples one layer takes (skipped ones included)
     std::uint32_t tableEntries = 0;   ///< of the leaf tables (one int per leaf of each box)
