@@ -9,9 +9,9 @@
 #include <map>
 #include <random>
 #include <string>
-#include <vector>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 #include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
