@@ -54,7 +54,9 @@ SPOT_CONST uint kBakedBindTable = 5u;       /* int[]: the leaf tables */
 SPOT_CONST uint kBakedBindBricks = 6u;      /* uvec2[]: density bricks of every level (the first buffer's) */
 SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
 SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
-SPOT_CONST uint kBakedBindLayerEntry = 9u;  /* uvec2 per pixel (row-major): this layer's entry, x 4 tet + face + 1 (0: none), y its depth's bits (baked_peel.frag) */
+SPOT_CONST uint kBakedBindLayerEntry = 9u;  /* uvec2 per pixel (row-major): this layer's entry,
+                                               x 4 tet + face + 1 (0: none), y its depth's bits
+                                               (baked_peel.frag) */
 SPOT_CONST uint kBakedBindMeshDistance = 10u; /* r32f image: ray distance to the mesh */
 SPOT_CONST uint kBakedBindAccum = 11u;      /* rgba32f image: premultiplied colour, alpha */
 SPOT_CONST uint kBakedBindBase = 12u;       /* rgba32f image: the mesh's colour */

@@ -27,7 +27,7 @@ void main() {
     if (pixel.x >= int(frame.size.x) || pixel.y >= int(frame.size.y))
         return;
     bool walk = (kFirstLayer && eyeTet != kBakedNoTet) ||
-                (layerEntry[pixel.y * int(frame.size.x) + pixel.x].x != 0u &&
+                (layerEntry[splatPixelIndex(pixel)].x != 0u &&
                  imageLoad(accum, pixel).a < 1.0);
     if (!walk) {
         imageStore(exitDepth, pixel, vec4(0.0));

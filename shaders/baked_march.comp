@@ -139,7 +139,7 @@ void main() {
     bool fromEye = tet != kBakedNoTet;
     if (!fromEye) {
         // Not 0: the list holds pixels with an entry.
-        uint id = layerEntry[pixel.y * int(frame.size.x) + pixel.x].x;
+        uint id = layerEntry[splatPixelIndex(pixel)].x;
         tet = (id - 1u) >> 2u;
         entryFace = (id - 1u) & 3u;
     }

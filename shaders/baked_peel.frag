@@ -25,5 +25,5 @@ void main() {
     if (gl_FragCoord.z >= imageLoad(prevDepth, pixel).r)
         return; // before the previous layer's exit: walked already
     uint64_t key = (uint64_t(floatBitsToUint(gl_FragCoord.z)) << 32) | uint64_t(vEntry + 1u);
-    atomicMax(layerEntry[pixel.y * int(frame.size.x) + pixel.x], key);
+    atomicMax(layerEntry[splatPixelIndex(pixel)], key);
 }

@@ -31,6 +31,11 @@ layout(constant_id = kSplatSpecResolveList) const bool kResolveList = false;
 const bool kShadeVaryings = kLambert && kLobes <= kSplatMaxShadeVaryingLobes;
 const uint kShadeLobes = kShadeVaryings ? kLobes : 1u;
 
+// Pixel `pixel`'s index in a row-major per-pixel buffer of the frame's size.
+uint splatPixelIndex(ivec2 pixel) {
+    return uint(pixel.y) * uint(frame.size.x) + uint(pixel.x);
+}
+
 // The ray through continuous pixel position p (pixels, (0,0) top-left), as noise::CameraRays:
 // world origin and unit direction. (The projection is also read from the frame: the ray-march's
 // shaders are not specialized for it.)

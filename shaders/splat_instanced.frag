@@ -31,6 +31,6 @@ void main() {
     splatCountCovered(s.alpha);
     if (splatInstancedCovers(s, gl_FragCoord.xy, tMesh)) {
         uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
-        atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);
+        atomicMin(closest[splatPixelIndex(pixel)], key);
     }
 }

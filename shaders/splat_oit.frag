@@ -38,7 +38,7 @@ void main() {
         discard;
     if (kHybridAtomic && s.alpha > kSplatHybridMinAlpha) {
         uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
-        atomicMin(closest[uint(pixel.y) * uint(frame.size.x) + uint(pixel.x)], key);
+        atomicMin(closest[splatPixelIndex(pixel)], key);
     }
     outAccum = vec4(s.premul, s.alpha) * splatOitWeight(s);
     outOpticalDepth = s.tau;
