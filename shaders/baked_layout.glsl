@@ -59,8 +59,10 @@ SPOT_CONST uint kBakedBindLayerEntry = 9u;  /* uvec2 per pixel (row-major): this
                                                (baked_peel.frag) */
 SPOT_CONST uint kBakedBindMeshDistance = 10u; /* r32f image: ray distance to the mesh */
 SPOT_CONST uint kBakedBindAccum = 11u;      /* rgba32f image: premultiplied colour, alpha */
-SPOT_CONST uint kBakedBindBase = 12u;       /* rgba32f image: the mesh's colour */
-SPOT_CONST uint kBakedBindResult = 13u;     /* rgba32f image: the frame's result */
+SPOT_CONST uint kBakedBindBase = 12u;       /* rgba32f image: the mesh's colour, then the frame's
+                                               result (each march composites its pixels into it) */
+SPOT_CONST uint kBakedBindBaseKept = 13u;   /* rgba32f image: the mesh's colour at the pixels the
+                                               first layer walks (its march keeps it there) */
 SPOT_CONST uint kBakedBindLoops = 14u;      /* uint: the most loop iterations (counted frames) */
 SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: across face f, 4 tet + its face there, or -1 */
 SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
@@ -73,12 +75,16 @@ SPOT_CONST uint kBakedBindEntryMasks = 16u; /* uint[triangles]: bit 4 k + f wher
 SPOT_CONST uint kBakedBindPeelDraw = 23u;   /* VkDrawIndirectCommand (16 bytes), then uint[]: the
                                                entry faces that face the eye, 4 tet + face each
                                                (baked_shell.comp, this frame) */
-SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList, then uint[width x height]: the pixels to march */
+SPOT_CONST uint kBakedBindList = 19u;       /* SpotBakedList: this layer's list of pixels to march
+                                               (one header per layer, each bound at its offset) */
+SPOT_CONST uint kBakedBindListPixels = 24u; /* uint[width x height]: the listed pixels, x | y << 16 */
 
 /* Specialization ids. */
 SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids below are splat_common.glsl's) */
 SPOT_CONST uint kBakedSpecSplitBricks = 66u; /* bool: the density bricks span several buffers */
-SPOT_CONST uint kBakedSpecFirstLayer = 65u; /* bool: the first layer (starts at the eye's tetrahedron if any) */
+SPOT_CONST uint kBakedSpecFirstLayer = 65u; /* bool: the first layer (its peel has no previous exit;
+                                                its march starts from nothing accumulated, or at
+                                                the eye's tetrahedron if any) */
 
 struct SpotBakedTet {
     vec4 world[4];  /* xyz: corner now, world units */
@@ -97,7 +103,7 @@ struct SpotBakedParams {
     ivec4 leafDims[kBakedSections];   /* per section: xyz the leaves of its box (0 when empty) */
 };
 
-/* The pixels a layer's march walks (baked_list.comp), x | y << 16 each after this header. */
+/* The pixels a layer's march walks (listed by its peel, baked_peel.frag; kBakedBindListPixels). */
 struct SpotBakedList {
     uvec3 groups; /* the march's indirect dispatch: (entries + 63) / 64, 1, 1 */
     uint count;   /* entries */

@@ -1,6 +1,6 @@
 #version 450
 // Baked renderer, one layer's march (docs/design.md section 5): per pixel of the layer's list
-// (baked_list.comp: those with an entry, not opaque; dispatched indirectly), a walk through the
+// (the peel's: those with an entry; dispatched indirectly), a walk through the
 // shell's tetrahedra from the layer's entry, front to back, across the face where the ray leaves
 // each into the neighbour there (the host's noise::shellNeighbours), so one layer covers the
 // ray's whole contiguous passage through the shell. Per tetrahedron: the exit is the nearest of
@@ -11,11 +11,16 @@
 // The walk ends at the shell's boundary (no neighbour), at the mesh, when the transmittance
 // falls below kBakedOpaque, or at kBakedMaxLayerTets tetrahedra or kBakedMaxLayerSamples samples;
 // the exit depth it writes is where the next layer's peel starts (0 when nothing behind can
-// show: the pixel became opaque, or the walk reached the mesh).
+// show: the pixel became opaque, or the walk reached the mesh). Each layer also writes its pixels'
+// composite over the mesh colour into the frame's result (the base image: the mesh's colour
+// elsewhere), from the mesh colour the first layer kept (every pixel a later layer walks, the
+// first walked: a pixel with no entry face before the mesh has none in any layer), and clears the
+// pixel's entry for the next peel.
 //
 // A layer starts at the entry face the peel kept (the layer's entries); but the first layer
 // (kFirstLayer), when the eye is inside the shell, starts every pixel at t = 0 in the
-// tetrahedron holding the eye (found by baked_shell.comp), and the next peel continues behind.
+// tetrahedron holding the eye (found by baked_shell.comp), over every pixel (the shell raises
+// the first list's dispatch to cover them), and the next peel continues behind.
 //
 // Loop bound per invocation (the host checks it against kBakedLoopBudget before recording):
 //   M (1 + 4) + S
@@ -43,12 +48,15 @@ layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { uvec2 brick
 layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { uvec2 bricks1[]; };
 layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { uvec2 bricks2[]; };
 layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { uvec2 bricks3[]; };
-layout(std430, binding = kBakedBindLayerEntry) readonly buffer LayerEntry { uvec2 layerEntry[]; };
+layout(std430, binding = kBakedBindLayerEntry) buffer LayerEntry { uvec2 layerEntry[]; };
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
+layout(binding = kBakedBindBase, rgba32f) uniform image2D baseColor;
+layout(binding = kBakedBindBaseKept, rgba32f) uniform image2D baseKept;
 layout(binding = kBakedBindExitDepth, r32f) uniform writeonly image2D exitDepth;
 layout(std430, binding = kBakedBindLoops) buffer Loops { uint maxLoops; };
-layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList list; uint listPixels[]; };
+layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList list; };
+layout(std430, binding = kBakedBindListPixels) readonly buffer ListPixels { uint listPixels[]; };
 
 uint loops = 0u;
 
@@ -130,18 +138,36 @@ void finish(ivec2 pixel, float depth) {
 }
 
 void main() {
-    if (gl_GlobalInvocationID.x >= list.count)
-        return;
-    uint packedPixel = listPixels[gl_GlobalInvocationID.x];
-    ivec2 pixel = ivec2(packedPixel & 0xffffu, packedPixel >> 16u);
-    vec4 acc = imageLoad(accum, pixel);
     uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = 4u; // 4: none (from the eye)
     bool fromEye = tet != kBakedNoTet;
+    ivec2 pixel;
+    uint item = gl_GlobalInvocationID.x;
+    uint width = uint(frame.size.x);
+    if (fromEye) {
+        if (item >= width * uint(frame.size.y))
+            return;
+        pixel = ivec2(item % width, item / width);
+    } else {
+        if (item >= list.count)
+            return;
+        uint packedPixel = listPixels[item];
+        pixel = ivec2(packedPixel & 0xffffu, packedPixel >> 16u);
+    }
+    uint index = splatPixelIndex(pixel);
     if (!fromEye) {
         // Not 0: the list holds pixels with an entry.
-        uint id = layerEntry[splatPixelIndex(pixel)].x;
+        uint id = layerEntry[index].x;
         tet = (id - 1u) >> 2u;
         entryFace = (id - 1u) & 3u;
+    }
+    layerEntry[index] = uvec2(0u); // the next peel starts with no entry
+    vec4 acc = kFirstLayer ? vec4(0.0) : imageLoad(accum, pixel);
+    vec3 under;
+    if (kFirstLayer) {
+        under = imageLoad(baseColor, pixel).rgb;
+        imageStore(baseKept, pixel, vec4(under, 1.0));
+    } else {
+        under = imageLoad(baseKept, pixel).rgb;
     }
     vec3 origin, dir;
     splatPixelRay(vec2(pixel) + 0.5, origin, dir);
@@ -269,7 +295,10 @@ void main() {
     if (transmittance < kBakedOpaque)
         acc.a = 1.0;
     imageStore(accum, pixel, acc);
+    imageStore(baseColor, pixel, vec4(acc.rgb + (1.0 - acc.a) * under, 1.0));
     float depth = tEnd * viewCos;
-    finish(pixel, transmittance < kBakedOpaque || tEnd >= tMesh ? 0.0
+    // Opaque (alpha 1: this layer's transmittance fell below kBakedOpaque, or the layers' alpha
+    // rounded to 1) or at the mesh: no later layer.
+    finish(pixel, acc.a >= 1.0 || tEnd >= tMesh ? 0.0
                   : depth > 0.0 ? frame.forward.w / depth : 2.0);
 }

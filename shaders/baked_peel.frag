@@ -7,6 +7,13 @@
 // the floats do): the same entry whatever order the faces are drawn in, the larger entry on a tie
 // (the faces that face the eye are listed by baked_shell.comp's atomics). The march
 // (baked_march.comp) then walks the shell from there.
+// The layer's list of pixels to march: the fragment whose atomicMax found the pixel without an
+// entry (the march clears each entry it takes, so a layer starts with none) appends the pixel.
+// The list's order depends on the atomics' order; every pixel is marched on its own, so the image
+// does not.
+// The first layer has no previous exit. A pixel without an entry there has no entry face before
+// the mesh at all, so it has none in any later layer either: the exit depth of pixels that are
+// never walked is never written, nor needed.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
@@ -15,15 +22,23 @@
 
 layout(early_fragment_tests) in;
 
+layout(constant_id = kBakedSpecFirstLayer) const bool kFirstLayer = false;
+
 layout(binding = kBakedBindPrevDepth, r32f) uniform readonly image2D prevDepth;
 layout(std430, binding = kBakedBindLayerEntry) buffer LayerEntry { uint64_t layerEntry[]; };
+layout(std430, binding = kBakedBindList) buffer List { SpotBakedList list; };
+layout(std430, binding = kBakedBindListPixels) writeonly buffer ListPixels { uint listPixels[]; };
 
 layout(location = 0) flat in uint vEntry;
 
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
-    if (gl_FragCoord.z >= imageLoad(prevDepth, pixel).r)
+    if (!kFirstLayer && gl_FragCoord.z >= imageLoad(prevDepth, pixel).r)
         return; // before the previous layer's exit: walked already
     uint64_t key = (uint64_t(floatBitsToUint(gl_FragCoord.z)) << 32) | uint64_t(vEntry + 1u);
-    atomicMax(layerEntry[splatPixelIndex(pixel)], key);
+    if (atomicMax(layerEntry[splatPixelIndex(pixel)], key) == uint64_t(0)) {
+        uint i = atomicAdd(list.count, 1u);
+        listPixels[i] = uint(pixel.x) | uint(pixel.y) << 16u;
+        atomicMax(list.groups.x, i / 64u + 1u);
+    }
 }

@@ -16,7 +16,8 @@
 // The eye test: each invocation also tests its 3 tetrahedra against the eye, and the lowest
 // index of those whose 4 face planes hold it is kept (atomicMin on an integer: deterministic;
 // the host fills kBakedNoTet first). The first layer's march (baked_march.comp) starts every
-// pixel's walk there, at t = 0, when the camera is inside the shell.
+// pixel's walk there, at t = 0, when the camera is inside the shell: an invocation that finds the
+// eye raises the first layer's dispatch to cover every pixel.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
@@ -31,6 +32,7 @@ layout(std430, binding = kBakedBindTets) writeonly buffer Tets { SpotBakedTet te
 layout(std430, binding = kBakedBindEyeTet) buffer EyeTet { uint eyeTet; };
 layout(std430, binding = kBakedBindEntryMasks) readonly buffer EntryMasks { uint entryMasks[]; };
 layout(std430, binding = kBakedBindPeelDraw) buffer PeelDraw { uvec4 peelDraw; uint peelFaces[]; };
+layout(std430, binding = kBakedBindList) buffer List { SpotBakedList firstList; };
 
 vec3 unitNormal(SpotMeshVertex v) {
     float len = length(v.normal.xyz);
@@ -103,8 +105,10 @@ void main() {
         for (uint j = 0u; j < 3u; ++j)
             tet.toRest[j] = vec4(m[0][j], m[1][j], m[2][j], offset[j]);
         tets[3u * t + k] = tet;
-        if (holdsEye)
+        if (holdsEye) {
             atomicMin(eyeTet, 3u * t + k);
+            atomicMax(firstList.groups.x, (uint(frame.size.x) * uint(frame.size.y) + 63u) / 64u);
+        }
     }
     front &= mask;
     if (front != 0u) {

@@ -16,10 +16,8 @@
 #include "noise/error.h"
 #include "noise/shell.h"
 
-#include "baked_list.comp.h"
 #include "baked_march.comp.h"
 #include "baked_peel.frag.h"
-#include "baked_resolve.comp.h"
 #include "baked_shell.comp.h"
 #include "baked_tet.vert.h"
 
@@ -80,35 +78,43 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
                   "stored R32F targets");
     requireFormat(m_ctx, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth");
     const std::uint32_t push = sizeof(gpu_splat::SpotSplatFrame);
-    m_shell = makeComputePipeline(
-        m_ctx, spirv(spv_baked_shell_comp),
-        {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindVertices),
-         storageBuffer(kBakedBindRest), storageBuffer(kBakedBindIndices),
-         storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEyeTet),
-         storageBuffer(kBakedBindEntryMasks), storageBuffer(kBakedBindPeelDraw)},
-        push);
-    GraphicsPipelineDesc desc;
-    desc.vertex = spirv(spv_baked_tet_vert);
-    desc.fragment = spirv(spv_baked_peel_frag);
-    desc.bindings = {storageBuffer(kBakedBindTets), storageBuffer(kBakedBindPeelDraw),
-                     storageImage(kBakedBindPrevDepth), storageBuffer(kBakedBindLayerEntry)};
-    desc.pushBytes = push;
-    // No colour target: the nearest entry is an atomicMax per pixel (baked_peel.frag). The depth
-    // attachment is the mesh's, tested (nearer than the mesh) and never written.
-    desc.depthFormat = kDepthFormat;
-    desc.depthTest = true;
-    desc.depthWrite = false;
-    desc.depthCompare = VK_COMPARE_OP_GREATER;
-    m_peel = makeGraphicsPipeline(m_ctx, desc);
-    m_resolve = makeComputePipeline(m_ctx, spirv(spv_baked_resolve_comp),
-                                    {storageImage(kBakedBindAccum), storageImage(kBakedBindBase),
-                                     storageImage(kBakedBindResult)},
-                                    push);
+    m_shell =
+        makeComputePipeline(m_ctx, spirv(spv_baked_shell_comp),
+                            {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindVertices),
+                             storageBuffer(kBakedBindRest), storageBuffer(kBakedBindIndices),
+                             storageBuffer(kBakedBindTets), storageBuffer(kBakedBindEyeTet),
+                             storageBuffer(kBakedBindEntryMasks), storageBuffer(kBakedBindPeelDraw),
+                             storageBuffer(kBakedBindList)},
+                            push);
+    for (const bool first : {false, true}) {
+        GraphicsPipelineDesc desc;
+        desc.vertex = spirv(spv_baked_tet_vert);
+        desc.fragment = spirv(spv_baked_peel_frag);
+        desc.bindings = {storageBuffer(kBakedBindTets),     storageBuffer(kBakedBindPeelDraw),
+                         storageImage(kBakedBindPrevDepth), storageBuffer(kBakedBindLayerEntry),
+                         storageBuffer(kBakedBindList),     storageBuffer(kBakedBindListPixels)};
+        desc.pushBytes = push;
+        // No colour target: the nearest entry is an atomicMax per pixel (baked_peel.frag). The
+        // depth attachment is the mesh's, tested (nearer than the mesh) and never written.
+        desc.depthFormat = kDepthFormat;
+        desc.depthTest = true;
+        desc.depthWrite = false;
+        desc.depthCompare = VK_COMPARE_OP_GREATER;
+        desc.spec.set(kBakedSpecFirstLayer, first);
+        m_peel[first] = makeGraphicsPipeline(m_ctx, desc);
+    }
     m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
     m_loops = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                      "baked loop counter");
     m_eyeTet = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                       "baked eye tetrahedron");
+    const VkDeviceSize align =
+        std::max<VkDeviceSize>(m_ctx.properties().limits.minStorageBufferOffsetAlignment, 1);
+    m_listStride = (sizeof(SpotBakedList) + align - 1) / align * align;
+    m_lists =
+        Buffer(m_ctx, m_listStride * kBakedMaxPeelPasses,
+               kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+               kDevice, "baked list headers");
 }
 
 BakedRenderer::~BakedRenderer() = default;
@@ -120,28 +126,19 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split)
     spec.set(kBakedSpecCount, count);
     spec.set(kBakedSpecFirstLayer, first);
     spec.set(kBakedSpecSplitBricks, split);
-    Pipeline p = makeComputePipeline(
-        m_ctx, spirv(spv_baked_march_comp),
-        {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
-         storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
-         storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
-         storageBuffer(kBakedBindBricks1), storageBuffer(kBakedBindBricks2),
-         storageBuffer(kBakedBindBricks3), storageBuffer(kBakedBindDistances),
-         storageBuffer(kBakedBindLayerEntry), storageImage(kBakedBindMeshDistance),
-         storageImage(kBakedBindAccum), storageImage(kBakedBindExitDepth),
-         storageBuffer(kBakedBindLoops), storageBuffer(kBakedBindList)},
-        sizeof(gpu_splat::SpotSplatFrame), spec);
-    if (!m_list.count(first)) {
-        Specialization listSpec;
-        listSpec.set(kBakedSpecFirstLayer, first);
-        m_list.emplace(
-            first,
-            makeComputePipeline(m_ctx, spirv(spv_baked_list_comp),
-                                {storageBuffer(kBakedBindEyeTet),
-                                 storageBuffer(kBakedBindLayerEntry), storageImage(kBakedBindAccum),
-                                 storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindList)},
-                                sizeof(gpu_splat::SpotSplatFrame), listSpec));
-    }
+    Pipeline p =
+        makeComputePipeline(m_ctx, spirv(spv_baked_march_comp),
+                            {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
+                             storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
+                             storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
+                             storageBuffer(kBakedBindBricks1), storageBuffer(kBakedBindBricks2),
+                             storageBuffer(kBakedBindBricks3), storageBuffer(kBakedBindDistances),
+                             storageBuffer(kBakedBindLayerEntry),
+                             storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
+                             storageImage(kBakedBindBase), storageImage(kBakedBindBaseKept),
+                             storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops),
+                             storageBuffer(kBakedBindList), storageBuffer(kBakedBindListPixels)},
+                            sizeof(gpu_splat::SpotSplatFrame), spec);
     return m_march.emplace(std::tuple{count, first, split}, std::move(p)).first->second;
 }
 
@@ -363,47 +360,54 @@ void BakedRenderer::loadBake(const std::string& file) {
 }
 
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
-    if (m_width == width && m_height == height && m_result.handle())
+    if (m_width == width && m_height == height && m_baseKept.handle())
         return;
-    // Per pixel: base 16, distance 4, depth 4, exit depth 4, layer entry 8, accum 16, result 16,
-    // the march's list 4.
-    const std::uint64_t need = std::uint64_t(width) * height * 72 + sizeof(SpotBakedList);
+    // The march's indirect dispatch covers every pixel when the eye is inside the shell, 64 a
+    // workgroup, in x only.
+    const std::uint64_t groups = (std::uint64_t(width) * height + 63) / 64;
+    if (groups > m_ctx.properties().limits.maxComputeWorkGroupCount[0])
+        throw InputError(cat("baked: a ", width, "x", height, " frame needs ", groups,
+                             " workgroups in one dispatch; the device takes ",
+                             m_ctx.properties().limits.maxComputeWorkGroupCount[0],
+                             "; reduce the image size"));
+    // Per pixel: base 16, distance 4, depth 4, exit depth 4, layer entry 8, accum 16, the kept
+    // base 16, the march's list 4.
+    const std::uint64_t need = std::uint64_t(width) * height * 72;
     std::uint64_t held = 0;
-    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_exitDepth, &m_accum, &m_result})
+    for (const Image* i : {&m_base, &m_distance, &m_meshDepth, &m_exitDepth, &m_accum, &m_baseKept})
         held += i->reservedBytes();
-    held += m_pixelList.reservedBytes() + m_layerEntry.reservedBytes();
+    held += m_listPixels.reservedBytes() + m_layerEntry.reservedBytes();
     if (m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("baked: a ", width, "x", height, " frame needs ", need >> 20,
                              " MiB of GPU memory for its targets; ",
                              (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; reduce the image size"));
-    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_exitDepth, &m_accum, &m_result})
+    for (Image* i : {&m_base, &m_distance, &m_meshDepth, &m_exitDepth, &m_accum, &m_baseKept})
         *i = Image();
-    m_pixelList = Buffer();
+    m_listPixels = Buffer();
     m_layerEntry = Buffer();
     m_width = m_height = 0;
     constexpr VkImageUsageFlags kAttach = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
     constexpr VkImageUsageFlags kStore = VK_IMAGE_USAGE_STORAGE_BIT;
     constexpr VkImageUsageFlags kSrc = VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-    constexpr VkImageUsageFlags kDst = VK_IMAGE_USAGE_TRANSFER_DST_BIT;
     constexpr VkImageUsageFlags kDepthUse = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
     constexpr VkImageAspectFlags kColor = VK_IMAGE_ASPECT_COLOR_BIT;
     constexpr VkImageAspectFlags kDepth = VK_IMAGE_ASPECT_DEPTH_BIT;
-    m_base = Image(m_ctx, width, height, kColorFormat, kAttach | kStore, kColor, "baked base colour");
+    m_base = Image(m_ctx, width, height, kColorFormat, kAttach | kStore | kSrc, kColor,
+                   "baked base colour and result");
     m_distance =
         Image(m_ctx, width, height, kScalarFormat, kAttach | kStore, kColor, "baked mesh distance");
     m_meshDepth = Image(m_ctx, width, height, kDepthFormat, kDepthUse, kDepth, "baked mesh depth");
-    m_exitDepth = Image(m_ctx, width, height, kScalarFormat, kStore | kDst, kColor, "baked exit depth");
+    m_exitDepth = Image(m_ctx, width, height, kScalarFormat, kStore, kColor, "baked exit depth");
     m_layerEntry =
         Buffer(m_ctx, std::uint64_t(width) * height * 8,
                kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice, "baked layer entries");
-    m_accum = Image(m_ctx, width, height, kColorFormat, kStore | kDst, kColor, "baked accumulation");
-    m_result = Image(m_ctx, width, height, kColorFormat, kStore | kSrc, kColor, "baked result");
-    m_pixelList = Buffer(m_ctx, sizeof(SpotBakedList) + std::uint64_t(width) * height * 4,
-                         kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
-                             VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                         kDevice, "baked pixel list");
+    m_accum = Image(m_ctx, width, height, kColorFormat, kStore, kColor, "baked accumulation");
+    m_baseKept =
+        Image(m_ctx, width, height, kColorFormat, kStore, kColor, "baked kept base colour");
+    m_listPixels =
+        Buffer(m_ctx, std::uint64_t(width) * height * 4, kStorage, kDevice, "baked pixel list");
     m_width = width;
     m_height = height;
 }
@@ -538,32 +542,46 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     const Prepared& f = m_frame;
     const std::uint32_t triangles = m_bakeStats.tetrahedra / 3;
     const MeshPass& mesh = m_scene.meshPass();
+    const auto bindList = [&](Descriptors& d, std::uint32_t layer) -> Descriptors& {
+        return d.buffer(kBakedBindList, m_lists, layer * m_listStride, sizeof(SpotBakedList));
+    };
 
-    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet),
-    // and the tetrahedron holding the eye, if any (the lowest index).
+    // The frame starts with no tetrahedron holding the eye, no face to peel, every layer's list
+    // empty and no pixel with an entry (each march clears the entries it takes).
     vkCmdFillBuffer(cmd, m_eyeTet.handle(), 0, VK_WHOLE_SIZE, kBakedNoTet);
     const VkDrawIndirectCommand noFaces{0, 1, 0, 0};
     vkCmdUpdateBuffer(cmd, m_peelDraw.handle(), 0, sizeof(noFaces), &noFaces);
+    std::vector<std::byte> lists(f.peelPasses * m_listStride);
+    const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
+    for (std::uint32_t k = 0; k < f.peelPasses; ++k)
+        std::memcpy(lists.data() + k * m_listStride, &emptyList, sizeof(emptyList));
+    vkCmdUpdateBuffer(cmd, m_lists.handle(), 0, lists.size(), lists.data());
+    vkCmdFillBuffer(cmd, m_layerEntry.handle(), 0, VK_WHOLE_SIZE, 0u);
+    if (f.count)
+        vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
     fullBarrier(cmd);
+
+    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet),
+    // and the tetrahedron holding the eye, if any (the lowest index).
     if (triangles > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_shell.handle());
         pushFrame(cmd, m_shell, f.frame);
-        Descriptors()
-            .buffer(kBakedBindParams, m_params)
+        Descriptors d;
+        d.buffer(kBakedBindParams, m_params)
             .buffer(kBakedBindVertices, mesh.vertices())
             .buffer(kBakedBindRest, mesh.vertices())
             .buffer(kBakedBindIndices, mesh.indices())
             .buffer(kBakedBindTets, m_tets)
             .buffer(kBakedBindEyeTet, m_eyeTet)
             .buffer(kBakedBindEntryMasks, m_entryMasks)
-            .buffer(kBakedBindPeelDraw, m_peelDraw)
-            .push(m_ctx, cmd, m_shell);
+            .buffer(kBakedBindPeelDraw, m_peelDraw);
+        bindList(d, 0).push(m_ctx, cmd, m_shell);
         vkCmdDispatch(cmd, (triangles + 63) / 64, 1, 1);
     }
     fullBarrier(cmd);
     timer.mark(cmd, "shell");
 
-    // The base mesh.
+    // The base mesh: its colour is the frame's result where no layer walks.
     for (const Image* image : {&m_base, &m_distance})
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kAttachment,
                         VK_PIPELINE_STAGE_2_NONE, 0, kColorOut, kColorRW);
@@ -574,45 +592,53 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     for (const Image* image : {&m_base, &m_distance})
         transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kAll,
-                        VK_ACCESS_2_MEMORY_READ_BIT);
+                        VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
     transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kGeneral, kTests, kDepthRW, kAll,
                     VK_ACCESS_2_MEMORY_READ_BIT);
-    for (const Image* image : {&m_exitDepth, &m_accum, &m_result})
+    // Written before they are read: the exit depth by the march of every pixel a later peel
+    // tests, the accumulation and the kept base by the first layer's march.
+    for (const Image* image : {&m_exitDepth, &m_accum, &m_baseKept})
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
-                        VK_PIPELINE_STAGE_2_NONE, 0, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT);
-    // Nothing accumulated; the first peel's "previous exit" is nearer than any face (depth <= 1).
-    const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    const VkClearColorValue zero{};
-    VkClearColorValue nearest{};
-    nearest.float32[0] = 2.0f;
-    vkCmdClearColorImage(cmd, m_accum.handle(), kGeneral, &zero, 1, &colorRange);
-    vkCmdClearColorImage(cmd, m_exitDepth.handle(), kGeneral, &nearest, 1, &colorRange);
-    if (f.count)
-        vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
-    fullBarrier(cmd);
+                        VK_PIPELINE_STAGE_2_NONE, 0, kAll,
+                        VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
     timer.mark(cmd, "mesh");
 
-    // The march of one layer: from its entry faces, or (the first) from the eye, over the list
-    // of the pixels that walk.
-    const auto recordMarch = [&](bool first) {
-        const Pipeline& list = m_list.at(first);
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, list.handle());
-        pushFrame(cmd, list, f.frame);
-        Descriptors()
-            .buffer(kBakedBindEyeTet, m_eyeTet)
-            .buffer(kBakedBindLayerEntry, m_layerEntry)
-            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(kBakedBindList, m_pixelList)
-            .push(m_ctx, cmd, list);
-        vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+    // Per layer: the peel (the nearest entry face behind the previous layer's exit, before the
+    // mesh: the mesh's depth tested and not written; the entry an atomicMax per pixel, the
+    // pixels listed as they get one), then the march over the list, from the entry (or, in the
+    // first layer, from the eye), composited under the earlier layers and over the mesh.
+    // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
+    const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
+    for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
+        const bool first = k == 0;
+        VkRenderingAttachmentInfo depthInfo =
+            depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
+        depthInfo.imageLayout = kGeneral;
+        beginRendering(cmd, m_width, m_height, {}, &depthInfo);
+        if (m_entryFaceCount > 0) {
+            const Pipeline& peel = m_peel[first];
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, peel.handle());
+            pushFrame(cmd, peel, f.frame);
+            Descriptors d;
+            d.buffer(kBakedBindTets, m_tets)
+                .buffer(kBakedBindPeelDraw, m_peelDraw)
+                .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+                .buffer(kBakedBindLayerEntry, m_layerEntry)
+                .buffer(kBakedBindListPixels, m_listPixels);
+            bindList(d, k).push(m_ctx, cmd, peel);
+            vkCmdDrawIndirect(cmd, m_peelDraw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+        }
+        vkCmdEndRendering(cmd);
         fullBarrier(cmd);
+        if (markLayers)
+            timer.mark(cmd, "peel");
+
         const Pipeline& march = m_march.at({f.count, first, f.split});
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
         pushFrame(cmd, march, f.frame);
-        Descriptors()
-            .buffer(kBakedBindParams, m_params)
+        Descriptors d;
+        d.buffer(kBakedBindParams, m_params)
             .buffer(kBakedBindTets, m_tets)
             .buffer(kBakedBindNeighbours, m_neighbours)
             .buffer(kBakedBindEyeTet, m_eyeTet)
@@ -625,62 +651,21 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kBakedBindLayerEntry, m_layerEntry)
             .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindBase, m_base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kBakedBindBaseKept, m_baseKept, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
             .buffer(kBakedBindLoops, m_loops)
-            .buffer(kBakedBindList, m_pixelList)
-            .push(m_ctx, cmd, march);
-        vkCmdDispatchIndirect(cmd, m_pixelList.handle(), 0);
+            .buffer(kBakedBindListPixels, m_listPixels);
+        bindList(d, k).push(m_ctx, cmd, march);
+        vkCmdDispatchIndirect(cmd, m_lists.handle(), k * m_listStride);
         fullBarrier(cmd);
-    };
-    // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
-    const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
-    for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
-        // Peel: the nearest entry face behind the previous layer's exit, before the mesh (the
-        // mesh's depth, tested and not written; the entry an atomicMax per pixel).
-        vkCmdFillBuffer(cmd, m_layerEntry.handle(), 0, VK_WHOLE_SIZE, 0u);
-        const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
-        vkCmdUpdateBuffer(cmd, m_pixelList.handle(), 0, sizeof(emptyList), &emptyList);
-        fullBarrier(cmd);
-        VkRenderingAttachmentInfo depthInfo =
-            depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
-        depthInfo.imageLayout = kGeneral;
-        beginRendering(cmd, m_width, m_height, {}, &depthInfo);
-        if (m_entryFaceCount > 0) {
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_peel.handle());
-            pushFrame(cmd, m_peel, f.frame);
-            Descriptors()
-                .buffer(kBakedBindTets, m_tets)
-                .buffer(kBakedBindPeelDraw, m_peelDraw)
-                .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-                .buffer(kBakedBindLayerEntry, m_layerEntry)
-                .push(m_ctx, cmd, m_peel);
-            vkCmdDrawIndirect(cmd, m_peelDraw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
-        }
-        vkCmdEndRendering(cmd);
-        fullBarrier(cmd);
-        if (markLayers)
-            timer.mark(cmd, "peel");
-
-        // Walk the shell from the kept entry and composite under the earlier layers.
-        recordMarch(k == 0);
         if (markLayers)
             timer.mark(cmd, "march");
     }
     if (!markLayers)
         timer.mark(cmd, "peel+march");
-
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_resolve.handle());
-    pushFrame(cmd, m_resolve, f.frame);
-    Descriptors()
-        .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-        .image(kBakedBindBase, m_base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-        .image(kBakedBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-        .push(m_ctx, cmd, m_resolve);
-    vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
-    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                  kCompute | kTransfer | kHostStage,
+    memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kTransfer | kHostStage,
                   kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
-    timer.mark(cmd, "resolve");
 }
 
 BakedStats BakedRenderer::stats() const {

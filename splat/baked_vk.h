@@ -18,18 +18,21 @@
 ///  3. per layer k = 1..N (RenderSettings::peelPasses): peel (raster, baked_tet.vert and
 ///     baked_peel.frag): the entry faces that face the eye (one triangle per mesh triangle on a
 ///     closed mesh), tested against the mesh's depth (z-buffer culling behind the mesh, no
-///     depth written) and against where layer k-1's walk left the shell, keep per pixel the
-///     nearest entry by a 64-bit atomicMax (the same entry in any drawing order); list (compute,
-///     baked_list.comp): the pixels with an entry that are not opaque, compacted; march (compute,
-///     baked_march.comp, dispatched indirectly over the list): from the entry, a walk through the
-///     tetrahedra across their shared faces until the ray leaves the shell, reaches the mesh or is
-///     opaque, sampling the bake at one spacing for the whole layer (the mip level of the pixel's
-///     footprint at the entry) through each tetrahedron's affine map, composited under the earlier
-///     layers (front to back); it writes the walk's exit depth, where the next peel starts. So one
-///     layer is the ray's whole contiguous passage through the shell, and later layers are
-///     re-entries (ears, silhouettes). The first layer starts every pixel at the eye, t = 0, when
-///     the eye is inside the shell.
-///  4. resolve (compute): the accumulation over the mesh colour, into result().
+///     depth written) and, after the first, against where layer k-1's walk left the shell, keep
+///     per pixel the nearest entry by a 64-bit atomicMax (the same entry in any drawing order),
+///     and list each pixel as it gets its first entry (the layer's list, its own header); march
+///     (compute, baked_march.comp, dispatched indirectly over the list): from the entry, a walk
+///     through the tetrahedra across their shared faces until the ray leaves the shell, reaches
+///     the mesh or is opaque, sampling the bake at one spacing for the whole layer (the mip level
+///     of the pixel's footprint at the entry) through each tetrahedron's affine map, composited
+///     under the earlier layers (front to back) and over the mesh colour into result() (the mesh's
+///     colour image: the result as it stands where no layer walks); it writes the walk's exit
+///     depth, where the next peel starts (0 once opaque), and clears the pixel's entry for the
+///     next peel. So one layer is the ray's whole contiguous passage through the shell, and later
+///     layers are re-entries (ears, silhouettes). The first layer starts every pixel at the eye,
+///     t = 0, when the eye is inside the shell (the shell pass raises its dispatch to every pixel).
+///     A pixel with no entry face before the mesh has none in any layer, so nothing per pixel is
+///     cleared but the entries: what a layer reads, an earlier layer's march wrote.
 ///
 /// The bake on the GPU stays sparse: its OpenVDB leaves (8^3 voxels) as bricks in up to 4 storage
 /// buffers of one binding's range each (each leaf with a voxel of apron towards +x, +y, +z, 9^3
@@ -143,7 +146,7 @@ public:
     void prepare(const View& view, const ImpulseSet& impulses,
                  const RenderSettings& settings) override;
     void record(VkCommandBuffer cmd, PassTimer& timer) override;
-    const Image& result() const override { return m_result; }
+    const Image& result() const override { return m_base; }
     /// extra: voxel_size, levels, thickness, tetrahedra, bricks, brick_buffers, distance_bricks,
     /// entry_faces, max_layer_tets, max_layer_samples, table_entries, loop_bound, peel_passes,
     /// eye_tetrahedron, bake_mib (and max_loop_iterations when counting).
@@ -168,9 +171,10 @@ private:
 
     const SceneGpu& m_scene;
     Context& m_ctx;
-    Pipeline m_shell, m_peel, m_resolve;
-    std::map<std::tuple<bool, bool, bool>, Pipeline> m_march; ///< by (count loops, first layer, split bricks)
-    std::map<bool, Pipeline> m_list;                    ///< by first layer
+    Pipeline m_shell;
+    std::array<Pipeline, 2> m_peel; ///< later layers, the first
+    std::map<std::tuple<bool, bool, bool>, Pipeline>
+        m_march; ///< by (count loops, first layer, split bricks)
     bool m_countLoops = false;
 
     // Per bake file.
@@ -188,8 +192,13 @@ private:
     std::uint32_t m_entryFaceCount = 0;
     // Per image size.
     std::uint32_t m_width = 0, m_height = 0;
-    Image m_base, m_distance, m_meshDepth, m_exitDepth, m_accum, m_result;
-    Buffer m_loops, m_pixelList, m_layerEntry;
+    Image m_base, m_distance, m_meshDepth, m_exitDepth, m_accum, m_baseKept;
+    Buffer m_loops, m_listPixels, m_layerEntry;
+    /// The layers' list headers (SpotBakedList), one per layer at m_listStride bytes (the
+    /// device's storage-buffer offset alignment), each bound at its own offset; the march's
+    /// indirect dispatch.
+    Buffer m_lists;
+    VkDeviceSize m_listStride = 0;
 
     struct Prepared {
         gpu_splat::SpotSplatFrame frame{};

@@ -792,6 +792,14 @@ Descriptors& Descriptors::buffer(std::uint32_t binding, const Buffer& b, VkDescr
     return *this;
 }
 
+Descriptors& Descriptors::buffer(std::uint32_t binding, const Buffer& b, VkDeviceSize offset,
+                                 VkDeviceSize range) {
+    buffer(binding, b);
+    m_buffers.back()->offset = offset;
+    m_buffers.back()->range = range;
+    return *this;
+}
+
 Descriptors& Descriptors::image(std::uint32_t binding, const Image& image, VkImageLayout layout,
                                 VkDescriptorType type, VkSampler sampler) {
     m_images.push_back(std::make_unique<VkDescriptorImageInfo>(VkDescriptorImageInfo{sampler, image.view(), layout}));

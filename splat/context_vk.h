@@ -287,6 +287,10 @@ class Descriptors {
 public:
     Descriptors& buffer(std::uint32_t binding, const Buffer& b,
                         VkDescriptorType type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    /// A storage buffer's `range` bytes from `offset` (a multiple of the device's
+    /// minStorageBufferOffsetAlignment).
+    Descriptors& buffer(std::uint32_t binding, const Buffer& b, VkDeviceSize offset,
+                        VkDeviceSize range);
     Descriptors& image(std::uint32_t binding, const Image& image, VkImageLayout layout,
                        VkDescriptorType type, VkSampler sampler = VK_NULL_HANDLE);
     void push(Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline);

@@ -236,8 +236,9 @@ TEST(BakedScenes, FarViewLevelZeroIsNoWorseThanHybridInFlip) {
 // (hybrid 36.7 dB: the bake's 0.004 voxels are many pixels wide this close, so its strands are
 // blurred); without the eye's walk (every layer from an entry face) 12.2 dB, FLIP 0.494, at
 // 256x256.
-TEST(BakedScenes, EyeInsideTheShellMatchesTheReference) {
-    BakedScene s = loadBakedScene("fur-bunny", 64, 0.004f, 4);
+/// Put the camera inside the shell: half its thickness above the vertex that faces the scene's
+/// camera most, looking along the surface and slightly into it, 60 degrees wide.
+void eyeInsideTheShell(BakedScene& s) {
     const float thickness = s.generator->cells().cellSize;
     const glm::vec3 from(s.scene.camera.eye);
     std::size_t best = 0;
@@ -256,6 +257,11 @@ TEST(BakedScenes, EyeInsideTheShellMatchesTheReference) {
     s.scene.camera.eye = glm::dvec3(eye);
     s.scene.camera.target = glm::dvec3(eye + 0.3f * tangent - 0.1f * n);
     s.scene.camera.fovYDeg = 60.0;
+}
+
+TEST(BakedScenes, EyeInsideTheShellMatchesTheReference) {
+    BakedScene s = loadBakedScene("fur-bunny", 64, 0.004f, 4);
+    eyeInsideTheShell(s);
 
     const noise::ReferenceRenderer reference(s.mesh, s.generator->kernel(), s.generator->generate(),
                                              s.scene.shading, s.scene.background,
@@ -358,6 +364,40 @@ TEST(BakedFrame, ByteIdenticalOnOneAndTwoThreads) {
                   0)
             << i;
     }
+}
+
+// A frame leaves per-pixel state behind for the next (each layer's entries are cleared by the
+// march that takes them; exit depths, the accumulation and the kept mesh colour are written only
+// where a layer walks). A frame after other views and peel counts, the eye inside the shell and
+// outside, is byte for byte the frame a new renderer makes of its view alone.
+TEST(BakedFrame, AFrameAfterOtherViewsIsTheFrameOfItsViewAlone) {
+    BakedScene s = loadBakedScene("fur-bunny", 64, 0.004f, 4);
+    const splat::View outside = s.view();
+    eyeInsideTheShell(s);
+    const splat::View inside = s.view();
+    struct Step {
+        const splat::View* view;
+        int peels;
+    };
+    const std::vector<Step> steps{{&outside, 4}, {&inside, 4}, {&outside, 1},
+                                  {&outside, 4}, {&inside, 1}, {&outside, 2}};
+    splat::Context ctx(validated());
+    splat::Frame frame(ctx, s.mesh, *s.generator);
+    splat::RenderSettings settings;
+    settings.bakeFile = s.bake;
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+        settings.peelPasses = steps[i].peels;
+        noise::Image after, alone;
+        frame.render("baked", *steps[i].view, settings, &after);
+        splat::Frame fresh(ctx, s.mesh, *s.generator);
+        fresh.render("baked", *steps[i].view, settings, &alone);
+        ASSERT_EQ(after.pixels.size(), alone.pixels.size());
+        EXPECT_EQ(std::memcmp(after.pixels.data(), alone.pixels.data(),
+                              after.pixels.size() * sizeof(glm::vec3)),
+                  0)
+            << "step " << i;
+    }
+    expectNoValidationErrors(ctx);
 }
 
 // A bake larger than one storage buffer's range (128 MiB on lavapipe) is split over up to 4
