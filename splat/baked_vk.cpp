@@ -101,6 +101,13 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
         desc.depthWrite = false;
         desc.depthCompare = VK_COMPARE_OP_GREATER;
         desc.spec.set(kBakedSpecFirstLayer, first);
+        if (first) {
+            // Drawn in the mesh's own rendering, after the mesh (MeshPass::record): its colour
+            // targets, left unwritten.
+            VkPipelineColorBlendAttachmentState none{};
+            desc.colorFormats = {kColorFormat, kScalarFormat};
+            desc.blends = {none, none};
+        }
         m_peel[first] = makeGraphicsPipeline(m_ctx, desc);
     }
     m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
@@ -588,7 +595,30 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0, kTests,
                     kDepthRW);
-    mesh.record(cmd, f.frame, m_base, m_distance, m_meshDepth, f.background);
+    // The first layer's peel is drawn in the mesh's rendering, against the depth the mesh has just
+    // written (a rendering and a barrier fewer).
+    const auto recordPeel = [&](VkCommandBuffer c, std::uint32_t k) {
+        if (m_entryFaceCount == 0)
+            return;
+        const Pipeline& peel = m_peel[k == 0];
+        vkCmdBindPipeline(c, VK_PIPELINE_BIND_POINT_GRAPHICS, peel.handle());
+        pushFrame(c, peel, f.frame);
+        Descriptors d;
+        d.buffer(kBakedBindTets, m_tets)
+            .buffer(kBakedBindPeelDraw, m_peelDraw)
+            .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kBakedBindLayerEntry, m_layerEntry)
+            .buffer(kBakedBindListPixels, m_listPixels);
+        bindList(d, k).push(m_ctx, c, peel);
+        vkCmdDrawIndirect(c, m_peelDraw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+    };
+    // The exit depth: written by a layer's march at every pixel the next peel tests (a pixel
+    // without an entry in the first layer has none in any), so never cleared.
+    transitionImage(cmd, m_exitDepth.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
+                    VK_PIPELINE_STAGE_2_NONE, 0, kAll,
+                    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    mesh.record(cmd, f.frame, m_base, m_distance, m_meshDepth, f.background,
+                [&](VkCommandBuffer c) { recordPeel(c, 0); });
     for (const Image* image : {&m_base, &m_distance})
         transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kAll,
@@ -596,13 +626,13 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kGeneral, kTests, kDepthRW, kAll,
                     VK_ACCESS_2_MEMORY_READ_BIT);
-    // Written before they are read: the exit depth by the march of every pixel a later peel
-    // tests, the accumulation and the kept base by the first layer's march.
-    for (const Image* image : {&m_exitDepth, &m_accum, &m_baseKept})
+    // Written before they are read: by the first layer's march at every pixel a later one walks.
+    for (const Image* image : {&m_accum, &m_baseKept})
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                         VK_PIPELINE_STAGE_2_NONE, 0, kAll,
                         VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-    timer.mark(cmd, "mesh");
+    fullBarrier(cmd);
+    timer.mark(cmd, "mesh+peel");
 
     // Per layer: the peel (the nearest entry face behind the previous layer's exit, before the
     // mesh: the mesh's depth tested and not written; the entry an atomicMax per pixel, the
@@ -612,27 +642,17 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
     for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
         const bool first = k == 0;
-        VkRenderingAttachmentInfo depthInfo =
-            depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
-        depthInfo.imageLayout = kGeneral;
-        beginRendering(cmd, m_width, m_height, {}, &depthInfo);
-        if (m_entryFaceCount > 0) {
-            const Pipeline& peel = m_peel[first];
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, peel.handle());
-            pushFrame(cmd, peel, f.frame);
-            Descriptors d;
-            d.buffer(kBakedBindTets, m_tets)
-                .buffer(kBakedBindPeelDraw, m_peelDraw)
-                .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-                .buffer(kBakedBindLayerEntry, m_layerEntry)
-                .buffer(kBakedBindListPixels, m_listPixels);
-            bindList(d, k).push(m_ctx, cmd, peel);
-            vkCmdDrawIndirect(cmd, m_peelDraw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+        if (!first) {
+            VkRenderingAttachmentInfo depthInfo =
+                depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
+            depthInfo.imageLayout = kGeneral;
+            beginRendering(cmd, m_width, m_height, {}, &depthInfo);
+            recordPeel(cmd, k);
+            vkCmdEndRendering(cmd);
+            fullBarrier(cmd);
+            if (markLayers)
+                timer.mark(cmd, "peel");
         }
-        vkCmdEndRendering(cmd);
-        fullBarrier(cmd);
-        if (markLayers)
-            timer.mark(cmd, "peel");
 
         const Pipeline& march = m_march.at({f.count, first, f.split});
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());

@@ -101,8 +101,10 @@ bool MeshPass::cullsBackFaces(const gpu_splat::SpotSplatFrame& frame) const {
     return true;
 }
 
-void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
-                      const Image& distance, const Image& depth, glm::vec3 background) const {
+void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame,
+                      const Image& base, const Image& distance, const Image& depth,
+                      glm::vec3 background,
+                      const std::function<void(VkCommandBuffer)>& after) const {
     const VkRenderingAttachmentInfo depthInfo = depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
     beginRendering(cmd, base.width(), base.height(),
                    {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
@@ -117,6 +119,8 @@ void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& fram
         vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
         vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
     }
+    if (after)
+        after(cmd);
     vkCmdEndRendering(cmd);
 }
 

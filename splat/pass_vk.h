@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -83,8 +84,11 @@ public:
     MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who);
     /// Records the pass into `base` (kColorFormat), `distance` (kScalarFormat) and `depth`
     /// (kDepthFormat), all in attachment layouts, cleared first. Nothing else changes layout.
+    /// `after`, if given, records more draws into the same rendering after the mesh's (their
+    /// pipelines made for those three formats; the mesh's depth is written by then).
     void record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
-                const Image& distance, const Image& depth, glm::vec3 background) const;
+                const Image& distance, const Image& depth, glm::vec3 background,
+                const std::function<void(VkCommandBuffer)>& after = {}) const;
     /// Whether `record` culls back faces for this frame: when the mesh bounds solids facing out
     /// (noise::closedOutward) and its bounds lie wholly beyond the near plane (so every ray starts
     /// outside them, and meets a front face first). Half the triangles are then dropped at setup,
