@@ -172,9 +172,11 @@ int render(int argc, char** argv) {
     for (const cli::OptionSpec& o : cli::renderOptions())
         specs.push_back(o);
     specs.insert(specs.end(),
-                 {{"repeat", "N", "GPU methods: render N warm frames after the first and report "
-                                  "their times (frame_ms, wall_ms in --stats, and gpu_ms: each "
-                                  "pass's median; default 0)", false},
+                 {{"repeat", "N",
+                   "GPU methods: render N warm frames after the first and report "
+                   "their times (frame_ms, wall_ms in --stats, and gpu_ms: each "
+                   "pass's median; default 0)",
+                   false},
                   {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},
                   {"stats", "FILE", "also write timings and counts as JSON", false},
                   cli::threadsOption()});
