@@ -122,6 +122,10 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
         Buffer(m_ctx, m_listStride * kBakedMaxPeelPasses,
                kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                kDevice, "baked list headers");
+    m_emptyLists.assign(m_listStride * kBakedMaxPeelPasses, std::byte{0});
+    const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
+    for (std::uint32_t k = 0; k < kBakedMaxPeelPasses; ++k)
+        std::memcpy(m_emptyLists.data() + k * m_listStride, &emptyList, sizeof(emptyList));
 }
 
 BakedRenderer::~BakedRenderer() = default;
@@ -558,11 +562,7 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     vkCmdFillBuffer(cmd, m_eyeTet.handle(), 0, VK_WHOLE_SIZE, kBakedNoTet);
     const VkDrawIndirectCommand noFaces{0, 1, 0, 0};
     vkCmdUpdateBuffer(cmd, m_peelDraw.handle(), 0, sizeof(noFaces), &noFaces);
-    std::vector<std::byte> lists(f.peelPasses * m_listStride);
-    const SpotBakedList emptyList{glm::uvec3(0u, 1u, 1u), 0u};
-    for (std::uint32_t k = 0; k < f.peelPasses; ++k)
-        std::memcpy(lists.data() + k * m_listStride, &emptyList, sizeof(emptyList));
-    vkCmdUpdateBuffer(cmd, m_lists.handle(), 0, lists.size(), lists.data());
+    vkCmdUpdateBuffer(cmd, m_lists.handle(), 0, f.peelPasses * m_listStride, m_emptyLists.data());
     vkCmdFillBuffer(cmd, m_layerEntry.handle(), 0, VK_WHOLE_SIZE, 0u);
     if (f.count)
         vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);

@@ -54,6 +54,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -199,6 +200,7 @@ private:
     /// indirect dispatch.
     Buffer m_lists;
     VkDeviceSize m_listStride = 0;
+    std::vector<std::byte> m_emptyLists; ///< every layer's header empty, at m_listStride (host)
 
     struct Prepared {
         gpu_splat::SpotSplatFrame frame{};
