@@ -63,7 +63,13 @@ struct Suite {
     int width = 128, height = 128; ///< image size (a scene entry may have its own)
     int frames = 5;        ///< warm frames timed for the roofline (one more, the first, is not)
     int referenceSpp = 16;
-    int orbitFrames = 8;   ///< frames of the orbit: every row's timed warm frames and its flicker
+    int orbitFrames = 8;   ///< frames of the orbit: every row's error and flicker
+    /// Every row's timed warm frames: the scene's camera, the image not read back (as `render
+    /// --repeat` times them), at least timedFrames and on until they add up to timedMs of wall
+    /// time (at most maxTimedFrames): a fast row's medians rest on many frames.
+    int timedFrames = 5;
+    double timedMs = 500.0;
+    int maxTimedFrames = 200;
     double orbitDeg = 0.5; ///< camera step per orbit frame, degrees about the target's up axis
     std::vector<SceneEntry> scenes;
     std::vector<Variant> variants;
@@ -347,22 +353,30 @@ struct Bench {
             if (baked)
                 prepareBake(job, meshBytes, v, row);
             ctx.resetPeak();
-            // One cold frame, then the slow orbit: its frames are the warm frames timed (the view
-            // turns 0.5 degrees a frame, the work stays the same), frame 0 is the scene's own
-            // camera and gives the error, and the orbit gives the flicker.
+            // One cold frame, then the slow orbit (the view turns 0.5 degrees a frame, the work
+            // stays the same): frame 0 is the scene's own camera and gives the error, and the
+            // orbit gives the flicker. Then the timed warm frames (Suite::timedFrames).
             render(job, frame, job.scene.camera, v);
-            std::vector<double> gpu, wall, splatPass;
             std::vector<noise::Image> frames;
             Frame last;
             for (int k = 0; k < suite.orbitFrames; ++k) {
                 Frame f = render(job, frame, orbit(job.scene.camera, k, suite.orbitDeg), v);
-                gpu.push_back(f.gpuMs);
-                wall.push_back(f.wallMs);
-                splatPass.push_back(f.splatMs);
                 frames.push_back(f.image);
                 if (k == 0)
                     last = std::move(f);
             }
+            std::vector<double> gpu, wall, splatPass;
+            double timedWall = 0.0;
+            while (int(gpu.size()) < suite.timedFrames ||
+                   (timedWall < suite.timedMs && int(gpu.size()) < suite.maxTimedFrames)) {
+                const Frame f = render(job, frame, job.scene.camera, v, false);
+                gpu.push_back(f.gpuMs);
+                wall.push_back(f.wallMs);
+                splatPass.push_back(f.splatMs);
+                timedWall += f.wallMs;
+            }
+            row["timed_frames"] = int(gpu.size());
+            row["timed_wall_ms"] = timedWall;
             if (splat::gpuMethod(v.method).splatting) {
                 // The splat pass against the rasterizer's own cost for the same primitives.
                 const double splatMs = percentile(splatPass, 0.5);
@@ -702,7 +716,9 @@ void writeCsv(const fs::path& file, const json& rows) {
                           "gpu_memory_bytes", "host_memory_bytes", "status", "reason",
                           // baked's (appended, so that the columns before keep their places)
                           "resolution", "voxel_size", "levels", "peel_passes", "bake_seconds",
-                          "bake_bytes", "bake_cached"};
+                          "bake_bytes", "bake_cached",
+                          // appended likewise
+                          "timed_frames"};
     writeFileAtomic(file, [&](std::ostream& o) {
         for (std::size_t i = 0; i < std::size(cols); ++i)
             o << (i ? "," : "") << cols[i];
@@ -804,7 +820,9 @@ int bench(int argc, char** argv) {
     bar.finish();
 
     const json doc = {{"suite", b.suite.name}, {"width", b.suite.width}, {"height", b.suite.height},
-                      {"frames", b.suite.frames},
+                      {"frames", b.suite.frames}, {"orbit_frames", b.suite.orbitFrames},
+                      {"timed_frames", b.suite.timedFrames}, {"timed_ms", b.suite.timedMs},
+                      {"max_timed_frames", b.suite.maxTimedFrames},
                       {"reference_spp", b.suite.referenceSpp}, {"device", b.ctx.deviceName()},
                       {"rows", b.rows}};
     writeFileAtomic(b.out / "results.json", [&](std::ostream& o) { o << doc.dump(2) << "\n"; });

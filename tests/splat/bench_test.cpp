@@ -64,6 +64,14 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
         EXPECT_TRUE(std::isfinite(ms) && ms > 0.0) << r.dump();
         EXPECT_TRUE(std::isfinite(p90) && p90 > 0.0) << r.dump();
         EXPECT_LE(ms, wallMs * 1.01) << r.dump();
+        // The timed warm frames: at least the suite's few, then on until half a second of wall
+        // time or the cap.
+        const int timed = r["timed_frames"];
+        EXPECT_GE(timed, int(doc["timed_frames"])) << r.dump();
+        EXPECT_LE(timed, int(doc["max_timed_frames"])) << r.dump();
+        EXPECT_TRUE(double(r["timed_wall_ms"]) >= double(doc["timed_ms"]) ||
+                    timed == int(doc["max_timed_frames"]))
+            << r.dump();
         EXPECT_LE(std::uint64_t(r["kernels_drawn"]), std::uint64_t(r["kernels_generated"]))
             << r.dump();
         // Splatting rows carry their splat pass, a part of the frame, and the roofline of the same
