@@ -105,6 +105,20 @@ struct SpotBakedParams {
 
 /* The pixels a layer's march walks (listed by its peel, baked_peel.frag; kBakedBindListPixels). */
 struct SpotBakedList {
-    uvec3 groups; /* the march's indirect dispatch: (entries + 63) / 64, 1, 1 */
+    uvec3 groups; /* the march's indirect dispatch over its entries, 64 a workgroup: rows of at
+                     most kBakedMarchRowGroups workgroups (x), as many rows as needed (y), 1 */
     uint count;   /* entries */
 };
+
+/* The march's workgroups a row of its dispatch (SpotBakedList.groups): a device takes at least
+ * 65,535 workgroups in each dimension, so one row alone would stop at about 4.2 million
+ * entries, less than a 2048x2048 frame; 65,535 rows of 1,024 (65,536 entries each) reach 4.29e9. */
+SPOT_CONST uint kBakedMarchRowGroups = 1024u;
+SPOT_CONST uint kBakedMarchGroupSize = 64u;
+
+/* The dispatch that covers `entries` (SpotBakedList.groups.xy); monotone in `entries`, so that
+ * the peel's appends can raise it with atomicMax. */
+SPOT_FN uvec2 spotBakedMarchGroups(uint entries) {
+    uint groups = entries / kBakedMarchGroupSize + uint(entries % kBakedMarchGroupSize != 0u);
+    return uvec2(min(groups, kBakedMarchRowGroups), (groups + kBakedMarchRowGroups - 1u) / kBakedMarchRowGroups);
+}

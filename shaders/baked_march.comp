@@ -33,7 +33,7 @@
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
 
-layout(local_size_x = 64) in;
+layout(local_size_x = kBakedMarchGroupSize) in;
 
 layout(constant_id = kBakedSpecCount) const bool kCountLoops = false;
 layout(constant_id = kBakedSpecFirstLayer) const bool kFirstLayer = false;
@@ -141,7 +141,8 @@ void main() {
     uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = 4u; // 4: none (from the eye)
     bool fromEye = tet != kBakedNoTet;
     ivec2 pixel;
-    uint item = gl_GlobalInvocationID.x;
+    uint item = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kBakedMarchGroupSize +
+                gl_LocalInvocationID.x; // rows of workgroups (SpotBakedList)
     uint width = uint(frame.size.x);
     if (fromEye) {
         if (item >= width * uint(frame.size.y))

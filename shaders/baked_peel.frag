@@ -39,6 +39,9 @@ void main() {
     if (atomicMax(layerEntry[splatPixelIndex(pixel)], key) == uint64_t(0)) {
         uint i = atomicAdd(list.count, 1u);
         listPixels[i] = uint(pixel.x) | uint(pixel.y) << 16u;
-        atomicMax(list.groups.x, i / 64u + 1u);
+        uvec2 groups = spotBakedMarchGroups(i + 1u);
+        atomicMax(list.groups.x, groups.x);
+        if (groups.y > 1u) // past the first row: rarely, so the second atomic is rarely paid
+            atomicMax(list.groups.y, groups.y);
     }
 }

@@ -107,7 +107,9 @@ void main() {
         tets[3u * t + k] = tet;
         if (holdsEye) {
             atomicMin(eyeTet, 3u * t + k);
-            atomicMax(firstList.groups.x, (uint(frame.size.x) * uint(frame.size.y) + 63u) / 64u);
+            uvec2 groups = spotBakedMarchGroups(uint(frame.size.x) * uint(frame.size.y));
+            atomicMax(firstList.groups.x, groups.x);
+            atomicMax(firstList.groups.y, groups.y);
         }
     }
     front &= mask;

@@ -373,14 +373,14 @@ void BakedRenderer::loadBake(const std::string& file) {
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     if (m_width == width && m_height == height && m_baseKept.handle())
         return;
-    // The march's indirect dispatch covers every pixel when the eye is inside the shell, 64 a
-    // workgroup, in x only.
-    const std::uint64_t groups = (std::uint64_t(width) * height + 63) / 64;
-    if (groups > m_ctx.properties().limits.maxComputeWorkGroupCount[0])
-        throw InputError(cat("baked: a ", width, "x", height, " frame needs ", groups,
-                             " workgroups in one dispatch; the device takes ",
-                             m_ctx.properties().limits.maxComputeWorkGroupCount[0],
-                             "; reduce the image size"));
+    // The march's indirect dispatch covers every pixel when the eye is inside the shell, in rows
+    // of workgroups (SpotBakedList); a device takes at least 65,535 in each dimension.
+    const VkPhysicalDeviceLimits& limits = m_ctx.properties().limits;
+    const glm::uvec2 groups = gpu_baked::spotBakedMarchGroups(width * height);
+    if (std::uint64_t(width) * height > std::numeric_limits<std::uint32_t>::max() ||
+        groups.x > limits.maxComputeWorkGroupCount[0] || groups.y > limits.maxComputeWorkGroupCount[1])
+        throw InputError(cat("baked: a ", width, "x", height, " frame needs more workgroups in one "
+                             "dispatch than the device takes; reduce the image size"));
     // Per pixel: base 16, distance 4, depth 4, exit depth 4, layer entry 8, accum 16, the kept
     // base 16, the march's list 4.
     const std::uint64_t need = std::uint64_t(width) * height * 72;

@@ -74,6 +74,8 @@ namespace spot::splat {
 namespace gpu_baked {
 using glm::ivec3;
 using glm::ivec4;
+using glm::min;
+using glm::uvec2;
 using glm::uvec3;
 using glm::uvec4;
 using glm::vec4;
