@@ -72,6 +72,10 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
         EXPECT_TRUE(double(r["timed_wall_ms"]) >= double(doc["timed_ms"]) ||
                     timed == int(doc["max_timed_frames"]))
             << r.dump();
+        // The orbit's frames, timed apart (a new view each, the image read back).
+        const double orbitMs = r["orbit_ms_median"], orbitWall = r["orbit_wall_ms_median"];
+        EXPECT_TRUE(std::isfinite(orbitMs) && orbitMs > 0.0) << r.dump();
+        EXPECT_LE(orbitMs, orbitWall * 1.01) << r.dump();
         EXPECT_LE(std::uint64_t(r["kernels_drawn"]), std::uint64_t(r["kernels_generated"]))
             << r.dump();
         // Splatting rows carry their splat pass, a part of the frame, and the roofline of the same
