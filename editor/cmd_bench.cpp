@@ -63,7 +63,7 @@ struct Suite {
     int width = 128, height = 128; ///< image size (a scene entry may have its own)
     int frames = 5;        ///< warm frames timed for the roofline (one more, the first, is not)
     int referenceSpp = 16;
-    int orbitFrames = 8;   ///< frames of the orbit: every row's error and flicker
+    int orbitFrames = 8; ///< frames of the orbit: every row's error and flicker
     /// Every row's timed warm frames: the scene's camera, the image not read back (as `render
     /// --repeat` times them), at least timedFrames and on until they add up to timedMs of wall
     /// time (at most maxTimedFrames): a fast row's medians rest on many frames.
@@ -369,8 +369,8 @@ struct Bench {
                     last = std::move(f);
             }
             // The orbit's frames are timed too: each has a new view (the host's per-view work,
-            // such as picking the cells the camera may see) and reads its image back, as an interactive
-            // window turning the camera does.
+            // such as picking the cells the camera may see) and reads its image back, as an
+            // interactive window turning the camera does.
             row["orbit_ms_median"] = percentile(orbitGpu, 0.5);
             row["orbit_wall_ms_median"] = percentile(orbitWall, 0.5);
             std::vector<double> gpu, wall, splatPass;
@@ -827,11 +827,16 @@ int bench(int argc, char** argv) {
         b.runScaling(bar, done, total);
     bar.finish();
 
-    const json doc = {{"suite", b.suite.name}, {"width", b.suite.width}, {"height", b.suite.height},
-                      {"frames", b.suite.frames}, {"orbit_frames", b.suite.orbitFrames},
-                      {"timed_frames", b.suite.timedFrames}, {"timed_ms", b.suite.timedMs},
+    const json doc = {{"suite", b.suite.name},
+                      {"width", b.suite.width},
+                      {"height", b.suite.height},
+                      {"frames", b.suite.frames},
+                      {"orbit_frames", b.suite.orbitFrames},
+                      {"timed_frames", b.suite.timedFrames},
+                      {"timed_ms", b.suite.timedMs},
                       {"max_timed_frames", b.suite.maxTimedFrames},
-                      {"reference_spp", b.suite.referenceSpp}, {"device", b.ctx.deviceName()},
+                      {"reference_spp", b.suite.referenceSpp},
+                      {"device", b.ctx.deviceName()},
                       {"rows", b.rows}};
     writeFileAtomic(b.out / "results.json", [&](std::ostream& o) { o << doc.dump(2) << "\n"; });
     writeCsv(b.out / "results.csv", b.rows);

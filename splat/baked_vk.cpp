@@ -378,8 +378,10 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     const VkPhysicalDeviceLimits& limits = m_ctx.properties().limits;
     const glm::uvec2 groups = gpu_baked::spotBakedMarchGroups(width * height);
     if (std::uint64_t(width) * height > std::numeric_limits<std::uint32_t>::max() ||
-        groups.x > limits.maxComputeWorkGroupCount[0] || groups.y > limits.maxComputeWorkGroupCount[1])
-        throw InputError(cat("baked: a ", width, "x", height, " frame needs more workgroups in one "
+        groups.x > limits.maxComputeWorkGroupCount[0] ||
+        groups.y > limits.maxComputeWorkGroupCount[1])
+        throw InputError(cat("baked: a ", width, "x", height,
+                             " frame needs more workgroups in one "
                              "dispatch than the device takes; reduce the image size"));
     // Per pixel: base 16, distance 4, depth 4, exit depth 4, layer entry 8, accum 16, the kept
     // base 16, the march's list 4.

@@ -413,13 +413,13 @@ TEST(BakedFrame, MarchDispatchRowsCoverEveryEntryAndAnyFrameSize) {
                                   2048u * 2048u, 3840u * 2160u, 16384u * 16384u}) {
         const glm::uvec2 g = spotBakedMarchGroups(n);
         const std::uint64_t invocations = std::uint64_t(g.x) * g.y * kBakedMarchGroupSize;
-        EXPECT_GE(invocations, n) << n;                        // every entry has an invocation
-        EXPECT_LT(invocations - n, std::uint64_t(row)) << n;   // no row more than needed
+        EXPECT_GE(invocations, n) << n;                      // every entry has an invocation
+        EXPECT_LT(invocations - n, std::uint64_t(row)) << n; // no row more than needed
         EXPECT_LE(g.x, kBakedMarchRowGroups) << n;
-        EXPECT_LE(g.y, 65535u) << n;                           // Vulkan's minimum limit
+        EXPECT_LE(g.y, 65535u) << n; // Vulkan's minimum limit
         if (g.y > 1u)
-            EXPECT_EQ(g.x, kBakedMarchRowGroups) << n;         // the march's index needs full rows
-        EXPECT_TRUE(g.x >= before.x && g.y >= before.y) << n;  // the peel raises it by atomicMax
+            EXPECT_EQ(g.x, kBakedMarchRowGroups) << n;        // the march's index needs full rows
+        EXPECT_TRUE(g.x >= before.x && g.y >= before.y) << n; // the peel raises it by atomicMax
         before = g;
     }
 }
