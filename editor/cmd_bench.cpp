@@ -368,8 +368,8 @@ struct Bench {
                 if (k == 0)
                     last = std::move(f);
             }
-            // The orbit's frames are timed too: each has a new view (the host's per-view work,
-            // such as picking the cells the camera may see) and reads its image back, as an
+            // The orbit's frames are timed too: each has a new view (the visible cells picked
+            // again, the impulses regenerated when they change) and reads its image back, as an
             // interactive window turning the camera does.
             row["orbit_ms_median"] = percentile(orbitGpu, 0.5);
             row["orbit_wall_ms_median"] = percentile(orbitWall, 0.5);
