@@ -375,13 +375,15 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
         return;
     // The march's indirect dispatch covers every pixel when the eye is inside the shell, in rows
     // of workgroups (SpotBakedList); a device takes at least 65,535 in each dimension.
+    // The shaders count pixels in 32 bits, so the product is checked before it is formed.
     const VkPhysicalDeviceLimits& limits = m_ctx.properties().limits;
-    const glm::uvec2 groups = gpu_baked::spotBakedMarchGroups(width * height);
-    if (std::uint64_t(width) * height > std::numeric_limits<std::uint32_t>::max() ||
-        groups.x > limits.maxComputeWorkGroupCount[0] ||
+    const bool fits = std::uint64_t(width) * height <= std::numeric_limits<std::uint32_t>::max();
+    const glm::uvec2 groups =
+        fits ? gpu_baked::spotBakedMarchGroups(width * height) : glm::uvec2(0);
+    if (!fits || groups.x > limits.maxComputeWorkGroupCount[0] ||
         groups.y > limits.maxComputeWorkGroupCount[1])
         throw InputError(cat("baked: a ", width, "x", height,
-                             " frame needs more workgroups in one "
+                             " frame needs more workgroups in one ",
                              "dispatch than the device takes; reduce the image size"));
     // Per pixel: base 16, distance 4, depth 4, exit depth 4, layer entry 8, accum 16, the kept
     // base 16, the march's list 4.
