@@ -103,25 +103,20 @@ splat::ContextOptions windowContextOptions() {
 
 // --- Vulkan presentation ------------------------------------------------------------------
 
-struct Surface {
-    Surface(splat::Context& ctx, GLFWwindow* window) : m_ctx(ctx) {
-        splat::vkCheck(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &handle),
-                       "glfwCreateWindowSurface");
-        VkBool32 supported = VK_FALSE;
-        vkGetPhysicalDeviceSurfaceSupportKHR(ctx.physicalDevice(), ctx.queueFamily(), handle,
-                                             &supported);
-        if (!supported) {
-            vkDestroySurfaceKHR(ctx.instance(), handle, nullptr);
-            throw std::runtime_error(cat("Vulkan: queue family ", ctx.queueFamily(), " of ",
-                                         ctx.deviceName(), " cannot present to the window"));
-        }
-    }
-    ~Surface() { vkDestroySurfaceKHR(m_ctx.instance(), handle, nullptr); }
-    Surface(const Surface&) = delete;
-    Surface& operator=(const Surface&) = delete;
-    splat::Context& m_ctx;
-    VkSurfaceKHR handle = VK_NULL_HANDLE;
-};
+/// The window's surface, refused when the context's queue cannot present to it.
+splat::UniqueSurface makeSurface(splat::Context& ctx, GLFWwindow* window) {
+    VkSurfaceKHR created = VK_NULL_HANDLE;
+    splat::vkCheck(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &created),
+                   "glfwCreateWindowSurface");
+    splat::UniqueSurface surface(ctx.instance(), created);
+    VkBool32 supported = VK_FALSE;
+    vkGetPhysicalDeviceSurfaceSupportKHR(ctx.physicalDevice(), ctx.queueFamily(), created,
+                                         &supported);
+    if (!supported)
+        throw std::runtime_error(cat("Vulkan: queue family ", ctx.queueFamily(), " of ",
+                                     ctx.deviceName(), " cannot present to the window"));
+    return surface;
+}
 
 bool canBlitTo(VkPhysicalDevice device, VkFormat format) {
     VkFormatProperties p;
@@ -151,54 +146,53 @@ VkSurfaceFormatKHR chooseFormat(VkPhysicalDevice device, VkSurfaceKHR surface, b
     throw std::runtime_error("Vulkan: no window surface format can be a blit destination");
 }
 
+/// The render pass ImGui draws in: over the blitted scene (loaded, not cleared), ending in the
+/// layout the present wants.
+splat::UniqueRenderPass makeOverlayPass(splat::Context& ctx, VkFormat format) {
+    VkAttachmentDescription color{};
+    color.format = format;
+    color.samples = VK_SAMPLE_COUNT_1_BIT;
+    color.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD; // the blitted scene
+    color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    color.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+    color.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    color.initialLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+    color.finalLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
+    VkAttachmentReference ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+    VkSubpassDescription subpass{};
+    subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    subpass.colorAttachmentCount = 1;
+    subpass.pColorAttachments = &ref;
+    // The blit's writes before ImGui's blending reads and writes.
+    VkSubpassDependency dependency{};
+    dependency.srcSubpass = VK_SUBPASS_EXTERNAL;
+    dependency.dstSubpass = 0;
+    dependency.srcStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT;
+    dependency.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    dependency.dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+    dependency.dstAccessMask =
+        VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+    VkRenderPassCreateInfo rpi{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+    rpi.attachmentCount = 1;
+    rpi.pAttachments = &color;
+    rpi.subpassCount = 1;
+    rpi.pSubpasses = &subpass;
+    rpi.dependencyCount = 1;
+    rpi.pDependencies = &dependency;
+    VkRenderPass pass = VK_NULL_HANDLE;
+    splat::vkCheck(vkCreateRenderPass(ctx.device(), &rpi, nullptr, &pass), "vkCreateRenderPass");
+    return splat::UniqueRenderPass(ctx.device(), pass);
+}
+
 /// The swapchain with its images' views and the ImGui render pass's framebuffers, recreated
-/// when the window's size changes.
+/// when the window's size changes. Members are destroyed in reverse: framebuffers, views,
+/// semaphores, the swapchain, the render pass.
 class Swapchain {
 public:
     Swapchain(splat::Context& ctx, VkSurfaceKHR surface) : m_ctx(ctx), m_surface(surface) {
         format = chooseFormat(ctx.physicalDevice(), surface, srgb);
-        VkAttachmentDescription color{};
-        color.format = format.format;
-        color.samples = VK_SAMPLE_COUNT_1_BIT;
-        color.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD; // the blitted scene
-        color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-        color.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
-        color.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-        color.initialLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-        color.finalLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
-        VkAttachmentReference ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
-        VkSubpassDescription subpass{};
-        subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-        subpass.colorAttachmentCount = 1;
-        subpass.pColorAttachments = &ref;
-        // The blit's writes before ImGui's blending reads and writes.
-        VkSubpassDependency dependency{};
-        dependency.srcSubpass = VK_SUBPASS_EXTERNAL;
-        dependency.dstSubpass = 0;
-        dependency.srcStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT;
-        dependency.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-        dependency.dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
-        dependency.dstAccessMask =
-            VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
-        VkRenderPassCreateInfo rpi{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-        rpi.attachmentCount = 1;
-        rpi.pAttachments = &color;
-        rpi.subpassCount = 1;
-        rpi.pSubpasses = &subpass;
-        rpi.dependencyCount = 1;
-        rpi.pDependencies = &dependency;
-        splat::vkCheck(vkCreateRenderPass(ctx.device(), &rpi, nullptr, &renderPass),
-                       "vkCreateRenderPass");
+        renderPass = makeOverlayPass(ctx, format.format);
     }
-    ~Swapchain() {
-        destroyViews();
-        for (VkSemaphore s : renderDone)
-            vkDestroySemaphore(m_ctx.device(), s, nullptr);
-        vkDestroySwapchainKHR(m_ctx.device(), handle, nullptr);
-        vkDestroyRenderPass(m_ctx.device(), renderPass, nullptr);
-    }
-    Swapchain(const Swapchain&) = delete;
-    Swapchain& operator=(const Swapchain&) = delete;
 
     /// (Re)create for the framebuffer size; false when the window is minimized (size 0).
     bool recreate(int fbWidth, int fbHeight) {
@@ -214,7 +208,38 @@ public:
         if (e.width == 0 || e.height == 0 || fbWidth == 0 || fbHeight == 0)
             return false;
         vkDeviceWaitIdle(m_ctx.device());
-        destroyViews();
+        framebuffers.clear();
+        views.clear();
+        createSwapchain(caps, e);
+        std::uint32_t n = 0;
+        vkGetSwapchainImagesKHR(m_ctx.device(), handle.get(), &n, nullptr);
+        images.resize(n);
+        vkGetSwapchainImagesKHR(m_ctx.device(), handle.get(), &n, images.data());
+        for (VkImage image : images)
+            addFramebuffer(image);
+        // One "rendering done" semaphore per image: the present of an image waits on its own,
+        // so a semaphore is only signalled again after its image came back from the presenter.
+        while (renderDone.size() < images.size())
+            renderDone.push_back(splat::makeSemaphore(m_ctx));
+        return true;
+    }
+
+    VkSurfaceFormatKHR format{};
+    bool srgb = false;
+    bool readable = false; ///< the images can be copied from (--window-screenshot)
+    VkPresentModeKHR presentMode = VK_PRESENT_MODE_FIFO_KHR;
+    std::uint32_t minImageCount = 2;
+    VkExtent2D extent{0, 0};
+    splat::UniqueRenderPass renderPass;
+    splat::UniqueSwapchain handle;
+    std::vector<VkImage> images;
+    std::vector<splat::UniqueSemaphore> renderDone;
+    std::vector<splat::UniqueImageView> views;
+    std::vector<splat::UniqueFramebuffer> framebuffers;
+
+private:
+    /// The swapchain for extent `e`, replacing (and destroying) the one before.
+    void createSwapchain(const VkSurfaceCapabilitiesKHR& caps, VkExtent2D e) {
         std::uint32_t n = 0;
         vkGetPhysicalDeviceSurfacePresentModesKHR(m_ctx.physicalDevice(), m_surface, &n, nullptr);
         std::vector<VkPresentModeKHR> modes(n);
@@ -245,170 +270,146 @@ public:
         sci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
         sci.presentMode = presentMode;
         sci.clipped = VK_TRUE;
-        sci.oldSwapchain = handle;
+        sci.oldSwapchain = handle.get();
         VkSwapchainKHR created = VK_NULL_HANDLE;
         splat::vkCheck(vkCreateSwapchainKHR(m_ctx.device(), &sci, nullptr, &created),
                        "vkCreateSwapchainKHR");
-        vkDestroySwapchainKHR(m_ctx.device(), handle, nullptr);
-        handle = created;
+        handle = splat::UniqueSwapchain(m_ctx.device(), created); // the old one destroyed
         extent = e;
-        vkGetSwapchainImagesKHR(m_ctx.device(), handle, &n, nullptr);
-        images.resize(n);
-        vkGetSwapchainImagesKHR(m_ctx.device(), handle, &n, images.data());
-        for (VkImage image : images) {
-            VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-            vi.image = image;
-            vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-            vi.format = format.format;
-            vi.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-            VkImageView view = VK_NULL_HANDLE;
-            splat::vkCheck(vkCreateImageView(m_ctx.device(), &vi, nullptr, &view),
-                           "vkCreateImageView");
-            views.push_back(view);
-            VkFramebufferCreateInfo fi{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-            fi.renderPass = renderPass;
-            fi.attachmentCount = 1;
-            fi.pAttachments = &view;
-            fi.width = e.width;
-            fi.height = e.height;
-            fi.layers = 1;
-            VkFramebuffer fb = VK_NULL_HANDLE;
-            splat::vkCheck(vkCreateFramebuffer(m_ctx.device(), &fi, nullptr, &fb),
-                           "vkCreateFramebuffer");
-            framebuffers.push_back(fb);
-        }
-        // One "rendering done" semaphore per image: the present of an image waits on its own,
-        // so a semaphore is only signalled again after its image came back from the presenter.
-        while (renderDone.size() < images.size()) {
-            VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-            VkSemaphore s = VK_NULL_HANDLE;
-            splat::vkCheck(vkCreateSemaphore(m_ctx.device(), &si, nullptr, &s),
-                           "vkCreateSemaphore");
-            renderDone.push_back(s);
-        }
-        return true;
     }
 
-    VkSwapchainKHR handle = VK_NULL_HANDLE;
-    VkSurfaceFormatKHR format{};
-    bool srgb = false;
-    bool readable = false; ///< the images can be copied from (--window-screenshot)
-    VkPresentModeKHR presentMode = VK_PRESENT_MODE_FIFO_KHR;
-    std::uint32_t minImageCount = 2;
-    VkExtent2D extent{0, 0};
-    VkRenderPass renderPass = VK_NULL_HANDLE;
-    std::vector<VkImage> images;
-    std::vector<VkImageView> views;
-    std::vector<VkFramebuffer> framebuffers;
-    std::vector<VkSemaphore> renderDone;
-
-private:
-    void destroyViews() {
-        for (VkFramebuffer fb : framebuffers)
-            vkDestroyFramebuffer(m_ctx.device(), fb, nullptr);
-        for (VkImageView v : views)
-            vkDestroyImageView(m_ctx.device(), v, nullptr);
-        framebuffers.clear();
-        views.clear();
+    /// A view of a swapchain image and the overlay pass's framebuffer on it.
+    void addFramebuffer(VkImage image) {
+        VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+        vi.image = image;
+        vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
+        vi.format = format.format;
+        vi.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+        VkImageView view = VK_NULL_HANDLE;
+        splat::vkCheck(vkCreateImageView(m_ctx.device(), &vi, nullptr, &view), "vkCreateImageView");
+        views.emplace_back(m_ctx.device(), view);
+        VkFramebufferCreateInfo fi{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        fi.renderPass = renderPass.get();
+        fi.attachmentCount = 1;
+        fi.pAttachments = &view;
+        fi.width = extent.width;
+        fi.height = extent.height;
+        fi.layers = 1;
+        VkFramebuffer fb = VK_NULL_HANDLE;
+        splat::vkCheck(vkCreateFramebuffer(m_ctx.device(), &fi, nullptr, &fb),
+                       "vkCreateFramebuffer");
+        framebuffers.emplace_back(m_ctx.device(), fb);
     }
+
     splat::Context& m_ctx;
     VkSurfaceKHR m_surface;
 };
 
-/// The present's command buffer, its fence and the acquire semaphore (one frame in flight).
+/// The present's command buffer (with its fence) and the acquire semaphore: one frame in
+/// flight. The command buffer is destroyed first; it waits for the queue to be idle.
 struct PresentSync {
-    explicit PresentSync(splat::Context& ctx) : m_ctx(ctx) {
-        VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-        ai.commandPool = ctx.commandPool();
-        ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-        ai.commandBufferCount = 1;
-        splat::vkCheck(vkAllocateCommandBuffers(ctx.device(), &ai, &cmd),
-                       "vkAllocateCommandBuffers");
-        VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-        splat::vkCheck(vkCreateFence(ctx.device(), &fci, nullptr, &fence), "vkCreateFence");
-        VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-        splat::vkCheck(vkCreateSemaphore(ctx.device(), &si, nullptr, &acquired),
-                       "vkCreateSemaphore");
-    }
-    ~PresentSync() {
-        vkDeviceWaitIdle(m_ctx.device());
-        vkDestroySemaphore(m_ctx.device(), acquired, nullptr);
-        vkDestroyFence(m_ctx.device(), fence, nullptr);
-        vkFreeCommandBuffers(m_ctx.device(), m_ctx.commandPool(), 1, &cmd);
-    }
-    PresentSync(const PresentSync&) = delete;
-    PresentSync& operator=(const PresentSync&) = delete;
-    splat::Context& m_ctx;
-    VkCommandBuffer cmd = VK_NULL_HANDLE;
-    VkFence fence = VK_NULL_HANDLE;
-    VkSemaphore acquired = VK_NULL_HANDLE;
+    explicit PresentSync(splat::Context& ctx) : acquired(splat::makeSemaphore(ctx)), cmd(ctx) {}
+    splat::UniqueSemaphore acquired;
+    splat::CommandBuffer cmd;
 };
 
 // --- Dear ImGui ----------------------------------------------------------------------------
 
 void checkImGuiVk(VkResult r) {
     if (r != VK_SUCCESS)
-        throw std::runtime_error(cat("Vulkan (Dear ImGui backend): VkResult ", int(r)));
+        splat::vkCheck(r, "a call of Dear ImGui's Vulkan backend");
 }
 
-/// The ImGui context, its GLFW and Vulkan backends, their descriptor pool and font texture.
-class ImGuiLayer {
-public:
-    ImGuiLayer(splat::Context& ctx, GLFWwindow* window, const Swapchain& swapchain) : m_ctx(ctx) {
+/// ImGui's context (no imgui.ini; the dark style, decoded to linear for an sRGB swapchain).
+struct ImGuiContextScope {
+    explicit ImGuiContextScope(bool srgb) {
         IMGUI_CHECKVERSION();
         ImGui::CreateContext();
         ImGui::GetIO().IniFilename = nullptr; // no imgui.ini beside the user's files
         ImGui::StyleColorsDark();
         // The swapchain is sRGB: ImGui's colours are sRGB values, so decode them to linear or
         // the panels would come out washed out.
-        if (swapchain.srgb)
+        if (srgb)
             for (ImVec4& c : ImGui::GetStyle().Colors)
                 c = ImVec4(noise::srgbDecode(c.x), noise::srgbDecode(c.y), noise::srgbDecode(c.z),
                            c.w);
-        // Chains to the callbacks the window installed before (navigation and the brush).
-        ImGui_ImplGlfw_InitForVulkan(window, true);
-        m_glfw = true;
-        const VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 16};
-        VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-        pi.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
-        pi.maxSets = 16;
-        pi.poolSizeCount = 1;
-        pi.pPoolSizes = &size;
-        splat::vkCheck(vkCreateDescriptorPool(ctx.device(), &pi, nullptr, &m_pool),
-                       "vkCreateDescriptorPool");
+    }
+    ~ImGuiContextScope() { ImGui::DestroyContext(); }
+    ImGuiContextScope(const ImGuiContextScope&) = delete;
+    ImGuiContextScope& operator=(const ImGuiContextScope&) = delete;
+};
+
+/// ImGui's GLFW backend; it chains to the callbacks the window installed before (navigation
+/// and the brush).
+struct ImGuiGlfwBackend {
+    explicit ImGuiGlfwBackend(GLFWwindow* window) { ImGui_ImplGlfw_InitForVulkan(window, true); }
+    ~ImGuiGlfwBackend() { ImGui_ImplGlfw_Shutdown(); }
+    ImGuiGlfwBackend(const ImGuiGlfwBackend&) = delete;
+    ImGuiGlfwBackend& operator=(const ImGuiGlfwBackend&) = delete;
+};
+
+/// The descriptor pool ImGui's Vulkan backend allocates its font texture's set from.
+splat::UniqueDescriptorPool makeImGuiPool(splat::Context& ctx) {
+    const VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 16};
+    VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    pi.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
+    pi.maxSets = 16;
+    pi.poolSizeCount = 1;
+    pi.pPoolSizes = &size;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    splat::vkCheck(vkCreateDescriptorPool(ctx.device(), &pi, nullptr, &pool),
+                   "vkCreateDescriptorPool");
+    return splat::UniqueDescriptorPool(ctx.device(), pool);
+}
+
+/// ImGui's Vulkan backend on the overlay render pass, with its font texture uploaded.
+struct ImGuiVulkanBackend {
+    ImGuiVulkanBackend(splat::Context& ctx, VkDescriptorPool pool, const Swapchain& swapchain) {
         ImGui_ImplVulkan_InitInfo info{};
         info.Instance = ctx.instance();
         info.PhysicalDevice = ctx.physicalDevice();
         info.Device = ctx.device();
         info.QueueFamily = ctx.queueFamily();
         info.Queue = ctx.queue();
-        info.DescriptorPool = m_pool;
+        info.DescriptorPool = pool;
         info.MinImageCount = swapchain.minImageCount;
         info.ImageCount = std::uint32_t(swapchain.images.size());
         info.MSAASamples = VK_SAMPLE_COUNT_1_BIT;
         info.CheckVkResultFn = checkImGuiVk;
-        if (!ImGui_ImplVulkan_Init(&info, swapchain.renderPass))
+        if (!ImGui_ImplVulkan_Init(&info, swapchain.renderPass.get()))
             throw std::runtime_error("Dear ImGui: the Vulkan backend did not initialize");
-        m_vulkan = true;
-        ctx.submitAndWait([](VkCommandBuffer cmd) { ImGui_ImplVulkan_CreateFontsTexture(cmd); });
+        try {
+            ctx.submitAndWait(
+                [](VkCommandBuffer cmd) { ImGui_ImplVulkan_CreateFontsTexture(cmd); });
+        } catch (...) {
+            ImGui_ImplVulkan_Shutdown();
+            throw;
+        }
         ImGui_ImplVulkan_DestroyFontUploadObjects();
     }
-    ~ImGuiLayer() {
-        vkDeviceWaitIdle(m_ctx.device());
-        if (m_vulkan)
-            ImGui_ImplVulkan_Shutdown();
-        if (m_glfw)
-            ImGui_ImplGlfw_Shutdown();
-        ImGui::DestroyContext();
-        vkDestroyDescriptorPool(m_ctx.device(), m_pool, nullptr);
-    }
+    ~ImGuiVulkanBackend() { ImGui_ImplVulkan_Shutdown(); }
+    ImGuiVulkanBackend(const ImGuiVulkanBackend&) = delete;
+    ImGuiVulkanBackend& operator=(const ImGuiVulkanBackend&) = delete;
+};
+
+/// The ImGui context, its GLFW and Vulkan backends, their descriptor pool and font texture:
+/// each part owns itself, so a part that throws releases those made before it.
+class ImGuiLayer {
+public:
+    ImGuiLayer(splat::Context& ctx, GLFWwindow* window, const Swapchain& swapchain)
+        : m_ctx(ctx), m_context(swapchain.srgb), m_glfw(window), m_pool(makeImGuiPool(ctx)),
+          m_vulkan(ctx, m_pool.get(), swapchain) {}
+    /// The GPU may still draw the last frame's panels.
+    ~ImGuiLayer() { vkDeviceWaitIdle(m_ctx.device()); }
     ImGuiLayer(const ImGuiLayer&) = delete;
     ImGuiLayer& operator=(const ImGuiLayer&) = delete;
 
 private:
     splat::Context& m_ctx;
-    VkDescriptorPool m_pool = VK_NULL_HANDLE;
-    bool m_glfw = false, m_vulkan = false;
+    ImGuiContextScope m_context;
+    ImGuiGlfwBackend m_glfw;
+    splat::UniqueDescriptorPool m_pool;
+    ImGuiVulkanBackend m_vulkan;
 };
 
 // --- the window's state and input -----------------------------------------------------------
@@ -772,17 +773,14 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
              const splat::Image& scene, WindowGrab* grab = nullptr,
              const splat::Image* inset = nullptr, VkOffset2D insetAt = {0, 0}) {
     std::uint32_t index = 0;
-    const VkResult acquired = vkAcquireNextImageKHR(ctx.device(), swapchain.handle, UINT64_MAX,
-                                                    sync.acquired, VK_NULL_HANDLE, &index);
+    const VkResult acquired =
+        vkAcquireNextImageKHR(ctx.device(), swapchain.handle.get(), UINT64_MAX, sync.acquired.get(),
+                              VK_NULL_HANDLE, &index);
     if (acquired == VK_ERROR_OUT_OF_DATE_KHR)
         return false;
     if (acquired != VK_SUBOPTIMAL_KHR)
         splat::vkCheck(acquired, "vkAcquireNextImageKHR");
-    VkCommandBuffer cmd = sync.cmd;
-    splat::vkCheck(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
-    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    splat::vkCheck(vkBeginCommandBuffer(cmd, &bi), "vkBeginCommandBuffer");
+    const VkCommandBuffer cmd = sync.cmd.begin();
     const VkImage target = swapchain.images[index];
     // The renderer's last pass (a compute shader, in an earlier submit) wrote the scene; the
     // renderers keep it in the general layout, the blit reads it best as a transfer source.
@@ -838,37 +836,25 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
                                VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
     }
     VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-    rp.renderPass = swapchain.renderPass;
-    rp.framebuffer = swapchain.framebuffers[index];
+    rp.renderPass = swapchain.renderPass.get();
+    rp.framebuffer = swapchain.framebuffers[index].get();
     rp.renderArea.extent = swapchain.extent;
     vkCmdBeginRenderPass(cmd, &rp, VK_SUBPASS_CONTENTS_INLINE);
     ImGui_ImplVulkan_RenderDrawData(ImGui::GetDrawData(), cmd);
     vkCmdEndRenderPass(cmd);
     if (grab)
         grab->record(ctx, cmd, target, swapchain.extent, swapchain.format.format);
-    splat::vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
-
-    const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
-    VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    si.waitSemaphoreCount = 1;
-    si.pWaitSemaphores = &sync.acquired;
-    si.pWaitDstStageMask = &waitStage;
-    si.commandBufferCount = 1;
-    si.pCommandBuffers = &cmd;
-    si.signalSemaphoreCount = 1;
-    si.pSignalSemaphores = &swapchain.renderDone[index];
-    splat::vkCheck(vkResetFences(ctx.device(), 1, &sync.fence), "vkResetFences");
-    splat::vkCheck(vkQueueSubmit(ctx.queue(), 1, &si, sync.fence), "vkQueueSubmit");
+    sync.cmd.submit(sync.acquired.get(), VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                    swapchain.renderDone[index].get());
     VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
     pi.waitSemaphoreCount = 1;
-    pi.pWaitSemaphores = &swapchain.renderDone[index];
+    pi.pWaitSemaphores = swapchain.renderDone[index].address();
     pi.swapchainCount = 1;
-    pi.pSwapchains = &swapchain.handle;
+    pi.pSwapchains = swapchain.handle.address();
     pi.pImageIndices = &index;
     const VkResult presented = vkQueuePresentKHR(ctx.queue(), &pi);
     // One frame in flight: the next frame's renderer writes the image the blit reads.
-    splat::vkCheck(vkWaitForFences(ctx.device(), 1, &sync.fence, VK_TRUE, UINT64_MAX),
-                   "vkWaitForFences");
+    sync.cmd.wait();
     if (presented == VK_ERROR_OUT_OF_DATE_KHR || presented == VK_SUBOPTIMAL_KHR)
         return false;
     splat::vkCheck(presented, "vkQueuePresentKHR");
@@ -1065,8 +1051,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
     const std::unique_ptr<edit::Session> owned = makeSession(windowContextOptions());
     edit::Session& session = *owned;
     splat::Context& ctx = session.context();
-    Surface surface(ctx, window.handle);
-    Swapchain swapchain(ctx, surface.handle);
+    const splat::UniqueSurface surface = makeSurface(ctx, window.handle);
+    Swapchain swapchain(ctx, surface.get());
     PresentSync sync(ctx);
 
     OrbitView view(session.camera());

@@ -10,7 +10,9 @@ packages=(
   libglm-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
   # Vulkan on the CPU (lavapipe) with validation, shaders
-  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
+  # (vulkan-validationlayers-dev: vk_enum_string_helper.h, the names of VkResult values)
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-validationlayers-dev
+  glslang-tools
   # tests; vdb_print (libopenvdb-tools) reads the bake's files as users' tools do
   libgtest-dev libgmock-dev libbenchmark-dev libopenvdb-tools
   # the editor's window: GLFW, Dear ImGui (core and backend sources), a virtual display for tests
