@@ -15,6 +15,7 @@
 #include <imgui_impl_glfw.h>
 #include <imgui_impl_vulkan.h>
 
+#include "edit_input.h"
 #include "edit_panels.h"
 #include "edit_script.h"
 #include "edit_session.h"
@@ -416,12 +417,13 @@ private:
 
 /// What the GLFW callbacks change (through the window's user pointer).
 struct InputState {
-    enum class Drag { None, Orbit, Pan, Brush };
     OrbitView* view = nullptr;
     edit::Session* session = nullptr;
     BoundingSphere sphere;
     Drag drag = Drag::None;
-    double lastX = 0.0, lastY = 0.0;
+    double lastX = 0.0, lastY = 0.0; ///< the pointer at the last cursor event
+    bool pointerKnown = false;       ///< a cursor event came (else lastX, lastY are queried)
+    bool exportRequested = false;    ///< F12: export the view when the panels are built
     bool sceneDirty = true;       ///< render the scene again
     bool resized = true;          ///< recreate the swapchain
     bool closeRequested = false;  ///< the close button, with unsaved changes (the modal asks)
@@ -458,61 +460,6 @@ InputState& state(GLFWwindow* window) {
     return *static_cast<InputState*>(glfwGetWindowUserPointer(window));
 }
 
-void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
-    InputState& s = state(window);
-    glfwGetCursorPos(window, &s.lastX, &s.lastY);
-    if (action == GLFW_RELEASE) {
-        if (s.drag == InputState::Drag::Brush && button == GLFW_MOUSE_BUTTON_LEFT)
-            s.brush(edit::Session::PointerPhase::Release, s.windowCamera(window), s.lastX, s.lastY,
-                    false);
-        s.drag = InputState::Drag::None;
-        return;
-    }
-    if (action != GLFW_PRESS || ImGui::GetIO().WantCaptureMouse || s.drag != InputState::Drag::None)
-        return;
-    const bool shift = mods & GLFW_MOD_SHIFT, alt = mods & GLFW_MOD_ALT;
-    if (button == GLFW_MOUSE_BUTTON_MIDDLE || (button == GLFW_MOUSE_BUTTON_LEFT && alt)) {
-        s.drag = shift ? InputState::Drag::Pan : InputState::Drag::Orbit;
-    } else if (button == GLFW_MOUSE_BUTTON_LEFT) {
-        s.drag = InputState::Drag::Brush;
-        // Shift or ctrl at the press inverts the stroke: density-add erases, length shrinks.
-        s.brush(edit::Session::PointerPhase::Press, s.windowCamera(window), s.lastX, s.lastY,
-                (mods & (GLFW_MOD_SHIFT | GLFW_MOD_CONTROL)) != 0);
-    }
-}
-
-void onCursor(GLFWwindow* window, double x, double y) {
-    InputState& s = state(window);
-    const double dx = x - s.lastX, dy = y - s.lastY;
-    s.lastX = x;
-    s.lastY = y;
-    int w = 0, h = 0;
-    glfwGetWindowSize(window, &w, &h);
-    switch (s.drag) {
-    case InputState::Drag::Orbit:
-        s.view->orbit(dx, dy, h);
-        s.moved();
-        break;
-    case InputState::Drag::Pan:
-        s.view->pan(dx, dy, h);
-        s.moved();
-        break;
-    case InputState::Drag::Brush:
-        s.brush(edit::Session::PointerPhase::Drag, s.windowCamera(window), x, y, false);
-        break;
-    case InputState::Drag::None:
-        break;
-    }
-}
-
-void onScroll(GLFWwindow* window, double, double dy) {
-    if (ImGui::GetIO().WantCaptureMouse)
-        return;
-    InputState& s = state(window);
-    s.view->dolly(dy);
-    s.moved();
-}
-
 void frameMesh(GLFWwindow* window, InputState& s) {
     int w = 0, h = 0;
     glfwGetWindowSize(window, &w, &h);
@@ -520,39 +467,119 @@ void frameMesh(GLFWwindow* window, InputState& s) {
     s.moved();
 }
 
-void onKey(GLFWwindow* window, int key, int, int action, int mods) {
-    if ((action != GLFW_PRESS && action != GLFW_REPEAT) || ImGui::GetIO().WantCaptureKeyboard)
-        return;
-    InputState& s = state(window);
-    edit::Session& session = *s.session;
-    edit::BrushSettings& brush = session.brush();
-    const bool shift = mods & GLFW_MOD_SHIFT, control = mods & GLFW_MOD_CONTROL;
-    if (s.drag == InputState::Drag::Brush) // no undo or brush change in the middle of a stroke
-        return;
+/// A brush key's action on the session's brush (radius, strength, kind, mirror).
+void applyBrushKey(InputState& s, const InputAction& a) {
+    edit::BrushSettings& brush = s.session->brush();
+    switch (a.type) {
+    case InputAction::Type::BrushRadius:
+        brush.radiusPx =
+            std::clamp(brush.radiusPx * (a.step > 0 ? 1.15f : 1.0f / 1.15f), 2.0f, 400.0f);
+        break;
+    case InputAction::Type::BrushStrength:
+        brush.strength = std::clamp(brush.strength + (a.step > 0 ? 0.05f : -0.05f), -1.0f, 1.0f);
+        break;
+    case InputAction::Type::BrushKind:
+        s.sceneDirty |= s.session->setBrushKind(edit::BrushKind(a.kind)).generatorRebuilt;
+        break;
+    case InputAction::Type::MirrorX:
+        brush.mirrorX = !brush.mirrorX;
+        break;
+    default:
+        break;
+    }
+}
+
+/// Carry out what mapInput() made of an event: the view moves, the session paints or undoes.
+void applyInput(GLFWwindow* window, InputState& s, const InputAction& a) {
+    using T = InputAction::Type;
+    using Phase = edit::Session::PointerPhase;
+    s.drag = a.drag;
+    int w = 0, h = 0;
+    glfwGetWindowSize(window, &w, &h);
     try {
-        if (control && key == GLFW_KEY_Z)
-            s.sceneDirty |= shift ? session.redo() : session.undo();
-        else if (control && key == GLFW_KEY_Y)
-            s.sceneDirty |= session.redo();
-        else if (control)
-            return;
-        else if (key == GLFW_KEY_F || key == GLFW_KEY_HOME)
+        switch (a.type) {
+        case T::None:
+        case T::Navigate:
+            break;
+        case T::Orbit:
+            s.view->orbit(a.dx, a.dy, h);
+            s.moved();
+            break;
+        case T::Pan:
+            s.view->pan(a.dx, a.dy, h);
+            s.moved();
+            break;
+        case T::Dolly:
+            s.view->dolly(a.dy);
+            s.moved();
+            break;
+        case T::BrushPress:
+        case T::BrushDrag:
+        case T::BrushRelease:
+            s.brush(a.type == T::BrushPress  ? Phase::Press
+                    : a.type == T::BrushDrag ? Phase::Drag
+                                             : Phase::Release,
+                    s.windowCamera(window), a.x, a.y, a.invert);
+            break;
+        case T::Undo:
+            s.sceneDirty |= s.session->undo();
+            break;
+        case T::Redo:
+            s.sceneDirty |= s.session->redo();
+            break;
+        case T::FrameMesh:
             frameMesh(window, s);
-        else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
-            const bool up = key == GLFW_KEY_RIGHT_BRACKET;
-            if (shift)
-                brush.strength = std::clamp(brush.strength + (up ? 0.05f : -0.05f), -1.0f, 1.0f);
-            else
-                brush.radiusPx =
-                    std::clamp(brush.radiusPx * (up ? 1.15f : 1.0f / 1.15f), 2.0f, 400.0f);
-        } else if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7)
-            s.sceneDirty |=
-                session.setBrushKind(edit::BrushKind(key - GLFW_KEY_1)).generatorRebuilt;
-        else if (key == GLFW_KEY_X)
-            brush.mirrorX = !brush.mirrorX;
+            break;
+        case T::BrushRadius:
+        case T::BrushStrength:
+        case T::BrushKind:
+        case T::MirrorX:
+            applyBrushKey(s, a);
+            break;
+        case T::Export:
+            s.exportRequested = true;
+            break;
+        }
     } catch (const InputError& e) {
         s.error = e.what();
     }
+}
+
+InputContext inputContext(const InputState& s, bool panelWantsMouse, bool panelWantsKeyboard) {
+    return {s.drag, s.lastX, s.lastY, panelWantsMouse, panelWantsKeyboard};
+}
+
+void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
+    InputState& s = state(window);
+    // The pointer as the last cursor event left it (queued events replay in order, however
+    // late they are read); asked of the display only before the first one.
+    if (!s.pointerKnown)
+        glfwGetCursorPos(window, &s.lastX, &s.lastY);
+    const InputEvent e = InputEvent::button(button, action, mods, s.lastX, s.lastY);
+    applyInput(window, s, mapInput(e, inputContext(s, ImGui::GetIO().WantCaptureMouse, false)));
+}
+
+void onCursor(GLFWwindow* window, double x, double y) {
+    InputState& s = state(window);
+    const InputAction a = mapInput(InputEvent::cursor(x, y), inputContext(s, false, false));
+    s.lastX = x;
+    s.lastY = y;
+    s.pointerKnown = true;
+    applyInput(window, s, a);
+}
+
+void onScroll(GLFWwindow* window, double dx, double dy) {
+    InputState& s = state(window);
+    applyInput(window, s,
+               mapInput(InputEvent::scroll(dx, dy),
+                        inputContext(s, ImGui::GetIO().WantCaptureMouse, false)));
+}
+
+void onKey(GLFWwindow* window, int key, int, int action, int mods) {
+    InputState& s = state(window);
+    applyInput(window, s,
+               mapInput(InputEvent::key(key, action, mods),
+                        inputContext(s, false, ImGui::GetIO().WantCaptureKeyboard)));
 }
 
 void onClose(GLFWwindow* window) {
@@ -1103,8 +1130,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         if (options.frames > 0 && report.frames >= options.frames && scriptDone())
             break;
         const auto frameStart = Clock::now();
-        const bool busy = panel.continuous || input.drag != InputState::Drag::None ||
-                          !scriptDone() || session.wind() ||
+        const bool busy = panel.continuous || input.drag != Drag::None || !scriptDone() ||
+                          session.wind() ||
                           (panel.refineFrames > 0 && refine.count < panel.refineFrames);
         if (busy)
             glfwPollEvents();
@@ -1185,9 +1212,9 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
             input.sceneDirty = true;
         }
 
-        const bool stroking = input.drag == InputState::Drag::Brush || strokePoint > 0;
+        const bool stroking = input.drag == Drag::Brush || strokePoint > 0;
         const bool navigating =
-            input.drag == InputState::Drag::Orbit || input.drag == InputState::Drag::Pan ||
+            input.drag == Drag::Orbit || input.drag == Drag::Pan ||
             std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;
         const bool lowRes = navigating || stroking;
         const auto overlayStart = Clock::now();
@@ -1209,6 +1236,17 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         session.setMethod(methods[std::size_t(panel.method)].name, panel.settings);
         session.setCamera(view.camera(fullW, fullH));
         input.sceneDirty |= sessionPanels(session, panels);
+        if (input.exportRequested) { // F12: what the File panel's Export does
+            input.exportRequested = false;
+            try {
+                session.exportImage(panels.exportPath);
+                panels.message = "wrote " + panels.exportPath;
+                panels.messageIsError = false;
+            } catch (const InputError& e) {
+                panels.message = e.what();
+                panels.messageIsError = true;
+            }
+        }
         const QuitStep quitting = quitStep(session.dirty(), false, quitModal(input, panels));
         if (quitting.close && (!quitting.save || saveSession(session, panels)))
             quit = true;
@@ -1226,8 +1264,7 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
         // The brush under the pointer (or the script's pointer).
         const ImVec2 mouse = ImGui::GetIO().MousePos;
         const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid();
-        if (scriptPointer || (overScene && input.drag != InputState::Drag::Orbit &&
-                              input.drag != InputState::Drag::Pan)) {
+        if (scriptPointer || (overScene && input.drag != Drag::Orbit && input.drag != Drag::Pan)) {
             const ImVec2 at = scriptPointer ? ImVec2(scriptPointer->x, scriptPointer->y) : mouse;
             ImGui::GetForegroundDrawList()->AddCircle(at, session.brush().radiusPx,
                                                       IM_COL32(255, 255, 255, 200), 48, 1.5f);

@@ -17,6 +17,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libopenvdb-tools
   # the editor's window: GLFW, Dear ImGui (core and backend sources), a virtual display for tests
   libglfw3-dev libimgui-dev xvfb xauth
+  # X events for the window test that drives the real window (tests/editor/window_test.cpp)
+  xdotool
   # the benchmark's charts
   python3 python3-matplotlib
 )
