@@ -1056,11 +1056,8 @@ QuitAnswer quitModal(InputState& input, const SessionPanels& panels) {
     return answer;
 }
 
-} // namespace
-
-EditWindowReport runEditWindow(const SessionFactory& makeSession,
-                               const EditWindowOptions& options) {
-    const auto& methods = splat::gpuMethods();
+/// The Render panel's state from the command line's options.
+PanelState initialPanel(const EditWindowOptions& options) {
     PanelState panel;
     panel.method = methodIndex(options.method);
     panel.settings = options.settings;
@@ -1070,383 +1067,523 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
                       std::begin(kScales));
     if (panel.scale == int(std::size(kScales)))
         throw InputError(cat("render scale ", options.renderScale, " must be 1, 2 or 4"));
+    return panel;
+}
 
-    // Destroyed in reverse: ImGui, the swapchain, the surface, the session (its frame and
-    // context), the window, GLFW. The display is checked before anything else is made.
-    GlfwLibrary glfw;
-    GlfwWindow window(options.width, options.height, options.title);
-    const std::unique_ptr<edit::Session> owned = makeSession(windowContextOptions());
-    edit::Session& session = *owned;
-    splat::Context& ctx = session.context();
-    const splat::UniqueSurface surface = makeSurface(ctx, window.handle);
-    Swapchain swapchain(ctx, surface.get());
-    PresentSync sync(ctx);
+/// What one pass of the window's loop decided, shared by its steps.
+struct FrameState {
+    Clock::time_point start;
+    int fullW = 0, fullH = 0;               ///< the swapchain's size
+    std::optional<glm::vec2> scriptPointer; ///< the script's stroke point this frame
+    bool stroking = false, lowRes = false;
+    double overlayMs = 0.0;
+    bool last = false;     ///< the last of options.frames
+    bool warm = true;      ///< the same method and size as the frame before
+    bool rendered = false; ///< the scene was rendered (not the overlay alone)
+    const splat::Image* shown = nullptr;
+};
 
-    OrbitView view(session.camera());
-    InputState input;
-    input.view = &view;
-    input.session = &session;
-    input.sphere = boundingSphere(session.mesh());
-    glfwSetWindowUserPointer(window.handle, &input);
-    glfwSetMouseButtonCallback(window.handle, onMouseButton);
-    glfwSetCursorPosCallback(window.handle, onCursor);
-    glfwSetScrollCallback(window.handle, onScroll);
-    glfwSetKeyCallback(window.handle, onKey);
-    glfwSetFramebufferSizeCallback(window.handle, onFramebufferSize);
-    glfwSetWindowCloseCallback(window.handle, onClose);
+/// The window, its session and everything the loop keeps between frames. Members are destroyed
+/// in reverse: the kernel preview and the refinement's images, ImGui, the present's
+/// synchronization, the swapchain, the surface, the session (its frame and context), the
+/// window, GLFW. The display is checked before anything else is made.
+class EditWindow {
+public:
+    EditWindow(const SessionFactory& makeSession, const EditWindowOptions& options)
+        : m_options(options), m_panel(initialPanel(options)),
+          m_window(options.width, options.height, options.title),
+          m_owned(makeSession(windowContextOptions())), m_session(*m_owned),
+          m_ctx(m_session.context()), m_surface(makeSurface(m_ctx, m_window.handle)),
+          m_swapchain(m_ctx, m_surface.get()), m_sync(m_ctx), m_view(m_session.camera()) {
+        installCallbacks();
+        int fbW = 0, fbH = 0;
+        glfwGetFramebufferSize(m_window.handle, &fbW, &fbH);
+        m_swapchain.recreate(fbW, fbH);
+        m_input.resized = false;
+        m_imgui.emplace(m_ctx, m_window.handle, m_swapchain);
+        m_panels.savePath = cat(m_session.scene().name, "-edited.json");
+        m_panels.exportPath = cat(m_session.scene().name, "-view.png");
+        m_navigationScaleChosen = m_panel.navigationScale;
+    }
 
-    int fbW = 0, fbH = 0;
-    glfwGetFramebufferSize(window.handle, &fbW, &fbH);
-    swapchain.recreate(fbW, fbH);
-    input.resized = false;
-    ImGuiLayer imgui(ctx, window.handle, swapchain);
-    SessionPanels panels;
-    panels.savePath = cat(session.scene().name, "-edited.json");
-    panels.exportPath = cat(session.scene().name, "-view.png");
+    EditWindowReport run() {
+        m_lastTick = Clock::now();
+        while (!glfwWindowShouldClose(m_window.handle) && !m_quit) {
+            if (m_options.frames > 0 && m_report.frames >= m_options.frames && scriptDone())
+                break;
+            FrameState f;
+            f.start = Clock::now();
+            if (!pollEvents(f))
+                continue;
+            scriptedNavigation();
+            f.scriptPointer = scriptStep(f);
+            advanceWind();
+            f.stroking = m_input.drag == Drag::Brush || m_strokePoint > 0;
+            const bool navigating =
+                m_input.drag == Drag::Orbit || m_input.drag == Drag::Pan ||
+                std::chrono::duration<double>(Clock::now() - m_input.lastMotion).count() < 0.3;
+            f.lowRes = navigating || f.stroking;
+            buildOverlay(f);
+            if (!renderScene(f))
+                continue;
+            presentFrame(f);
+            countFrame(f);
+        }
+        vkDeviceWaitIdle(m_ctx.device());
+        writeScreenshots();
+        return finalReport();
+    }
 
-    splat::FrameStats stats;
-    const splat::Image* scene = nullptr;
-    int renderW = 0, renderH = 0;
-    std::string renderedWith; ///< method and size of the last render (warm-frame bookkeeping)
-    std::vector<double> frameMs, renderMs, presentMs, overlayMs, refineMs, refineAddMs,
-        strokeFrameMs;
-    EditWindowReport report;
-    double lastFrameMs = 0.0, lastPresentMs = 0.0;
-    std::optional<noise::Image> screenshot, windowImage;
-    WindowGrab windowGrab;
-    Refinement refine;
-    KernelPreview preview;
-    int movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
-    std::vector<double> recentLowMs; ///< the last moving or painting frames' times
-    int slowWindows = 0;             ///< ... groups of five in a row with a slow median
-    int navigationScaleChosen = panel.navigationScale;
-    edit::ScriptReport scriptReport;
-    std::size_t scriptNext = 0, strokePoint = 0; ///< the next action; a stroke's next point
-    auto scriptDone = [&] { return scriptNext >= options.script.size(); };
-    auto lastTick = Clock::now();
-    bool quit = false;
+private:
+    bool scriptDone() const { return m_scriptNext >= m_options.script.size(); }
+    const std::string& methodName() const {
+        return splat::gpuMethods()[std::size_t(m_panel.method)].name;
+    }
 
-    while (!glfwWindowShouldClose(window.handle) && !quit) {
-        if (options.frames > 0 && report.frames >= options.frames && scriptDone())
-            break;
-        const auto frameStart = Clock::now();
-        const bool busy = panel.continuous || input.drag != Drag::None || !scriptDone() ||
-                          session.wind() ||
-                          (panel.refineFrames > 0 && refine.count < panel.refineFrames);
+    void installCallbacks() {
+        m_input.view = &m_view;
+        m_input.session = &m_session;
+        m_input.sphere = boundingSphere(m_session.mesh());
+        glfwSetWindowUserPointer(m_window.handle, &m_input);
+        glfwSetMouseButtonCallback(m_window.handle, onMouseButton);
+        glfwSetCursorPosCallback(m_window.handle, onCursor);
+        glfwSetScrollCallback(m_window.handle, onScroll);
+        glfwSetKeyCallback(m_window.handle, onKey);
+        glfwSetFramebufferSizeCallback(m_window.handle, onFramebufferSize);
+        glfwSetWindowCloseCallback(m_window.handle, onClose);
+    }
+
+    /// Events (waiting a little when idle), then the swapchain for the window's size; false
+    /// when there is nothing to draw into (minimized, or the swapchain not recreated).
+    bool pollEvents(FrameState& f) {
+        const bool busy = m_panel.continuous || m_input.drag != Drag::None || !scriptDone() ||
+                          m_session.wind() ||
+                          (m_panel.refineFrames > 0 && m_refine.count < m_panel.refineFrames);
         if (busy)
             glfwPollEvents();
         else
             glfwWaitEventsTimeout(0.25); // idle: redraw the overlay a few times a second
-        glfwGetFramebufferSize(window.handle, &fbW, &fbH);
+        int fbW = 0, fbH = 0;
+        glfwGetFramebufferSize(m_window.handle, &fbW, &fbH);
         if (fbW == 0 || fbH == 0) { // minimized
             glfwWaitEvents();
-            continue;
+            return false;
         }
-        if (input.resized) {
-            if (!swapchain.recreate(fbW, fbH))
-                continue;
-            ImGui_ImplVulkan_SetMinImageCount(swapchain.minImageCount);
-            input.resized = false;
+        if (m_input.resized) {
+            if (!m_swapchain.recreate(fbW, fbH))
+                return false;
+            ImGui_ImplVulkan_SetMinImageCount(m_swapchain.minImageCount);
+            m_input.resized = false;
         }
-        const int fullW = int(swapchain.extent.width), fullH = int(swapchain.extent.height);
-        if (options.cycleMethods) {
-            int next = report.frames % int(methods.size());
-            if (methods[std::size_t(next)].baked && panel.settings.bakeFile.empty())
+        f.fullW = int(m_swapchain.extent.width);
+        f.fullH = int(m_swapchain.extent.height);
+        return true;
+    }
+
+    /// --cycle-methods and --orbit.
+    void scriptedNavigation() {
+        const auto& methods = splat::gpuMethods();
+        if (m_options.cycleMethods) {
+            int next = m_report.frames % int(methods.size());
+            if (methods[std::size_t(next)].baked && m_panel.settings.bakeFile.empty())
                 next = 0; // `baked` needs a bake file (--bake)
-            input.sceneDirty |= next != panel.method;
-            panel.method = next;
+            m_input.sceneDirty |= next != m_panel.method;
+            m_panel.method = next;
         }
-        if (options.orbitDegreesPerFrame != 0.0 && report.frames > 0) {
-            view.orbit(options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
-            input.moved();
+        if (m_options.orbitDegreesPerFrame != 0.0 && m_report.frames > 0) {
+            m_view.orbit(m_options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
+            m_input.moved();
         }
+    }
 
-        // The script: one action between two frames; a stroke one pointer event per frame.
-        std::optional<glm::vec2> scriptPointer;
-        if (!scriptDone()) {
-            const edit::ScriptAction& a = options.script[scriptNext];
-            if (a.type == edit::ScriptAction::Type::Stroke) {
-                using Phase = edit::Session::PointerPhase;
-                const std::size_t i = std::min(strokePoint, a.points.size() - 1);
-                const Phase phase = strokePoint == 0                ? Phase::Press
-                                    : strokePoint < a.points.size() ? Phase::Drag
-                                                                    : Phase::Release;
-                try {
-                    if (!input.pendingBrush && phase != Phase::Release)
-                        input.pendingBrush = Clock::now();
-                    session.pointer(phase, a.points[i], input.windowCamera(window.handle));
-                } catch (const InputError& e) {
-                    throw InputError(
-                        cat("script ", options.scriptName, ":", a.line, ": ", e.what()));
-                }
-                scriptPointer = a.points[i];
-                input.sceneDirty = true;
-                if (phase == Phase::Release) {
-                    ++scriptReport.strokes;
-                    ++scriptNext;
-                    strokePoint = 0;
-                    if (options.log)
-                        std::fprintf(options.log, "%4d  %s\n", a.line, a.text.c_str());
-                } else {
-                    ++strokePoint;
-                }
-            } else {
-                // The window's view, so that `screenshot` and `frames` show what it shows.
-                session.setCamera(view.camera(fullW, fullH));
-                edit::runScriptAction(session, a, options.scriptName, options.log, scriptReport);
-                ++scriptNext;
-                panel.method = methodIndex(session.method());
-                panel.settings = session.settings();
-                const noise::Camera now = session.camera(), shown = view.camera(fullW, fullH);
-                if (now.eye != shown.eye || now.target != shown.target ||
-                    now.fovYDeg != shown.fovYDeg)
-                    view = OrbitView(now);
-                input.sceneDirty = true;
-            }
-        }
-        // Wind animates: the session's time advances (1/30 s a frame when scripted).
-        const double tick = std::chrono::duration<double>(Clock::now() - lastTick).count();
-        lastTick = Clock::now();
-        if (session.wind() && scriptDone()) {
-            session.setTime(session.time() + (options.frames > 0 ? 1.0 / 30.0 : tick));
-            input.sceneDirty = true;
-        }
+    /// The script: one action between two frames; a stroke one pointer event per frame. Returns
+    /// the stroke's pointer this frame (for the brush's circle).
+    std::optional<glm::vec2> scriptStep(const FrameState& f) {
+        if (scriptDone())
+            return std::nullopt;
+        const edit::ScriptAction& a = m_options.script[m_scriptNext];
+        if (a.type == edit::ScriptAction::Type::Stroke)
+            return scriptStrokeStep(a);
+        // The window's view, so that `screenshot` and `frames` show what it shows.
+        m_session.setCamera(m_view.camera(f.fullW, f.fullH));
+        edit::runScriptAction(m_session, a, m_options.scriptName, m_options.log, m_scriptReport);
+        ++m_scriptNext;
+        m_panel.method = methodIndex(m_session.method());
+        m_panel.settings = m_session.settings();
+        const noise::Camera now = m_session.camera(), shown = m_view.camera(f.fullW, f.fullH);
+        if (now.eye != shown.eye || now.target != shown.target || now.fovYDeg != shown.fovYDeg)
+            m_view = OrbitView(now);
+        m_input.sceneDirty = true;
+        return std::nullopt;
+    }
 
-        const bool stroking = input.drag == Drag::Brush || strokePoint > 0;
-        const bool navigating =
-            input.drag == Drag::Orbit || input.drag == Drag::Pan ||
-            std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;
-        const bool lowRes = navigating || stroking;
+    /// One pointer event of the script's stroke `a`: the press, a drag, or the release.
+    glm::vec2 scriptStrokeStep(const edit::ScriptAction& a) {
+        using Phase = edit::Session::PointerPhase;
+        const std::size_t i = std::min(m_strokePoint, a.points.size() - 1);
+        const Phase phase = m_strokePoint == 0                ? Phase::Press
+                            : m_strokePoint < a.points.size() ? Phase::Drag
+                                                              : Phase::Release;
+        try {
+            if (!m_input.pendingBrush && phase != Phase::Release)
+                m_input.pendingBrush = Clock::now();
+            m_session.pointer(phase, a.points[i], m_input.windowCamera(m_window.handle));
+        } catch (const InputError& e) {
+            throw InputError(cat("script ", m_options.scriptName, ":", a.line, ": ", e.what()));
+        }
+        m_input.sceneDirty = true;
+        if (phase == Phase::Release) {
+            ++m_scriptReport.strokes;
+            ++m_scriptNext;
+            m_strokePoint = 0;
+            if (m_options.log)
+                std::fprintf(m_options.log, "%4d  %s\n", a.line, a.text.c_str());
+        } else {
+            ++m_strokePoint;
+        }
+        return a.points[i];
+    }
+
+    /// Wind animates: the session's time advances (1/30 s a frame when scripted).
+    void advanceWind() {
+        const double tick = std::chrono::duration<double>(Clock::now() - m_lastTick).count();
+        m_lastTick = Clock::now();
+        if (m_session.wind() && scriptDone()) {
+            m_session.setTime(m_session.time() + (m_options.frames > 0 ? 1.0 / 30.0 : tick));
+            m_input.sceneDirty = true;
+        }
+    }
+
+    /// The ImGui frame: the panels (whose edits reach the session), F12's export, the quit
+    /// modal, the stats, the status line, the brush circle and the kernel preview's frame.
+    void buildOverlay(FrameState& f) {
         const auto overlayStart = Clock::now();
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
-        const int methodShown = panel.method;
-        input.sceneDirty |= methodPanel(panel);
-        if (panel.navigationScale != navigationScaleChosen || panel.method != methodShown) {
-            navigationScaleChosen = panel.navigationScale;
-            movingScale = 0;
+        const int methodShown = m_panel.method;
+        m_input.sceneDirty |= methodPanel(m_panel);
+        if (m_panel.navigationScale != m_navigationScaleChosen || m_panel.method != methodShown) {
+            m_navigationScaleChosen = m_panel.navigationScale;
+            m_movingScale = 0;
         }
-        if (!input.error.empty()) {
-            panels.message = input.error;
-            panels.messageIsError = true;
-            input.error.clear();
+        if (!m_input.error.empty()) {
+            m_panels.message = m_input.error;
+            m_panels.messageIsError = true;
+            m_input.error.clear();
         }
         // The panels' Export renders the view as the window shows it.
-        session.setMethod(methods[std::size_t(panel.method)].name, panel.settings);
-        session.setCamera(view.camera(fullW, fullH));
-        input.sceneDirty |= sessionPanels(session, panels);
-        if (input.exportRequested) { // F12: what the File panel's Export does
-            input.exportRequested = false;
-            try {
-                session.exportImage(panels.exportPath);
-                panels.message = "wrote " + panels.exportPath;
-                panels.messageIsError = false;
-            } catch (const InputError& e) {
-                panels.message = e.what();
-                panels.messageIsError = true;
-            }
+        m_session.setMethod(methodName(), m_panel.settings);
+        m_session.setCamera(m_view.camera(f.fullW, f.fullH));
+        m_input.sceneDirty |= sessionPanels(m_session, m_panels);
+        if (m_input.exportRequested)
+            exportView();
+        const QuitStep quitting = quitStep(m_session.dirty(), false, quitModal(m_input, m_panels));
+        if (quitting.close && (!quitting.save || saveSession(m_session, m_panels)))
+            m_quit = true;
+        drawStatus(f);
+        drawBrushAndPreviewFrame(f);
+        ImGui::Render();
+        f.overlayMs = msSince(overlayStart);
+    }
+
+    /// F12: what the File panel's Export does.
+    void exportView() {
+        m_input.exportRequested = false;
+        try {
+            m_session.exportImage(m_panels.exportPath);
+            m_panels.message = "wrote " + m_panels.exportPath;
+            m_panels.messageIsError = false;
+        } catch (const InputError& e) {
+            m_panels.message = e.what();
+            m_panels.messageIsError = true;
         }
-        const QuitStep quitting = quitStep(session.dirty(), false, quitModal(input, panels));
-        if (quitting.close && (!quitting.save || saveSession(session, panels)))
-            quit = true;
+    }
+
+    /// The Stats panel and the status line.
+    void drawStatus(const FrameState& f) {
         std::string refining;
-        if (panel.refineFrames > 0 && refine.count > 0)
-            refining =
-                refine.count < panel.refineFrames
-                    ? cat("refining ", refine.count, "/", panel.refineFrames, " (sorted, jittered)")
-                    : cat("refined ", refine.count, "/", panel.refineFrames, " (sorted, jittered)");
-        statsPanel(stats, renderW, renderH, fullW, fullH, lastFrameMs, lastPresentMs,
-                   lowRes && std::max(panel.navigationScale, movingScale) > panel.scale,
-                   swapchain.srgb, refining);
-        statusLine(stats, renderW, renderH, fullW, fullH, lastFrameMs,
-                   lowRes && std::max(panel.navigationScale, movingScale) > panel.scale, refining);
-        // The brush under the pointer (or the script's pointer).
+        if (m_panel.refineFrames > 0 && m_refine.count > 0)
+            refining = m_refine.count < m_panel.refineFrames
+                           ? cat("refining ", m_refine.count, "/", m_panel.refineFrames,
+                                 " (sorted, jittered)")
+                           : cat("refined ", m_refine.count, "/", m_panel.refineFrames,
+                                 " (sorted, jittered)");
+        const bool scaledUp =
+            f.lowRes && std::max(m_panel.navigationScale, m_movingScale) > m_panel.scale;
+        statsPanel(m_stats, m_renderW, m_renderH, f.fullW, f.fullH, m_lastFrameMs, m_lastPresentMs,
+                   scaledUp, m_swapchain.srgb, refining);
+        statusLine(m_stats, m_renderW, m_renderH, f.fullW, f.fullH, m_lastFrameMs, scaledUp,
+                   refining);
+    }
+
+    /// The brush under the pointer (or the script's pointer), and a frame around the kernel
+    /// preview.
+    void drawBrushAndPreviewFrame(const FrameState& f) {
         const ImVec2 mouse = ImGui::GetIO().MousePos;
         const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid();
-        if (scriptPointer || (overScene && input.drag != Drag::Orbit && input.drag != Drag::Pan)) {
-            const ImVec2 at = scriptPointer ? ImVec2(scriptPointer->x, scriptPointer->y) : mouse;
-            ImGui::GetForegroundDrawList()->AddCircle(at, session.brush().radiusPx,
+        if (f.scriptPointer ||
+            (overScene && m_input.drag != Drag::Orbit && m_input.drag != Drag::Pan)) {
+            const ImVec2 at =
+                f.scriptPointer ? ImVec2(f.scriptPointer->x, f.scriptPointer->y) : mouse;
+            ImGui::GetForegroundDrawList()->AddCircle(at, m_session.brush().radiusPx,
                                                       IM_COL32(255, 255, 255, 200), 48, 1.5f);
         }
-        if (panels.kernelOpen) { // a frame around the kernel preview
-            const float x = float(fullW - 330 - 8 - KernelPreview::kSize);
+        if (m_panels.kernelOpen) {
+            const float x = float(f.fullW - 330 - 8 - KernelPreview::kSize);
             ImGui::GetForegroundDrawList()->AddRect(
                 ImVec2(x - 1, 7), ImVec2(x + KernelPreview::kSize + 1, 9 + KernelPreview::kSize),
                 IM_COL32(120, 120, 140, 255));
         }
-        ImGui::Render();
-        const double overlay = msSince(overlayStart);
+    }
 
+    /// The scene for this frame: one more refinement step when idle, a render when something
+    /// changed (or every frame when asked), else the last image. False when the method refused
+    /// the settings interactively (the frame is dropped; the panel shows why).
+    bool renderScene(FrameState& f) {
         // Navigation or a stroke ended: back to the resolution chosen.
-        if (!lowRes && scene && refine.count == 0 &&
-            (renderW != std::max(1, fullW / kScales[panel.scale]) ||
-             renderH != std::max(1, fullH / kScales[panel.scale])))
-            input.sceneDirty = true;
-        const bool change = input.sceneDirty || !scene;
+        if (!f.lowRes && m_scene && m_refine.count == 0 &&
+            (m_renderW != std::max(1, f.fullW / kScales[m_panel.scale]) ||
+             m_renderH != std::max(1, f.fullH / kScales[m_panel.scale])))
+            m_input.sceneDirty = true;
+        const bool change = m_input.sceneDirty || !m_scene;
         if (change)
-            refine.count = 0;
-        const bool last = options.frames > 0 && scriptDone() && report.frames + 1 >= options.frames;
-        const bool refineNow = !change && !lowRes && panel.refineFrames > 0 &&
-                               refine.count < panel.refineFrames && !session.wind();
-        const std::string& method = methods[std::size_t(panel.method)].name;
-        bool warm = true, rendered = false;
-        const splat::Image* shown = refine.count > 0 ? &refine.image() : scene;
-        if (refineNow) {
-            // One more jittered frame of the most accurate method into the running average.
-            const auto refineStart = Clock::now();
-            // Without EWA: the average of the jittered point-sampled frames is the box-filtered
-            // image; EWA's widened kernels would blur it twice.
-            splat::RenderSettings refineSettings = panel.settings;
-            refineSettings.ewa = false;
-            session.setMethod("sorted", refineSettings);
-            const glm::dvec2 jitter = haltonJitter(refine.count);
-            session.setCamera(jitteredCamera(view.camera(fullW, fullH), jitter.x, jitter.y));
-            noise::Image image;
-            stats = session.render(&image);
-            const auto addStart = Clock::now();
-            refine.add(ctx, image);
-            refineAddMs.push_back(msSince(addStart));
-            refineMs.push_back(msSince(refineStart));
-            ++report.refined;
-            renderW = fullW;
-            renderH = fullH;
-            shown = &refine.image();
-            warm = false;
-            renderedWith = "refine";
-        } else if (change || (panel.continuous && refine.count == 0)) {
-            const int scale =
-                kScales[lowRes ? std::max({panel.scale, panel.navigationScale, movingScale})
-                               : panel.scale];
-            renderW = std::max(1, fullW / scale);
-            renderH = std::max(1, fullH / scale);
-            noise::Image image;
-            const bool capture = last && !options.screenshot.empty();
-            const auto renderStart = Clock::now();
-            try {
-                session.setMethod(method, panel.settings);
-                session.setCamera(view.camera(renderW, renderH));
-                stats = session.render(capture ? &image : nullptr);
-                panel.error.clear();
-            } catch (const InputError& e) {
-                // Interactively, a setting the method refuses (or a frame beyond the memory
-                // budget) is shown in the panel; scripted, it fails. The session may have
-                // rebuilt its frame: the last image is gone.
-                if (!scene || options.frames > 0)
-                    throw;
-                panel.error = e.what();
-                input.sceneDirty = false;
-                scene = nullptr;
-                ImGui::EndFrame();
-                continue;
-            }
-            const double renderWall = msSince(renderStart);
-            if (capture)
-                screenshot = std::move(image);
-            scene = &session.frame().renderer(method).result();
-            shown = scene;
-            input.sceneDirty = false;
-            rendered = true;
-            ++report.rendered;
-            // Warm: the same method at the same size as the last render (the first frame after
-            // a change creates targets and compiles pipelines).
-            const std::string key = cat(method, " ", renderW, "x", renderH);
-            warm = key == renderedWith;
-            renderedWith = key;
-            if (warm)
-                renderMs.push_back(renderWall);
+            m_refine.count = 0;
+        f.last = m_options.frames > 0 && scriptDone() && m_report.frames + 1 >= m_options.frames;
+        const bool refineNow = !change && !f.lowRes && m_panel.refineFrames > 0 &&
+                               m_refine.count < m_panel.refineFrames && !m_session.wind();
+        f.shown = m_refine.count > 0 ? &m_refine.image() : m_scene;
+        if (refineNow)
+            refineStep(f);
+        else if (change || (m_panel.continuous && m_refine.count == 0))
+            return renderInteractive(f);
+        return true;
+    }
+
+    /// One more jittered frame of the most accurate method into the running average.
+    void refineStep(FrameState& f) {
+        const auto refineStart = Clock::now();
+        // Without EWA: the average of the jittered point-sampled frames is the box-filtered
+        // image; EWA's widened kernels would blur it twice.
+        splat::RenderSettings refineSettings = m_panel.settings;
+        refineSettings.ewa = false;
+        m_session.setMethod("sorted", refineSettings);
+        const glm::dvec2 jitter = haltonJitter(m_refine.count);
+        m_session.setCamera(jitteredCamera(m_view.camera(f.fullW, f.fullH), jitter.x, jitter.y));
+        noise::Image image;
+        m_stats = m_session.render(&image);
+        const auto addStart = Clock::now();
+        m_refine.add(m_ctx, image);
+        m_refineAddMs.push_back(msSince(addStart));
+        m_refineMs.push_back(msSince(refineStart));
+        ++m_report.refined;
+        m_renderW = f.fullW;
+        m_renderH = f.fullH;
+        f.shown = &m_refine.image();
+        f.warm = false;
+        m_renderedWith = "refine";
+    }
+
+    /// The chosen method at the interactive resolution (lower while moving or painting).
+    bool renderInteractive(FrameState& f) {
+        const int scale =
+            kScales[f.lowRes ? std::max({m_panel.scale, m_panel.navigationScale, m_movingScale})
+                             : m_panel.scale];
+        m_renderW = std::max(1, f.fullW / scale);
+        m_renderH = std::max(1, f.fullH / scale);
+        noise::Image image;
+        const bool capture = f.last && !m_options.screenshot.empty();
+        const std::string& method = methodName();
+        const auto renderStart = Clock::now();
+        try {
+            m_session.setMethod(method, m_panel.settings);
+            m_session.setCamera(m_view.camera(m_renderW, m_renderH));
+            m_stats = m_session.render(capture ? &image : nullptr);
+            m_panel.error.clear();
+        } catch (const InputError& e) {
+            // Interactively, a setting the method refuses (or a frame beyond the memory
+            // budget) is shown in the panel; scripted, it fails. The session may have
+            // rebuilt its frame: the last image is gone.
+            if (!m_scene || m_options.frames > 0)
+                throw;
+            m_panel.error = e.what();
+            m_input.sceneDirty = false;
+            m_scene = nullptr;
+            ImGui::EndFrame();
+            return false;
         }
-        if (last && !options.screenshot.empty() && refine.count > 0)
-            screenshot = refine.average;
+        const double renderWall = msSince(renderStart);
+        if (capture)
+            m_screenshot = std::move(image);
+        m_scene = &m_session.frame().renderer(method).result();
+        f.shown = m_scene;
+        m_input.sceneDirty = false;
+        f.rendered = true;
+        ++m_report.rendered;
+        // Warm: the same method at the same size as the last render (the first frame after
+        // a change creates targets and compiles pipelines).
+        const std::string key = cat(method, " ", m_renderW, "x", m_renderH);
+        f.warm = key == m_renderedWith;
+        m_renderedWith = key;
+        if (f.warm)
+            m_renderMs.push_back(renderWall);
+        return true;
+    }
+
+    /// Blit the scene (and the kernel preview), draw the panels, present; read the window back
+    /// for --window-screenshot on the last frame.
+    void presentFrame(FrameState& f) {
+        if (f.last && !m_options.screenshot.empty() && m_refine.count > 0)
+            m_screenshot = m_refine.average;
         const auto presentStart = Clock::now();
-        const bool grab = last && !options.windowScreenshot.empty();
-        if (grab && !swapchain.readable)
+        const bool grab = f.last && !m_options.windowScreenshot.empty();
+        if (grab && !m_swapchain.readable)
             throw std::runtime_error("--window-screenshot: the window's images cannot be read back "
                                      "on this surface");
         // The kernel preview while the Kernel panel is open (rendered again when the kernel
         // changed), left of the panel's place at the top right.
         const splat::Image* inset = nullptr;
-        const int insetX = fullW - 330 - 8 - KernelPreview::kSize;
-        if (panels.kernelOpen && insetX >= 8 && fullH >= KernelPreview::kSize + 16) {
+        const int insetX = f.fullW - 330 - 8 - KernelPreview::kSize;
+        if (m_panels.kernelOpen && insetX >= 8 && f.fullH >= KernelPreview::kSize + 16) {
             try {
-                inset = &preview.update(ctx, session);
+                inset = &m_preview.update(m_ctx, m_session);
             } catch (const InputError& e) {
-                panels.message = e.what();
-                panels.messageIsError = true;
+                m_panels.message = e.what();
+                m_panels.messageIsError = true;
             }
         }
-        if (!present(ctx, swapchain, sync, *shown, grab ? &windowGrab : nullptr, inset,
+        if (!present(m_ctx, m_swapchain, m_sync, *f.shown, grab ? &m_windowGrab : nullptr, inset,
                      VkOffset2D{insetX, 8}))
-            input.resized = true;
+            m_input.resized = true;
         if (grab)
-            windowImage = windowGrab.read(swapchain.srgb);
-        lastPresentMs = msSince(presentStart);
-        lastFrameMs = msSince(frameStart);
-        if (rendered && input.pendingBrush) {
-            report.strokeToFrameMs.push_back(msSince(*input.pendingBrush));
-            input.pendingBrush.reset();
-        }
-        if (rendered && stroking && warm)
-            strokeFrameMs.push_back(lastFrameMs);
-        // Moving or painting below 10 frames a second (the median of five such frames, twice
-        // in a row: not the rebuild after a parameter edit): a lower resolution for the rest of the
-        // session (a quarter at most); the Render panel's choice resets it.
-        if (rendered && lowRes && warm) {
-            recentLowMs.push_back(lastFrameMs);
-            if (recentLowMs.size() == 5) {
-                slowWindows = median(recentLowMs) > kInteractiveMs ? slowWindows + 1 : 0;
-                if (slowWindows == 2 && movingScale < int(std::size(kScales)) - 1) {
-                    movingScale = std::max(movingScale, panel.navigationScale) + 1;
-                    slowWindows = 0;
-                }
-                recentLowMs.clear();
-            }
-        }
-        if (warm && report.frames > 0) {
-            presentMs.push_back(lastPresentMs);
-            frameMs.push_back(lastFrameMs);
-            overlayMs.push_back(overlay);
-        }
-        ++report.frames;
-        if (report.frames == 1 && options.resizeWidth > 0 && options.resizeHeight > 0)
-            glfwSetWindowSize(window.handle, options.resizeWidth, options.resizeHeight);
+            m_windowImage = m_windowGrab.read(m_swapchain.srgb);
+        m_lastPresentMs = msSince(presentStart);
+        m_lastFrameMs = msSince(f.start);
     }
-    vkDeviceWaitIdle(ctx.device());
 
-    if (!options.screenshot.empty()) {
-        if (!screenshot) { // closed by the user: the view as it was last shown
-            session.setMethod(methods[std::size_t(panel.method)].name, panel.settings);
-            session.setCamera(
-                view.camera(int(swapchain.extent.width), int(swapchain.extent.height)));
-            noise::Image image;
-            session.render(&image);
-            screenshot = std::move(image);
+    /// The frame's timings, and the resolution while moving lowered when those frames are slow.
+    void countFrame(const FrameState& f) {
+        if (f.rendered && m_input.pendingBrush) {
+            m_report.strokeToFrameMs.push_back(msSince(*m_input.pendingBrush));
+            m_input.pendingBrush.reset();
         }
-        noise::writeImage(options.screenshot, *screenshot,
-                          {{"method", refine.count > 0 ? std::string("sorted (refined)")
-                                                       : methods[std::size_t(panel.method)].name},
-                           {"scene", session.scene().name}});
+        if (f.rendered && f.stroking && f.warm)
+            m_strokeFrameMs.push_back(m_lastFrameMs);
+        if (f.rendered && f.lowRes && f.warm)
+            adaptMovingScale();
+        if (f.warm && m_report.frames > 0) {
+            m_presentMs.push_back(m_lastPresentMs);
+            m_frameMs.push_back(m_lastFrameMs);
+            m_overlayMs.push_back(f.overlayMs);
+        }
+        ++m_report.frames;
+        if (m_report.frames == 1 && m_options.resizeWidth > 0 && m_options.resizeHeight > 0)
+            glfwSetWindowSize(m_window.handle, m_options.resizeWidth, m_options.resizeHeight);
     }
-    if (windowImage)
-        noise::writeImage(options.windowScreenshot, *windowImage,
-                          {{"scene", session.scene().name}});
-    const splat::ValidationCounts v = ctx.validation();
-    if (v.errors > 0)
-        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
-    report.validation = ctx.validationEnabled();
-    report.validationWarnings = v.warnings;
-    report.warmFrames = int(frameMs.size());
-    report.frameMs = median(frameMs);
-    report.renderMs = median(renderMs);
-    report.presentMs = median(presentMs);
-    report.overlayMs = median(overlayMs);
-    report.refineMs = median(refineMs);
-    report.refineAverageMs = median(refineAddMs);
-    report.previewMs = preview.lastMs;
-    report.strokeFrameMs = median(strokeFrameMs);
-    report.strokeFrames = int(strokeFrameMs.size());
-    report.lowScale = kScales[std::max(panel.navigationScale, movingScale)];
-    return report;
+
+    /// Moving or painting below 10 frames a second (the median of five such frames, twice in a
+    /// row: not the rebuild after a parameter edit): a lower resolution for the rest of the
+    /// session (a quarter at most); the Render panel's choice resets it.
+    void adaptMovingScale() {
+        m_recentLowMs.push_back(m_lastFrameMs);
+        if (m_recentLowMs.size() < 5)
+            return;
+        m_slowWindows = median(m_recentLowMs) > kInteractiveMs ? m_slowWindows + 1 : 0;
+        if (m_slowWindows == 2 && m_movingScale < int(std::size(kScales)) - 1) {
+            m_movingScale = std::max(m_movingScale, m_panel.navigationScale) + 1;
+            m_slowWindows = 0;
+        }
+        m_recentLowMs.clear();
+    }
+
+    /// --screenshot (the scene; rendered now when the user closed the window) and
+    /// --window-screenshot.
+    void writeScreenshots() {
+        if (!m_options.screenshot.empty()) {
+            if (!m_screenshot) { // closed by the user: the view as it was last shown
+                m_session.setMethod(methodName(), m_panel.settings);
+                m_session.setCamera(
+                    m_view.camera(int(m_swapchain.extent.width), int(m_swapchain.extent.height)));
+                noise::Image image;
+                m_session.render(&image);
+                m_screenshot = std::move(image);
+            }
+            noise::writeImage(
+                m_options.screenshot, *m_screenshot,
+                {{"method", m_refine.count > 0 ? std::string("sorted (refined)") : methodName()},
+                 {"scene", m_session.scene().name}});
+        }
+        if (m_windowImage)
+            noise::writeImage(m_options.windowScreenshot, *m_windowImage,
+                              {{"scene", m_session.scene().name}});
+    }
+
+    /// The medians, and validation's verdict (errors throw).
+    EditWindowReport finalReport() {
+        const splat::ValidationCounts v = m_ctx.validation();
+        if (v.errors > 0)
+            throw std::runtime_error(
+                cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
+        EditWindowReport report = m_report;
+        report.validation = m_ctx.validationEnabled();
+        report.validationWarnings = v.warnings;
+        report.warmFrames = int(m_frameMs.size());
+        report.frameMs = median(m_frameMs);
+        report.renderMs = median(m_renderMs);
+        report.presentMs = median(m_presentMs);
+        report.overlayMs = median(m_overlayMs);
+        report.refineMs = median(m_refineMs);
+        report.refineAverageMs = median(m_refineAddMs);
+        report.previewMs = m_preview.lastMs;
+        report.strokeFrameMs = median(m_strokeFrameMs);
+        report.strokeFrames = int(m_strokeFrameMs.size());
+        report.lowScale = kScales[std::max(m_panel.navigationScale, m_movingScale)];
+        return report;
+    }
+
+    const EditWindowOptions& m_options;
+    PanelState m_panel;
+    GlfwLibrary m_glfw;
+    GlfwWindow m_window;
+    const std::unique_ptr<edit::Session> m_owned;
+    edit::Session& m_session;
+    splat::Context& m_ctx;
+    const splat::UniqueSurface m_surface;
+    Swapchain m_swapchain;
+    PresentSync m_sync;
+    OrbitView m_view;
+    InputState m_input;
+    std::optional<ImGuiLayer> m_imgui;
+    SessionPanels m_panels;
+
+    splat::FrameStats m_stats;
+    const splat::Image* m_scene = nullptr; ///< the last interactive render (null: none)
+    int m_renderW = 0, m_renderH = 0;
+    std::string m_renderedWith; ///< method and size of the last render (warm-frame bookkeeping)
+    std::vector<double> m_frameMs, m_renderMs, m_presentMs, m_overlayMs, m_refineMs, m_refineAddMs,
+        m_strokeFrameMs;
+    EditWindowReport m_report;
+    double m_lastFrameMs = 0.0, m_lastPresentMs = 0.0;
+    std::optional<noise::Image> m_screenshot, m_windowImage;
+    WindowGrab m_windowGrab;
+    Refinement m_refine;
+    KernelPreview m_preview;
+    int m_movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
+    std::vector<double> m_recentLowMs; ///< the last moving or painting frames' times
+    int m_slowWindows = 0;             ///< ... groups of five in a row with a slow median
+    int m_navigationScaleChosen = 0;
+    edit::ScriptReport m_scriptReport;
+    std::size_t m_scriptNext = 0, m_strokePoint = 0; ///< the next action; a stroke's next point
+    Clock::time_point m_lastTick;                    ///< the wind's last time step
+    bool m_quit = false;
+};
+
+} // namespace
+
+EditWindowReport runEditWindow(const SessionFactory& makeSession,
+                               const EditWindowOptions& options) {
+    EditWindow window(makeSession, options);
+    return window.run();
 }
 
 std::vector<cli::OptionSpec> editWindowOptions() {
