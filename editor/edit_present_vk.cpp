@@ -104,7 +104,6 @@ splat::UniqueDescriptorPool makeImGuiPool(splat::Context& ctx) {
 
 } // namespace
 
-/// The window's surface, refused when the context's queue cannot present to it.
 splat::UniqueSurface makeSurface(splat::Context& ctx, GLFWwindow* window) {
     VkSurfaceKHR created = VK_NULL_HANDLE;
     splat::vkCheck(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &created),
@@ -124,7 +123,6 @@ Swapchain::Swapchain(splat::Context& ctx, VkSurfaceKHR surface) : m_ctx(ctx), m_
     renderPass = makeOverlayPass(ctx, format.format);
 }
 
-/// (Re)create for the framebuffer size; false when the window is minimized (size 0).
 bool Swapchain::recreate(int fbWidth, int fbHeight) {
     VkSurfaceCapabilitiesKHR caps;
     splat::vkCheck(
