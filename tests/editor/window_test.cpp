@@ -1,7 +1,8 @@
 // The editor's window (`spotshell edit`) as a user runs it, under a virtual display (xvfb-run):
 // validation on, the scene it shows identical to `spotshell render`'s, the panels drawn over it,
-// every registry method and a resize in one scripted run, and one clear error without a display.
-// Also the navigation's camera math (edit_view.h), which needs no window.
+// every registry method and a resize in one scripted run, and one clear error without a display;
+// the real window driven by X events (xdotool) ends on the script's images. Also the navigation's
+// camera math (edit_view.h), which needs no window.
 #include <algorithm>
 #include <array>
 #include <cmath>

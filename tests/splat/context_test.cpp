@@ -188,7 +188,8 @@ TEST(VulkanContext, OnACpuDeviceFreedHostMemoryStaysInTheProcess) {
 // passed directly.
 TEST(VulkanContext, AFailedCallNamesItsResultFileAndLine) {
     splat::Context ctx(validated());
-    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkFenceCreateInfo fci{};
+    fci.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
     VkFence raw = VK_NULL_HANDLE;
     splat::vkCheck(vkCreateFence(ctx.device(), &fci, nullptr, &raw), "vkCreateFence");
     const splat::UniqueFence fence(ctx.device(), raw);
