@@ -21,13 +21,13 @@
 #include "noise/reference.h"
 #include "noise/system.h"
 #include "progress.h"
+#include "render_options.h"
 #include "scene_job.h"
-#include "splat/baked_vk.h"
+#include "splat/methods/baked/baked_vk.h"
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/image_compare.h"
-#include "splat/renderer_vk.h"
 
 namespace spot::cmd {
 
@@ -48,7 +48,7 @@ struct Variant {
     std::string setting; ///< human-readable settings, unique per method
     splat::RenderSettings settings;
     /// baked: the bake's level-0 voxels along the mesh's longest side and its levels (the bench
-    /// bakes each scene's noise itself; settings.bakeFile is set per scene).
+    /// bakes each scene's noise itself; settings.bake is set per scene).
     int bakeResolution = 0, bakeLevels = 0;
 };
 
@@ -269,12 +269,17 @@ struct Bench {
             return noise::readImage(cached);
         if (job.impulses.empty())
             job.impulses = job.generator->generate();
-        const noise::ReferenceRenderer ref(job.mesh, job.generator->kernel(), job.impulses,
-                                           job.scene.shading, job.scene.background,
-                                           job.scene.baseColor);
-        noise::ReferenceSettings settings;
+        // The registry's `reference`, as `render --method reference` runs it.
+        const splat::MethodInfo& method = splat::method("reference");
+        splat::RenderSettings settings;
         settings.spp = suite.referenceSpp;
-        const noise::Image image = ref.render(cam, settings);
+        const splat::CpuScene scene{job.mesh,
+                                    job.generator->kernel(),
+                                    job.impulses,
+                                    {cam, job.scene.shading, job.scene.background, job.scene.baseColor},
+                                    job.scene.seed,
+                                    job.scene.referenceSpp};
+        const noise::Image image = method.renderCpu(scene, settings, {}).image;
         noise::writeImage(cached, image, {{"method", "reference"}});
         return image;
     }
@@ -311,7 +316,7 @@ struct Bench {
     std::map<std::string, std::string> refusedBakes{};
 
     /// The bake baked variant `v` renders on `job`'s scene, found in DIR/cache or made now; sets
-    /// v.settings.bakeFile and the row's bake columns. InputError when the bake is refused.
+    /// v.settings.bake (read once for the variant) and the row's bake columns. InputError when the bake is refused.
     void prepareBake(cli::SceneJob& job, const std::string& meshBytes, Variant& v, json& row) {
         BenchBakeInputs in;
         in.mesh = meshBytes;
@@ -338,7 +343,7 @@ struct Bench {
         }
         row.update({{"bake_seconds", it->second.seconds}, {"bake_bytes", it->second.bytes},
                     {"bake_cached", it->second.cached}});
-        v.settings.bakeFile = it->second.file.string();
+        v.settings.bake = splat::BakeData::load(it->second.file.string());
     }
 
     json runVariant(const SceneEntry& entry, cli::SceneJob& job, splat::Frame& frame,
@@ -348,10 +353,13 @@ struct Bench {
                     {"setting", v.setting}, {"width", job.scene.camera.width},
                     {"rays_per_pixel", v.method == "raymarch" ? v.settings.supersample * v.settings.supersample : 0},
                     {"height", job.scene.camera.height}};
-        const bool baked = splat::gpuMethod(v.method).baked;
+        const splat::MethodInfo& method = splat::gpuMethod(v.method);
+        const bool baked = method.takes(splat::settings::bake);
         try {
             if (baked)
                 prepareBake(job, meshBytes, v, row);
+            // The method's settings as its descriptors write them (what `render --stats` gives).
+            row["settings"] = cli::describe(method, v.settings);
             ctx.resetPeak();
             // One cold frame, then the slow orbit (the view turns 0.5 degrees a frame, the work
             // stays the same): frame 0 is the scene's own camera and gives the error, and the
@@ -385,7 +393,8 @@ struct Bench {
             }
             row["timed_frames"] = int(gpu.size());
             row["timed_wall_ms"] = timedWall;
-            if (splat::gpuMethod(v.method).splatting) {
+            // The methods with a splat pass are those that count its fragments.
+            if (method.takes(splat::settings::countFragments)) {
                 // The splat pass against the rasterizer's own cost for the same primitives.
                 const double splatMs = percentile(splatPass, 0.5);
                 row["splat_ms_median"] = splatMs;
@@ -461,7 +470,7 @@ struct Bench {
         roofline.settings.roofline = true;
         std::vector<double> rooflineMs;
         const bool splatting = std::any_of(suite.variants.begin(), suite.variants.end(), [](const Variant& v) {
-            return splat::gpuMethod(v.method).splatting;
+            return splat::gpuMethod(v.method).takes(splat::settings::countFragments);
         });
         for (int f = 0; splatting && f <= suite.frames; ++f) {
             const Frame fr = render(job, frame, job.scene.camera, roofline, false);
@@ -472,7 +481,7 @@ struct Bench {
         // The mesh's bytes, for the bake cache's keys.
         std::string meshBytes;
         if (std::any_of(suite.variants.begin(), suite.variants.end(),
-                        [](const Variant& v) { return splat::gpuMethod(v.method).baked; }))
+                        [](const Variant& v) { return splat::gpuMethod(v.method).takes(splat::settings::bake); }))
             meshBytes = slurp(job.scene.mesh);
         for (const Variant& v : suite.variants) {
             json row = runVariant(entry, job, frame, v, ref, refFlicker, rooflineMedian, meshBytes);

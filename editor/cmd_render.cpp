@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -13,7 +14,6 @@
 #include "commands.h"
 #include "noise/error.h"
 #include "noise/image.h"
-#include "noise/reference.h"
 #include "noise/system.h"
 #include "progress.h"
 #include "render_options.h"
@@ -21,7 +21,6 @@
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
-#include "splat/renderer_vk.h"
 
 namespace spot::cmd {
 
@@ -35,33 +34,35 @@ struct Rendered {
     std::string summary; ///< for the closing line
 };
 
-Rendered renderReference(const cli::Args& args, cli::SceneJob& job) {
-    noise::ReferenceSettings settings;
-    settings.spp = int(args.integer("spp", job.scene.referenceSpp, 1, 65536));
-    settings.stepScale = args.number("step-scale", 1.0, 1e-3, 1e3);
-    settings.seed = job.scene.seed;
-    const noise::ReferenceRenderer renderer(job.mesh, job.generator->kernel(), job.impulses,
-                                            job.scene.shading, job.scene.background,
-                                            job.scene.baseColor);
-    noise::ReferenceStats stats;
-    cli::ProgressBar bar("reference");
-    Rendered r;
-    r.image = renderer.render(job.scene.camera, settings,
-                              [&](int done, int total) { bar.update(done, total); }, &stats);
+/// A number for --stats: an integer when it is one.
+nlohmann::json statValue(double v) {
+    if (v == std::floor(v) && std::abs(v) < 9007199254740992.0)
+        return std::int64_t(v);
+    return v;
+}
+
+/// A CPU method (the reference) on the scene's impulses, with a progress bar.
+Rendered renderCpu(const cli::Args& args, cli::SceneJob& job, const splat::MethodInfo& method) {
+    const splat::RenderSettings settings = cli::renderSettings(args);
+    const splat::CpuScene scene{job.mesh,
+                                job.generator->kernel(),
+                                job.impulses,
+                                {job.scene.camera, job.scene.shading, job.scene.background,
+                                 job.scene.baseColor},
+                                job.scene.seed,
+                                job.scene.referenceSpp};
+    cli::ProgressBar bar(method.name);
+    splat::CpuFrame f = method.renderCpu(scene, settings,
+                                         [&](int done, int total) { bar.update(done, total); });
     bar.finish();
-    r.kernels = job.impulses.size();
-    r.seconds = stats.seconds;
-    r.stats = {{"spp", settings.spp},
-               {"step_scale", settings.stepScale},
-               {"kernels_generated", r.kernels},
-               {"kernels_drawn", r.kernels},
-               {"lobes", stats.lobes},
-               {"rays", stats.rays},
-               {"chords", stats.chords},
-               {"exact_chords", stats.exactChords},
-               {"quadrature_steps", stats.quadratureSteps},
-               {"memory_bytes", stats.memoryBytes}};
-    r.summary = cat(settings.spp, " spp, ", r.kernels, " kernels, ", stats.seconds, " s");
+    Rendered r;
+    r.image = std::move(f.image);
+    r.kernels = f.kernels;
+    r.seconds = f.seconds;
+    r.stats = cli::describe(method, settings);
+    for (const auto& [name, value] : f.stats)
+        r.stats[name] = statValue(value);
+    r.summary = f.summary;
     return r;
 }
 
@@ -139,7 +140,7 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
                     {"validation_errors", v.errors}});
     for (const auto& [name, value] : last.counters.extra)
         r.stats[name] = value;
-    if (settings.countFragments && method.splatting) {
+    if (settings.countFragments && method.takes(splat::settings::countFragments)) {
         const auto& c = last.counters;
         r.stats["fragments_shaded"] = c.fragmentsShaded;
         r.stats["pixels_covered"] = c.pixelsCovered;
@@ -147,11 +148,8 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
             c.pixelsCovered > 0 ? double(c.fragmentsShaded) / double(c.pixelsCovered) : 0.0;
     }
     r.summary = cat(first.kernelsGenerated, " kernels, ", last.counters.kernelsDrawn, " drawn, ");
-    if (method.marching)
-        r.summary += cat(settings.steps, " steps, ", settings.supersample, "x", settings.supersample,
-                         " rays per pixel, ");
-    if (method.baked)
-        r.summary += cat(settings.peelPasses, " peel passes, ");
+    if (method.summarize)
+        r.summary += method.summarize(settings);
     r.summary += cat(first.gpuMs, " ms GPU");
     if (repeat > 0)
         r.summary += cat(" (", repeat, " warm frames: median ", double(summary(gpu)["median"]),
@@ -164,11 +162,7 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
 
 int render(int argc, char** argv) {
     std::vector<cli::OptionSpec> specs = cli::sceneOptions();
-    specs.push_back({"method", "NAME",
-                     "reference (converged CPU ground truth), " + splat::gpuMethodNames(),
-                     true});
-    specs.push_back({"spp", "N", "reference: samples per pixel (default: the scene's)", false});
-    specs.push_back({"step-scale", "X", "reference: quadrature step multiplier (default 1)", false});
+    specs.push_back({"method", "NAME", splat::methodNames(), true});
     for (const cli::OptionSpec& o : cli::renderOptions())
         specs.push_back(o);
     specs.insert(specs.end(),
@@ -188,19 +182,23 @@ int render(int argc, char** argv) {
         return 0;
     }
     const std::string method = args.str("method");
-    const splat::MethodInfo* gpuMethod = splat::findGpuMethod(method);
-    if (!gpuMethod && method != "reference")
-        throw InputError(cat("spotshell render: unknown method '", method, "' (reference, ",
-                             splat::gpuMethodNames(), ")"));
+    const splat::MethodInfo* info = splat::findMethod(method);
+    if (!info)
+        throw InputError(cat("spotshell render: unknown method '", method, "' (",
+                             splat::methodNames(), ")"));
+    cli::refuseSettingsNotTakenBy(args, *info, "spotshell render");
+    if (!info->gpu() && args.has("repeat"))
+        throw InputError(cat("spotshell render: --repeat times the warm frames of a GPU method (",
+                             splat::gpuMethodNames(), "), not of ", method));
     const auto threads = args.integer("threads", 0, 0, 1024);
     std::optional<tbb::global_control> threadLimit;
     if (threads > 0)
         threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
 
-    const bool reference = method == "reference";
-    cli::SceneJob job = cli::prepareScene(args, reference);
+    // A CPU method renders the impulses generated on the host.
+    cli::SceneJob job = cli::prepareScene(args, !info->gpu());
     const std::string out = args.str("out");
-    Rendered r = gpuMethod ? renderGpu(args, job, *gpuMethod) : renderReference(args, job);
+    Rendered r = info->gpu() ? renderGpu(args, job, *info) : renderCpu(args, job, *info);
 
     std::map<std::string, std::string> metadata = {{"method", method},
                                                    {"scene", job.scene.name},

@@ -11,6 +11,7 @@
 #include "edit_session.h"
 #include "noise/error.h"
 #include "noise/image.h"
+#include "splat/method_vk.h"
 
 namespace spot::editor {
 
@@ -329,6 +330,59 @@ bool sessionPanels(edit::Session& session, SessionPanels& state) {
     changed |= distributionPanel(session, state);
     changed |= windPanel(session, state);
     changed |= filePanel(session, state);
+    return changed;
+}
+
+bool renderSettingsWidgets(const splat::MethodInfo& method, splat::RenderSettings& settings) {
+    using splat::SettingType;
+    bool changed = false;
+    for (const splat::Setting* s : method.settings) {
+        const char* label = s->name.c_str();
+        const double top = s->panelMax > 0.0 ? s->panelMax : s->max;
+        switch (s->type) {
+        case SettingType::Toggle:
+        case SettingType::Flag: {
+            bool on = s->get(settings) != 0.0;
+            if (ImGui::Checkbox(label, &on)) {
+                s->set(settings, on ? 1.0 : 0.0);
+                changed = true;
+            }
+            break;
+        }
+        case SettingType::Integer: {
+            int v = int(s->get(settings));
+            if (ImGui::SliderInt(label, &v, int(s->min), int(top))) {
+                s->set(settings, double(v));
+                changed = true;
+            }
+            break;
+        }
+        case SettingType::Number: {
+            float v = float(s->get(settings));
+            if (ImGui::SliderFloat(label, &v, float(s->min), float(top), "%.1f")) {
+                s->set(settings, double(v));
+                changed = true;
+            }
+            break;
+        }
+        case SettingType::Choice: {
+            int v = int(s->get(settings));
+            std::string items;
+            for (const std::string& c : s->choices)
+                items += c + '\0';
+            if (ImGui::Combo(label, &v, items.c_str())) {
+                s->set(settings, double(v));
+                changed = true;
+            }
+            break;
+        }
+        case SettingType::File:
+            ImGui::Text("%s: %s", label, s->text(settings).c_str());
+            break;
+        }
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("%s", s->help.c_str());
+    }
     return changed;
 }
 

@@ -16,6 +16,10 @@
 namespace spot::edit {
 class Session;
 }
+namespace spot::splat {
+struct MethodInfo;
+struct RenderSettings;
+} // namespace spot::splat
 
 namespace spot::editor {
 
@@ -38,5 +42,10 @@ bool sessionPanels(edit::Session& session, SessionPanels& state);
 
 /// Save to state.savePath; false (with the message set) when it failed.
 bool saveSession(edit::Session& session, SessionPanels& state);
+
+/// The Render panel's widgets for the settings `method` takes, from their descriptors
+/// (splat/settings.h): a checkbox, a slider (to Setting::panelMax) or a combo each; a file
+/// setting is shown, not edited. Returns whether a setting changed.
+bool renderSettingsWidgets(const splat::MethodInfo& method, splat::RenderSettings& settings);
 
 } // namespace spot::editor

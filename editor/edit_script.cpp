@@ -82,31 +82,37 @@ private:
 
 constexpr double kBig = 1e9;
 
+/// `method NAME [KEY VALUE]...`: the settings from their descriptors (splat/settings.h), each
+/// written as on the command line (flags as on|off); a setting the method does not take is
+/// refused, naming the methods that take it.
 splat::RenderSettings methodSettings(Line& line, const std::string& method) {
-    std::vector<std::string> args;
+    const splat::MethodInfo& info = splat::method(method);
+    std::vector<std::pair<const splat::Setting*, std::string>> given;
     while (!line.done()) {
         const std::string key = line.word("setting");
         const std::string value = line.word(cat("value of ", key).c_str());
-        if (key == "count-fragments") {
-            if (value != "on" && value != "off")
-                line.fail("count-fragments must be on or off");
-            if (value == "on")
-                args.push_back("--count-fragments");
-            continue;
-        }
-        args.push_back("--" + key);
-        args.push_back(value);
+        const splat::Setting* setting = nullptr;
+        for (const splat::Setting* s : splat::allSettings())
+            if (s->name == key)
+                setting = s;
+        if (!setting)
+            line.fail(cat("unknown setting '", key, "' of ", method));
+        if (!info.takes(*setting))
+            line.fail(cat(key, " is a setting of ", splat::methodsTaking(*setting), ", not of ",
+                          method));
+        given.emplace_back(setting, value);
     }
-    std::vector<char*> argv;
-    for (std::string& a : args)
-        argv.push_back(a.data());
+    splat::RenderSettings settings;
     try {
-        const cli::Args parsed("method " + method, "", cli::renderOptions(), int(argv.size()),
-                               argv.data());
-        return cli::renderSettings(parsed);
+        // Values first, files last: a bad value is named before a file is read.
+        for (const bool files : {false, true})
+            for (const auto& [setting, value] : given)
+                if ((setting->type == splat::SettingType::File) == files)
+                    setting->parse(settings, value);
     } catch (const InputError& e) {
         line.fail(e.what());
     }
+    return settings;
 }
 
 void parseBrush(Line& line, BrushSettings& b) {

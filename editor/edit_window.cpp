@@ -337,29 +337,7 @@ bool methodPanel(PanelState& p) {
     }
     const splat::MethodInfo& m = methods[std::size_t(p.method)];
     splat::RenderSettings& s = p.settings;
-    if (m.splatting) {
-        changed |= ImGui::Checkbox("EWA filtering", &s.ewa);
-        changed |= ImGui::SliderInt("kernel samples", &s.kernelSamples, 0, 64);
-        int weight = int(s.weight);
-        if (ImGui::Combo("OIT weight", &weight, "constant\0mcguire-bavoil\0")) {
-            s.weight = splat::OitWeight(weight);
-            changed = true;
-        }
-        int closest = int(s.closest);
-        if (ImGui::Combo("closest", &closest, "atomic\0depth-pass\0")) {
-            s.closest = splat::ClosestKernel(closest);
-            changed = true;
-        }
-    }
-    if (m.marching) {
-        changed |= ImGui::SliderInt("steps", &s.steps, 1, 256);
-        changed |= ImGui::SliderInt("supersample", &s.supersample, 1, 4);
-    }
-    float lod = float(s.lodPixels);
-    if (ImGui::SliderFloat("LOD pixels", &lod, 0.0f, 16.0f, "%.1f")) {
-        s.lodPixels = lod;
-        changed = true;
-    }
+    changed |= renderSettingsWidgets(m, s); // the settings `m` takes (edit_panels.h)
     ImGui::Separator();
     changed |= ImGui::Checkbox("render every frame", &p.continuous);
     changed |= ImGui::Combo("resolution", &p.scale, kScaleNames);
@@ -685,7 +663,7 @@ private:
         const auto& methods = splat::gpuMethods();
         if (m_options.cycleMethods) {
             int next = m_report.frames % int(methods.size());
-            if (methods[std::size_t(next)].baked && m_panel.settings.bakeFile.empty())
+            if (methods[std::size_t(next)].takes(splat::settings::bake) && !m_panel.settings.bake)
                 next = 0; // `baked` needs a bake file (--bake)
             m_input.sceneDirty |= next != m_panel.method;
             m_panel.method = next;

@@ -1,87 +1,97 @@
 #include "render_options.h"
 
 #include "noise/error.h"
-#include "splat/baked_vk.h"
-#include "splat/raymarch_vk.h"
 
 namespace spot::cli {
 
+namespace {
+
+using splat::Setting;
+using splat::SettingType;
+
+std::string rangeText(const Setting& s) {
+    switch (s.type) {
+    case SettingType::Integer:
+    case SettingType::Number:
+        return cat("; ", s.min, " to ", s.max);
+    case SettingType::Choice: {
+        std::string names;
+        for (std::size_t i = 0; i < s.choices.size(); ++i)
+            names += (i == 0 ? "" : i + 1 == s.choices.size() ? " or " : ", ") + s.choices[i];
+        return "; " + names;
+    }
+    default:
+        return "";
+    }
+}
+
+} // namespace
+
 std::vector<OptionSpec> renderOptions() {
-    return {{"kernel-samples", "N", "splatting: march N samples per kernel (paper eq. 10) instead "
-                                    "of the analytic integral (default 0)", false},
-            {"ewa", "on|off", "splatting: EWA filtering by the pixel footprint (default on)", false},
-            {"weight", "W", "oit/hybrid: constant or mcguire-bavoil (default)", false},
-            {"closest", "HOW", "hybrid: find each pixel's closest kernel with an atomicMin in the "
-                               "OIT pass (atomic, default) or in a depth pass of its own "
-                               "(depth-pass); the same image either way", false},
-            {"small-pixels", "N", "oit/hybrid/instanced: kernels whose quad covers at most N pixel "
-                                  "centres are evaluated by a compute pass instead of drawn, and "
-                                  "so are thin ones (at most 3 pixels wide) covering at most 256 "
-                                  "(default 36, at most 256; 0: draw every kernel)", false},
-            {"steps", "N", "raymarch: samples along each ray through the shell (default 32, at "
-                           "most 4096; split over dispatches so that no shader invocation loops "
-                           "too long)", false},
-            {"supersample", "N", "raymarch: N x N rays per pixel, box-filtered (default 1, at "
-                                 "most 8)", false},
-            {"bake", "FILE", "baked: the bake to render (an OpenVDB file from spotshell bake)",
-             false},
-            {"peel-passes", "N", "baked: depth-peeling layers of tetrahedra (default 4, at most "
-                                 "64)", false},
-            {"lod", "PIXELS", "GPU methods: thin the kernels of cells smaller than PIXELS on "
-                              "screen, conserving mass (default 0: off)", false},
-            {"count-fragments", "", "splatting: count the fragments shaded and the pixels a "
-                                    "kernel covers (alpha >= 1/255); slows the splat pass", false}};
+    std::vector<OptionSpec> specs;
+    for (const Setting* s : splat::allSettings()) {
+        std::string help = splat::methodsTaking(*s) + ": " + s->help;
+        if (s->type != SettingType::Flag && s->type != SettingType::File)
+            help += " (default " + s->defaultValue() + rangeText(*s) + ")";
+        specs.push_back({s->name, s->value, help, false});
+    }
+    return specs;
 }
 
 splat::RenderSettings renderSettings(const Args& args) {
-    splat::RenderSettings s;
-    s.kernelSamples = int(args.integer("kernel-samples", 0, 0, 2048));
-    const std::string ewa = args.str("ewa", "on");
-    if (ewa != "on" && ewa != "off")
-        throw InputError(cat("--ewa must be on or off, not '", ewa, "'"));
-    s.ewa = ewa == "on";
-    const std::string weight = args.str("weight", "mcguire-bavoil");
-    if (weight == "constant")
-        s.weight = splat::OitWeight::Constant;
-    else if (weight == "mcguire-bavoil")
-        s.weight = splat::OitWeight::McGuireBavoil;
-    else
-        throw InputError(cat("--weight must be constant or mcguire-bavoil, not '", weight, "'"));
-    const std::string closest = args.str("closest", "atomic");
-    if (closest == "atomic")
-        s.closest = splat::ClosestKernel::Atomic;
-    else if (closest == "depth-pass")
-        s.closest = splat::ClosestKernel::DepthPass;
-    else
-        throw InputError(cat("--closest must be atomic or depth-pass, not '", closest, "'"));
-    s.smallPixels = int(args.integer("small-pixels", s.smallPixels, 0, splat::gpu_splat::kSplatMaxSmallPixels));
-    s.steps = int(args.integer("steps", 32, 1, splat::kRaymarchMaxSteps));
-    s.supersample = int(args.integer("supersample", 1, 1, splat::kRaymarchMaxSupersample));
-    s.bakeFile = args.str("bake", "");
-    s.peelPasses = int(args.integer("peel-passes", 4, 1, splat::kBakedMaxPeelPasses));
-    s.lodPixels = args.number("lod", 0.0, 0.0, 64.0);
-    s.countFragments = args.has("count-fragments");
-    return s;
+    splat::RenderSettings r;
+    const std::vector<const Setting*> all = splat::allSettings();
+    // Values first, files last: a bad value is named before a file is read.
+    for (const bool files : {false, true})
+        for (const Setting* s : all) {
+            if ((s->type == SettingType::File) != files || !args.has(s->name))
+                continue;
+            switch (s->type) {
+            case SettingType::Integer: // Args' messages: "spotshell render: --steps 5000 is ..."
+                s->set(r, double(args.integer(s->name, 0, std::int64_t(s->min),
+                                              std::int64_t(s->max))));
+                break;
+            case SettingType::Number:
+                s->set(r, args.number(s->name, 0.0, s->min, s->max));
+                break;
+            case SettingType::Flag:
+                s->set(r, 1.0);
+                break;
+            default:
+                s->parse(r, args.str(s->name));
+            }
+        }
+    return r;
 }
 
-nlohmann::json describe(const splat::MethodInfo& method, const splat::RenderSettings& s) {
+void refuseSettingsNotTakenBy(const Args& args, const splat::MethodInfo& method,
+                              const std::string& context) {
+    for (const Setting* s : splat::allSettings())
+        if (args.has(s->name) && !method.takes(*s))
+            throw InputError(cat(context, ": --", s->name, " is a setting of ",
+                                 splat::methodsTaking(*s), ", not of ", method.name));
+}
+
+nlohmann::json describe(const splat::MethodInfo& method, const splat::RenderSettings& settings) {
     nlohmann::json d = nlohmann::json::object();
-    if (method.splatting) {
-        d["ewa"] = s.ewa;
-        d["kernel_samples"] = s.kernelSamples;
-        d["weight"] = s.weight == splat::OitWeight::Constant ? "constant" : "mcguire-bavoil";
-        d["closest"] = s.closest == splat::ClosestKernel::Atomic ? "atomic" : "depth-pass";
-        d["small_pixels"] = s.smallPixels;
+    for (const Setting* s : method.settings) {
+        switch (s->type) {
+        case SettingType::Toggle:
+        case SettingType::Flag:
+            d[s->key()] = s->get(settings) != 0.0;
+            break;
+        case SettingType::Integer:
+            d[s->key()] = std::int64_t(s->get(settings));
+            break;
+        case SettingType::Number:
+            d[s->key()] = s->get(settings);
+            break;
+        case SettingType::Choice:
+        case SettingType::File:
+            d[s->key()] = s->text(settings);
+            break;
+        }
     }
-    if (method.marching) {
-        d["steps"] = s.steps;
-        d["supersample"] = s.supersample;
-    }
-    if (method.baked) {
-        d["bake"] = s.bakeFile;
-        d["peel_passes"] = s.peelPasses;
-    }
-    d["lod_pixels"] = s.lodPixels;
     return d;
 }
 

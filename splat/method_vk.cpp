@@ -4,9 +4,6 @@
 
 #include "noise/error.h"
 #include "noise/mesh.h"
-#include "splat/baked_vk.h"
-#include "splat/raymarch_vk.h"
-#include "splat/renderer_vk.h"
 
 namespace spot::splat {
 
@@ -51,51 +48,91 @@ SceneGpu::SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& k
     : m_ctx(&ctx), m_kernel(kernel), m_meshPass(ctx, mesh, "scene"),
       m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}
 
-const std::vector<MethodInfo>& gpuMethods() {
-    static const std::vector<MethodInfo> methods = [] {
-        std::vector<MethodInfo> m;
-        auto splat = [&](Method method, const char* summary) {
-            m.push_back({methodName(method), summary, true, false,
-                         [method](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
-                             return std::make_unique<SplatRenderer>(scene, method);
-                         }});
-        };
-        splat(Method::Instanced, "opaque kernels with the depth test (paper fig. 4 left)");
-        splat(Method::Oit, "weighted blended OIT EWA splatting (paper eq. 10-12)");
-        splat(Method::Hybrid, "oit plus the closest kernel composited over it (paper eq. 13)");
-        splat(Method::Sorted, "kernels sorted by depth, composited back to front");
-        m.push_back({"raymarch",
-                     "the baseline: each pixel's ray marched through the shell, the neighbouring "
-                     "kernels summed at every step (paper eq. 7-9)",
-                     false, true, [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
-                         return std::make_unique<RaymarchRenderer>(scene);
-                     }});
-        m.push_back({"baked",
-                     "a bake (render --bake FILE.vdb) marched through the shell's tetrahedra, "
-                     "composited by depth peeling",
-                     false, false,
-                     [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
-                         return std::make_unique<BakedRenderer>(scene);
-                     },
-                     true});
-        return m;
-    }();
-    return methods;
+// The registry: each method's module makes its entry (its folder under splat/methods/). Adding a
+// method is its folder and one line here.
+MethodInfo referenceMethod();
+MethodInfo instancedMethod();
+MethodInfo oitMethod();
+MethodInfo hybridMethod();
+MethodInfo sortedMethod();
+MethodInfo raymarchMethod();
+MethodInfo bakedMethod();
+
+const std::vector<MethodInfo>& methods() {
+    static const std::vector<MethodInfo> all = {referenceMethod(), instancedMethod(), oitMethod(),
+                                                hybridMethod(),    sortedMethod(),    raymarchMethod(),
+                                                bakedMethod()};
+    return all;
 }
 
-std::string gpuMethodNames() {
-    std::string names;
-    for (const MethodInfo& m : gpuMethods())
-        names += (names.empty() ? "" : ", ") + m.name;
-    return names;
+bool MethodInfo::takes(const Setting& setting) const {
+    return std::find(settings.begin(), settings.end(), &setting) != settings.end();
 }
 
-const MethodInfo* findGpuMethod(std::string_view name) {
-    for (const MethodInfo& m : gpuMethods())
+bool MethodInfo::takes(std::string_view setting) const {
+    return std::any_of(settings.begin(), settings.end(),
+                       [&](const Setting* s) { return s->name == setting; });
+}
+
+namespace {
+
+std::string names(const std::vector<MethodInfo>& list) {
+    std::string out;
+    for (const MethodInfo& m : list)
+        out += (out.empty() ? "" : ", ") + m.name;
+    return out;
+}
+
+const MethodInfo* find(const std::vector<MethodInfo>& list, std::string_view name) {
+    for (const MethodInfo& m : list)
         if (m.name == name)
             return &m;
     return nullptr;
 }
+
+} // namespace
+
+const MethodInfo* findMethod(std::string_view name) { return find(methods(), name); }
+
+const MethodInfo& method(std::string_view name) {
+    if (const MethodInfo* m = findMethod(name))
+        return *m;
+    throw InputError(cat("unknown method '", name, "' (", methodNames(), ")"));
+}
+
+std::string methodNames() { return names(methods()); }
+
+std::vector<const Setting*> allSettings() {
+    std::vector<const Setting*> out;
+    for (const MethodInfo& m : methods())
+        for (const Setting* s : m.settings)
+            if (std::find(out.begin(), out.end(), s) == out.end())
+                out.push_back(s);
+    return out;
+}
+
+std::string methodsTaking(const Setting& setting) {
+    std::string out;
+    for (const MethodInfo& m : methods())
+        if (m.takes(setting))
+            out += (out.empty() ? "" : ", ") + m.name;
+    return out;
+}
+
+const std::vector<MethodInfo>& gpuMethods() {
+    static const std::vector<MethodInfo> gpu = [] {
+        std::vector<MethodInfo> out;
+        for (const MethodInfo& m : methods())
+            if (m.gpu())
+                out.push_back(m);
+        return out;
+    }();
+    return gpu;
+}
+
+std::string gpuMethodNames() { return names(gpuMethods()); }
+
+const MethodInfo* findGpuMethod(std::string_view name) { return find(gpuMethods(), name); }
 
 const MethodInfo& gpuMethod(std::string_view name) {
     if (const MethodInfo* m = findGpuMethod(name))

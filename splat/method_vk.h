@@ -28,9 +28,12 @@
 #include "noise/camera.h"
 #include "noise/cells.h"
 #include "noise/kernel.h"
+#include "noise/image.h"
+#include "noise/impulses.h"
 #include "noise/reference.h"
 #include "splat/context_vk.h"
 #include "splat/pass_vk.h"
+#include "splat/settings.h"
 
 namespace spot::noise {
 struct Mesh;
@@ -44,63 +47,6 @@ struct View {
     noise::Shading shading;
     glm::vec3 background{0.0f}; ///< linear RGB where no mesh is hit
     glm::vec3 baseColor{0.0f};  ///< linear RGB of the opaque base mesh
-};
-
-/// How `hybrid` finds each pixel's closest kernel (docs/design.md section 4: "measure both
-/// ways"). Both find the same kernel, so the images are identical; only the cost differs.
-enum class ClosestKernel {
-    Atomic,   ///< in the OIT pass itself: a 64-bit atomicMin of (distance bits, kernel index)
-    DepthPass ///< a separate pass over the same quads with a depth test (splat_closest.frag)
-};
-enum class OitWeight {
-    Constant,     ///< w = 1: a plain unordered blend ("no OIT", paper fig. 3.3)
-    McGuireBavoil ///< MB13 eq. 7 with z = view depth in world units (see spotOitWeight)
-};
-
-/// Every method's settings, flat: a method reads the ones it uses and ignores the others (the
-/// registry says which method uses which).
-/// RenderSettings::smallPixels's default: kSplatSmallPixels (shaders/spot_splat.h; renderer_vk.cpp
-/// holds them equal).
-inline constexpr int kDefaultSmallPixels = 36;
-
-struct RenderSettings {
-    // Splatting (instanced, oit, hybrid, sorted).
-    bool ewa = true;       ///< widen lobes by the pixel footprint (anti-aliasing)
-    int kernelSamples = 0; ///< 0: analytic optical depths; N in [1, 2048]: paper eq. 10's N_s
-    OitWeight weight = OitWeight::McGuireBavoil;       ///< oit, hybrid
-    ClosestKernel closest = ClosestKernel::Atomic;     ///< hybrid
-    /// oit, hybrid (atomic), instanced: a kernel whose quad's pixel box holds at most this many
-    /// pixel centres is evaluated by a compute pass instead of drawn (lavapipe's cost per
-    /// primitive dwarfs the few fragments of such a quad), and so is a thin quad (at most 3
-    /// pixels wide) whose box holds at most kSplatMaxSmallPixels (lavapipe shades a quad in 4x4
-    /// blocks, few of whose lanes a thin one fills: docs/design.md section 4); 0: every kernel is
-    /// drawn. In [0, kSplatMaxSmallPixels]; the default is kSplatSmallPixels
-    /// (shaders/spot_splat.h). oit and hybrid draw every kernel in frames over about 1830^2 pixels
-    /// (their fixed-point sums, 40 bytes a pixel, would not fit one 128 MiB storage buffer
-    /// binding).
-    int smallPixels = kDefaultSmallPixels;
-    /// The roofline instead of the method's splat pass: the same quads over the same pixels into
-    /// the `oit` targets with a fragment shader that does nothing (the image is meaningless; the
-    /// splat pass time is what lavapipe's rasterizer itself costs for this frame).
-    bool roofline = false;
-    /// Count the fragments each splat pass shades and the pixels where a kernel's alpha reaches
-    /// 1/255 (FrameCounters); costs atomics in the fragment shader, so off unless measuring.
-    bool countFragments = false;
-
-    // Impulse generation (every method).
-    double lodPixels = 0.0; ///< thin the kernels of cells smaller than this on screen (0: off)
-
-    // Ray-march.
-    int steps = 32;      ///< samples along each ray through the shell, [1, 4096]
-    int supersample = 1; ///< n x n rays per pixel, box-filtered, [1, 8]
-    /// Largest loop bound one march dispatch may reach (raymarch_vk.h); tests raise it past
-    /// lavapipe's 65,535 to show what the guard prevents. 0: the default budget.
-    std::uint32_t loopBudget = 0;
-    bool cullImpulses = true; ///< skip impulses whose box misses the sample (exact)
-
-    // Baked (baked_vk.h).
-    std::string bakeFile; ///< the bake (noise/bake.h's OpenVDB file) the method renders
-    int peelPasses = 4;   ///< depth-peeling layers of tetrahedra, [1, kBakedMaxPeelPasses]
 };
 
 /// Impulses on the GPU for one frame (GpuGenerator's, or uploaded by a test).
@@ -184,21 +130,66 @@ public:
     virtual bool readsImpulsesInPrepare() const { return false; }
 };
 
-/// One GPU method of the registry.
+/// What a CPU method renders from: the scene on the host.
+struct CpuScene {
+    const noise::Mesh& mesh;
+    const noise::Kernel& kernel;
+    const std::vector<noise::Impulse>& impulses;
+    View view;
+    std::uint32_t seed = 0;
+    int spp = 1; ///< the scene's samples per pixel (RenderSettings::spp 0 takes these)
+};
+/// What a CPU method rendered.
+struct CpuFrame {
+    noise::Image image;
+    double seconds = 0.0;
+    std::size_t kernels = 0;
+    /// Numbers for --stats, in order (integers are written as such).
+    std::vector<std::pair<std::string, double>> stats;
+    std::string summary; ///< for render's closing line
+};
+/// Called with (done, total) as a CPU method progresses.
+using Progress = std::function<void(int, int)>;
+
+/// One method of the registry: its name, the settings it takes, and how it renders. A GPU method
+/// makes a Renderer (driven by splat::Frame); a CPU method renders on the host from the scene's
+/// impulses.
 struct MethodInfo {
     std::string name;    ///< as on the command line
     std::string summary; ///< one line for --help
-    bool splatting = false; ///< reads RenderSettings' splatting fields
-    bool marching = false;  ///< reads RenderSettings' ray-march fields
+    /// The settings it takes; any other given to it is refused (render, the script's `method`).
+    std::vector<const Setting*> settings;
+    /// GPU methods: a renderer for `scene`.
     std::function<std::unique_ptr<Renderer>(const SceneGpu&)> make;
-    bool baked = false; ///< reads RenderSettings' bake fields (and needs a bake file)
+    /// CPU methods: the image of `scene`.
+    std::function<CpuFrame(const CpuScene&, const RenderSettings&, const Progress&)> renderCpu;
+    /// What render's closing line says of the settings (e.g. "32 steps, 2x2 rays per pixel, "),
+    /// empty when nothing.
+    std::function<std::string(const RenderSettings&)> summarize;
+
+    bool gpu() const { return bool(make); }
+    bool takes(const Setting& setting) const;
+    bool takes(std::string_view setting) const;
 };
 
-/// Every GPU method, in the order `render --help` and the bench list them.
-const std::vector<MethodInfo>& gpuMethods();
+/// Every method, reference included, in the order `render --help` and the bench list them.
+const std::vector<MethodInfo>& methods();
 /// The method called `name`; InputError naming the methods there are.
-const MethodInfo& gpuMethod(std::string_view name);
+const MethodInfo& method(std::string_view name);
 /// The method called `name`, or null.
+const MethodInfo* findMethod(std::string_view name);
+/// "reference, instanced, oit, hybrid, sorted, raymarch, baked".
+std::string methodNames();
+/// Every setting some method takes, once each, in the registry's order.
+std::vector<const Setting*> allSettings();
+/// The names of the methods that take `setting` ("oit, hybrid").
+std::string methodsTaking(const Setting& setting);
+
+/// The GPU methods alone (what splat::Frame and the editor draw with), in the registry's order.
+const std::vector<MethodInfo>& gpuMethods();
+/// The GPU method called `name`; InputError naming the methods there are.
+const MethodInfo& gpuMethod(std::string_view name);
+/// The GPU method called `name`, or null.
 const MethodInfo* findGpuMethod(std::string_view name);
 /// "instanced, oit, hybrid, sorted, raymarch, baked".
 std::string gpuMethodNames();

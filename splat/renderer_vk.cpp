@@ -478,13 +478,33 @@ void SplatRenderer::prepare(const View& view, const ImpulseSet& impulses,
 }
 
 void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
+    recordPrepareAndCompact(cmd);
+    timer.mark(cmd, "prepare");
+    if (m_frame.sorted) {
+        recordSort(cmd);
+        timer.mark(cmd, "sort");
+    }
+    recordMesh(cmd);
+    timer.mark(cmd, "mesh");
+    recordClosestPass(cmd);
+    recordSplat(cmd);
+    timer.mark(cmd, "splat");
+    recordResolve(cmd);
+    timer.mark(cmd, "resolve");
+}
+
+std::vector<const Image*> SplatRenderer::attachments() const {
+    std::vector<const Image*> targets = {&m_base, &m_distance};
+    if (usesOit(m_method) || m_frame.settings.roofline)
+        targets.insert(targets.end(), {&m_accum, &m_opticalDepth});
+    return targets;
+}
+
+void SplatRenderer::recordPrepareAndCompact(VkCommandBuffer cmd) {
     using namespace passes;
     const Prepared& f = m_frame;
     const Pipelines& p = *f.pipelines;
-    const std::uint32_t width = m_width, height = m_height;
     const std::uint32_t capacity = f.impulses.capacity;
-    const bool oitTargets = usesOit(m_method) || f.settings.roofline;
-
     // 1. Prepare: world and screen lobes and bounds, then the kept kernels in order and the draw.
     PrepareBuffers pb;
     pb.impulses = f.impulses.impulses;
@@ -522,29 +542,32 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
                   VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
                       kFragment | kCompute,
                   VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | kStorageRW);
-    timer.mark(cmd, "prepare");
+}
 
-    // 1b. Sorted: the kept kernels back to front (the padding past the kept count last).
-    if (f.sorted) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.sortKeys.handle());
-        pushFrame(cmd, p.sortKeys, f.frame);
-        Descriptors()
-            .buffer(kSplatBindBounds, m_bounds)
-            .buffer(kSplatBindVisible, m_visible)
-            .buffer(kSplatBindDraw, m_draw)
-            .buffer(kSplatBindKeys, m_sortKeys)
-            .push(m_ctx, cmd, p.sortKeys);
-        if (capacity > 0)
-            vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
-        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRW);
-        m_sort->record(cmd, m_sortKeys, m_visible, capacity, m_sortScratch);
-        timer.mark(cmd, "sort");
-    }
+void SplatRenderer::recordSort(VkCommandBuffer cmd) {
+    // The kept kernels back to front (the padding past the kept count last).
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const Pipelines& p = *f.pipelines;
+    const std::uint32_t capacity = f.impulses.capacity;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.sortKeys.handle());
+    pushFrame(cmd, p.sortKeys, f.frame);
+    Descriptors()
+        .buffer(kSplatBindBounds, m_bounds)
+        .buffer(kSplatBindVisible, m_visible)
+        .buffer(kSplatBindDraw, m_draw)
+        .buffer(kSplatBindKeys, m_sortKeys)
+        .push(m_ctx, cmd, p.sortKeys);
+    if (capacity > 0)
+        vkCmdDispatch(cmd, (capacity + 63) / 64, 1, 1);
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRW);
+    m_sort->record(cmd, m_sortKeys, m_visible, capacity, m_sortScratch);
+}
 
-    // 2. The base mesh.
-    std::vector<const Image*> targets = {&m_base, &m_distance};
-    if (oitTargets)
-        targets.insert(targets.end(), {&m_accum, &m_opticalDepth});
+void SplatRenderer::recordMesh(VkCommandBuffer cmd) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const std::vector<const Image*> targets = attachments();
     for (const Image* image : targets)
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kAttachment,
                         VK_PIPELINE_STAGE_2_NONE, 0, kColorOut, kColorRW);
@@ -560,27 +583,34 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                     kTests, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
-    timer.mark(cmd, "mesh");
+}
 
-    auto quadDescriptors = [&](const Pipeline& pipeline, bool closest, bool counters) {
-        Descriptors d;
-        d.buffer(kSplatBindBounds, m_bounds)
-            .buffer(kSplatBindVisible, m_visible)
-            .buffer(kSplatBindWorldLobes, m_worldLobes)
-            .buffer(kSplatBindScreenLobes, m_screenLobes)
-            .image(kSplatBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
-        if (closest)
-            d.buffer(kSplatBindClosest, m_closest.handle() ? m_closest : m_counters);
-        if (counters)
-            d.buffer(kSplatBindCounters, m_counters);
-        d.push(m_ctx, cmd, pipeline);
-    };
+void SplatRenderer::pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline,
+                                        bool closest, bool counters) {
+    Descriptors d;
+    d.buffer(kSplatBindBounds, m_bounds)
+        .buffer(kSplatBindVisible, m_visible)
+        .buffer(kSplatBindWorldLobes, m_worldLobes)
+        .buffer(kSplatBindScreenLobes, m_screenLobes)
+        .image(kSplatBindMeshDistance, m_distance, passes::kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
+    if (closest)
+        d.buffer(kSplatBindClosest, m_closest.handle() ? m_closest : m_counters);
+    if (counters)
+        d.buffer(kSplatBindCounters, m_counters);
+    d.push(m_ctx, cmd, pipeline);
+}
+
+void SplatRenderer::drawQuads(VkCommandBuffer cmd) {
     // One quad per kept kernel: the compaction's indexed draw (spot_splat.h, kSplatQuadIndices).
-    auto drawQuads = [&] {
-        vkCmdBindIndexBuffer(cmd, m_quadIndices.handle(), 0, VK_INDEX_TYPE_UINT32);
-        vkCmdDrawIndexedIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndexedIndirectCommand));
-    };
+    vkCmdBindIndexBuffer(cmd, m_quadIndices.handle(), 0, VK_INDEX_TYPE_UINT32);
+    vkCmdDrawIndexedIndirect(cmd, m_draw.handle(), 0, 1, sizeof(VkDrawIndexedIndirectCommand));
+}
 
+void SplatRenderer::recordClosestPass(VkCommandBuffer cmd) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const Pipelines& p = *f.pipelines;
+    const std::uint32_t width = m_width, height = m_height;
     // 3a. Hybrid with a depth pass: each pixel's closest kernel (index, depth test LESS).
     transitionImage(cmd, m_closestKernel.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED,
                     kAttachment, VK_PIPELINE_STAGE_2_NONE, 0, kColorOut, kColorRW);
@@ -596,13 +626,19 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         beginRendering(cmd, width, height, {index}, &nearest);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.closest.handle());
         pushFrame(cmd, p.closest, f.frame);
-        quadDescriptors(p.closest, false, false);
-        drawQuads();
+        pushQuadDescriptors(cmd, p.closest, false, false);
+        drawQuads(cmd);
         vkCmdEndRendering(cmd);
     }
     transitionImage(cmd, m_closestKernel.handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute, kStorageRead);
+}
 
+void SplatRenderer::recordSplat(VkCommandBuffer cmd) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const Pipelines& p = *f.pipelines;
+    const std::uint32_t width = m_width, height = m_height;
     // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
     const VkRenderingAttachmentInfo depthInfo = depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
     if (f.instanced) // nothing but the atomics, behind the mesh test
@@ -618,8 +654,8 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.splat.handle());
     pushFrame(cmd, p.splat, f.frame);
     const bool atomics = (usesOit(m_method) || f.instanced) && !f.settings.roofline;
-    quadDescriptors(p.splat, atomics, true);
-    drawQuads();
+    pushQuadDescriptors(cmd, p.splat, atomics, true);
+    drawQuads(cmd);
     vkCmdEndRendering(cmd);
     // 3b. The small kernels: one invocation each (after the quads: both pass's atomics are
     // order-independent, and the fixed-point sums are the resolve's to add).
@@ -641,14 +677,20 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             .push(m_ctx, cmd, p.small);
         vkCmdDispatchIndirect(cmd, m_draw.handle(), kSplatDrawDispatch * sizeof(std::uint32_t));
     }
-    for (const Image* image : targets)
+    for (const Image* image : attachments())
         if (image != &m_distance)
             transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                             VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute, kStorageRead);
     memoryBarrier(cmd, kFragment | kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                   kCompute | kHostStage, kStorageRW | VK_ACCESS_2_HOST_READ_BIT);
-    timer.mark(cmd, "splat");
+}
 
+void SplatRenderer::recordResolve(VkCommandBuffer cmd) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const Pipelines& p = *f.pipelines;
+    const std::uint32_t width = m_width, height = m_height;
+    const bool oitTargets = usesOit(m_method) || f.settings.roofline;
     // 4. Resolve into the result image (hybrid, instanced: in two dispatches, SpotSplatList).
     const bool listed = p.resolveList.handle() != VK_NULL_HANDLE;
     if (listed)
@@ -689,7 +731,6 @@ void SplatRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                   kCompute | kTransfer | kHostStage,
                   kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
-    timer.mark(cmd, "resolve");
 }
 
 FrameCounters SplatRenderer::counters() const {
@@ -711,6 +752,45 @@ FrameCounters SplatRenderer::counters() const {
         c.pixelsCovered = std::uint64_t(counted.fragments.z) | (std::uint64_t(counted.fragments.w) << 32);
     }
     return c;
+}
+
+namespace {
+
+MethodInfo splatMethod(Method method, const char* summary, std::vector<const Setting*> taken) {
+    MethodInfo m;
+    m.name = methodName(method);
+    m.summary = summary;
+    m.settings = std::move(taken);
+    m.make = [method](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
+        return std::make_unique<SplatRenderer>(scene, method);
+    };
+    return m;
+}
+
+} // namespace
+
+MethodInfo instancedMethod() {
+    namespace s = settings;
+    return splatMethod(Method::Instanced, "opaque kernels with the depth test (paper fig. 4 left)",
+                       {&s::kernelSamples, &s::ewa, &s::smallPixels, &s::lod, &s::countFragments});
+}
+
+MethodInfo oitMethod() {
+    namespace s = settings;
+    return splatMethod(Method::Oit, "weighted blended OIT EWA splatting (paper eq. 10-12)",
+                       {&s::kernelSamples, &s::ewa, &s::weight, &s::smallPixels, &s::lod, &s::countFragments});
+}
+
+MethodInfo hybridMethod() {
+    namespace s = settings;
+    return splatMethod(Method::Hybrid, "oit plus the closest kernel composited over it (paper eq. 13)",
+                       {&s::kernelSamples, &s::ewa, &s::weight, &s::closest, &s::smallPixels, &s::lod, &s::countFragments});
+}
+
+MethodInfo sortedMethod() {
+    namespace s = settings;
+    return splatMethod(Method::Sorted, "kernels sorted by depth, composited back to front",
+                       {&s::kernelSamples, &s::ewa, &s::lod, &s::countFragments});
 }
 
 } // namespace spot::splat

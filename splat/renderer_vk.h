@@ -117,6 +117,25 @@ private:
     /// ensureBuffers checks against the budget and frameBytes counts.
     std::uint64_t kernelBytes() const;
 
+    // The passes record() records, in order (the class comment's steps).
+    /// 1. Prepare and compaction, and the clears the frame's atomics need.
+    void recordPrepareAndCompact(VkCommandBuffer cmd);
+    /// 1b. `sorted`: the kept kernels back to front.
+    void recordSort(VkCommandBuffer cmd);
+    /// 2. The base mesh.
+    void recordMesh(VkCommandBuffer cmd);
+    /// 3a. `hybrid` with a depth pass: each pixel's closest kernel.
+    void recordClosestPass(VkCommandBuffer cmd);
+    /// 3. The kernels' quads, and the small kernels' compute pass.
+    void recordSplat(VkCommandBuffer cmd);
+    /// 4. The resolve into result().
+    void recordResolve(VkCommandBuffer cmd);
+    /// The colour targets the mesh pass clears and the splat pass draws into.
+    std::vector<const Image*> attachments() const;
+    void pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline, bool closest,
+                             bool counters);
+    void drawQuads(VkCommandBuffer cmd);
+
     const SceneGpu& m_scene;
     Context& m_ctx;
     Method m_method;

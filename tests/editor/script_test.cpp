@@ -69,6 +69,10 @@ TEST(EditScript, BadLinesNameTheirLine) {
     EXPECT_NE(parseError("\n\nstroke 10;20\n").find("t.script:3:"), std::string::npos);
     EXPECT_NE(parseError("method warp\n").find("t.script:1: unknown method"), std::string::npos);
     EXPECT_NE(parseError("method raymarch steps 0\n").find("t.script:1:"), std::string::npos);
+    EXPECT_NE(parseError("method hybrid steps 64\n")
+                  .find("t.script:1: steps is a setting of raymarch, not of hybrid"),
+              std::string::npos)
+        << parseError("method hybrid steps 64\n");
     EXPECT_NE(parseError("frames many\n").find("t.script:1: frame count"), std::string::npos);
     EXPECT_NE(parseError("frames 2 3\n").find("unexpected '3'"), std::string::npos);
     EXPECT_NE(parseError("lobe 9 sigma 1 1 1\n").find("t.script:1:"), std::string::npos);

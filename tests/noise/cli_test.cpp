@@ -244,6 +244,29 @@ TEST(Cli, RenderGpuRejectsBadSettings) {
                      "--steps");
 }
 
+// A setting given to a method that does not take it would silently do nothing: it is refused
+// (exit 2, one line naming the methods that take it), from the registry's settings.
+TEST(Cli, RenderRefusesSettingsTheMethodDoesNotTake) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+    const std::string render = "render --scene " + scene + " --size 16x12 --out " + tmp("x.png");
+    expectInputError(render + " --method hybrid --supersample 2",
+                     "--supersample is a setting of raymarch, not of hybrid");
+    expectInputError(render + " --method hybrid --steps 64",
+                     "--steps is a setting of raymarch, not of hybrid");
+    expectInputError(render + " --method hybrid --peel-passes 2",
+                     "--peel-passes is a setting of baked, not of hybrid");
+    expectInputError(render + " --method instanced --closest depth-pass",
+                     "--closest is a setting of hybrid, not of instanced");
+    expectInputError(render + " --method reference --ewa off",
+                     "--ewa is a setting of instanced, oit, hybrid, sorted, not of reference");
+    expectInputError(render + " --method oit --spp 4", "--spp is a setting of reference, not of oit");
+    expectInputError(render + " --method reference --repeat 2", "--repeat");
+    EXPECT_FALSE(std::filesystem::exists(tmp("x.png")));
+    // Every option's help names the methods that take it.
+    const Result help = run("render --help");
+    EXPECT_NE(help.out.find("raymarch: samples along each ray"), std::string::npos) << help.out;
+}
+
 TEST(Cli, RenderRaymarchSplitsAndSupersamples) {
     // 100 steps do not fit one dispatch on fur (the loop guard splits them); 2 x 2 rays per pixel.
     const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";

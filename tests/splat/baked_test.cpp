@@ -21,7 +21,7 @@
 #include "noise/image.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
-#include "splat/baked_vk.h"
+#include "splat/methods/baked/baked_vk.h"
 #include "splat/image_compare.h"
 #include "splat_test_support.h"
 
@@ -138,7 +138,7 @@ TEST(Baked, SingleLobeMatchesTheReference) {
     splat::BakedRenderer renderer(scene);
     renderer.countLoops(true);
     splat::RenderSettings settings;
-    settings.bakeFile = file;
+    settings.bake = splat::BakeData::load(file);
     const splat::Buffer impulses = test::upload(ctx, {imp});
     const noise::Image got = splat::renderImpulses(ctx, renderer, {cam, shading, background, base},
                                                    impulses, 1, settings, nullptr,
@@ -166,7 +166,7 @@ HybridAndBaked renderHybridAndBaked(const BakedScene& s) {
     splat::Context ctx(validated());
     splat::Frame frame(ctx, s.mesh, *s.generator);
     splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
+    settings.bake = splat::BakeData::load(s.bake);
     HybridAndBaked r;
     frame.render("hybrid", s.view(), settings, &r.hybrid);
     frame.render("baked", s.view(), settings, &r.baked);
@@ -187,7 +187,7 @@ TEST(BakedScenes, FurBunnyMatchesTheReferenceAndMoreLayersNeverHurt) {
     splat::Context ctx(validated());
     splat::Frame frame(ctx, s.mesh, *s.generator);
     splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
+    settings.bake = splat::BakeData::load(s.bake);
     double last = 0.0;
     for (int layers : {1, 2, 4, 8, 16}) {
         settings.peelPasses = layers;
@@ -273,7 +273,7 @@ TEST(BakedScenes, EyeInsideTheShellMatchesTheReference) {
     splat::Context ctx(validated());
     splat::Frame frame(ctx, s.mesh, *s.generator);
     splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
+    settings.bake = splat::BakeData::load(s.bake);
     noise::Image got, hybrid;
     frame.render("baked", s.view(), settings, &got);
     const splat::BakedStats stats =
@@ -303,7 +303,7 @@ TEST(BakedFrame, DeterministicWarmFramesAndTheLoopGuard) {
     auto& renderer = dynamic_cast<splat::BakedRenderer&>(frame.renderer("baked"));
     renderer.countLoops(true);
     splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
+    settings.bake = splat::BakeData::load(s.bake);
     noise::Image first, second;
     frame.render("baked", s.view(), settings, &first);
     const std::uint64_t bytes = ctx.allocatedBytes();
@@ -327,7 +327,7 @@ TEST(BakedFrame, DeterministicWarmFramesAndTheLoopGuard) {
         EXPECT_NE(std::string(e.what()).find("65,535"), std::string::npos) << e.what();
     }
     settings.loopBudget = 0;
-    settings.bakeFile.clear();
+    settings.bake.reset();
     EXPECT_THROW(frame.render("baked", s.view(), settings), InputError);
     expectNoValidationErrors(ctx);
 }
@@ -347,7 +347,7 @@ TEST(BakedFrame, ByteIdenticalOnOneAndTwoThreads) {
         splat::Context ctx(validated());
         splat::Frame frame(ctx, s.mesh, *s.generator);
         splat::RenderSettings settings;
-        settings.bakeFile = s.bake;
+        settings.bake = splat::BakeData::load(s.bake);
         settings.peelPasses = 4;
         images.emplace_back();
         frame.render("baked", s.view(), settings, &images.back());
@@ -384,7 +384,7 @@ TEST(BakedFrame, AFrameAfterOtherViewsIsTheFrameOfItsViewAlone) {
     splat::Context ctx(validated());
     splat::Frame frame(ctx, s.mesh, *s.generator);
     splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
+    settings.bake = splat::BakeData::load(s.bake);
     for (std::size_t i = 0; i < steps.size(); ++i) {
         settings.peelPasses = steps[i].peels;
         noise::Image after, alone;
@@ -460,7 +460,7 @@ TEST(BakedFrame, BricksSplitOverBuffersRenderTheSame) {
     splat::Frame frame(ctx, s.mesh, *s.generator);
     auto& renderer = dynamic_cast<splat::BakedRenderer&>(frame.renderer("baked"));
     splat::RenderSettings settings;
-    settings.bakeFile = s.bake;
+    settings.bake = splat::BakeData::load(s.bake);
     noise::Image whole, split;
     frame.render("baked", s.view(), settings, &whole);
     EXPECT_EQ(renderer.stats().brickBuffers, 1u);

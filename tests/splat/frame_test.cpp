@@ -47,7 +47,7 @@ TEST(Frame, WarmFramesAllocateNothingAndRepeatTheImage) {
     splat::Context ctx(validated());
     splat::Frame frame(ctx, s.mesh, *s.generator);
     for (const splat::MethodInfo& method : splat::gpuMethods()) {
-        if (method.baked)
+        if (method.takes(splat::settings::bake))
             continue; // needs a bake file: tests/splat/baked_test.cpp
         splat::RenderSettings settings;
         noise::Image first, second;

@@ -26,7 +26,7 @@
 #include "splat/image_compare.h"
 #include "splat/layout.h"
 #include "splat/method_vk.h"
-#include "splat/raymarch_vk.h"
+#include "splat/methods/raymarch/raymarch_vk.h"
 #include "splat_test_support.h"
 
 namespace {
@@ -694,8 +694,8 @@ TEST(RaymarchFrame, ThroughTheRegistryAndTheFrame) {
     // impulses generated in the frame (a submit of their own, since the lists read them on the
     // host), then warm frames that neither regenerate nor rebin nor allocate.
     const splat::MethodInfo& info = splat::gpuMethod("raymarch");
-    EXPECT_TRUE(info.marching);
-    EXPECT_FALSE(info.splatting);
+    EXPECT_TRUE(info.takes(splat::settings::steps));
+    EXPECT_FALSE(info.takes(splat::settings::ewa));
     noise::SceneDesc desc =
         noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json");
     desc.camera.width = desc.camera.height = 40;

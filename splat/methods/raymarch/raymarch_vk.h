@@ -211,7 +211,28 @@ private:
     };
     const Shell& shellFor(const noise::SurfaceCells& cells);
     const Pipelines& pipelines(bool lambert, bool cull, bool count, bool walkBits);
+    /// The impulses' lists for the march (the file comment's step 1), from scratch: the pieces
+    /// below, in order.
     void bin(const ImpulseSet& impulses, const noise::Camera& marchCamera, bool cull);
+    struct Lists;
+    /// The bin pass on the GPU, waited for: world lobes, boxes and each shell cell's range of
+    /// impulses. Returns its GPU milliseconds.
+    double binOnGpu(const ImpulseSet& impulses, const Shell& shell,
+                    const noise::Camera& marchCamera, const gpu_march::SpotMarchParams& params);
+    /// The bins read back and checked (InputError for impulses out of the cells or out of order).
+    Lists checkBins(const ImpulseSet& impulses, const Shell& shell) const;
+    /// Each shell cell's 27 neighbours and how many impulses lie around it.
+    void findNeighbours(const Shell& shell, const gpu_march::SpotMarchParams& params,
+                        Lists& lists) const;
+    /// The lists without culling: per cell, every impulse of its 27 neighbours.
+    void listEveryImpulse(const Shell& shell, Lists& lists) const;
+    /// The lists with culling: per sub-cell, the impulses (and lobes) whose box reaches it.
+    void listCulled(const Shell& shell, const gpu_march::SpotMarchParams& params,
+                    Lists& lists) const;
+    /// The walk's bits per brick of the shell's box (empty when the box is too large).
+    std::vector<glm::uvec2> walkBits(const Shell& shell, const Lists& lists) const;
+    /// The lists into the grow-only buffers (InputError over a storage buffer or the budget).
+    void uploadLists(const Shell& shell, const Lists& lists);
     void ensureImpulseBuffers(std::uint32_t capacity);
     void ensureTargets(std::uint32_t outWidth, std::uint32_t outHeight, std::uint32_t n);
 

@@ -33,32 +33,6 @@ constexpr Buffer::Memory kDevice = Buffer::Memory::DeviceLocal;
 /// Layers whose peel and march passes are timed apart (2 marks each, within PassTimer's 32).
 constexpr std::uint32_t kBakedMarkedLayers = 12;
 
-struct LeafKey {
-    glm::ivec3 leaf;
-    bool operator==(const LeafKey& o) const { return leaf == o.leaf; }
-};
-struct LeafKeyHash {
-    std::size_t operator()(const LeafKey& k) const {
-        std::uint32_t h = std::uint32_t(k.leaf.x) * 73856093u ^ std::uint32_t(k.leaf.y) * 19349663u ^
-                          std::uint32_t(k.leaf.z) * 83492791u;
-        h ^= h >> 16u;
-        h *= 0x7feb352du;
-        return h ^ (h >> 15u);
-    }
-};
-
-/// A section of leaves in first-seen order (the bake's tree order: deterministic).
-struct Leaves {
-    std::unordered_map<LeafKey, std::uint32_t, LeafKeyHash> index;
-    std::vector<glm::ivec3> keys;
-    std::uint32_t brick(glm::ivec3 leaf) {
-        const auto [it, added] = index.try_emplace(LeafKey{leaf}, std::uint32_t(keys.size()));
-        if (added)
-            keys.push_back(leaf);
-        return it->second;
-    }
-};
-
 /// Every memory barrier the passes need: each pass reads what the previous ones wrote (images,
 /// buffers, attachments); lavapipe runs them in order anyway, the barrier keeps it valid Vulkan.
 void fullBarrier(VkCommandBuffer cmd) {
@@ -153,199 +127,73 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split)
     return m_march.emplace(std::tuple{count, first, split}, std::move(p)).first->second;
 }
 
-float brickUnit(float largest) {
-    if (!(largest > 0.0f) || !std::isfinite(largest))
-        return 1.0f;
-    return std::max(largest / 32768.0f, std::numeric_limits<float>::min());
-}
-
-ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves,
-                            const std::vector<glm::vec4>& data, float unit) {
-    Leaves stored;
-    for (const glm::ivec3& key : leaves)
-        stored.brick(key);
-    const auto step = [](int n) { return glm::ivec3(n >> 2, (n >> 1) & 1, n & 1); };
-    Leaves withApron;
-    for (const glm::ivec3& key : leaves)
-        for (int n = 0; n < 8; ++n)
-            withApron.brick(key - step(n));
-    ApronBricks out;
-    out.voxels.resize(withApron.keys.size() * kBakedBrickVoxels);
-    const int side = int(kBakedBrickSide);
-    for (std::size_t b = 0; b < withApron.keys.size(); ++b) {
-        // The leaf and its neighbours towards +x, +y, +z (index 4 x + 2 y + z), if stored.
-        std::array<const glm::vec4*, 8> around{};
-        for (int n = 0; n < 8; ++n) {
-            const auto it = stored.index.find(LeafKey{withApron.keys[b] + step(n)});
-            around[std::size_t(n)] = it == stored.index.end()
-                                         ? nullptr
-                                         : data.data() + std::size_t(it->second) * kBakedLeafVoxels;
-        }
-        for (int x = 0; x < side; ++x)
-            for (int y = 0; y < side; ++y)
-                for (int z = 0; z < side; ++z) {
-                    const glm::vec4* leaf =
-                        around[std::size_t((x >> 3) << 2 | (y >> 3) << 1 | (z >> 3))];
-                    const glm::vec4 v =
-                        leaf ? leaf[(x & 7) << 6 | (y & 7) << 3 | (z & 7)] / unit : glm::vec4(0.0f);
-                    out.voxels[b * kBakedBrickVoxels + std::size_t((x * side + y) * side + z)] =
-                        glm::uvec2(glm::packHalf2x16(glm::vec2(v.r, v.g)),
-                                   glm::packHalf2x16(glm::vec2(v.b, v.a)));
-                }
-    }
-    out.leaves = std::move(withApron.keys);
-    return out;
-}
-
-void BakedRenderer::loadBake(const std::string& file) {
-    const noise::BakedVolume volume = noise::readBakedGrids(file);
-    const int levels = volume.levels();
-    // Density leaves per level: vec4(extinction x colour, extinction) per voxel.
-    std::vector<Leaves> leaves(std::size_t(levels) + 1);
-    std::vector<std::vector<glm::vec4>> bricks(static_cast<std::size_t>(levels));
-    for (int l = 0; l < levels; ++l) {
-        volume.forEachActive(l, [&](glm::ivec3 ijk, float density, glm::vec3 color) {
-            const std::uint32_t b = leaves[std::size_t(l)].brick(ijk >> int(kBakedLeafBits));
-            auto& data = bricks[std::size_t(l)];
-            if (data.size() < std::size_t(b + 1) * kBakedLeafVoxels)
-                data.resize(std::size_t(b + 1) * kBakedLeafVoxels, glm::vec4(0.0f));
-            const glm::ivec3 o = ijk & 7;
-            data[std::size_t(b) * kBakedLeafVoxels + std::size_t(o.x << 6 | o.y << 3 | o.z)] =
-                glm::vec4(density * color, density);
-        });
-    }
-    // The density bricks with their aprons (packApronBricks), in units of the bake's largest
-    // value: one leaf lookup a sample.
-    float largest = 0.0f;
-    for (const auto& data : bricks)
-        for (const glm::vec4& v : data)
-            largest =
-                std::max({largest, std::abs(v.r), std::abs(v.g), std::abs(v.b), std::abs(v.a)});
-    const float unit = brickUnit(largest);
-    // Each section's leaves in brick order: the levels' bricks, then the distance grid's.
-    std::vector<std::vector<glm::ivec3>> sections(std::size_t(levels) + 1);
-    std::vector<std::vector<glm::uvec2>> packed(static_cast<std::size_t>(levels));
-    std::uint64_t brickCount = 0;
-    for (int l = 0; l < levels; ++l) {
-        ApronBricks level =
-            packApronBricks(leaves[std::size_t(l)].keys, bricks[std::size_t(l)], unit);
-        brickCount += level.leaves.size();
-        sections[std::size_t(l)] = std::move(level.leaves);
-        packed[std::size_t(l)] = std::move(level.voxels);
-    }
-    bricks.clear();
-
-    // Distance leaves: every leaf within 3 voxels of a non-empty level-0 voxel (nearer than the
-    // cap), filled from the bake's distance grid; leaves that hold only the cap are left out
-    // (a lookup that finds no leaf reads the cap).
-    const float cap = noise::kBakeDistanceCap;
-    const int reach = int(cap) - 1;
-    Leaves candidates;
-    volume.forEachActive(0, [&](glm::ivec3 ijk, float, glm::vec3) {
-        for (int c = 0; c < 8; ++c) {
-            const glm::ivec3 d((c & 4) ? reach : -reach, (c & 2) ? reach : -reach,
-                               (c & 1) ? reach : -reach);
-            candidates.brick((ijk + d) >> int(kBakedLeafBits));
-        }
-    });
-    Leaves& distanceLeaves = leaves.back();
-    std::vector<float> distances;
-    std::vector<float> one(kBakedLeafVoxels);
-    for (const glm::ivec3& leaf : candidates.keys) {
-        bool any = false;
-        for (std::uint32_t v = 0; v < kBakedLeafVoxels; ++v) {
-            const glm::ivec3 ijk = leaf * 8 + glm::ivec3(int(v >> 6), int(v >> 3) & 7, int(v) & 7);
-            one[v] = volume.distance(ijk);
-            any = any || one[v] < cap;
-        }
-        if (!any)
-            continue;
-        distanceLeaves.brick(leaf);
-        distances.insert(distances.end(), one.begin(), one.end());
-    }
-
-    sections.back() = distanceLeaves.keys;
-    // Leaf tables: per section the dense box of its leaves, an int each (the brick, or empty).
+void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer) const {
     const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
-    std::vector<std::int32_t> table;
-    std::vector<glm::ivec4> origins(kBakedSections, glm::ivec4(0)), dims(kBakedSections, glm::ivec4(0));
-    std::vector<std::uint32_t> firstBrick(std::size_t(levels) + 1, 0);
-    std::uint32_t base = 0;
-    for (std::size_t s = 0; s < sections.size(); ++s) {
-        const std::uint32_t id = s < std::size_t(levels) ? std::uint32_t(s) : kBakedDistanceSection;
-        const std::vector<glm::ivec3>& keys = sections[s];
-        firstBrick[s] = s < std::size_t(levels) ? base : 0;
-        origins[id].w = std::int32_t(table.size());
-        if (!keys.empty()) {
-            glm::ivec3 lo = keys[0], hi = keys[0];
-            for (const glm::ivec3& k : keys) {
-                lo = glm::min(lo, k);
-                hi = glm::max(hi, k);
-            }
-            const glm::i64vec3 d = glm::i64vec3(hi) - glm::i64vec3(lo) + std::int64_t(1);
-            const std::uint64_t entries = std::uint64_t(d.x * d.y * d.z);
-            if ((table.size() + entries) * sizeof(std::int32_t) > range)
-                throw InputError(cat("baked: ", file, "'s leaves span a box of ", d.x, "x", d.y,
-                                     "x", d.z, " leaves (level ", s, "), more than one storage "
-                                     "buffer of this device takes as a leaf table (",
-                                     range >> 20, " MiB)"));
-            const std::size_t offset = table.size();
-            table.resize(offset + entries, kBakedEmptySlot);
-            for (std::uint32_t b = 0; b < keys.size(); ++b) {
-                const glm::i64vec3 r = glm::i64vec3(keys[b]) - glm::i64vec3(lo);
-                table[offset + std::size_t((r.z * d.y + r.y) * d.x + r.x)] =
-                    std::int32_t(firstBrick[s] + b);
-            }
-            origins[id] = glm::ivec4(lo, std::int32_t(offset));
-            dims[id] = glm::ivec4(glm::ivec3(d), 0);
+    for (std::size_t s = 0; s < bake.tableEnd.size(); ++s)
+        if (bake.tableEnd[s] * sizeof(std::int32_t) > range) {
+            const glm::i64vec3 d = bake.sectionBox[s];
+            throw InputError(cat("baked: ", bake.file, "'s leaves span a box of ", d.x, "x", d.y,
+                                 "x", d.z, " leaves (level ", s, "), more than one storage "
+                                 "buffer of this device takes as a leaf table (",
+                                 range >> 20, " MiB)"));
         }
-        if (s < std::size_t(levels))
-            base += std::uint32_t(keys.size());
-    }
-    if (table.empty())
-        table.push_back(kBakedEmptySlot);
-
     const std::uint64_t brickBytesEach = std::uint64_t(kBakedBrickVoxels) * sizeof(glm::uvec2);
-    const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * brickBytesEach;
+    const std::uint64_t brickBytes = std::max<std::uint64_t>(bake.brickCount, 1) * brickBytesEach;
     const std::uint64_t distanceBytes =
-        std::max<std::uint64_t>(distanceLeaves.keys.size(), 1) * kBakedLeafVoxels * 4;
-    const std::uint64_t tableBytes = table.size() * sizeof(std::int32_t);
-    // The density bricks over up to kBakedBrickBuffers buffers of one storage buffer's range.
-    const std::uint64_t fits = range / brickBytesEach;
-    const std::uint64_t perBuffer = m_brickSplit > 0 ? std::min<std::uint64_t>(m_brickSplit, fits) : fits;
-    const std::uint64_t bufferCount = std::max<std::uint64_t>((brickCount + perBuffer - 1) / perBuffer, 1);
+        std::max<std::uint64_t>(bake.distanceBricks, 1) * kBakedLeafVoxels * 4;
+    const std::uint64_t tableBytes = bake.table.size() * sizeof(std::int32_t);
+    const std::uint64_t bufferCount =
+        std::max<std::uint64_t>((bake.brickCount + perBuffer - 1) / perBuffer, 1);
     if (bufferCount > kBakedBrickBuffers || distanceBytes > range || tableBytes > range)
-        throw InputError(cat("baked: ", file, " holds ", brickCount, " leaves (", brickBytes >> 20,
-                             " MiB of bricks, ", distanceBytes >> 20, " MiB of distances), more than ",
-                             kBakedBrickBuffers, " storage buffers of this device take (",
-                             range >> 20, " MiB each); bake it at a larger voxel size"));
+        throw InputError(cat("baked: ", bake.file, " holds ", bake.brickCount, " leaves (",
+                             brickBytes >> 20, " MiB of bricks, ", distanceBytes >> 20,
+                             " MiB of distances), more than ", kBakedBrickBuffers,
+                             " storage buffers of this device take (", range >> 20,
+                             " MiB each); bake it at a larger voxel size"));
     std::uint64_t held = m_table.reservedBytes() + m_distances.reservedBytes();
     for (const Buffer& b : m_bricks)
         held += b.reservedBytes();
     if (m_ctx.allocatedBytes() - held + brickBytes + distanceBytes + tableBytes >
         m_ctx.memoryBudget())
-        throw InputError(cat("baked: ", file, " needs ",
+        throw InputError(cat("baked: ", bake.file, " needs ",
                              (brickBytes + distanceBytes + tableBytes) >> 20,
                              " MiB of GPU memory; ", (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; bake it at a larger voxel size"));
+}
+
+void BakedRenderer::uploadBake(const BakeData& bake) {
+    const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
+    const std::uint64_t brickBytesEach = std::uint64_t(kBakedBrickVoxels) * sizeof(glm::uvec2);
+    // The density bricks over up to kBakedBrickBuffers buffers of one storage buffer's range.
+    const std::uint64_t fits = range / brickBytesEach;
+    const std::uint64_t perBuffer =
+        m_brickSplit > 0 ? std::min<std::uint64_t>(m_brickSplit, fits) : fits;
+    checkBakeFits(bake, perBuffer);
+    const std::uint64_t brickCount = bake.brickCount;
+    const std::uint64_t bufferCount =
+        std::max<std::uint64_t>((brickCount + perBuffer - 1) / perBuffer, 1);
+    const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * brickBytesEach;
+    const std::uint64_t distanceBytes =
+        std::max<std::uint64_t>(bake.distanceBricks, 1) * kBakedLeafVoxels * 4;
+    const std::uint64_t tableBytes = bake.table.size() * sizeof(std::int32_t);
     m_table = Buffer();
     for (Buffer& b : m_bricks)
         b = Buffer();
     m_distances = Buffer();
     m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
-    m_table.upload(std::span<const std::int32_t>(table));
+    m_table.upload(std::span<const std::int32_t>(bake.table));
     for (std::uint64_t i = 0; i < bufferCount; ++i) {
         const std::uint64_t n = std::min<std::uint64_t>(perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
         m_bricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
                              cat("baked bricks (", n, ", buffer ", i, ")"));
     }
     // Level l's bricks are [firstBrick[l], + its leaves), uploaded in pieces at buffer bounds.
-    for (int l = 0; l < levels; ++l) {
-        const auto& data = packed[std::size_t(l)];
+    for (int l = 0; l < bake.levels; ++l) {
+        const auto& data = bake.packed[std::size_t(l)];
         const std::uint64_t count = data.size() / kBakedBrickVoxels;
         for (std::uint64_t done = 0; done < count;) {
-            const std::uint64_t b = firstBrick[std::size_t(l)] + done;
+            const std::uint64_t b = bake.firstBrick[std::size_t(l)] + done;
             const std::uint64_t buffer = b / perBuffer, local = b % perBuffer;
             const std::uint64_t n = std::min(count - done, perBuffer - local);
             m_bricks[buffer].upload(data.data() + done * kBakedBrickVoxels, n * brickBytesEach,
@@ -355,18 +203,18 @@ void BakedRenderer::loadBake(const std::string& file) {
     }
     m_bricksPerBuffer = std::uint32_t(perBuffer);
     m_distances = Buffer(m_ctx, distanceBytes, kStorage, kHost, "baked distance bricks");
-    if (!distances.empty())
-        m_distances.upload(std::span<const float>(distances));
-    m_leafOrigin = origins;
-    m_leafDims = dims;
+    if (!bake.distances.empty())
+        m_distances.upload(std::span<const float>(bake.distances));
+    m_leafOrigin = bake.leafOrigin;
+    m_leafDims = bake.leafDims;
     m_bakeStats = BakedStats{};
-    m_brickUnit = unit;
-    m_bakeStats.voxelSize = volume.voxelSize(0);
-    m_bakeStats.levels = std::uint32_t(levels);
+    m_brickUnit = bake.unit;
+    m_bakeStats.voxelSize = bake.voxelSize;
+    m_bakeStats.levels = std::uint32_t(bake.levels);
     m_bakeStats.bricks = std::uint32_t(brickCount);
     m_bakeStats.brickBuffers = std::uint32_t(bufferCount);
-    m_bakeStats.distanceBricks = std::uint32_t(distanceLeaves.keys.size());
-    m_bakeStats.tableEntries = std::uint32_t(table.size());
+    m_bakeStats.distanceBricks = bake.distanceBricks;
+    m_bakeStats.tableEntries = std::uint32_t(bake.table.size());
     m_bakeStats.gpuBytes = brickBytes + distanceBytes + tableBytes;
 }
 
@@ -437,7 +285,7 @@ void requireBakedView(const View& view) {
 
 void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                             const RenderSettings& settings) {
-    if (settings.bakeFile.empty())
+    if (!settings.bake)
         throw InputError("baked: no bake file (render --bake FILE.vdb; spotshell bake makes one)");
     requireBakedView(view);
     if (settings.peelPasses < 1 || settings.peelPasses > kBakedMaxPeelPasses)
@@ -445,13 +293,10 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                              kBakedMaxPeelPasses, " are accepted"));
     if (!impulses.cells)
         throw InputError("baked: the shell's thickness needs the impulses' cells");
-    std::error_code error;
-    const auto time = std::filesystem::last_write_time(settings.bakeFile, error);
-    if (settings.bakeFile != m_bakeFile || error || time != m_bakeTime) {
-        m_bakeFile.clear();
-        loadBake(settings.bakeFile);
-        m_bakeFile = settings.bakeFile;
-        m_bakeTime = time;
+    if (settings.bake != m_bake) { // a new bake: uploaded once, kept while it is handed again
+        m_bake.reset();
+        uploadBake(*settings.bake);
+        m_bake = settings.bake;
     }
 
     // The tetrahedra (rebuilt per frame on the GPU), and per mesh their neighbours and the
@@ -723,6 +568,19 @@ FrameCounters BakedRenderer::counters() const {
     if (m_frame.count)
         c.extra.emplace_back("max_loop_iterations", double(s.maxLoopIterations));
     return c;
+}
+
+MethodInfo bakedMethod() {
+    MethodInfo m;
+    m.name = "baked";
+    m.summary = "a bake (render --bake FILE.vdb) marched through the shell's tetrahedra, "
+                "composited by depth peeling";
+    m.settings = {&settings::bake, &settings::peelPasses};
+    m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
+        return std::make_unique<BakedRenderer>(scene);
+    };
+    m.summarize = [](const RenderSettings& s) { return cat(s.peelPasses, " peel passes, "); };
+    return m;
 }
 
 } // namespace spot::splat

@@ -56,7 +56,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
+#include <memory>
 #include <map>
 #include <string>
 #include <tuple>
@@ -68,31 +68,11 @@
 #include "splat/context_vk.h"
 #include "splat/method_vk.h"
 #include "splat/pass_vk.h"
+#include "splat/methods/baked/bake_data.h"
 
 namespace spot::splat {
 
-namespace gpu_baked {
-using glm::ivec3;
-using glm::ivec4;
-using glm::min;
-using glm::uvec2;
-using glm::uvec3;
-using glm::uvec4;
-using glm::vec4;
-using uint = std::uint32_t;
-#define SPOT_CONST inline constexpr
-#define SPOT_FN inline
-#include "shaders/baked_layout.glsl"
-#undef SPOT_CONST
-#undef SPOT_FN
-static_assert(sizeof(SpotBakedTet) == 176);
-static_assert(sizeof(SpotBakedParams) == 432);
-} // namespace gpu_baked
 
-/// Loop iterations one march invocation may need by default (baked_march.comp).
-inline constexpr std::uint32_t kBakedMarchLoopBudget = gpu_baked::kBakedLoopBudget;
-/// Most peel passes accepted.
-inline constexpr int kBakedMaxPeelPasses = 64;
 
 /// What the last frame used (the stats' FrameCounters::extra gives them to `render --stats`).
 struct BakedStats {
@@ -114,22 +94,6 @@ struct BakedStats {
     std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
 };
 
-/// One level's density bricks as the march reads them (baked_layout.glsl): a brick for every leaf
-/// whose apron (the leaf and the first voxels of its +x, +y and +z neighbours, 9^3 voxels) holds
-/// a stored voxel, that is every stored leaf and its -x, -y, -z neighbours, in the order first
-/// met walking `leaves`; each voxel vec4(extinction x colour, extinction) / unit as two
-/// packHalf2x16 words, 0 where no stored leaf holds it.
-struct ApronBricks {
-    std::vector<glm::ivec3> leaves; ///< brick b's leaf
-    std::vector<glm::uvec2> voxels; ///< brick b's at [b x 729, +729), (x * 9 + y) * 9 + z
-};
-/// `leaves`: the level's stored leaves (distinct); `data`: 512 values per leaf, voxel xyz of
-/// leaf i at i x 512 + (x << 6 | y << 3 | z); `unit`: what a stored 1 is (> 0).
-ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves,
-                            const std::vector<glm::vec4>& data, float unit);
-/// The unit of a bake's bricks: its largest magnitude over 32,768 (the half floats' range, with
-/// room to spare), never below the smallest normal float; 1 for an empty bake.
-float brickUnit(float largest);
 
 /// Throws InputError, with the reason, when `baked` cannot render `view` (an orthographic camera;
 /// Lambert shading, which needs normals the bake does not store).
@@ -141,8 +105,8 @@ public:
     explicit BakedRenderer(const SceneGpu& scene);
     ~BakedRenderer() override;
 
-    /// Reads settings.bakeFile when it changed (InputError, one line naming the file, for a
-    /// missing or bad file, or a bake beyond the storage-buffer or memory limits). The shell's
+    /// Uploads settings.bake when it is not the one uploaded last (InputError, one line naming
+    /// the file, for a bake beyond the storage-buffer or memory limits); reads no file. The shell's
     /// thickness is the impulses' cell size (ImpulseSet::cells; the kernels reach at most one
     /// cell from the surface). InputError for an orthographic camera, Lambert shading, a peel
     /// count outside [1, kBakedMaxPeelPasses] or a loop bound beyond the budget.
@@ -161,14 +125,18 @@ public:
     /// storage buffer takes) from the next bake loaded on (for tests: the split of a small bake).
     void splitBricks(std::uint32_t bricksPerBuffer) {
         m_brickSplit = bricksPerBuffer;
-        m_bakeFile.clear();
+        m_bake.reset();
     }
     /// After the frame completed.
     BakedStats stats() const;
 
 private:
     struct Bake;
-    void loadBake(const std::string& file);
+    /// InputError when `bake` does not fit the device (a leaf table or the bricks beyond its
+    /// storage buffers, or the memory budget) split `perBuffer` bricks a buffer.
+    void checkBakeFits(const BakeData& bake, std::uint64_t perBuffer) const;
+    /// Replace the bake on the GPU by `bake`.
+    void uploadBake(const BakeData& bake);
     void ensureTargets(std::uint32_t width, std::uint32_t height);
     const Pipeline& marchPipeline(bool count, bool first, bool split);
 
@@ -180,9 +148,8 @@ private:
         m_march; ///< by (count loops, first layer, split bricks)
     bool m_countLoops = false;
 
-    // Per bake file.
-    std::string m_bakeFile;
-    std::filesystem::file_time_type m_bakeTime{};
+    // Per bake (RenderSettings::bake): the one on the GPU.
+    std::shared_ptr<const BakeData> m_bake;
     BakedStats m_bakeStats;
     Buffer m_table, m_distances;
     std::array<Buffer, gpu_baked::kBakedBrickBuffers> m_bricks; ///< the density bricks' buffers

@@ -469,19 +469,68 @@ void RaymarchRenderer::ensureTargets(std::uint32_t outWidth, std::uint32_t outHe
     m_n = n;
 }
 
+/// What bin() builds on the host for the march (raymarch_vk.h's file comment), and the bins it
+/// builds it from.
+struct RaymarchRenderer::Lists {
+    // The bin pass's output, read back: per shell cell its impulses [first, end) and their count.
+    const std::uint32_t* binFirst = nullptr;
+    const std::uint32_t* binEnd = nullptr;
+    const std::uint32_t* binCount = nullptr;
+    std::uint32_t count = 0; ///< impulses binned
+    /// Each record's 27 neighbours (-1 outside the shell), in (di, dj, dk) order.
+    std::vector<std::int32_t> neighbours;
+    std::vector<SpotMarchCell> cells; ///< head.x: impulses around; head.y: listed
+    std::uint32_t mostAround = 0;
+    /// The lists: slot q's entries are list[starts[q], starts[q + 1]) (a slot per sub-cell with
+    /// culling, per cell without).
+    std::vector<std::uint32_t> starts, list;
+};
+
 void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marchCamera,
                            bool cull) {
     m_version = 0; // until the lists are done
     const auto hostStart = std::chrono::steady_clock::now();
-    const noise::SurfaceCells& surface = *impulses.cells;
-    const Shell& shell = shellFor(surface);
+    const Shell& shell = shellFor(*impulses.cells);
     const std::uint32_t records = std::uint32_t(shell.cells.size());
-    const std::uint32_t capacity = impulses.capacity;
     const std::uint32_t lobes = m_scene.lobeCount();
-    ensureImpulseBuffers(capacity);
+    ensureImpulseBuffers(impulses.capacity);
     SpotMarchParams params = shell.params();
     params.grid.z = m_scene.support();
     params.counts.y = lobes;
+    const double binMs = binOnGpu(impulses, shell, marchCamera, params);
+    Lists lists = checkBins(impulses, shell);
+    findNeighbours(shell, params, lists);
+    if (cull)
+        listCulled(shell, params, lists);
+    else
+        listEveryImpulse(shell, lists);
+    std::uint32_t longest = 0;
+    for (std::size_t q = 0; q + 1 < lists.starts.size(); ++q)
+        longest = std::max(longest, lists.starts[q + 1] - lists.starts[q]);
+    uploadLists(shell, lists);
+
+    RaymarchStats& s = m_binStats;
+    s = RaymarchStats{};
+    s.shellCells = records;
+    s.maxNeighbourhoodImpulses = lists.mostAround;
+    s.maxListedImpulses = longest;
+    s.lobesPerImpulse = lobes;
+    s.longestProbe = std::uint32_t(shell.longestProbe);
+    s.walkCells = shell.walkCells();
+    s.listEntries = lists.list.size();
+    s.impulses = lists.count;
+    s.binMs = binMs;
+    s.binHostMs = since(hostStart);
+    m_version = impulses.version;
+    m_listsCulled = cull;
+    m_listedCells = impulses.cells;
+}
+
+double RaymarchRenderer::binOnGpu(const ImpulseSet& impulses, const Shell& shell,
+                                  const noise::Camera& marchCamera, const SpotMarchParams& params) {
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    const std::uint32_t capacity = impulses.capacity;
+    const std::uint32_t lobes = m_scene.lobeCount();
     const std::uint64_t binBytes = (3 * std::uint64_t(records) + 2) * sizeof(std::uint32_t);
     if (m_bins.size() < binBytes) {
         const std::uint64_t held = m_bins.reservedBytes();
@@ -540,13 +589,23 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
                       kHostStage, VK_ACCESS_2_HOST_READ_BIT);
         times.write(cmd, 1, kAll);
     });
-    const double binMs = times.milliseconds()[1];
+    return times.milliseconds()[1];
+}
 
-    // On the host: check the impulse order, then list each sub-cell's impulses.
+RaymarchRenderer::Lists RaymarchRenderer::checkBins(const ImpulseSet& impulses,
+                                                    const Shell& shell) const {
+    // On the host: check the impulse order (each cell's impulses contiguous, in cell order).
+    const noise::SurfaceCells& surface = *impulses.cells;
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    const std::uint32_t capacity = impulses.capacity;
     const auto* bin = static_cast<const std::uint32_t*>(m_bins.mapped());
-    const std::uint32_t* binFirst = bin;
-    const std::uint32_t* binEnd = bin + records;
-    const std::uint32_t* binCount = bin + 2 * std::uint64_t(records);
+    Lists lists;
+    lists.binFirst = bin;
+    lists.binEnd = bin + records;
+    lists.binCount = bin + 2 * std::uint64_t(records);
+    const std::uint32_t* binFirst = lists.binFirst;
+    const std::uint32_t* binEnd = lists.binEnd;
+    const std::uint32_t* binCount = lists.binCount;
     const std::uint32_t count = bin[3 * std::uint64_t(records) + 1];
     if (count > capacity)
         throw InputError(cat("raymarch: the impulse count ", count, " exceeds the capacity ",
@@ -576,172 +635,189 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
         expected = binEnd[r];
     }
     SPOT_CHECK_EQ(expected, count);
+    lists.count = count;
+    return lists;
+}
 
+void RaymarchRenderer::findNeighbours(const Shell& shell, const SpotMarchParams& params,
+                                      Lists& lists) const {
     // Each record's 27 neighbours (-1 outside the shell), in (di, dj, dk) order: cell order, so
     // their impulses come in impulse order.
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
     requireMemory(std::uint64_t(records) * (27 * 4 + 16 + kMarchSubCells * 8),
                   cat("the ray march's lists of ", records, " shell cells"));
-    std::vector<std::int32_t> neighbours(std::size_t(records) * 27);
-    std::vector<SpotMarchCell> cells(records);
-    std::uint32_t mostAround = 0;
-    {
-        MarchTwin find(MarchTwin::Arrays{&params, shell.table.data()});
-        for (std::uint32_t r = 0; r < records; ++r) {
-            std::uint32_t around = 0;
-            for (int n = 0; n < 27; ++n) {
-                std::uint32_t loops = 0;
-                const int found = find.marchFind(
-                    shell.cells[r] + glm::ivec3(n / 9 - 1, n / 3 % 3 - 1, n % 3 - 1), loops);
-                neighbours[std::size_t(r) * 27 + std::size_t(n)] = found;
-                if (found >= 0)
-                    around += binCount[found];
-            }
-            cells[r].head = glm::uvec4(around, 0u, 0u, 0u);
-            mostAround = std::max(mostAround, around);
+    lists.neighbours.assign(std::size_t(records) * 27, 0);
+    lists.cells.assign(records, SpotMarchCell{});
+    MarchTwin find(MarchTwin::Arrays{&params, shell.table.data()});
+    for (std::uint32_t r = 0; r < records; ++r) {
+        std::uint32_t around = 0;
+        for (int n = 0; n < 27; ++n) {
+            std::uint32_t loops = 0;
+            const int found = find.marchFind(
+                shell.cells[r] + glm::ivec3(n / 9 - 1, n / 3 % 3 - 1, n % 3 - 1), loops);
+            lists.neighbours[std::size_t(r) * 27 + std::size_t(n)] = found;
+            if (found >= 0)
+                around += lists.binCount[found];
         }
+        lists.cells[r].head = glm::uvec4(around, 0u, 0u, 0u);
+        lists.mostAround = std::max(lists.mostAround, around);
     }
-    // List slots: per sub-cell with culling, per cell without.
-    const std::size_t slots = std::size_t(records) * (cull ? kMarchSubCells : 1u);
-    std::vector<std::uint32_t> starts(slots + 1, 0u);
-    std::vector<std::uint32_t> list;
-    if (!cull) {
-        // The paper's baseline: every sub-cell of a cell lists all its 27 neighbours' impulses,
-        // with all their lobes.
-        const std::uint32_t allLobes = (1u << lobes) - 1u;
-        std::uint64_t total = 0;
-        for (std::uint32_t r = 0; r < records; ++r)
-            total += cells[r].head.x;
-        requireMemory(total * 4, cat("the ray march's lists (", total, " entries)"));
-        list.reserve(total);
-        for (std::uint32_t r = 0; r < records; ++r) {
-            const std::uint32_t first = std::uint32_t(list.size());
-            starts[r] = first;
-            for (int n = 0; n < 27; ++n)
-                if (const int nb = neighbours[std::size_t(r) * 27 + std::size_t(n)];
-                    nb >= 0 && binCount[nb] > 0)
-                    for (std::uint32_t i = binFirst[nb]; i < binEnd[nb]; ++i)
-                        list.push_back(i | allLobes << kMarchEntryLobeShift);
-            cells[r].head.y = std::uint32_t(list.size()) - first;
-        }
-        starts[records] = std::uint32_t(list.size());
-    } else {
-        // Each impulse goes to the sub-cells its box reaches within its cell's 27 neighbours,
-        // with a margin of 1/1000 of a sub-cell (and the float rounding of large coordinates)
-        // for the shader's floor(x / (h / kMarchSub)), so a sample a hair past a sub-cell's side
-        // still finds every impulse whose box holds it.
-        const auto* boxes = static_cast<const SpotMarchBox*>(m_boxes.mapped());
-        const auto* lobeBoxes = static_cast<const SpotMarchBox*>(m_lobeBoxes.mapped());
-        const auto* worldLobes = static_cast<const gpu::SpotWorldLobe*>(m_worldLobes.mapped());
-        const double scale = double(params.grid.y * float(kMarchSub));
-        const double k = double(m_scene.support());
-        // A sub-cell as the slab test sees it: its centre and half side, grown by the margin of
-        // `reach` (1/1000 of a sub-cell, and the rounding of large coordinates below).
-        const double subSize = 1.0 / scale;
-        const glm::dvec3 subHalf(0.5 * subSize);
-        const glm::dvec3 subReach(0.5 * subSize * 1.002);
-        const int sub = int(kMarchSub);
-        // The sub-cells a box reaches, clamped to [first, last] per axis (hi < lo: none).
-        const auto reach = [&](const SpotMarchBox& box, glm::ivec3 first, glm::ivec3 last,
-                               glm::ivec3& lo, glm::ivec3& hi) {
-            for (int a = 0; a < 3; ++a) {
-                const double l = double(box.lo[a]) * scale;
-                const double h = double(box.hi[a]) * scale;
-                lo[a] = int(std::clamp(std::floor(l - 1e-3 - 1e-6 * std::abs(l)), double(first[a]),
-                                       double(last[a])));
-                hi[a] = int(std::clamp(std::floor(h + 1e-3 + 1e-6 * std::abs(h)), double(first[a]),
-                                       double(last[a])));
-                if (!(l <= h)) // empty (no lobe with density) or not a number
-                    hi[a] = lo[a] - 1;
-            }
-        };
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs; // (slot, entry)
-        std::vector<std::uint32_t> masks; // per sub-cell of one impulse's box: its lobes there
-        for (std::uint32_t r = 0; r < records; ++r) {
-            if (binCount[r] == 0)
-                continue;
-            const glm::ivec3 c = shell.cells[r];
-            const glm::ivec3 first = (c - 1) * sub, last = (c + 2) * sub - 1;
-            for (std::uint32_t i = binFirst[r]; i < binEnd[r]; ++i) {
-                glm::ivec3 lo, hi;
-                reach(boxes[i], first, last, lo, hi);
-                if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z)
-                    continue;
-                const glm::ivec3 size = hi - lo + 1;
-                masks.assign(std::size_t(size.x) * size.y * size.z, 0u);
-                for (std::uint32_t l = 0; l < lobes; ++l) {
-                    glm::ivec3 a, b;
-                    reach(lobeBoxes[std::size_t(i) * lobes + l], lo, hi, a, b);
-                    const Slabs slabs(worldLobes[std::size_t(i) * lobes + l], k);
-                    for (int x = a.x; x <= b.x; ++x)
-                        for (int y = a.y; y <= b.y; ++y)
-                            for (int z = a.z; z <= b.z; ++z)
-                                if (slabs.mayReach(glm::dvec3(x, y, z) * subSize + subHalf,
-                                                   subReach))
-                                    masks[(std::size_t(x - lo.x) * size.y + std::size_t(y - lo.y)) *
-                                              size.z +
-                                          std::size_t(z - lo.z)] |= 1u << l;
-                }
-                std::size_t m = 0;
-                for (int x = lo.x; x <= hi.x; ++x)
-                    for (int y = lo.y; y <= hi.y; ++y)
-                        for (int z = lo.z; z <= hi.z; ++z, ++m) {
-                            if (masks[m] == 0)
-                                continue;
-                            const glm::ivec3 q(floorDiv(x, sub), floorDiv(y, sub),
-                                               floorDiv(z, sub));
-                            const glm::ivec3 d = q - c + 1;
-                            const int nb = neighbours[std::size_t(r) * 27 +
-                                                      std::size_t(d.x * 9 + d.y * 3 + d.z)];
-                            SPOT_CHECK_LE(0, nb);
-                            const glm::ivec3 local = glm::ivec3(x, y, z) - q * sub;
-                            pairs.emplace_back(
-                                std::uint32_t(nb) * kMarchSubCells +
-                                    std::uint32_t((local.x * sub + local.y) * sub + local.z),
-                                i | masks[m] << kMarchEntryLobeShift);
-                        }
-            }
-        }
-        // Counting sort by slot, stable: each list in impulse order.
-        for (const auto& pair : pairs)
-            ++starts[pair.first + 1];
-        for (std::size_t q = 0; q < slots; ++q)
-            starts[q + 1] += starts[q];
-        list.resize(pairs.size());
-        std::vector<std::uint32_t> fill(starts.begin(), starts.end() - 1);
-        for (const auto& [slot, entry] : pairs)
-            list[fill[slot]++] = entry;
-        for (std::uint32_t r = 0; r < records; ++r)
-            cells[r].head.y = starts[std::size_t(r + 1) * kMarchSubCells] -
-                              starts[std::size_t(r) * kMarchSubCells];
-    }
-    std::uint32_t longest = 0;
-    for (std::size_t q = 0; q < slots; ++q)
-        longest = std::max(longest, starts[q + 1] - starts[q]);
+}
 
-    // Upload into the grow-only buffers (each checked against the budget before anything is
-    // freed, so a refused frame leaves the old ones).
+void RaymarchRenderer::listEveryImpulse(const Shell& shell, Lists& lists) const {
+    // The paper's baseline: every sub-cell of a cell lists all its 27 neighbours' impulses, with
+    // all their lobes; a list per cell.
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    const std::uint32_t allLobes = (1u << m_scene.lobeCount()) - 1u;
+    std::vector<std::uint32_t>& starts = lists.starts;
+    std::vector<std::uint32_t>& list = lists.list;
+    starts.assign(std::size_t(records) + 1, 0u);
+    std::uint64_t total = 0;
+    for (std::uint32_t r = 0; r < records; ++r)
+        total += lists.cells[r].head.x;
+    requireMemory(total * 4, cat("the ray march's lists (", total, " entries)"));
+    list.reserve(total);
+    for (std::uint32_t r = 0; r < records; ++r) {
+        const std::uint32_t first = std::uint32_t(list.size());
+        starts[r] = first;
+        for (int n = 0; n < 27; ++n)
+            if (const int nb = lists.neighbours[std::size_t(r) * 27 + std::size_t(n)];
+                nb >= 0 && lists.binCount[nb] > 0)
+                for (std::uint32_t i = lists.binFirst[nb]; i < lists.binEnd[nb]; ++i)
+                    list.push_back(i | allLobes << kMarchEntryLobeShift);
+        lists.cells[r].head.y = std::uint32_t(list.size()) - first;
+    }
+    starts[records] = std::uint32_t(list.size());
+}
+
+void RaymarchRenderer::listCulled(const Shell& shell, const SpotMarchParams& params,
+                                  Lists& lists) const {
+    // Each impulse goes to the sub-cells its box reaches within its cell's 27 neighbours, with a
+    // margin of 1/1000 of a sub-cell (and the float rounding of large coordinates) for the
+    // shader's floor(x / (h / kMarchSub)), so a sample a hair past a sub-cell's side still finds
+    // every impulse whose box holds it.
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    const std::uint32_t lobes = m_scene.lobeCount();
+    const std::size_t slots = std::size_t(records) * kMarchSubCells;
+    const auto* boxes = static_cast<const SpotMarchBox*>(m_boxes.mapped());
+    const auto* lobeBoxes = static_cast<const SpotMarchBox*>(m_lobeBoxes.mapped());
+    const auto* worldLobes = static_cast<const gpu::SpotWorldLobe*>(m_worldLobes.mapped());
+    const double scale = double(params.grid.y * float(kMarchSub));
+    const double k = double(m_scene.support());
+    // A sub-cell as the slab test sees it: its centre and half side, grown by the margin of
+    // `reach` (1/1000 of a sub-cell, and the rounding of large coordinates below).
+    const double subSize = 1.0 / scale;
+    const glm::dvec3 subHalf(0.5 * subSize);
+    const glm::dvec3 subReach(0.5 * subSize * 1.002);
+    const int sub = int(kMarchSub);
+    // The sub-cells a box reaches, clamped to [first, last] per axis (hi < lo: none).
+    const auto reach = [&](const SpotMarchBox& box, glm::ivec3 first, glm::ivec3 last,
+                           glm::ivec3& lo, glm::ivec3& hi) {
+        for (int a = 0; a < 3; ++a) {
+            const double l = double(box.lo[a]) * scale;
+            const double h = double(box.hi[a]) * scale;
+            lo[a] = int(std::clamp(std::floor(l - 1e-3 - 1e-6 * std::abs(l)), double(first[a]),
+                                   double(last[a])));
+            hi[a] = int(std::clamp(std::floor(h + 1e-3 + 1e-6 * std::abs(h)), double(first[a]),
+                                   double(last[a])));
+            if (!(l <= h)) // empty (no lobe with density) or not a number
+                hi[a] = lo[a] - 1;
+        }
+    };
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs; // (slot, entry)
+    std::vector<std::uint32_t> masks; // per sub-cell of one impulse's box: its lobes there
+    for (std::uint32_t r = 0; r < records; ++r) {
+        if (lists.binCount[r] == 0)
+            continue;
+        const glm::ivec3 c = shell.cells[r];
+        const glm::ivec3 first = (c - 1) * sub, last = (c + 2) * sub - 1;
+        for (std::uint32_t i = lists.binFirst[r]; i < lists.binEnd[r]; ++i) {
+            glm::ivec3 lo, hi;
+            reach(boxes[i], first, last, lo, hi);
+            if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z)
+                continue;
+            const glm::ivec3 size = hi - lo + 1;
+            masks.assign(std::size_t(size.x) * size.y * size.z, 0u);
+            for (std::uint32_t l = 0; l < lobes; ++l) {
+                glm::ivec3 a, b;
+                reach(lobeBoxes[std::size_t(i) * lobes + l], lo, hi, a, b);
+                const Slabs slabs(worldLobes[std::size_t(i) * lobes + l], k);
+                for (int x = a.x; x <= b.x; ++x)
+                    for (int y = a.y; y <= b.y; ++y)
+                        for (int z = a.z; z <= b.z; ++z)
+                            if (slabs.mayReach(glm::dvec3(x, y, z) * subSize + subHalf, subReach))
+                                masks[(std::size_t(x - lo.x) * size.y + std::size_t(y - lo.y)) *
+                                          size.z +
+                                      std::size_t(z - lo.z)] |= 1u << l;
+            }
+            std::size_t m = 0;
+            for (int x = lo.x; x <= hi.x; ++x)
+                for (int y = lo.y; y <= hi.y; ++y)
+                    for (int z = lo.z; z <= hi.z; ++z, ++m) {
+                        if (masks[m] == 0)
+                            continue;
+                        const glm::ivec3 q(floorDiv(x, sub), floorDiv(y, sub), floorDiv(z, sub));
+                        const glm::ivec3 d = q - c + 1;
+                        const int nb = lists.neighbours[std::size_t(r) * 27 +
+                                                        std::size_t(d.x * 9 + d.y * 3 + d.z)];
+                        SPOT_CHECK_LE(0, nb);
+                        const glm::ivec3 local = glm::ivec3(x, y, z) - q * sub;
+                        pairs.emplace_back(
+                            std::uint32_t(nb) * kMarchSubCells +
+                                std::uint32_t((local.x * sub + local.y) * sub + local.z),
+                            i | masks[m] << kMarchEntryLobeShift);
+                    }
+        }
+    }
+    // Counting sort by slot, stable: each list in impulse order.
+    std::vector<std::uint32_t>& starts = lists.starts;
+    std::vector<std::uint32_t>& list = lists.list;
+    starts.assign(slots + 1, 0u);
+    for (const auto& pair : pairs)
+        ++starts[pair.first + 1];
+    for (std::size_t q = 0; q < slots; ++q)
+        starts[q + 1] += starts[q];
+    list.resize(pairs.size());
+    std::vector<std::uint32_t> fill(starts.begin(), starts.end() - 1);
+    for (const auto& [slot, entry] : pairs)
+        list[fill[slot]++] = entry;
+    for (std::uint32_t r = 0; r < records; ++r)
+        lists.cells[r].head.y = starts[std::size_t(r + 1) * kMarchSubCells] -
+                                starts[std::size_t(r) * kMarchSubCells];
+}
+
+std::vector<glm::uvec2> RaymarchRenderer::walkBits(const Shell& shell, const Lists& lists) const {
     // The walk's bits: per brick of the shell's bounding box, the cells a segment may pass (shell
     // cells with impulses around them), when the box is small enough (else the walk looks cells
     // up in the hash table: memory never grows without bound with the volume).
-    std::vector<glm::uvec2> walkBits;
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    std::vector<glm::uvec2> bits;
     const glm::ivec3 extent = glm::max(shell.hi - shell.lo + 1, glm::ivec3(0));
     const glm::u64vec3 bricks = glm::u64vec3((extent + kMarchWalkBrick - 1) / kMarchWalkBrick);
     if (records > 0 && bricks.x * bricks.y * bricks.z <= kMaxWalkBricks) {
-        walkBits.assign(std::size_t(bricks.x * bricks.y * bricks.z), glm::uvec2(0u));
+        bits.assign(std::size_t(bricks.x * bricks.y * bricks.z), glm::uvec2(0u));
         for (std::uint32_t r = 0; r < records; ++r)
-            if (cells[r].head.x > 0) {
+            if (lists.cells[r].head.x > 0) {
                 const glm::ivec3 q = shell.cells[r] - shell.lo;
                 const glm::u64vec3 b = glm::u64vec3(q / kMarchWalkBrick);
                 const glm::ivec3 l = q - glm::ivec3(b) * kMarchWalkBrick;
                 const int bit = (l.x * kMarchWalkBrick + l.y) * kMarchWalkBrick + l.z;
-                walkBits[std::size_t((b.x * bricks.y + b.y) * bricks.z + b.z)][bit / 32] |=
+                bits[std::size_t((b.x * bricks.y + b.y) * bricks.z + b.z)][bit / 32] |=
                     1u << (bit % 32);
             }
     }
+    return bits;
+}
+
+void RaymarchRenderer::uploadLists(const Shell& shell, const Lists& lists) {
+    // Upload into the grow-only buffers (each checked against the budget before anything is
+    // freed, so a refused frame leaves the old ones).
+    const std::uint32_t records = std::uint32_t(shell.cells.size());
+    std::vector<glm::uvec2> bits = walkBits(shell, lists);
     const std::uint64_t cellBytes = std::uint64_t(records) * sizeof(SpotMarchCell);
-    const std::uint64_t startBytes = starts.size() * sizeof(std::uint32_t);
-    const std::uint64_t listBytes = list.size() * sizeof(std::uint32_t);
-    const std::uint64_t bitBytes = walkBits.size() * sizeof(glm::uvec2);
+    const std::uint64_t startBytes = lists.starts.size() * sizeof(std::uint32_t);
+    const std::uint64_t listBytes = lists.list.size() * sizeof(std::uint32_t);
+    const std::uint64_t bitBytes = bits.size() * sizeof(glm::uvec2);
     std::uint64_t held = 0, need = 0;
     for (const auto& [buffer, bytes] : {std::pair<Buffer*, std::uint64_t>{&m_cells, cellBytes},
                                         {&m_starts, startBytes},
@@ -752,7 +828,7 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
             need += grownSize(bytes);
             if (grownSize(bytes) > m_ctx.properties().limits.maxStorageBufferRange)
                 throw InputError(cat("raymarch: the impulse lists of ", records, " shell cells (",
-                                     list.size(), " entries) need ", grownSize(bytes) >> 20,
+                                     lists.list.size(), " entries) need ", grownSize(bytes) >> 20,
                                      " MiB in one storage buffer, more than this device's limit "
                                      "of ",
                                      m_ctx.properties().limits.maxStorageBufferRange >> 20,
@@ -760,8 +836,8 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
         }
     if (need > 0 && m_ctx.allocatedBytes() - held + need > m_ctx.memoryBudget())
         throw InputError(cat("raymarch: the impulse lists of ", records, " shell cells (",
-                             list.size(), " entries) need ", need >> 20, " MiB of GPU memory; ",
-                             (m_ctx.allocatedBytes() - held) >> 20,
+                             lists.list.size(), " entries) need ", need >> 20,
+                             " MiB of GPU memory; ", (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; reduce the kernel density or the cell count"));
     const auto put = [&](Buffer& buffer, const void* data, std::uint64_t bytes, const char* what) {
@@ -772,27 +848,11 @@ void RaymarchRenderer::bin(const ImpulseSet& impulses, const noise::Camera& marc
         if (bytes > 0)
             buffer.upload(data, bytes);
     };
-    put(m_cells, cells.data(), cellBytes, "ray march shell cells");
-    put(m_starts, starts.data(), startBytes, "ray march list starts");
-    put(m_list, list.data(), listBytes, "ray march impulse lists");
-    put(m_walkBits, walkBits.data(), bitBytes, "ray march walk bits");
-    m_walkBitData = std::move(walkBits);
-
-    RaymarchStats& s = m_binStats;
-    s = RaymarchStats{};
-    s.shellCells = records;
-    s.maxNeighbourhoodImpulses = mostAround;
-    s.maxListedImpulses = longest;
-    s.lobesPerImpulse = lobes;
-    s.longestProbe = std::uint32_t(shell.longestProbe);
-    s.walkCells = shell.walkCells();
-    s.listEntries = list.size();
-    s.impulses = count;
-    s.binMs = binMs;
-    s.binHostMs = since(hostStart);
-    m_version = impulses.version;
-    m_listsCulled = cull;
-    m_listedCells = impulses.cells;
+    put(m_cells, lists.cells.data(), cellBytes, "ray march shell cells");
+    put(m_starts, lists.starts.data(), startBytes, "ray march list starts");
+    put(m_list, lists.list.data(), listBytes, "ray march impulse lists");
+    put(m_walkBits, bits.data(), bitBytes, "ray march walk bits");
+    m_walkBitData = std::move(bits);
 }
 
 void RaymarchRenderer::prepare(const View& view, const ImpulseSet& impulses,
@@ -1114,6 +1174,21 @@ noise::Image raymarchOnCpu(const RaymarchCapture& capture, std::vector<std::uint
                 sum / float(n * n);
         }
     return image;
+}
+
+MethodInfo raymarchMethod() {
+    MethodInfo m;
+    m.name = "raymarch";
+    m.summary = "the baseline: each pixel's ray marched through the shell, the neighbouring "
+                "kernels summed at every step (paper eq. 7-9)";
+    m.settings = {&settings::steps, &settings::supersample, &settings::lod};
+    m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
+        return std::make_unique<RaymarchRenderer>(scene);
+    };
+    m.summarize = [](const RenderSettings& s) {
+        return cat(s.steps, " steps, ", s.supersample, "x", s.supersample, " rays per pixel, ");
+    };
+    return m;
 }
 
 } // namespace spot::splat
