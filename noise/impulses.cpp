@@ -89,10 +89,6 @@ ImpulseGenerator::ImpulseGenerator(const Mesh& mesh, const PresetDesc& preset,
 
 ImpulseGenerator::~ImpulseGenerator() = default;
 
-double ImpulseGenerator::expectedCandidates() const {
-    return m_preset.distribution.densityMax * m_cells.totalArea;
-}
-
 float ImpulseGenerator::minimumCellSizeFor(const Field& scale) const {
     const FieldRange scaleRange = scale.range();
     const float maxScale = std::max({scaleRange.hi.x, scaleRange.hi.y, scaleRange.hi.z}) *

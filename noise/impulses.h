@@ -75,8 +75,6 @@ public:
     /// Smallest valid cell size for this preset: the kernel's world support radius plus the
     /// largest height offset.
     float minimumCellSize() const { return m_minCellSize; }
-    /// Expected impulse count over the whole mesh before the density test (density_max x area).
-    double expectedCandidates() const;
 
     /// Append the impulses of cell `cellIndex` to `out`, in a fixed order.
     void generateCell(std::size_t cellIndex, std::vector<Impulse>& out) const;
