@@ -684,11 +684,13 @@ void writeBakedGrids(const std::filesystem::path& file, const BakedVolume& volum
 namespace {
 
 /// Read grid `name` of the open file as a `GridT` at `level`, checking its type, transform and
-/// values; errors name the file and the grid.
+/// values; errors name the file and the grid. `nonNegative`: a density grid, whose values are
+/// extinctions (1 / world unit): a negative one would make the march's alpha 1 - exp(-sigma dt)
+/// negative and add light, so the grid is refused (its background too).
 template <typename GridT>
 typename GridT::Ptr readBakedGrid(openvdb::io::File& in, const std::filesystem::path& file,
                                   const std::vector<std::string>& names, const std::string& name,
-                                  double voxel) {
+                                  double voxel, bool nonNegative = false) {
     const std::string where = cat(file.string(), ": grid \"", name, "\"");
     if (std::find(names.begin(), names.end(), name) == names.end()) {
         std::string list;
@@ -725,9 +727,20 @@ typename GridT::Ptr readBakedGrid(openvdb::io::File& in, const std::filesystem::
         if constexpr (std::is_same_v<GridT, Vec3Grid>) {
             if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z()))
                 throw InputError(cat(where, ": the grid holds a NaN or infinite value"));
-        } else if (!std::isfinite(value)) {
-            throw InputError(cat(where, ": the grid holds a NaN or infinite value"));
+        } else {
+            if (!std::isfinite(value))
+                throw InputError(cat(where, ": the grid holds a NaN or infinite value"));
+            if (nonNegative && value < 0.0f) {
+                const openvdb::Coord c = it.getCoord();
+                throw InputError(cat(where, ": negative density ", value, " at voxel (", c.x(),
+                                     ", ", c.y(), ", ", c.z(), "); a density must be >= 0"));
+            }
         }
+    }
+    if constexpr (!std::is_same_v<GridT, Vec3Grid>) {
+        if (nonNegative && !(grid->background() >= 0.0f))
+            throw InputError(cat(where, ": negative background density ", grid->background(),
+                                 "; a density must be >= 0"));
     }
     return grid;
 }
@@ -781,7 +794,7 @@ BakedVolume readBakedGrids(const std::filesystem::path& file) {
         for (int level = 0; level < levels; ++level) {
             const double vl = levelVoxel(voxel, level);
             impl->density.push_back(
-                readBakedGrid<FloatGrid>(in, file, names, bakedDensityName(level), vl));
+                readBakedGrid<FloatGrid>(in, file, names, bakedDensityName(level), vl, true));
             impl->color.push_back(
                 readBakedGrid<Vec3Grid>(in, file, names, bakedColorName(level), vl));
         }
