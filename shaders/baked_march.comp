@@ -58,6 +58,9 @@ layout(std430, binding = kBakedBindLoops) buffer Loops { uint maxLoops; };
 layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList list; };
 layout(std430, binding = kBakedBindListPixels) readonly buffer ListPixels { uint listPixels[]; };
 
+vec4 spotWalkPlane(uint tet, uint f) { return tets[tet].plane[f]; }
+#include "spot_tet_walk.h"
+
 uint loops = 0u;
 
 // The brick of the leaf holding voxel `ijk`, or -1, from a section's leaf table (origin, dims:
@@ -115,19 +118,9 @@ vec4 sampleLevel(vec3 x, ivec4 origin, ivec3 dims, float inverseSize, float unit
     return (float(found >= 0) * unit) * mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
 }
 
-// Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where
-// den > 0, leaving where den < 0.
-void facePlane(uint tet, uint f, vec3 origin, vec3 dir, out float num, out float den) {
-    vec4 plane = tets[tet].plane[f];
-    num = -(dot(plane.xyz, origin) + plane.w);
-    den = dot(plane.xyz, dir);
-}
-
 // The rest-pose position of world point x in `tet`.
 vec3 toRest(uint tet, vec3 x) {
-    return vec3(dot(tets[tet].toRest[0].xyz, x) + tets[tet].toRest[0].w,
-                dot(tets[tet].toRest[1].xyz, x) + tets[tet].toRest[1].w,
-                dot(tets[tet].toRest[2].xyz, x) + tets[tet].toRest[2].w);
+    return spotTetToRest(tets[tet].toRest[0], tets[tet].toRest[1], tets[tet].toRest[2], x);
 }
 
 // The layer ends: its exit depth (reversed: near / view depth) for the next peel.
@@ -175,12 +168,7 @@ void main() {
     float tMesh = imageLoad(meshDistance, pixel).r;
     float viewCos = dot(dir, frame.forward.xyz);
 
-    float tIn = 0.0;
-    if (!fromEye) {
-        float num, den;
-        facePlane(tet, entryFace, origin, dir, num, den);
-        tIn = den != 0.0 ? max(num / den, 0.0) : 0.0;
-    }
+    float tIn = fromEye ? 0.0 : spotTetEntry(tet, entryFace, origin, dir);
 
     // The samples: t_k = tStart + (k + 1/2) dt for the whole layer, at the mip level of the
     // pixel's footprint at the entry (the coarsest whose voxel is no larger).
@@ -221,31 +209,8 @@ void main() {
                 break;
             ++walked;
             // The exit: the nearest plane the ray leaves through, the entry face excluded.
-            tOut = 3.0e38;
-            exitFace = 4u;
-            // The 3 faces after the entry face (from the eye, entry face 4: faces 1 to 3, and 0).
-            for (uint i = 1u; i < 4u; ++i) {
-                if (kCountLoops)
-                    ++loops;
-                uint f = (entryFace + i) & 3u;
-                float num, den;
-                facePlane(tet, f, origin, dir, num, den);
-                if (den < 0.0 && num / den < tOut) {
-                    tOut = num / den;
-                    exitFace = f;
-                }
-            }
-            if (entryFace == 4u) {
-                if (kCountLoops)
-                    ++loops;
-                float num, den;
-                facePlane(tet, 0u, origin, dir, num, den);
-                if (den < 0.0 && num / den < tOut) {
-                    tOut = num / den;
-                    exitFace = 0u;
-                }
-            }
-            if (exitFace == 4u)
+            exitFace = spotTetExit(tet, entryFace, origin, dir, kCountLoops, tOut, loops);
+            if (exitFace == kTetNoFace)
                 break; // flat or degenerate: the walk stops here
             tOut = max(tOut, tIn);
             atMesh = tOut >= tMesh;
@@ -283,11 +248,8 @@ void main() {
             tIn = tOut;
             if (atMesh || samples >= kBakedMaxLayerSamples)
                 break;
-            int next = neighbours[tet][exitFace];
-            if (next < 0)
+            if (!spotTetNext(neighbours[tet][exitFace], tet, entryFace))
                 break; // left the shell
-            tet = uint(next) >> 2u;
-            entryFace = uint(next) & 3u;
             inTet = false;
         }
     }
