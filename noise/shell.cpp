@@ -120,8 +120,8 @@ namespace {
 /// The walk, in either precision: `Twin` the shared functions' class of that precision, `Real`
 /// its scalar.
 template <typename Twin, typename Real>
-bool walkSegment(Twin twin, std::uint32_t tet, glm::dvec3 origin, glm::dvec3 dir,
-                 double& tEnter, double& tExit) {
+bool walkSegment(Twin twin, std::uint32_t tet, glm::dvec3 origin, glm::dvec3 dir, double& tEnter,
+                 double& tExit) {
     using Vec3 = glm::vec<3, Real>;
     const Vec3 o(origin), d(dir);
     Real enter = Real(0);

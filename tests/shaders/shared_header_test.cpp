@@ -267,9 +267,8 @@ TEST(SharedHeader, GradientNormalFallsBackWhereTheGradientVanishes) {
     EXPECT_NEAR(glm::length(n - f64::rvec3(1.0, 0.0, 0.0)), 0.0, 1e-15);
     EXPECT_EQ(f64::spotGradientNormal(f64::rvec3(0.0), fallback, 1e30), fallback);
     EXPECT_EQ(f64::spotGradientNormal(f64::rvec3(1e31, 0.0, 0.0), fallback, 1e30), fallback);
-    EXPECT_EQ(f64::spotGradientNormal(
-                  f64::rvec3(std::numeric_limits<double>::infinity(), 0.0, 0.0), fallback,
-                  std::numeric_limits<double>::infinity()),
+    EXPECT_EQ(f64::spotGradientNormal(f64::rvec3(std::numeric_limits<double>::infinity(), 0.0, 0.0),
+                                      fallback, std::numeric_limits<double>::infinity()),
               fallback);
 }
 
