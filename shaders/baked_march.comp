@@ -130,20 +130,21 @@ void finish(ivec2 pixel, float depth) {
         atomicMax(maxLoops, loops);
 }
 
-void main() {
-    uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = 4u; // 4: none (from the eye)
+// This invocation's pixel, and where its walk starts: the eye's tetrahedron (first layer, eye in
+// the shell: every pixel) or the entry the peel kept (the layer's list), whose record it clears
+// for the next peel. False when the invocation has no pixel.
+bool layerPixel(out ivec2 pixel, inout uint tet, inout uint entryFace) {
     bool fromEye = tet != kBakedNoTet;
-    ivec2 pixel;
     uint item = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kBakedMarchGroupSize +
                 gl_LocalInvocationID.x; // rows of workgroups (SpotBakedList)
     uint width = uint(frame.size.x);
     if (fromEye) {
         if (item >= width * uint(frame.size.y))
-            return;
+            return false;
         pixel = ivec2(item % width, item / width);
     } else {
         if (item >= list.count)
-            return;
+            return false;
         uint packedPixel = listPixels[item];
         pixel = ivec2(packedPixel & 0xffffu, packedPixel >> 16u);
     }
@@ -155,6 +156,32 @@ void main() {
         entryFace = (id - 1u) & 3u;
     }
     layerEntry[index] = uvec2(0u); // the next peel starts with no entry
+    return true;
+}
+
+// The layer's radiance and transmittance composited under what the earlier layers left (acc),
+// its composite over the mesh colour (under) into the frame's result, and its exit depth.
+void compositeLayer(ivec2 pixel, vec4 acc, vec3 under, vec3 radiance, float transmittance,
+                    float tEnd, float tMesh, float viewCos) {
+    acc.rgb += (1.0 - acc.a) * radiance;
+    acc.a += (1.0 - acc.a) * (1.0 - transmittance);
+    if (transmittance < kBakedOpaque)
+        acc.a = 1.0;
+    imageStore(accum, pixel, acc);
+    imageStore(baseColor, pixel, vec4(acc.rgb + (1.0 - acc.a) * under, 1.0));
+    float depth = tEnd * viewCos;
+    // Opaque (alpha 1: this layer's transmittance fell below kBakedOpaque, or the layers' alpha
+    // rounded to 1) or at the mesh: no later layer.
+    finish(pixel, acc.a >= 1.0 || tEnd >= tMesh ? 0.0
+                  : depth > 0.0 ? frame.forward.w / depth : 2.0);
+}
+
+void main() {
+    uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = kTetNoFace; // from the eye
+    bool fromEye = tet != kBakedNoTet;
+    ivec2 pixel;
+    if (!layerPixel(pixel, tet, entryFace))
+        return;
     vec4 acc = kFirstLayer ? vec4(0.0) : imageLoad(accum, pixel);
     vec3 under;
     if (kFirstLayer) {
@@ -253,15 +280,5 @@ void main() {
             inTet = false;
         }
     }
-    acc.rgb += (1.0 - acc.a) * radiance;
-    acc.a += (1.0 - acc.a) * (1.0 - transmittance);
-    if (transmittance < kBakedOpaque)
-        acc.a = 1.0;
-    imageStore(accum, pixel, acc);
-    imageStore(baseColor, pixel, vec4(acc.rgb + (1.0 - acc.a) * under, 1.0));
-    float depth = tEnd * viewCos;
-    // Opaque (alpha 1: this layer's transmittance fell below kBakedOpaque, or the layers' alpha
-    // rounded to 1) or at the mesh: no later layer.
-    finish(pixel, acc.a >= 1.0 || tEnd >= tMesh ? 0.0
-                  : depth > 0.0 ? frame.forward.w / depth : 2.0);
+    compositeLayer(pixel, acc, under, radiance, transmittance, tEnd, tMesh, viewCos);
 }
