@@ -63,11 +63,10 @@ bool CameraRays::boxMayBeVisible(glm::dvec3 lo, glm::dvec3 hi) const {
 }
 
 Ray CameraRays::ray(double px, double py) const {
-    // The shaders' mapping (spot_shared.h), in double; the GPU gets the same half extents
-    // (splat::makeSplatFrame: halfWidth = halfHeight x width / height).
-    const double halfWidth = m_halfHeight * double(m_camera.width) / double(m_camera.height);
+    // The shaders' mapping (spot_shared.h), in double; the GPU gets the same axes and half
+    // extents (splat::makeSplatFrame reads them from here).
     Ray r;
-    shared::f64::spotPixelRay(m_camera.eye, m_forward, m_right * halfWidth, m_up * m_halfHeight,
+    shared::f64::spotPixelRay(m_camera.eye, m_forward, m_right * halfWidth(), m_up * m_halfHeight,
                               m_camera.projection == Projection::Orthographic,
                               glm::dvec2(m_camera.width, m_camera.height), glm::dvec2(px, py),
                               r.origin, r.dir);
