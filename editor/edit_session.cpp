@@ -23,27 +23,6 @@ double msSince(Clock::time_point start) {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-/// Moller-Trumbore in double; the distance along the ray, or a negative value for a miss.
-double intersect(const noise::Ray& ray, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c,
-                 glm::dvec3& bary) {
-    const glm::dvec3 e1 = b - a, e2 = c - a;
-    const glm::dvec3 p = glm::cross(ray.dir, e2);
-    const double det = glm::dot(e1, p);
-    if (std::abs(det) < 1e-300)
-        return -1.0;
-    const double inv = 1.0 / det;
-    const glm::dvec3 s = ray.origin - a;
-    const double u = glm::dot(s, p) * inv;
-    if (u < 0.0 || u > 1.0)
-        return -1.0;
-    const glm::dvec3 q = glm::cross(s, e1);
-    const double v = glm::dot(ray.dir, q) * inv;
-    if (v < 0.0 || u + v > 1.0)
-        return -1.0;
-    bary = glm::dvec3(1.0 - u - v, u, v);
-    return glm::dot(e2, q) * inv;
-}
-
 bool paintedIn(const nlohmann::json& preset, Slot slot) {
     const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
     if (!preset.contains(ptr))
@@ -169,16 +148,7 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
     m_ctx = std::make_unique<splat::Context>(options.context);
     rebuild();
     m_surface = std::make_unique<SurfaceIndex>(m_mesh);
-    std::vector<noise::Aabb> boxes;
-    boxes.reserve(m_mesh.triangles.size());
-    for (const glm::uvec3& t : m_mesh.triangles) {
-        noise::Aabb b;
-        b.grow(glm::dvec3(m_mesh.positions[t.x]));
-        b.grow(glm::dvec3(m_mesh.positions[t.y]));
-        b.grow(glm::dvec3(m_mesh.positions[t.z]));
-        boxes.push_back(b);
-    }
-    m_bvh.build(boxes);
+    m_bvh = noise::triangleBvh(m_mesh);
     if (options.armBrush)
         m_startArmCost = armBrush();
 }
@@ -218,20 +188,11 @@ void Session::exportImage(const std::filesystem::path& file) {
 
 std::optional<Hit> Session::pick(glm::vec2 pixel) const {
     const noise::Ray ray = noise::CameraRays(m_camera).ray(pixel.x, pixel.y);
-    double tMax = std::numeric_limits<double>::infinity();
-    std::optional<Hit> best;
-    m_bvh.traverse(ray, 0.0, tMax, [&](std::uint32_t t, double& limit) {
-        const glm::uvec3 tri = m_mesh.triangles[t];
-        glm::dvec3 bary;
-        const double d = intersect(ray, m_mesh.positions[tri.x], m_mesh.positions[tri.y],
-                                   m_mesh.positions[tri.z], bary);
-        if (d <= 0.0 || d >= limit)
-            return;
-        limit = d;
-        const noise::SurfacePoint sp = noise::surfacePoint(m_mesh, t, bary);
-        best = Hit{sp.position, sp.normal, d, t};
-    });
-    return best;
+    const std::optional<noise::MeshHit> hit = noise::closestHit(m_bvh, m_mesh, ray);
+    if (!hit)
+        return std::nullopt;
+    const noise::SurfacePoint sp = noise::surfacePoint(m_mesh, hit->triangle, hit->barycentric);
+    return Hit{sp.position, sp.normal, hit->t, hit->triangle};
 }
 
 glm::vec3 Session::screenToWorld(glm::vec2 drag) const {

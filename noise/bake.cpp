@@ -355,24 +355,19 @@ BakeEstimate estimateBake(const SurfaceCells& cells, const BakeOptions& options)
     return e;
 }
 
-BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
-                         const std::vector<Impulse>& impulses, const BakeOptions& options,
-                         const std::function<void(long, long)>& progress, BakeStats* stats) {
-    initializeOpenVdb();
-    const auto start = std::chrono::steady_clock::now();
-    BakeEstimate estimate = estimateBake(cells, options);
-    const std::size_t lobesPerKernel = kernel.lobes.size();
-    const std::uint64_t lobeBytes = std::uint64_t(impulses.size()) *
-                                    (lobesPerKernel * sizeof(BakeLobe) + 2 * sizeof(std::uint32_t));
-    requireMemory(lobeBytes + estimate.scratchBytes,
-                  cat("a bake's ", impulses.size() * lobesPerKernel, " lobes"));
+namespace {
 
-    const double h = double(cells.cellSize), v = double(options.voxelSize);
-    const double k = double(kernel.supportSigma);
+/// The impulses grouped by their generating cell, in their given order within a cell: impulse
+/// order[n] is the n-th of the grouping, cell c's are n in [first[c], first[c + 1]).
+struct CellImpulses {
+    std::vector<std::uint32_t> first;
+    std::vector<std::uint32_t> order;
+};
 
-    // Impulses grouped by their generating cell, in their given order within a cell.
+CellImpulses groupByCell(const SurfaceCells& cells, const std::vector<Impulse>& impulses) {
+    CellImpulses g;
     std::vector<std::uint32_t> cellOf(impulses.size());
-    std::vector<std::uint32_t> firstImpulse(cells.cells.size() + 1, 0);
+    g.first.assign(cells.cells.size() + 1, 0);
     for (std::size_t i = 0; i < impulses.size(); ++i) {
         const std::int64_t c = cells.find(impulses[i].cell);
         if (c < 0)
@@ -380,21 +375,26 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                                  impulses[i].cell.y, ", ", impulses[i].cell.z,
                                  ") is not a surface cell"));
         cellOf[i] = std::uint32_t(c);
-        ++firstImpulse[std::size_t(c) + 1];
+        ++g.first[std::size_t(c) + 1];
     }
     for (std::size_t c = 0; c < cells.cells.size(); ++c)
-        firstImpulse[c + 1] += firstImpulse[c];
-    std::vector<std::uint32_t> order(impulses.size());
-    {
-        std::vector<std::uint32_t> next(firstImpulse.begin(), firstImpulse.end() - 1);
-        for (std::size_t i = 0; i < impulses.size(); ++i)
-            order[next[cellOf[i]]++] = std::uint32_t(i);
-    }
-    // Every lobe placed once, as the reference places it (a lobe of zero extinction or a
-    // non-finite box is skipped there too).
+        g.first[c + 1] += g.first[c];
+    g.order.resize(impulses.size());
+    std::vector<std::uint32_t> next(g.first.begin(), g.first.end() - 1);
+    for (std::size_t i = 0; i < impulses.size(); ++i)
+        g.order[next[cellOf[i]]++] = std::uint32_t(i);
+    return g;
+}
+
+/// Every lobe placed once, as the reference places it (a lobe of zero extinction or a non-finite
+/// box is skipped there too: here its extinction stays 0), lobe l of the n-th impulse of the
+/// grouping at n x lobesPerKernel + l. `k`: the support (sigmas).
+std::vector<BakeLobe> placeBakeLobes(const Kernel& kernel, const std::vector<Impulse>& impulses,
+                                     const CellImpulses& groups, double k) {
+    const std::size_t lobesPerKernel = kernel.lobes.size();
     std::vector<BakeLobe> lobes(impulses.size() * lobesPerKernel);
     tbb::parallel_for(std::size_t(0), impulses.size(), [&](std::size_t n) {
-        const Impulse& imp = impulses[order[n]];
+        const Impulse& imp = impulses[groups.order[n]];
         for (std::size_t l = 0; l < lobesPerKernel; ++l) {
             BakeLobe& out = lobes[n * lobesPerKernel + l];
             out.extinction = 0.0;
@@ -411,65 +411,11 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                    w.centre - half, w.centre + half};
         }
     });
+    return lobes;
+}
 
-    // The voxels of shell cell `s` (its index range [lo, end) per axis) each lobe of the kernels
-    // of its 27 neighbours reaches, in a fixed order (neighbour, impulse, lobe, z, y, x):
-    // `visit(lobe, voxel offset in the cell's block, lobe-space point)` for every voxel centre
-    // inside the lobe's box.
-    const std::vector<glm::ivec3> shell = shellCells(cells);
-    const auto cellBlock = [&](std::size_t s, glm::ivec3& lo, glm::ivec3& end) {
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = boundaryVoxel(shell[s][a], h, v);
-            end[a] = boundaryVoxel(shell[s][a] + 1, h, v);
-        }
-        const glm::ivec3 dims = glm::max(end - lo, glm::ivec3(0));
-        return std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
-    };
-    const auto forLobeVoxels = [&](std::size_t s, glm::ivec3 lo, glm::ivec3 end, auto&& visit) {
-        const glm::ivec3 dims = end - lo;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const std::int64_t c = cells.find(shell[s] + glm::ivec3(dx, dy, dz));
-                    if (c < 0)
-                        continue;
-                    for (std::uint32_t n = firstImpulse[std::size_t(c)];
-                         n < firstImpulse[std::size_t(c) + 1]; ++n)
-                        for (std::size_t l = 0; l < lobesPerKernel; ++l) {
-                            const BakeLobe& lobe = lobes[n * lobesPerKernel + l];
-                            if (!(lobe.extinction > 0.0))
-                                continue;
-                            glm::ivec3 a, b;
-                            bool empty = false;
-                            for (int ax = 0; ax < 3; ++ax) {
-                                a[ax] =
-                                    std::max(lo[ax], int(std::ceil(std::max(lobe.lo[ax] / v - 0.5,
-                                                                            double(lo[ax] - 1)))));
-                                b[ax] = std::min(end[ax] - 1,
-                                                 int(std::floor(std::min(lobe.hi[ax] / v - 0.5,
-                                                                         double(end[ax])))));
-                                empty = empty || a[ax] > b[ax];
-                            }
-                            if (empty)
-                                continue;
-                            for (int z = a.z; z <= b.z; ++z)
-                                for (int y = a.y; y <= b.y; ++y)
-                                    for (int x = a.x; x <= b.x; ++x) {
-                                        const glm::dvec3 p = (glm::dvec3(x, y, z) + 0.5) * v;
-                                        const std::size_t at =
-                                            (std::size_t(z - lo.z) * std::size_t(dims.y) +
-                                             std::size_t(y - lo.y)) *
-                                                std::size_t(dims.x) +
-                                            std::size_t(x - lo.x);
-                                        visit(lobe, at, lobe.toLobe * (p - lobe.centre));
-                                    }
-                        }
-                }
-    };
-
-    // Memory, in two steps, each before anything of that size is allocated. First the lobes'
-    // boxes bound the non-empty voxels from above: refuse at once when even a level-0 grid of
-    // that many voxels (fewer when the shell holds fewer) cannot fit.
+/// An upper bound on the non-empty level-0 voxels from the lobes' boxes alone (voxel size v).
+double lobeBoxVoxels(const std::vector<BakeLobe>& lobes, double v) {
     double boxVoxels = 0.0;
     for (const BakeLobe& lobe : lobes) {
         if (!(lobe.extinction > 0.0))
@@ -480,72 +426,140 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                           std::floor(lobe.hi[a] / v - 0.5) - std::ceil(lobe.lo[a] / v - 0.5) + 1.0);
         boxVoxels += n;
     }
-    const double boundVoxels = std::min(double(estimate.shellVoxels), boxVoxels);
-    requireMemory(std::uint64_t(boundVoxels * double(kBytesPerGridVoxel)),
-                  cat("a bake of up to ", std::uint64_t(boundVoxels), " voxels (voxel size ",
-                      options.voxelSize, ")"));
-    // Then the non-empty voxels are counted exactly (a pass without values) and the whole bake
-    // is bounded from that count: level 0 and its lists, the coarser levels, and the distance
-    // grid (the voxels within the cap of a non-empty one, at most the shell cells' blocks grown
-    // by the cap).
-    std::vector<std::uint64_t> nonEmpty(shell.size(), 0);
-    std::atomic<long> cellsDone{0}; // progress: the count pass, then the values, per cell
+    return boxVoxels;
+}
+
+/// The shell cells' blocks of level-0 voxels and the lobes that reach them: each shell cell
+/// evaluates the voxel centres inside it, summing the lobes of the kernels of its 27 neighbours.
+class ShellVoxels {
+public:
+    ShellVoxels(const SurfaceCells& cells, const CellImpulses& groups,
+                const std::vector<BakeLobe>& lobes, std::size_t lobesPerKernel, double v)
+        : m_cells(cells), m_groups(groups), m_lobes(lobes), m_lobesPerKernel(lobesPerKernel),
+          m_h(double(cells.cellSize)), m_v(v), m_shell(shellCells(cells)) {}
+
+    std::size_t size() const { return m_shell.size(); }
+
+    /// Shell cell `s`'s voxels: the index range [lo, end) per axis; returns their count.
+    std::size_t block(std::size_t s, glm::ivec3& lo, glm::ivec3& end) const {
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = boundaryVoxel(m_shell[s][a], m_h, m_v);
+            end[a] = boundaryVoxel(m_shell[s][a] + 1, m_h, m_v);
+        }
+        const glm::ivec3 dims = glm::max(end - lo, glm::ivec3(0));
+        return std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z);
+    }
+
+    /// The voxels of shell cell `s` (block(s, lo, end)) each lobe of the kernels of its 27
+    /// neighbours reaches, in a fixed order (neighbour, impulse, lobe, z, y, x): `visit(lobe,
+    /// voxel offset in the cell's block, lobe-space point)` for every voxel centre inside the
+    /// lobe's box.
+    template <typename Visit>
+    void forLobeVoxels(std::size_t s, glm::ivec3 lo, glm::ivec3 end, Visit&& visit) const {
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const std::int64_t c = m_cells.find(m_shell[s] + glm::ivec3(dx, dy, dz));
+                    if (c < 0)
+                        continue;
+                    for (std::uint32_t n = m_groups.first[std::size_t(c)];
+                         n < m_groups.first[std::size_t(c) + 1]; ++n)
+                        for (std::size_t l = 0; l < m_lobesPerKernel; ++l)
+                            forVoxelsOf(m_lobes[n * m_lobesPerKernel + l], lo, end, visit);
+                }
+    }
+
+private:
+    /// The voxel centres of block [lo, end) inside `lobe`'s box, z, y, x order.
+    template <typename Visit>
+    void forVoxelsOf(const BakeLobe& lobe, glm::ivec3 lo, glm::ivec3 end, Visit& visit) const {
+        if (!(lobe.extinction > 0.0))
+            return;
+        const glm::ivec3 dims = end - lo;
+        glm::ivec3 a, b;
+        bool empty = false;
+        for (int ax = 0; ax < 3; ++ax) {
+            a[ax] = std::max(lo[ax],
+                             int(std::ceil(std::max(lobe.lo[ax] / m_v - 0.5, double(lo[ax] - 1)))));
+            b[ax] = std::min(end[ax] - 1,
+                             int(std::floor(std::min(lobe.hi[ax] / m_v - 0.5, double(end[ax])))));
+            empty = empty || a[ax] > b[ax];
+        }
+        if (empty)
+            return;
+        for (int z = a.z; z <= b.z; ++z)
+            for (int y = a.y; y <= b.y; ++y)
+                for (int x = a.x; x <= b.x; ++x) {
+                    const glm::dvec3 p = (glm::dvec3(x, y, z) + 0.5) * m_v;
+                    const std::size_t at =
+                        (std::size_t(z - lo.z) * std::size_t(dims.y) + std::size_t(y - lo.y)) *
+                            std::size_t(dims.x) +
+                        std::size_t(x - lo.x);
+                    visit(lobe, at, lobe.toLobe * (p - lobe.centre));
+                }
+    }
+
+    const SurfaceCells& m_cells;
+    const CellImpulses& m_groups;
+    const std::vector<BakeLobe>& m_lobes;
+    std::size_t m_lobesPerKernel;
+    double m_h, m_v;
+    std::vector<glm::ivec3> m_shell;
+};
+
+/// Per shell cell, its non-empty voxels counted exactly (a pass without values: a voxel is
+/// non-empty when some lobe's support, k sigmas, holds its centre). `tick` after each cell.
+std::vector<std::uint64_t> countNonEmpty(const ShellVoxels& voxels, double k,
+                                         const std::function<void()>& tick) {
+    std::vector<std::uint64_t> nonEmpty(voxels.size(), 0);
     tbb::enumerable_thread_specific<std::vector<unsigned char>> marks;
     const double k2 = k * k;
-    tbb::parallel_for(std::size_t(0), shell.size(), [&](std::size_t s) {
+    tbb::parallel_for(std::size_t(0), voxels.size(), [&](std::size_t s) {
         glm::ivec3 lo, end;
-        const std::size_t count = cellBlock(s, lo, end);
+        const std::size_t count = voxels.block(s, lo, end);
         if (count > 0) {
             std::vector<unsigned char>& mark = marks.local();
             mark.assign(count, 0);
-            forLobeVoxels(s, lo, end, [&](const BakeLobe&, std::size_t at, glm::dvec3 u) {
+            voxels.forLobeVoxels(s, lo, end, [&](const BakeLobe&, std::size_t at, glm::dvec3 u) {
                 mark[at] |= glm::dot(u, u) < k2 ? 1 : 0;
             });
             nonEmpty[s] = std::uint64_t(std::count(mark.begin(), mark.end(), 1));
         }
-        const long finished = ++cellsDone;
-        if (progress)
-            progress(finished, 2 * long(shell.size()));
+        tick();
     });
-    for (std::uint64_t n : nonEmpty)
-        estimate.nonEmptyVoxels += n;
-    const double grow = double(2 * (int(kBakeDistanceCap) - 1));
-    const double perAxis = std::ceil(h / v) + 1.0 + grow;
-    estimate.distanceVoxels = std::uint64_t(
-        std::min(double(estimate.nonEmptyVoxels) * (grow + 1.0) * (grow + 1.0) * (grow + 1.0),
-                 double(estimate.shellCells) * perAxis * perAxis * perAxis));
-    estimate.bytes = estimate.nonEmptyVoxels * kBytesPerVoxel +
-                     estimate.distanceVoxels * kBytesPerDistanceVoxel + estimate.scratchBytes +
-                     lobeBytes;
-    requireMemory(estimate.bytes, cat("a bake of ", estimate.nonEmptyVoxels, " voxels and up to ",
-                                      estimate.distanceVoxels, " distance voxels (voxel size ",
-                                      options.voxelSize, ", ", options.levels, " levels)"));
+    return nonEmpty;
+}
 
-    // Level 0: every shell cell evaluates the voxel centres inside it, summing the lobes of the
-    // kernels of its 27 neighbours in the fixed order above.
-    std::vector<std::vector<BakedVoxel>> perCell(shell.size());
-    std::vector<std::uint64_t> evaluated(shell.size(), 0);
+/// Level 0, per shell cell: its non-empty voxels (extinction and extinction-weighted colour)
+/// in z, y, x order; `evaluated` receives each cell's voxels evaluated. `tick` after each cell.
+std::vector<std::vector<BakedVoxel>> evaluateLevel0(const ShellVoxels& voxels, double k,
+                                                    const std::vector<std::uint64_t>& nonEmpty,
+                                                    std::vector<std::uint64_t>& evaluated,
+                                                    const std::function<void()>& tick) {
+    std::vector<std::vector<BakedVoxel>> perCell(voxels.size());
+    evaluated.assign(voxels.size(), 0);
     struct Scratch {
         std::vector<double> sigma;
         std::vector<glm::dvec3> weighted;
     };
     tbb::enumerable_thread_specific<Scratch> scratch;
-    tbb::parallel_for(std::size_t(0), shell.size(), [&](std::size_t s) {
+    tbb::parallel_for(std::size_t(0), voxels.size(), [&](std::size_t s) {
         glm::ivec3 lo, end;
-        const std::size_t count = cellBlock(s, lo, end);
+        const std::size_t count = voxels.block(s, lo, end);
         const glm::ivec3 dims = end - lo;
         if (count > 0) {
             Scratch& sc = scratch.local();
             sc.sigma.assign(count, 0.0);
             sc.weighted.assign(count, glm::dvec3(0.0));
-            forLobeVoxels(s, lo, end, [&](const BakeLobe& lobe, std::size_t at, glm::dvec3 u) {
-                const double g = sh::spotLobeDensity(u, k);
-                if (!(g > 0.0))
-                    return;
-                const double sigma = lobe.extinction * g;
-                sc.sigma[at] += sigma;
-                sc.weighted[at] += sigma * lobe.color;
-            });
+            voxels.forLobeVoxels(s, lo, end,
+                                 [&](const BakeLobe& lobe, std::size_t at, glm::dvec3 u) {
+                                     const double g = sh::spotLobeDensity(u, k);
+                                     if (!(g > 0.0))
+                                         return;
+                                     const double sigma = lobe.extinction * g;
+                                     sc.sigma[at] += sigma;
+                                     sc.weighted[at] += sigma * lobe.color;
+                                 });
             perCell[s].reserve(std::size_t(nonEmpty[s]));
             std::vector<BakedVoxel>& out = perCell[s];
             for (int z = 0; z < dims.z; ++z)
@@ -563,12 +577,17 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
                     }
             evaluated[s] = count;
         }
-        const long finished = ++cellsDone;
-        if (progress)
-            progress(finished, 2 * long(shell.size()));
+        tick();
     });
+    return perCell;
+}
 
+/// The bake's grids from level 0's voxels (consumed): the coarser levels by downsampling, the
+/// distance grid, every grid named and tagged.
+std::unique_ptr<BakedVolume::Impl> buildGrids(std::vector<std::vector<BakedVoxel>>& perCell,
+                                              const BakeOptions& options) {
     auto impl = std::make_unique<BakedVolume::Impl>();
+    const double v = double(options.voxelSize);
     impl->voxel0 = v;
     impl->presetHash = options.presetHash;
     impl->presetName = options.presetName;
@@ -612,8 +631,65 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
         openvdb::StringMetadata(cat("Chebyshev (L-infinity) distance to the nearest non-empty "
                                     "level-0 voxel, in level-0 voxels, capped at ",
                                     kBakeDistanceCap)));
+    return impl;
+}
 
-    BakedVolume volume(std::move(impl));
+} // namespace
+
+BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
+                         const std::vector<Impulse>& impulses, const BakeOptions& options,
+                         const std::function<void(long, long)>& progress, BakeStats* stats) {
+    initializeOpenVdb();
+    const auto start = std::chrono::steady_clock::now();
+    BakeEstimate estimate = estimateBake(cells, options);
+    const std::size_t lobesPerKernel = kernel.lobes.size();
+    const std::uint64_t lobeBytes = std::uint64_t(impulses.size()) *
+                                    (lobesPerKernel * sizeof(BakeLobe) + 2 * sizeof(std::uint32_t));
+    requireMemory(lobeBytes + estimate.scratchBytes,
+                  cat("a bake's ", impulses.size() * lobesPerKernel, " lobes"));
+
+    const double h = double(cells.cellSize), v = double(options.voxelSize);
+    const double k = double(kernel.supportSigma);
+    const CellImpulses groups = groupByCell(cells, impulses);
+    const std::vector<BakeLobe> lobes = placeBakeLobes(kernel, impulses, groups, k);
+    const ShellVoxels voxels(cells, groups, lobes, lobesPerKernel, v);
+
+    // Memory, in two steps, each before anything of that size is allocated. First the lobes'
+    // boxes bound the non-empty voxels from above: refuse at once when even a level-0 grid of
+    // that many voxels (fewer when the shell holds fewer) cannot fit.
+    const double boundVoxels = std::min(double(estimate.shellVoxels), lobeBoxVoxels(lobes, v));
+    requireMemory(std::uint64_t(boundVoxels * double(kBytesPerGridVoxel)),
+                  cat("a bake of up to ", std::uint64_t(boundVoxels), " voxels (voxel size ",
+                      options.voxelSize, ")"));
+    // Then the non-empty voxels are counted exactly (a pass without values) and the whole bake
+    // is bounded from that count: level 0 and its lists, the coarser levels, and the distance
+    // grid (the voxels within the cap of a non-empty one, at most the shell cells' blocks grown
+    // by the cap).
+    std::atomic<long> cellsDone{0}; // progress: the count pass, then the values, per cell
+    const auto tick = [&] {
+        const long finished = ++cellsDone;
+        if (progress)
+            progress(finished, 2 * long(voxels.size()));
+    };
+    const std::vector<std::uint64_t> nonEmpty = countNonEmpty(voxels, k, tick);
+    for (std::uint64_t n : nonEmpty)
+        estimate.nonEmptyVoxels += n;
+    const double grow = double(2 * (int(kBakeDistanceCap) - 1));
+    const double perAxis = std::ceil(h / v) + 1.0 + grow;
+    estimate.distanceVoxels = std::uint64_t(
+        std::min(double(estimate.nonEmptyVoxels) * (grow + 1.0) * (grow + 1.0) * (grow + 1.0),
+                 double(estimate.shellCells) * perAxis * perAxis * perAxis));
+    estimate.bytes = estimate.nonEmptyVoxels * kBytesPerVoxel +
+                     estimate.distanceVoxels * kBytesPerDistanceVoxel + estimate.scratchBytes +
+                     lobeBytes;
+    requireMemory(estimate.bytes, cat("a bake of ", estimate.nonEmptyVoxels, " voxels and up to ",
+                                      estimate.distanceVoxels, " distance voxels (voxel size ",
+                                      options.voxelSize, ", ", options.levels, " levels)"));
+
+    std::vector<std::uint64_t> evaluated;
+    std::vector<std::vector<BakedVoxel>> perCell =
+        evaluateLevel0(voxels, k, nonEmpty, evaluated, tick);
+    BakedVolume volume(buildGrids(perCell, options));
     if (stats) {
         stats->impulses = impulses.size();
         stats->lobes = std::size_t(std::count_if(
@@ -622,7 +698,7 @@ BakedVolume bakeImpulses(const SurfaceCells& cells, const Kernel& kernel,
         for (std::uint64_t e : evaluated)
             stats->evaluatedVoxels += e;
         stats->activeVoxels.clear();
-        for (int level = 0; level < levels; ++level)
+        for (int level = 0; level < options.levels; ++level)
             stats->activeVoxels.push_back(volume.activeCount(level));
         stats->distanceVoxels = volume.distanceCount();
         stats->estimate = estimate;
@@ -684,11 +760,13 @@ void writeBakedGrids(const std::filesystem::path& file, const BakedVolume& volum
 namespace {
 
 /// Read grid `name` of the open file as a `GridT` at `level`, checking its type, transform and
-/// values; errors name the file and the grid.
+/// values; errors name the file and the grid. `nonNegative`: a density grid, whose values are
+/// extinctions (1 / world unit): a negative one would make the march's alpha 1 - exp(-sigma dt)
+/// negative and add light, so the grid is refused (its background too).
 template <typename GridT>
 typename GridT::Ptr readBakedGrid(openvdb::io::File& in, const std::filesystem::path& file,
                                   const std::vector<std::string>& names, const std::string& name,
-                                  double voxel) {
+                                  double voxel, bool nonNegative = false) {
     const std::string where = cat(file.string(), ": grid \"", name, "\"");
     if (std::find(names.begin(), names.end(), name) == names.end()) {
         std::string list;
@@ -725,9 +803,20 @@ typename GridT::Ptr readBakedGrid(openvdb::io::File& in, const std::filesystem::
         if constexpr (std::is_same_v<GridT, Vec3Grid>) {
             if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z()))
                 throw InputError(cat(where, ": the grid holds a NaN or infinite value"));
-        } else if (!std::isfinite(value)) {
-            throw InputError(cat(where, ": the grid holds a NaN or infinite value"));
+        } else {
+            if (!std::isfinite(value))
+                throw InputError(cat(where, ": the grid holds a NaN or infinite value"));
+            if (nonNegative && value < 0.0f) {
+                const openvdb::Coord c = it.getCoord();
+                throw InputError(cat(where, ": negative density ", value, " at voxel (", c.x(),
+                                     ", ", c.y(), ", ", c.z(), "); a density must be >= 0"));
+            }
         }
+    }
+    if constexpr (!std::is_same_v<GridT, Vec3Grid>) {
+        if (nonNegative && !(grid->background() >= 0.0f))
+            throw InputError(cat(where, ": negative background density ", grid->background(),
+                                 "; a density must be >= 0"));
     }
     return grid;
 }
@@ -781,7 +870,7 @@ BakedVolume readBakedGrids(const std::filesystem::path& file) {
         for (int level = 0; level < levels; ++level) {
             const double vl = levelVoxel(voxel, level);
             impl->density.push_back(
-                readBakedGrid<FloatGrid>(in, file, names, bakedDensityName(level), vl));
+                readBakedGrid<FloatGrid>(in, file, names, bakedDensityName(level), vl, true));
             impl->color.push_back(
                 readBakedGrid<Vec3Grid>(in, file, names, bakedColorName(level), vl));
         }

@@ -1,11 +1,14 @@
 /// @file bvh.h
 /// @brief A bounding volume hierarchy over axis-aligned boxes, for the CPU reference: the base
 /// mesh's triangles (closest hit) and the lobes' truncated ellipsoids (all hits along a ray).
+/// The closest hit on the mesh (Moller-Trumbore under the BVH) is written once here, for the
+/// reference's base mesh and the editor's picking.
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -100,5 +103,27 @@ private:
     std::vector<Node> m_nodes;
     std::vector<std::uint32_t> m_order;
 };
+
+struct Mesh;
+
+/// Moller-Trumbore ("Fast, Minimum Storage Ray/Triangle Intersection", 1997) in double: the ray
+/// parameter t > 0 of the ray's hit with triangle (a, b, c) (world distance: Ray::dir is unit),
+/// or +inf when it misses, the triangle is edge-on, or the hit lies at or behind the origin.
+/// On a hit `barycentric` receives the hit's weights of a, b and c.
+double intersectTriangle(const Ray& ray, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c,
+                         glm::dvec3& barycentric);
+
+/// A BVH over `mesh`'s triangles, one box per triangle in triangle order (for closestHit).
+Bvh triangleBvh(const Mesh& mesh);
+
+struct MeshHit {
+    double t = 0.0;             ///< ray parameter (world distance), > 0
+    std::uint32_t triangle = 0; ///< index into Mesh::triangles
+    glm::dvec3 barycentric{1.0, 0.0, 0.0};
+};
+
+/// The nearest hit of `ray` (t in (0, inf)) with the triangles of `mesh`, `bvh` built by
+/// triangleBvh(mesh); of hits at the same t, the first the traversal meets. None on a miss.
+std::optional<MeshHit> closestHit(const Bvh& bvh, const Mesh& mesh, const Ray& ray);
 
 } // namespace spot::noise

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "error.h"
+#include "shaders/spot_shared.hpp"
 
 namespace spot::noise {
 
@@ -62,17 +63,13 @@ bool CameraRays::boxMayBeVisible(glm::dvec3 lo, glm::dvec3 hi) const {
 }
 
 Ray CameraRays::ray(double px, double py) const {
-    const double aspect = double(m_camera.width) / double(m_camera.height);
-    const double x = (2.0 * px / m_camera.width - 1.0) * m_halfHeight * aspect;
-    const double y = (1.0 - 2.0 * py / m_camera.height) * m_halfHeight;
+    // The shaders' mapping (spot_shared.h), in double; the GPU gets the same axes and half
+    // extents (splat::makeSplatFrame reads them from here).
     Ray r;
-    if (m_camera.projection == Projection::Perspective) {
-        r.origin = m_camera.eye;
-        r.dir = glm::normalize(m_forward + x * m_right + y * m_up);
-    } else {
-        r.origin = m_camera.eye + x * m_right + y * m_up;
-        r.dir = m_forward;
-    }
+    shared::f64::spotPixelRay(m_camera.eye, m_forward, m_right * halfWidth(), m_up * m_halfHeight,
+                              m_camera.projection == Projection::Orthographic,
+                              glm::dvec2(m_camera.width, m_camera.height), glm::dvec2(px, py),
+                              r.origin, r.dir);
     return r;
 }
 

@@ -42,7 +42,16 @@ public:
     /// near a corner may be reported visible). Cells failing it generate nothing.
     bool boxMayBeVisible(glm::dvec3 lo, glm::dvec3 hi) const;
     const Camera& camera() const { return m_camera; }
+    /// The unit camera axes (world): view direction, right, and up (image rows grow downwards).
     glm::dvec3 forward() const { return m_forward; }
+    glm::dvec3 right() const { return m_right; }
+    glm::dvec3 up() const { return m_up; }
+    /// Half the view's height and width at unit distance (perspective: tan(fov / 2)) or in world
+    /// units (orthographic): the lengths of spotPixelRay's `up` and `right` (spot_shared.h).
+    double halfHeight() const { return m_halfHeight; }
+    double halfWidth() const {
+        return m_halfHeight * double(m_camera.width) / double(m_camera.height);
+    }
 
 private:
     Camera m_camera;

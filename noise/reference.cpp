@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 #include <tbb/parallel_for.h>
 
@@ -57,26 +59,6 @@ std::uint32_t permute(std::uint32_t i, std::uint32_t l, std::uint32_t p) {
 
 double randUnit(std::uint32_t i, std::uint32_t p) {
     return double(sh::spotHash(sh::spotHashCombine(p, i)) >> 8) * (1.0 / 16777216.0);
-}
-
-/// Möller-Trumbore; returns t or +inf, barycentrics (b1, b2) in u, v.
-double intersectTriangle(const Ray& r, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c, double& u, double& v) {
-    const glm::dvec3 e1 = b - a, e2 = c - a;
-    const glm::dvec3 p = glm::cross(r.dir, e2);
-    const double det = glm::dot(e1, p);
-    if (std::abs(det) < 1e-300)
-        return std::numeric_limits<double>::infinity();
-    const double inv = 1.0 / det;
-    const glm::dvec3 s = r.origin - a;
-    u = glm::dot(s, p) * inv;
-    if (u < 0.0 || u > 1.0)
-        return std::numeric_limits<double>::infinity();
-    const glm::dvec3 q = glm::cross(s, e1);
-    v = glm::dot(r.dir, q) * inv;
-    if (v < 0.0 || u + v > 1.0)
-        return std::numeric_limits<double>::infinity();
-    const double t = glm::dot(e2, q) * inv;
-    return t > 0.0 ? t : std::numeric_limits<double>::infinity();
 }
 
 } // namespace
@@ -136,46 +118,27 @@ ReferenceRenderer::ReferenceRenderer(const Mesh& mesh, const Kernel& kernel,
         }
     }
     m_lobeBvh.build(boxes);
-    std::vector<Aabb> tris(mesh.triangles.size());
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (int v = 0; v < 3; ++v)
-            tris[t].grow(glm::dvec3(mesh.positions[mesh.triangles[t][v]]));
-    m_meshBvh.build(tris);
+    m_meshBvh = triangleBvh(mesh);
 }
 
 double ReferenceRenderer::hitMesh(const Ray& ray, glm::vec3& normal) const {
-    double tMax = std::numeric_limits<double>::infinity();
-    std::uint32_t hitTri = 0;
-    double hu = 0.0, hv = 0.0;
-    m_meshBvh.traverse(ray, 0.0, tMax, [&](std::uint32_t t, double& tm) {
-        const glm::uvec3 tri = m_mesh.triangles[t];
-        double u = 0.0, v = 0.0;
-        const double d = intersectTriangle(ray, glm::dvec3(m_mesh.positions[tri.x]),
-                                           glm::dvec3(m_mesh.positions[tri.y]),
-                                           glm::dvec3(m_mesh.positions[tri.z]), u, v);
-        if (d < tm) {
-            tm = d;
-            hitTri = t;
-            hu = u;
-            hv = v;
-        }
-    });
-    if (std::isfinite(tMax))
-        normal = surfacePoint(m_mesh, hitTri, glm::dvec3(1.0 - hu - hv, hu, hv)).normal;
-    return tMax;
+    const std::optional<MeshHit> hit = closestHit(m_meshBvh, m_mesh, ray);
+    if (!hit)
+        return std::numeric_limits<double>::infinity();
+    normal = surfacePoint(m_mesh, hit->triangle, hit->barycentric).normal;
+    return hit->t;
 }
 
 glm::vec3 ReferenceRenderer::shade(glm::vec3 color, glm::dvec3 normal) const {
     if (m_shading.mode == Shading::Mode::Unlit)
         return color;
-    const double lambert = std::max(0.0, glm::dot(normal, glm::dvec3(m_shading.lightDir)));
-    return color * float(m_shading.ambient + (1.0 - m_shading.ambient) * lambert);
+    return color * float(sh::spotLambertFactor(normal, glm::dvec3(m_shading.lightDir),
+                                               double(m_shading.ambient)));
 }
 
 glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, ReferenceStats* stats) const {
     glm::vec3 meshNormal(0.0f);
     const double tEnd = hitMesh(ray, meshNormal);
-    const double k2 = m_support * m_support;
 
     // 1. Chords of every lobe the ray crosses before the mesh.
     // Per-thread scratch: no allocation per ray once warm.
@@ -187,19 +150,13 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
         const Lobe& lobe = m_lobes[l];
         const glm::dvec3 o = lobe.toLobe * (ray.origin - lobe.centre);
         const glm::dvec3 d = lobe.toLobe * ray.dir;
-        const double dd = glm::dot(d, d);
-        if (!(dd > 0.0))
+        double tStar = 0.0, perp2 = 0.0, half = 0.0;
+        if (!sh::spotLobeLine(o, d, m_support, tStar, perp2, half))
             return;
-        const double tStar = -glm::dot(o, d) / dd;
-        const glm::dvec3 perp = o + tStar * d;
-        const double perp2 = glm::dot(perp, perp);
-        if (perp2 >= k2)
-            return;
-        const double half = std::sqrt((k2 - perp2) / dd);
         const double ta = std::max(0.0, tStar - half), tb = std::min(tEnd, tStar + half);
         if (!(tb > ta))
             return;
-        const double len = std::sqrt(dd);
+        const double len = std::sqrt(glm::dot(d, d));
         chords.push_back({ta, tb, tStar, len,
                           lobe.extinction * sh::kSqrtTwoPi / len * std::exp(-0.5 * perp2), l});
     });
@@ -258,15 +215,15 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
                 if (lit) {
                     const Lobe& lobe = m_lobes[ch.lobe];
                     const glm::dvec3 u = lobe.toLobe * (mid - lobe.centre);
-                    gradient -= lobe.extinction * sh::spotLobeDensity(u, m_support) *
-                                (glm::transpose(lobe.toLobe) * u);
+                    gradient += sh::spotLobeGradient(
+                        lobe.toLobe, u, lobe.extinction * sh::spotLobeDensity(u, m_support));
                 }
             }
             if (tau > 0.0) {
                 glm::dvec3 color = emitted / tau;
                 if (lit) {
-                    const double g = glm::length(gradient);
-                    const glm::dvec3 n = g > 0.0 ? -gradient / g : -ray.dir;
+                    const glm::dvec3 n = sh::spotGradientNormal(
+                        gradient, -ray.dir, std::numeric_limits<double>::infinity());
                     color = glm::dvec3(shade(glm::vec3(color), n));
                 }
                 radiance += transmittance * -std::expm1(-tau) * color;

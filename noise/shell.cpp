@@ -6,6 +6,14 @@
 
 #include "noise/error.h"
 #include "noise/mesh.h"
+#include "shaders/spot_shared.hpp"
+
+namespace spot::shared::f32 {
+#include "noise/shell_walk_twin.h"
+} // namespace spot::shared::f32
+namespace spot::shared::f64 {
+#include "noise/shell_walk_twin.h"
+} // namespace spot::shared::f64
 
 namespace spot::noise {
 
@@ -27,37 +35,6 @@ std::array<ShellTetrahedron, 3> prismTetrahedra(glm::uvec3 tri, std::uint32_t t,
         for (ShellTetrahedron& tet : out)
             std::swap(tet.vertices[0], tet.vertices[1]);
     return out;
-}
-
-bool raySegmentInTetrahedron(const ShellMesh& shell, const ShellTetrahedron& tet, glm::dvec3 origin,
-                             glm::dvec3 dir, double& tEnter, double& tExit) {
-    glm::dvec3 p[4];
-    for (int i = 0; i < 4; ++i)
-        p[i] = glm::dvec3(shell.positions[tet.vertices[std::size_t(i)]]);
-    tEnter = 0.0;
-    tExit = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < 4; ++i) {
-        // The face opposite vertex i, its normal turned towards vertex i (inwards).
-        const glm::dvec3 a = p[(i + 1) % 4], b = p[(i + 2) % 4], c = p[(i + 3) % 4];
-        glm::dvec3 n = glm::cross(b - a, c - a);
-        const double side = glm::dot(n, p[i] - a);
-        if (!(side != 0.0))
-            return false;
-        if (side < 0.0)
-            n = -n;
-        const double num = glm::dot(n, origin - a), den = glm::dot(n, dir);
-        if (den == 0.0) {
-            if (num < 0.0)
-                return false;
-            continue;
-        }
-        const double t = -num / den;
-        if (den > 0.0)
-            tEnter = std::max(tEnter, t);
-        else
-            tExit = std::min(tExit, t);
-    }
-    return tEnter < tExit;
 }
 
 std::vector<ShellTetrahedron> shellTetrahedra(const std::vector<glm::uvec3>& triangles,
@@ -120,6 +97,149 @@ ShellMesh buildShell(const Mesh& mesh, float thickness) {
         shell.positions.push_back(mesh.positions[i] + thickness * mesh.normals[i]);
     shell.tetrahedra = shellTetrahedra(mesh.triangles, shell.baseCount);
     return shell;
+}
+
+std::vector<glm::ivec4> shellWalkNeighbours(const std::vector<ShellTetrahedron>& tetrahedra) {
+    const std::vector<std::array<std::int32_t, 4>> neighbours = shellNeighbours(tetrahedra);
+    std::vector<glm::ivec4> packed(neighbours.size(), glm::ivec4(-1));
+    for (std::size_t t = 0; t < neighbours.size(); ++t)
+        for (std::uint32_t f = 0; f < 4; ++f) {
+            // The neighbour and the face it shares, as that neighbour numbers it.
+            const std::int32_t n = neighbours[t][f];
+            std::int32_t back = 0;
+            while (n >= 0 && back < 3 &&
+                   neighbours[std::size_t(n)][std::size_t(back)] != std::int32_t(t))
+                ++back;
+            packed[t][int(f)] = n < 0 ? -1 : n * 4 + back;
+        }
+    return packed;
+}
+
+namespace {
+
+/// The walk, in either precision: `Twin` the shared functions' class of that precision, `Real`
+/// its scalar.
+template <typename Twin, typename Real>
+bool walkSegment(Twin twin, std::uint32_t tet, glm::dvec3 origin, glm::dvec3 dir, double& tEnter,
+                 double& tExit) {
+    using Vec3 = glm::vec<3, Real>;
+    const Vec3 o(origin), d(dir);
+    Real enter = Real(0);
+    for (std::uint32_t f = 0; f < 4; ++f) {
+        Real num, den;
+        twin.spotTetCrossing(twin.plane(tet, f), o, d, num, den);
+        if (den > Real(0))
+            enter = std::max(enter, num / den);
+        else if (den == Real(0) && num > Real(0))
+            return false; // parallel to the face, outside it
+    }
+    Real exit;
+    std::uint32_t loops = 0;
+    if (twin.spotTetExit(tet, Twin::kTetNoFace, o, d, false, exit, loops) == Twin::kTetNoFace)
+        exit = std::numeric_limits<Real>::infinity(); // no plane left: unbounded (inside)
+    tEnter = double(enter);
+    tExit = double(exit);
+    return enter < exit;
+}
+
+template <typename Twin, typename Real>
+std::vector<WalkSegment> walkFrom(Twin twin, const std::vector<glm::ivec4>& neighbours,
+                                  glm::dvec3 origin, glm::dvec3 dir, std::uint32_t tet,
+                                  std::uint32_t entryFace, double tEnd, std::uint32_t maxTets) {
+    using Vec3 = glm::vec<3, Real>;
+    const Vec3 o(origin), d(dir);
+    const Real tMesh = Real(tEnd);
+    std::vector<WalkSegment> out;
+    Real tIn = entryFace == Twin::kTetNoFace ? Real(0) : twin.spotTetEntry(tet, entryFace, o, d);
+    std::uint32_t loops = 0;
+    while (out.size() < maxTets) {
+        Real tOut;
+        const std::uint32_t exitFace = twin.spotTetExit(tet, entryFace, o, d, false, tOut, loops);
+        if (exitFace == Twin::kTetNoFace)
+            break; // flat or degenerate: the walk stops here
+        tOut = std::max(tOut, tIn);
+        const bool atMesh = tOut >= tMesh;
+        tOut = std::min(tOut, tMesh);
+        out.push_back({tet, double(tIn), double(tOut), exitFace});
+        tIn = tOut;
+        if (atMesh || !twin.spotTetNext(neighbours[tet][int(exitFace)], tet, entryFace))
+            break;
+    }
+    return out;
+}
+
+template <typename Twin, typename Real>
+std::int64_t containingTet(Twin twin, std::size_t count, glm::dvec3 p) {
+    using Vec3 = glm::vec<3, Real>;
+    const Vec3 x(p);
+    for (std::size_t t = 0; t < count; ++t) {
+        bool holds = true;
+        for (std::uint32_t f = 0; f < 4 && holds; ++f) {
+            const auto plane = twin.plane(std::uint32_t(t), f);
+            holds = glm::dot(Vec3(plane), x) + plane.w >= Real(0);
+        }
+        if (holds)
+            return std::int64_t(t);
+    }
+    return -1;
+}
+
+/// The face planes of every tetrahedron of `shell`, by the shared spotTetFacePlane.
+template <typename Twin, typename Vec4> std::vector<Vec4> facePlanes(const ShellMesh& shell) {
+    using Vec3 = glm::vec<3, typename Vec4::value_type>;
+    std::vector<Vec4> planes(4 * shell.tetrahedra.size());
+    Twin twin(planes.data());
+    for (std::size_t t = 0; t < shell.tetrahedra.size(); ++t) {
+        Vec3 p[4];
+        for (int i = 0; i < 4; ++i)
+            p[i] = Vec3(shell.positions[shell.tetrahedra[t].vertices[std::size_t(i)]]);
+        for (int f = 0; f < 4; ++f)
+            planes[4 * t + std::size_t(f)] =
+                twin.spotTetFacePlane(p[(f + 1) % 4], p[(f + 2) % 4], p[(f + 3) % 4], p[f]);
+    }
+    return planes;
+}
+
+} // namespace
+
+ShellWalk::ShellWalk(const ShellMesh& shell, Precision precision)
+    : m_precision(precision), m_neighbours(shellWalkNeighbours(shell.tetrahedra)) {
+    if (precision == Precision::Float)
+        m_planesF = facePlanes<shared::f32::TetWalkTwin, glm::vec4>(shell);
+    else
+        m_planesD = facePlanes<shared::f64::TetWalkTwin, glm::dvec4>(shell);
+}
+
+bool ShellWalk::segment(std::uint32_t tet, glm::dvec3 origin, glm::dvec3 dir, double& tEnter,
+                        double& tExit) const {
+    SPOT_CHECK_LT(std::size_t(tet), m_neighbours.size());
+    if (m_precision == Precision::Float)
+        return walkSegment<shared::f32::TetWalkTwin, float>(
+            shared::f32::TetWalkTwin(m_planesF.data()), tet, origin, dir, tEnter, tExit);
+    return walkSegment<shared::f64::TetWalkTwin, double>(shared::f64::TetWalkTwin(m_planesD.data()),
+                                                         tet, origin, dir, tEnter, tExit);
+}
+
+std::vector<WalkSegment> ShellWalk::walk(glm::dvec3 origin, glm::dvec3 dir, std::uint32_t tet,
+                                         std::uint32_t entryFace, double tEnd,
+                                         std::uint32_t maxTets) const {
+    SPOT_CHECK_LT(std::size_t(tet), m_neighbours.size());
+    SPOT_CHECK_LE(entryFace, 4u);
+    if (m_precision == Precision::Float)
+        return walkFrom<shared::f32::TetWalkTwin, float>(shared::f32::TetWalkTwin(m_planesF.data()),
+                                                         m_neighbours, origin, dir, tet, entryFace,
+                                                         tEnd, maxTets);
+    return walkFrom<shared::f64::TetWalkTwin, double>(shared::f64::TetWalkTwin(m_planesD.data()),
+                                                      m_neighbours, origin, dir, tet, entryFace,
+                                                      tEnd, maxTets);
+}
+
+std::int64_t ShellWalk::containing(glm::dvec3 p) const {
+    if (m_precision == Precision::Float)
+        return containingTet<shared::f32::TetWalkTwin, float>(
+            shared::f32::TetWalkTwin(m_planesF.data()), m_neighbours.size(), p);
+    return containingTet<shared::f64::TetWalkTwin, double>(
+        shared::f64::TetWalkTwin(m_planesD.data()), m_neighbours.size(), p);
 }
 
 } // namespace spot::noise

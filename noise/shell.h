@@ -46,13 +46,6 @@ struct ShellMesh {
 std::array<ShellTetrahedron, 3> prismTetrahedra(glm::uvec3 tri, std::uint32_t t,
                                                 std::uint32_t baseCount);
 
-/// The part [tEnter, tExit] of the ray origin + t dir, t >= 0, inside tetrahedron `tet` of
-/// `shell`, clipped by its 4 face planes: per pixel, the tetrahedron's thickness along the view
-/// ray that the renderer marches (Ritsche 2006). World units of t times |dir|. False when the ray
-/// misses it or the tetrahedron is flat; either orientation works.
-bool raySegmentInTetrahedron(const ShellMesh& shell, const ShellTetrahedron& tet, glm::dvec3 origin,
-                             glm::dvec3 dir, double& tEnter, double& tExit);
-
 /// Per tetrahedron and face (face i is the one opposite vertex i), the tetrahedron across it, or
 /// -1 on the shell's boundary. Faces match by their vertex-index triples (base vertex v or top
 /// vertex v + baseCount): the rising-edge rule makes the two prisms of a shared edge split their
@@ -71,5 +64,55 @@ std::vector<ShellTetrahedron> shellTetrahedra(const std::vector<glm::uvec3>& tri
 /// Extrude `mesh` by `thickness` (world units, > 0 and finite; InputError otherwise) along its
 /// vertex normals and split every prism.
 ShellMesh buildShell(const Mesh& mesh, float thickness);
+
+/// shellNeighbours as the baked renderer's walk reads them: per tetrahedron and face, the
+/// neighbour across it times 4 plus that face's index as the neighbour numbers it (the face the
+/// walk enters it through), or -1 on the shell's boundary.
+std::vector<glm::ivec4> shellWalkNeighbours(const std::vector<ShellTetrahedron>& tetrahedra);
+
+/// One tetrahedron of a walk: the ray's parameters where it enters and leaves it.
+struct WalkSegment {
+    std::uint32_t tet = 0;
+    double tIn = 0.0, tOut = 0.0;
+    std::uint32_t exitFace = 0; ///< the face it leaves through (opposite that corner)
+};
+
+/// The CPU twin of the baked renderer's walk through a shell's tetrahedra (baked_march.comp):
+/// shaders/spot_tet_walk.h compiled for the CPU, the same source as the shaders, in float (the
+/// GPU's precision) or double. Each tetrahedron's face planes come from the shared
+/// spotTetFacePlane, as baked_shell.comp builds them every frame.
+class ShellWalk {
+public:
+    enum class Precision { Float, Double };
+
+    ShellWalk(const ShellMesh& shell, Precision precision);
+
+    /// The part [tEnter, tExit] of the ray origin + t dir, t >= 0, inside tetrahedron `tet`
+    /// alone, clipped by its 4 face planes: tEnter the last plane the ray enters, tExit the
+    /// first it leaves (spotTetExit from inside). World units of t times |dir|. False when the
+    /// ray misses it or the tetrahedron is flat; either orientation works.
+    bool segment(std::uint32_t tet, glm::dvec3 origin, glm::dvec3 dir, double& tEnter,
+                 double& tExit) const;
+
+    /// The walk of the ray origin + t dir from tetrahedron `tet`, entered through `entryFace`
+    /// (4: the ray starts inside it, at t = 0, as from the eye), front to back across the faces
+    /// it leaves through into the neighbours there, as baked_march.comp walks it: ends at the
+    /// shell's boundary, at t = tEnd (the mesh), at a flat tetrahedron, or after `maxTets`.
+    std::vector<WalkSegment> walk(glm::dvec3 origin, glm::dvec3 dir, std::uint32_t tet,
+                                  std::uint32_t entryFace, double tEnd,
+                                  std::uint32_t maxTets) const;
+
+    /// The lowest-index tetrahedron whose 4 face planes hold p (baked_shell.comp's eye test), or
+    /// -1.
+    std::int64_t containing(glm::dvec3 p) const;
+
+    std::size_t tetrahedra() const { return m_neighbours.size(); }
+
+private:
+    Precision m_precision;
+    std::vector<glm::vec4> m_planesF;  ///< 4 per tetrahedron (Precision::Float)
+    std::vector<glm::dvec4> m_planesD; ///< 4 per tetrahedron (Precision::Double)
+    std::vector<glm::ivec4> m_neighbours;
+};
 
 } // namespace spot::noise

@@ -3,38 +3,48 @@
 #include <cmath>
 
 #include "mesh.h"
+#include "shaders/spot_shared.hpp"
+
+namespace spot::shared::f64 {
+namespace {
+
+/// shaders/spot_surface.h over a noise::Mesh, in double: the generator's surface formulas (its
+/// float twin: noise/generator_shared.h) at the CPU's precision.
+class MeshSurface {
+public:
+    explicit MeshSurface(const noise::Mesh& mesh) : m_mesh(mesh) {}
+
+private:
+    const noise::Mesh& m_mesh;
+    glm::uvec3 spotMeshTriangle(uint t) const { return m_mesh.triangles[t]; }
+    rvec3 spotMeshPosition(uint v) const { return rvec3(m_mesh.positions[v]); }
+    rvec3 spotMeshNormal(uint v) const { return rvec3(m_mesh.normals[v]); }
+    rvec3 spotMeshTangent(uint v) const {
+        return m_mesh.tangents.empty() ? rvec3(0.0) : rvec3(m_mesh.tangents[v]);
+    }
+    rvec2 spotMeshUv(uint v) const { return m_mesh.hasUv() ? rvec2(m_mesh.uvs[v]) : rvec2(0.0); }
+
+public:
+#define SPOT_FN
+#include "shaders/spot_surface.h"
+#undef SPOT_FN
+};
+
+} // namespace
+} // namespace spot::shared::f64
 
 namespace spot::noise {
 
-glm::vec3 defaultTangent(glm::vec3 normal) {
-    glm::vec3 t = glm::vec3(0.0f, -1.0f, 0.0f) - normal * -normal.y;
-    if (glm::dot(t, t) < 1e-8f)
-        t = glm::vec3(1.0f, 0.0f, 0.0f) - normal * normal.x;
-    return glm::normalize(t);
-}
-
 SurfacePoint surfacePoint(const Mesh& mesh, std::uint32_t triangle, glm::dvec3 b) {
-    const glm::uvec3 tri = mesh.triangles[triangle];
+    shared::f64::MeshSurface surface(mesh);
+    const auto s = surface.spotSurfaceAt(triangle, b);
     SurfacePoint sp;
     sp.triangle = triangle;
     sp.barycentric = glm::vec3(b);
-    const glm::dvec3 p0(mesh.positions[tri.x]), p1(mesh.positions[tri.y]), p2(mesh.positions[tri.z]);
-    sp.position = glm::vec3(b.x * p0 + b.y * p1 + b.z * p2);
-    glm::vec3 n = float(b.x) * mesh.normals[tri.x] + float(b.y) * mesh.normals[tri.y] +
-                  float(b.z) * mesh.normals[tri.z];
-    if (!(glm::dot(n, n) > 1e-12f))
-        n = glm::vec3(glm::cross(p1 - p0, p2 - p0));
-    sp.normal = glm::normalize(n);
-    if (mesh.hasUv()) {
-        sp.uv = float(b.x) * mesh.uvs[tri.x] + float(b.y) * mesh.uvs[tri.y] +
-                float(b.z) * mesh.uvs[tri.z];
-    }
-    glm::vec3 t(0.0f);
-    if (!mesh.tangents.empty())
-        t = float(b.x) * mesh.tangents[tri.x] + float(b.y) * mesh.tangents[tri.y] +
-            float(b.z) * mesh.tangents[tri.z];
-    t -= sp.normal * glm::dot(t, sp.normal);
-    sp.tangent = glm::dot(t, t) > 1e-12f ? glm::normalize(t) : defaultTangent(sp.normal);
+    sp.position = glm::vec3(s.position);
+    sp.normal = glm::vec3(s.normal);
+    sp.tangent = glm::vec3(s.tangent);
+    sp.uv = glm::vec2(s.uv);
     return sp;
 }
 

@@ -12,15 +12,11 @@ namespace spot::noise {
 
 struct Mesh;
 
-/// Tangent used where a mesh has no uv: world -y (the way fur hangs) projected on the tangent
-/// plane, or world +x where the normal is vertical. Continuous over smooth surfaces except where
-/// the normal passes through +-y, unlike a generic orthonormal basis whose seam would show as a
-/// sudden change of comb direction.
-glm::vec3 defaultTangent(glm::vec3 normal);
-
 /// The surface at barycentric (b0, b1, b2) of triangle `triangle`: interpolated position,
 /// normal (unit; the face normal if the interpolation vanishes), tangent (unit, _|_ normal: the
-/// interpolated +u tangent when the mesh has uv, else defaultTangent) and uv.
+/// interpolated +u tangent when the mesh has uv, else spotDefaultTangent: world -y projected on
+/// the tangent plane) and uv. The GPU generator's formulas (shaders/spot_surface.h), evaluated
+/// in double and rounded to float.
 SurfacePoint surfacePoint(const Mesh& mesh, std::uint32_t triangle, glm::dvec3 barycentric);
 
 /// Barycentric coordinates of the point of triangle (a, b, c) closest to p (Ericson, Real-Time

@@ -58,6 +58,9 @@ layout(std430, binding = kBakedBindLoops) buffer Loops { uint maxLoops; };
 layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList list; };
 layout(std430, binding = kBakedBindListPixels) readonly buffer ListPixels { uint listPixels[]; };
 
+vec4 spotWalkPlane(uint tet, uint f) { return tets[tet].plane[f]; }
+#include "spot_tet_walk.h"
+
 uint loops = 0u;
 
 // The brick of the leaf holding voxel `ijk`, or -1, from a section's leaf table (origin, dims:
@@ -115,19 +118,9 @@ vec4 sampleLevel(vec3 x, ivec4 origin, ivec3 dims, float inverseSize, float unit
     return (float(found >= 0) * unit) * mix(mix(z0, z1, w.y), mix(z2, z3, w.y), w.x);
 }
 
-// Where the ray origin + t dir crosses face f's plane of `tet`: at t = num / den, entering where
-// den > 0, leaving where den < 0.
-void facePlane(uint tet, uint f, vec3 origin, vec3 dir, out float num, out float den) {
-    vec4 plane = tets[tet].plane[f];
-    num = -(dot(plane.xyz, origin) + plane.w);
-    den = dot(plane.xyz, dir);
-}
-
 // The rest-pose position of world point x in `tet`.
 vec3 toRest(uint tet, vec3 x) {
-    return vec3(dot(tets[tet].toRest[0].xyz, x) + tets[tet].toRest[0].w,
-                dot(tets[tet].toRest[1].xyz, x) + tets[tet].toRest[1].w,
-                dot(tets[tet].toRest[2].xyz, x) + tets[tet].toRest[2].w);
+    return spotTetToRest(tets[tet].toRest[0], tets[tet].toRest[1], tets[tet].toRest[2], x);
 }
 
 // The layer ends: its exit depth (reversed: near / view depth) for the next peel.
@@ -137,20 +130,21 @@ void finish(ivec2 pixel, float depth) {
         atomicMax(maxLoops, loops);
 }
 
-void main() {
-    uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = 4u; // 4: none (from the eye)
+// This invocation's pixel, and where its walk starts: the eye's tetrahedron (first layer, eye in
+// the shell: every pixel) or the entry the peel kept (the layer's list), whose record it clears
+// for the next peel. False when the invocation has no pixel.
+bool layerPixel(out ivec2 pixel, inout uint tet, inout uint entryFace) {
     bool fromEye = tet != kBakedNoTet;
-    ivec2 pixel;
     uint item = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kBakedMarchGroupSize +
                 gl_LocalInvocationID.x; // rows of workgroups (SpotBakedList)
     uint width = uint(frame.size.x);
     if (fromEye) {
         if (item >= width * uint(frame.size.y))
-            return;
+            return false;
         pixel = ivec2(item % width, item / width);
     } else {
         if (item >= list.count)
-            return;
+            return false;
         uint packedPixel = listPixels[item];
         pixel = ivec2(packedPixel & 0xffffu, packedPixel >> 16u);
     }
@@ -162,6 +156,32 @@ void main() {
         entryFace = (id - 1u) & 3u;
     }
     layerEntry[index] = uvec2(0u); // the next peel starts with no entry
+    return true;
+}
+
+// The layer's radiance and transmittance composited under what the earlier layers left (acc),
+// its composite over the mesh colour (under) into the frame's result, and its exit depth.
+void compositeLayer(ivec2 pixel, vec4 acc, vec3 under, vec3 radiance, float transmittance,
+                    float tEnd, float tMesh, float viewCos) {
+    acc.rgb += (1.0 - acc.a) * radiance;
+    acc.a += (1.0 - acc.a) * (1.0 - transmittance);
+    if (transmittance < kBakedOpaque)
+        acc.a = 1.0;
+    imageStore(accum, pixel, acc);
+    imageStore(baseColor, pixel, vec4(acc.rgb + (1.0 - acc.a) * under, 1.0));
+    float depth = tEnd * viewCos;
+    // Opaque (alpha 1: this layer's transmittance fell below kBakedOpaque, or the layers' alpha
+    // rounded to 1) or at the mesh: no later layer.
+    finish(pixel, acc.a >= 1.0 || tEnd >= tMesh ? 0.0
+                  : depth > 0.0 ? frame.forward.w / depth : 2.0);
+}
+
+void main() {
+    uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = kTetNoFace; // from the eye
+    bool fromEye = tet != kBakedNoTet;
+    ivec2 pixel;
+    if (!layerPixel(pixel, tet, entryFace))
+        return;
     vec4 acc = kFirstLayer ? vec4(0.0) : imageLoad(accum, pixel);
     vec3 under;
     if (kFirstLayer) {
@@ -175,12 +195,7 @@ void main() {
     float tMesh = imageLoad(meshDistance, pixel).r;
     float viewCos = dot(dir, frame.forward.xyz);
 
-    float tIn = 0.0;
-    if (!fromEye) {
-        float num, den;
-        facePlane(tet, entryFace, origin, dir, num, den);
-        tIn = den != 0.0 ? max(num / den, 0.0) : 0.0;
-    }
+    float tIn = fromEye ? 0.0 : spotTetEntry(tet, entryFace, origin, dir);
 
     // The samples: t_k = tStart + (k + 1/2) dt for the whole layer, at the mip level of the
     // pixel's footprint at the entry (the coarsest whose voxel is no larger).
@@ -221,31 +236,8 @@ void main() {
                 break;
             ++walked;
             // The exit: the nearest plane the ray leaves through, the entry face excluded.
-            tOut = 3.0e38;
-            exitFace = 4u;
-            // The 3 faces after the entry face (from the eye, entry face 4: faces 1 to 3, and 0).
-            for (uint i = 1u; i < 4u; ++i) {
-                if (kCountLoops)
-                    ++loops;
-                uint f = (entryFace + i) & 3u;
-                float num, den;
-                facePlane(tet, f, origin, dir, num, den);
-                if (den < 0.0 && num / den < tOut) {
-                    tOut = num / den;
-                    exitFace = f;
-                }
-            }
-            if (entryFace == 4u) {
-                if (kCountLoops)
-                    ++loops;
-                float num, den;
-                facePlane(tet, 0u, origin, dir, num, den);
-                if (den < 0.0 && num / den < tOut) {
-                    tOut = num / den;
-                    exitFace = 0u;
-                }
-            }
-            if (exitFace == 4u)
+            exitFace = spotTetExit(tet, entryFace, origin, dir, kCountLoops, tOut, loops);
+            if (exitFace == kTetNoFace)
                 break; // flat or degenerate: the walk stops here
             tOut = max(tOut, tIn);
             atMesh = tOut >= tMesh;
@@ -283,23 +275,10 @@ void main() {
             tIn = tOut;
             if (atMesh || samples >= kBakedMaxLayerSamples)
                 break;
-            int next = neighbours[tet][exitFace];
-            if (next < 0)
+            if (!spotTetNext(neighbours[tet][exitFace], tet, entryFace))
                 break; // left the shell
-            tet = uint(next) >> 2u;
-            entryFace = uint(next) & 3u;
             inTet = false;
         }
     }
-    acc.rgb += (1.0 - acc.a) * radiance;
-    acc.a += (1.0 - acc.a) * (1.0 - transmittance);
-    if (transmittance < kBakedOpaque)
-        acc.a = 1.0;
-    imageStore(accum, pixel, acc);
-    imageStore(baseColor, pixel, vec4(acc.rgb + (1.0 - acc.a) * under, 1.0));
-    float depth = tEnd * viewCos;
-    // Opaque (alpha 1: this layer's transmittance fell below kBakedOpaque, or the layers' alpha
-    // rounded to 1) or at the mesh: no later layer.
-    finish(pixel, acc.a >= 1.0 || tEnd >= tMesh ? 0.0
-                  : depth > 0.0 ? frame.forward.w / depth : 2.0);
+    compositeLayer(pixel, acc, under, radiance, transmittance, tEnd, tMesh, viewCos);
 }

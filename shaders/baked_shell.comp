@@ -21,6 +21,8 @@
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #include "baked_layout.glsl"
+#define SPOT_TET_WALK_BUILD_ONLY
+#include "spot_tet_walk.h"
 
 layout(local_size_x = 64) in;
 
@@ -86,24 +88,16 @@ void main() {
             tet.world[i] = vec4(p[i], 1.0);
         bool holdsEye = true;
         for (uint f = 0u; f < 4u; ++f) {
-            vec3 a = p[(f + 1u) % 4u], b = p[(f + 2u) % 4u], c = p[(f + 3u) % 4u];
-            vec3 n = cross(b - a, c - a);
-            float side = dot(n, p[f] - a);
-            if (side < 0.0)
-                n = -n;
-            tet.plane[f] = side == 0.0 ? vec4(0.0, 0.0, 0.0, -1.0) : vec4(n, -dot(n, a));
+            vec3 a = p[(f + 1u) % 4u];
+            tet.plane[f] = spotTetFacePlane(a, p[(f + 2u) % 4u], p[(f + 3u) % 4u], p[f]);
             float eyeSide = dot(tet.plane[f].xyz, frame.eye.xyz) + tet.plane[f].w;
             holdsEye = holdsEye && eyeSide >= 0.0;
             // Faces the eye (or nearly: the peel's vertex shader decides), so the peel draws it.
             if (eyeSide <= 1e-3 * length(tet.plane[f].xyz) * length(frame.eye.xyz - a))
                 front |= 1u << (4u * k + f);
         }
-        mat3 pm = mat3(p[1] - p[0], p[2] - p[0], p[3] - p[0]);
-        mat3 m = determinant(pm) != 0.0 ? mat3(r[1] - r[0], r[2] - r[0], r[3] - r[0]) * inverse(pm)
-                                         : mat3(0.0);
-        vec3 offset = r[0] - m * p[0];
-        for (uint j = 0u; j < 3u; ++j)
-            tet.toRest[j] = vec4(m[0][j], m[1][j], m[2][j], offset[j]);
+        spotTetRestMap(p[0], p[1], p[2], p[3], r[0], r[1], r[2], r[3], tet.toRest[0],
+                       tet.toRest[1], tet.toRest[2]);
         tets[3u * t + k] = tet;
         if (holdsEye) {
             atomicMin(eyeTet, 3u * t + k);

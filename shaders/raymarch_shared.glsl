@@ -59,10 +59,8 @@ SPOT_FN int marchFind(ivec3 q, SPOT_INOUT(uint) loops) {
 /* The ray through continuous pixel position (px, py) of the march image (pixels, (0, 0)
  * top-left), as noise::CameraRays and splatPixelRay build it: world origin and unit direction. */
 SPOT_FN void marchPixelRay(SpotMarchPush f, float px, float py, SPOT_OUT(vec3) o, SPOT_OUT(vec3) d) {
-    float sx = 2.0f * px / f.size.x - 1.0f;
-    float sy = 1.0f - 2.0f * py / f.size.y;
-    spotCameraRay(vec3(f.eye), vec3(f.forward), vec3(f.right) * f.right.w, vec3(f.up) * f.up.w,
-                  f.eye.w > 0.5f, sx, sy, o, d);
+    spotPixelRay(vec3(f.eye), vec3(f.forward), vec3(f.right) * f.right.w, vec3(f.up) * f.up.w,
+                 f.eye.w > 0.5f, vec2(f.size), vec2(px, py), o, d);
 }
 
 /* The parts of a ray inside the shell, front to back. */
@@ -296,7 +294,7 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
                                         sigma += rho;
                                         emitted += rho * vec3(c);
                                         if (kMarchLambert)
-                                            gradient += rho * (transpose(A) * u);
+                                            gradient += spotLobeGradient(A, u, rho);
                                     }
                                 }
                             }
@@ -308,8 +306,7 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
                 float alpha = spotOneMinusExp(sigma * dt);
                 vec3 color = emitted / sigma;
                 if (kMarchLambert) {
-                    float len = length(gradient);
-                    vec3 normal = len > 0.0f && len < kMarchFar ? gradient / len : -d;
+                    vec3 normal = spotGradientNormal(gradient, -d, kMarchFar);
                     color *= spotLambertFactor(normal, vec3(marchLight()), marchLight().w);
                 }
                 radiance += transmittance * alpha * color;

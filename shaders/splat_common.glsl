@@ -40,10 +40,9 @@ uint splatPixelIndex(ivec2 pixel) {
 // world origin and unit direction. (The projection is also read from the frame: the ray-march's
 // shaders are not specialized for it.)
 void splatPixelRay(vec2 p, out vec3 origin, out vec3 dir) {
-    float sx = 2.0 * p.x / frame.size.x - 1.0;
-    float sy = 1.0 - 2.0 * p.y / frame.size.y;
-    spotCameraRay(frame.eye.xyz, frame.forward.xyz, frame.right.xyz * frame.right.w,
-                  frame.up.xyz * frame.up.w, kOrthographic || frame.eye.w > 0.5, sx, sy, origin, dir);
+    spotPixelRay(frame.eye.xyz, frame.forward.xyz, frame.right.xyz * frame.right.w,
+                 frame.up.xyz * frame.up.w, kOrthographic || frame.eye.w > 0.5, frame.size.xy, p,
+                 origin, dir);
 }
 
 // World length of the pixel's ray direction scaled to unit view depth (1 for orthographic): a

@@ -1,8 +1,9 @@
 /* spot_layout.h: structs shared by C++ and GLSL (std430 storage buffers, push constants).
  *
  * Every member is a 16-byte vector so the std430 layout equals the C++ layout without padding
- * rules to remember; C++ static_asserts sizes in splat/layout.h. In C++ this file is included by
- * splat/layout.h inside namespace spot::gpu with glm types; in GLSL directly.
+ * rules to remember. In C++ this file is included by shaders/spot_layout.hpp inside namespace
+ * spot::gpu with glm types, which static_asserts the sizes; tests/shaders/layout_test.cpp asserts
+ * every field's offset, on the host and in the compiled SPIR-V. In GLSL it is included directly.
  *
  * Units: world units, radians; colours linear RGB.
  */

@@ -440,20 +440,38 @@ SPOT_FN real spotOneMinusExp(real x) {
     return real(1.0) - exp(-x);
 }
 
+/* The ray o + t d (lobe space, as for spotLobeDepth) against a lobe truncated at k sigmas: the
+ * peak parameter tStar (where the ray passes nearest the lobe's centre), the squared lobe-space
+ * distance perp2 there, and the chord's half length halfChord (in t), so that the chord is
+ * [tStar - halfChord, tStar + halfChord]. Returns false (and zeros) when the ray misses the
+ * support. The splatting shaders (spotLobeChord) and the CPU reference share it. */
+SPOT_FN bool spotLobeLine(rvec3 o, rvec3 d, real k, SPOT_OUT(real) tStar, SPOT_OUT(real) perp2,
+                          SPOT_OUT(real) halfChord) {
+    tStar = real(0.0);
+    perp2 = real(0.0);
+    halfChord = real(0.0);
+    real dd = dot(d, d);
+    if (!(dd > real(0.0)))
+        return false;
+    tStar = -dot(o, d) / dd;
+    rvec3 perp = o + tStar * d;
+    perp2 = dot(perp, perp);
+    if (!(perp2 < k * k))
+        return false;
+    halfChord = sqrt((k * k - perp2) / dd);
+    return true;
+}
+
 /* The chord [ta, tb] of the ray o + t d (lobe space, as for spotLobeDepth) inside a lobe truncated
  * at k sigmas. Returns false (and ta = tb = 0) when the ray misses the support. */
 SPOT_FN bool spotLobeChord(rvec3 o, rvec3 d, real k, SPOT_OUT(real) ta, SPOT_OUT(real) tb) {
     ta = real(0.0);
     tb = real(0.0);
-    real dd = dot(d, d);
-    if (!(dd > real(0.0)))
+    real tStar;
+    real perp2;
+    real halfChord;
+    if (!spotLobeLine(o, d, k, tStar, perp2, halfChord))
         return false;
-    real tStar = -dot(o, d) / dd;
-    rvec3 perp = o + tStar * d;
-    real perp2 = dot(perp, perp);
-    if (!(perp2 < k * k))
-        return false;
-    real halfChord = sqrt((k * k - perp2) / dd);
     ta = tStar - halfChord;
     tb = tStar + halfChord;
     return true;
@@ -503,6 +521,18 @@ SPOT_FN real spotLambertFactor(rvec3 n, rvec3 l, real ambient) {
     return ambient + (real(1.0) - ambient) * max(real(0.0), dot(n, l));
 }
 
+/* A lobe's term of the gradient of the negative summed density (which points out of the strands)
+ * at lobe-space point u = A (x - centre), rho its density there: rho A^T u. */
+SPOT_FN rvec3 spotLobeGradient(rmat3 A, rvec3 u, real rho) { return rho * (transpose(A) * u); }
+
+/* The shading normal of a medium from its summed spotLobeGradient terms g: g / |g|, or `fallback`
+ * (the reverse view direction) where g vanishes or is not below `far` (not finite). The CPU
+ * reference and the ray march shade with it. */
+SPOT_FN rvec3 spotGradientNormal(rvec3 g, rvec3 fallback, real far) {
+    real len = length(g);
+    return len > real(0.0) && len < far ? g / len : fallback;
+}
+
 /* The primary ray of a camera, as noise::CameraRays builds it: sx in [-1, 1] left to right, sy in
  * [-1, 1] bottom to top (sx = 2 px / width - 1, sy = 1 - 2 py / height); `right` and `up` are the
  * unit camera axes times the half width and half height of the view at unit distance
@@ -516,6 +546,22 @@ SPOT_FN void spotCameraRay(rvec3 eye, rvec3 forward, rvec3 right, rvec3 up, bool
         origin = eye;
         dir = normalize(forward + sx * right + sy * up);
     }
+}
+
+/* Continuous pixel position p (pixels, (0, 0) the top-left corner of the image; noise/camera.h)
+ * of an image of `size` pixels, as the screen coordinates spotCameraRay takes: sx in [-1, 1] left
+ * to right, sy in [-1, 1] bottom to top. */
+SPOT_FN rvec2 spotPixelToScreen(rvec2 p, rvec2 size) {
+    return rvec2(real(2.0) * p.x / size.x - real(1.0), real(1.0) - real(2.0) * p.y / size.y);
+}
+
+/* The primary ray through continuous pixel position p of an image of `size` pixels (the one
+ * mapping from pixels to rays: noise::CameraRays, the splatting and baked shaders and the ray
+ * march all call it); `right`, `up` and the rest as for spotCameraRay. */
+SPOT_FN void spotPixelRay(rvec3 eye, rvec3 forward, rvec3 right, rvec3 up, bool orthographic,
+                          rvec2 size, rvec2 p, SPOT_OUT(rvec3) origin, SPOT_OUT(rvec3) dir) {
+    rvec2 s = spotPixelToScreen(p, size);
+    spotCameraRay(eye, forward, right, up, orthographic, s.x, s.y, origin, dir);
 }
 
 /* Weighted blended OIT weights (McGuire and Bavoil 2013, "Weighted Blended Order-Independent

@@ -18,14 +18,10 @@ gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const nois
                                          glm::vec3 baseColor, std::uint32_t count,
                                          std::uint32_t lobes, float support,
                                          std::uint32_t kernelSamples, std::uint32_t flags) {
-    const noise::CameraRays rays(camera); // validates the camera
-    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
-    const glm::dvec3 up = glm::cross(right, forward);
+    const noise::CameraRays rays(camera); // validates the camera; the one camera basis
+    const glm::dvec3 forward = rays.forward(), right = rays.right(), up = rays.up();
     const bool ortho = camera.projection == noise::Projection::Orthographic;
-    const double halfHeight =
-        ortho ? 0.5 * camera.orthoHeight : std::tan(0.5 * camera.fovYDeg * M_PI / 180.0);
-    const double halfWidth = halfHeight * double(camera.width) / double(camera.height);
+    const double halfHeight = rays.halfHeight(), halfWidth = rays.halfWidth();
     if (shading.mode == noise::Shading::Mode::Lambert)
         flags |= gpu_splat::kSplatFlagLambert;
     gpu_splat::SpotSplatFrame frame{};

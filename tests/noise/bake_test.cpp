@@ -512,6 +512,55 @@ TEST(Bake, BadFilesGiveOneClearError) {
     expectBadFile(painted, "not a spotshell bake (no spotshell_levels metadata)");
 }
 
+TEST(Bake, NegativeDensityIsRefusedOnEveryLevel) {
+    // A density is an extinction: a bake whose density grid (any level) holds a negative value,
+    // or has a negative background, is refused with one line naming the file, the grid and the
+    // voxel, not rendered.
+    OneCell one(test::uniformPreset(4000.0f, 0.01f));
+    const BakedVolume bake = bakeImpulses(one.generator->cells(), one.generator->kernel(),
+                                          one.generator->generate(), options(0.004f, 3));
+    const fs::path dir = tmpDir();
+    const fs::path good = dir / "negative-good.vdb";
+    writeBakedGrids(good, bake);
+    EXPECT_NO_THROW((void)readBakedGrids(good));
+    openvdb::initialize();
+    const auto rewrite = [&](const fs::path& out, const std::string& grid,
+                             const std::function<void(openvdb::FloatGrid&)>& edit) {
+        openvdb::io::File f(good.string());
+        f.open();
+        openvdb::GridPtrVec grids = *f.getGrids();
+        const openvdb::MetaMap::Ptr meta = f.getMetadata();
+        f.close();
+        bool found = false;
+        for (auto& g : grids)
+            if (g->getName() == grid) {
+                edit(*openvdb::gridPtrCast<openvdb::FloatGrid>(g));
+                found = true;
+            }
+        ASSERT_TRUE(found) << grid;
+        openvdb::io::File(out.string()).write(grids, *meta);
+    };
+    for (int level = 0; level < 3; ++level) {
+        const std::string name = bakedDensityName(level);
+        const fs::path negative = dir / ("negative-" + name + ".vdb");
+        rewrite(negative, name, [](openvdb::FloatGrid& g) {
+            auto it = g.tree().beginValueOn();
+            ASSERT_TRUE(bool(it));
+            it.setValue(-0.25f);
+        });
+        expectBadFile(negative, "grid \"" + name + "\": negative density -0.25 at voxel (");
+    }
+    // An inactive voxel set to a negative value (it becomes active) and a negative background.
+    const fs::path added = dir / "negative-added.vdb";
+    rewrite(added, bakedDensityName(0),
+            [](openvdb::FloatGrid& g) { g.tree().setValue(openvdb::Coord(-999, 7, 3), -1.0f); });
+    expectBadFile(added, "negative density -1 at voxel (-999, 7, 3)");
+    const fs::path background = dir / "negative-background.vdb";
+    rewrite(background, bakedDensityName(1),
+            [](openvdb::FloatGrid& g) { g.tree().root().setBackground(-0.5f, false); });
+    expectBadFile(background, "negative background density -0.5");
+}
+
 TEST(Bake, OversizedRequestIsRefusedBeforeAllocating) {
     OneCell one(test::uniformPreset(4000.0f, 0.01f));
     const std::vector<Impulse> impulses = one.generator->generate();
@@ -620,4 +669,33 @@ TEST(BakeCli, BadRequestsAndBadFilesExitTwoWithOneLine) {
     expectExit2("info --bake " + garbage, "cannot read");
     expectExit2("info --bake " + (dir / "absent.vdb").string(), "no such bake file");
     expectExit2("info", "--mesh FILE or --bake FILE");
+}
+
+TEST(BakeCli, NegativeDensityExitsTwoWithOneLine) {
+    // `info` and `render --method baked` read the bake the same way: both refuse it.
+    const fs::path dir = tmpDir();
+    const std::string good = (dir / "negative-cli-good.vdb").string();
+    const CliRun r = spotshell("bake --scene " + scene("fur-bunny") +
+                               " --voxel-size 0.024 --levels 2 --out " + good);
+    ASSERT_EQ(r.code, 0) << r.err;
+    openvdb::initialize();
+    const std::string bad = (dir / "negative-cli.vdb").string();
+    {
+        openvdb::io::File f(good);
+        f.open();
+        openvdb::GridPtrVec grids = *f.getGrids();
+        const openvdb::MetaMap::Ptr meta = f.getMetadata();
+        f.close();
+        for (auto& g : grids)
+            if (g->getName() == bakedDensityName(1)) {
+                auto it = openvdb::gridPtrCast<openvdb::FloatGrid>(g)->tree().beginValueOn();
+                ASSERT_TRUE(bool(it));
+                it.setValue(-2.0f);
+            }
+        openvdb::io::File(bad).write(grids, *meta);
+    }
+    expectExit2("info --bake " + bad, "negative density -2");
+    expectExit2("render --scene " + scene("fur-bunny") + " --size 32x32 --method baked --bake " +
+                    bad + " --out " + (dir / "never.png").string(),
+                "negative density -2");
 }

@@ -144,7 +144,9 @@ TEST(Shell, AdjacentPrismsSplitTheirSharedQuadAlikeOnTheBunny) {
 TEST(Shell, RaySegmentsOfAPrismsTetrahedraTileItsChord) {
     // A right prism (flat triangle, equal normals) and random rays: the lengths of the ray's
     // segments in the 3 tetrahedra add up to its chord through the prism, clipped independently
-    // by the prism's 5 planes (the slab 0 <= z <= thickness and the triangle's 3 sides).
+    // by the prism's 5 planes (the slab 0 <= z <= thickness and the triangle's 3 sides). The
+    // segments come from the walk's shared source (shaders/spot_tet_walk.h) in double, and in
+    // float (the GPU's precision) to float's tolerance.
     Mesh m;
     m.name = "one-triangle";
     m.positions = {{0.0f, 0.0f, 0.0f}, {1.0f, 0.1f, 0.0f}, {0.2f, 0.9f, 0.0f}};
@@ -152,6 +154,8 @@ TEST(Shell, RaySegmentsOfAPrismsTetrahedraTileItsChord) {
     m.triangles = {{2, 0, 1}};
     const float thickness = 0.3f;
     const ShellMesh shell = buildShell(m, thickness);
+    const ShellWalk walk(shell, ShellWalk::Precision::Double);
+    const ShellWalk walkFloat(shell, ShellWalk::Precision::Float);
     std::uint32_t state = 12345u;
     const auto rand01 = [&] {
         state = state * 1664525u + 1013904223u;
@@ -162,11 +166,13 @@ TEST(Shell, RaySegmentsOfAPrismsTetrahedraTileItsChord) {
         const glm::dvec3 o(rand01() * 1.6 - 0.3, rand01() * 1.6 - 0.3, rand01() * 1.2 - 0.45);
         const glm::dvec3 d = glm::normalize(
             glm::dvec3(rand01() - 0.5, rand01() - 0.5, rand01() - 0.5) + glm::dvec3(0, 0, 1e-3));
-        double sum = 0.0;
-        for (const ShellTetrahedron& tet : shell.tetrahedra) {
+        double sum = 0.0, sumFloat = 0.0;
+        for (std::uint32_t tet = 0; tet < shell.tetrahedra.size(); ++tet) {
             double t0 = 0.0, t1 = 0.0;
-            if (raySegmentInTetrahedron(shell, tet, o, d, t0, t1))
+            if (walk.segment(tet, o, d, t0, t1))
                 sum += t1 - t0;
+            if (walkFloat.segment(tet, o, d, t0, t1))
+                sumFloat += t1 - t0;
         }
         // The prism's chord.
         double enter = 0.0, exit = std::numeric_limits<double>::infinity();
@@ -195,8 +201,81 @@ TEST(Shell, RaySegmentsOfAPrismsTetrahedraTileItsChord) {
         const double chord = std::max(0.0, exit - enter);
         hits += chord > 0.0;
         EXPECT_NEAR(sum, chord, 1e-9) << "ray " << r;
+        // Float: each plane's crossing to a few ulps of the coordinates (about 1), the chord
+        // up to 3 segments and 2 rounded ends.
+        EXPECT_NEAR(sumFloat, chord, 2e-5) << "ray " << r;
     }
     EXPECT_GT(hits, 200);
+}
+
+TEST(Shell, WalkFromInsideCrossesTheSquaresPrismsToTheShellsBoundary) {
+    // A flat unit square (2 triangles, normals +z) extruded by 0.3: the shell is the box
+    // [0, 1]^2 x [0, 0.3]. A walk as baked_march.comp takes it, from the tetrahedron holding the
+    // ray's origin (the eye test) across the faces it leaves into their neighbours: its segments
+    // follow each other without a gap, each inside its tetrahedron, and end where the ray leaves
+    // the box, whatever prisms and tetrahedra it crosses. In double and in float.
+    Mesh m;
+    m.name = "square";
+    m.positions = {{0.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, {1.0f, 1.0f, 0.0f}};
+    m.normals = std::vector<glm::vec3>(4, glm::vec3(0, 0, 1));
+    m.triangles = {{0, 1, 2}, {1, 3, 2}};
+    const float thickness32 = 0.3f;
+    const double thickness = double(thickness32); // the shell's top, exactly
+    const ShellMesh shell = buildShell(m, thickness32);
+    std::uint32_t state = 777u;
+    const auto rand01 = [&] {
+        state = state * 1664525u + 1013904223u;
+        return double(state >> 8) / double(1u << 24);
+    };
+    for (const auto precision : {ShellWalk::Precision::Double, ShellWalk::Precision::Float}) {
+        const bool isFloat = precision == ShellWalk::Precision::Float;
+        const double tolerance = isFloat ? 2e-5 : 1e-9;
+        const ShellWalk walk(shell, precision);
+        int crossed = 0; // walks that cross more than one prism
+        for (int r = 0; r < 500; ++r) {
+            const glm::dvec3 o(0.05 + 0.9 * rand01(), 0.05 + 0.9 * rand01(),
+                               thickness * (0.05 + 0.9 * rand01()));
+            const glm::dvec3 d =
+                glm::normalize(glm::dvec3(rand01() - 0.5, rand01() - 0.5, 0.3 * (rand01() - 0.5)));
+            const std::int64_t start = walk.containing(o);
+            ASSERT_GE(start, 0) << "ray " << r;
+            const std::vector<WalkSegment> segments =
+                walk.walk(o, d, std::uint32_t(start), 4u, 1e30, 64);
+            ASSERT_FALSE(segments.empty()) << "ray " << r;
+            // Where the ray leaves the box.
+            double exit = std::numeric_limits<double>::infinity();
+            const glm::dvec3 lo(0.0), hi(1.0, 1.0, thickness);
+            for (int a = 0; a < 3; ++a) {
+                if (d[a] > 0.0)
+                    exit = std::min(exit, (hi[a] - o[a]) / d[a]);
+                else if (d[a] < 0.0)
+                    exit = std::min(exit, (lo[a] - o[a]) / d[a]);
+            }
+            EXPECT_EQ(segments.front().tIn, 0.0) << "ray " << r;
+            std::set<std::uint32_t> prisms;
+            for (std::size_t i = 0; i < segments.size(); ++i) {
+                const WalkSegment& s = segments[i];
+                prisms.insert(shell.tetrahedra[s.tet].triangle);
+                EXPECT_LE(s.tIn, s.tOut) << "ray " << r << " segment " << i;
+                if (i > 0)
+                    EXPECT_EQ(s.tIn, segments[i - 1].tOut) << "ray " << r << " segment " << i;
+                double t0 = 0.0, t1 = 0.0;
+                if (s.tOut > s.tIn + tolerance && walk.segment(s.tet, o, d, t0, t1)) {
+                    EXPECT_NEAR(s.tIn, std::max(t0, s.tIn), tolerance) << "ray " << r;
+                    EXPECT_NEAR(s.tOut, t1, tolerance) << "ray " << r << " segment " << i;
+                }
+            }
+            EXPECT_NEAR(segments.back().tOut, exit, tolerance) << "ray " << r;
+            crossed += prisms.size() > 1;
+        }
+        EXPECT_GT(crossed, 50) << (isFloat ? "float" : "double");
+        // The mesh ends the walk: a walk cut at t = 0.1 ends there.
+        const glm::dvec3 o(0.5, 0.4, 0.15), d(1.0, 0.0, 0.0);
+        const std::vector<WalkSegment> cut =
+            walk.walk(o, d, std::uint32_t(walk.containing(o)), 4u, 0.1, 64);
+        ASSERT_FALSE(cut.empty());
+        EXPECT_EQ(cut.back().tOut, isFloat ? double(float(0.1)) : 0.1);
+    }
 }
 
 TEST(Shell, NeighboursAreSymmetricAndPairEveryInteriorFaceOnTheBunny) {

@@ -2,6 +2,7 @@
 // frames have the statistics and invariants the generator relies on.
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -211,6 +212,64 @@ TEST(SharedHeader, ErfcApproximationMeetsItsBound) {
         const double approx = f64::spotErfcApprox(x), exact = std::erfc(x);
         EXPECT_NEAR(approx / exact, 1.0, 2e-7) << x;
     }
+}
+
+TEST(SharedHeader, LobeLineGivesTheChordAndThePeak) {
+    // A ray through a unit lobe truncated at k = 2, passing at distance 1.2 from its centre: the
+    // peak where it passes nearest, perp2 = 1.44, and the chord where |o + t d| = k.
+    const f64::rvec3 o(1.2, -5.0, 0.0), d(0.0, 2.0, 0.0);
+    double tStar = 0.0, perp2 = 0.0, half = 0.0;
+    ASSERT_TRUE(f64::spotLobeLine(o, d, 2.0, tStar, perp2, half));
+    EXPECT_NEAR(tStar, 2.5, 1e-15);
+    EXPECT_NEAR(perp2, 1.44, 1e-15);
+    EXPECT_NEAR(half, std::sqrt(4.0 - 1.44) / 2.0, 1e-15);
+    double ta = 0.0, tb = 0.0;
+    ASSERT_TRUE(f64::spotLobeChord(o, d, 2.0, ta, tb));
+    EXPECT_EQ(ta, tStar - half);
+    EXPECT_EQ(tb, tStar + half);
+    // A miss (perp2 >= k^2) and a degenerate direction: false, and zeros.
+    EXPECT_FALSE(f64::spotLobeLine(o, d, 1.2, tStar, perp2, half));
+    EXPECT_FALSE(f64::spotLobeChord(o, d, 1.2, ta, tb));
+    EXPECT_EQ(ta, 0.0);
+    EXPECT_EQ(tb, 0.0);
+    EXPECT_FALSE(f64::spotLobeLine(o, f64::rvec3(0.0), 2.0, tStar, perp2, half));
+    EXPECT_EQ(half, 0.0);
+}
+
+TEST(SharedHeader, PixelRayMapsTheImageCornersAndCentre) {
+    // Pixel (0, 0) is the top-left corner: screen (-1, 1); (w, h) the bottom-right: (1, -1).
+    const f64::rvec2 size(64.0, 48.0);
+    EXPECT_EQ(f64::spotPixelToScreen(f64::rvec2(0.0, 0.0), size), f64::rvec2(-1.0, 1.0));
+    EXPECT_EQ(f64::spotPixelToScreen(size, size), f64::rvec2(1.0, -1.0));
+    EXPECT_EQ(f64::spotPixelToScreen(0.5 * size, size), f64::rvec2(0.0, 0.0));
+    // The centre pixel's ray looks along forward; a corner's through the view's corner.
+    const f64::rvec3 eye(1.0, 2.0, 3.0), forward(0.0, 0.0, -1.0), right(0.75, 0.0, 0.0),
+        up(0.0, 0.5, 0.0);
+    f64::rvec3 o, d;
+    f64::spotPixelRay(eye, forward, right, up, false, size, 0.5 * size, o, d);
+    EXPECT_EQ(o, eye);
+    EXPECT_NEAR(glm::length(d - forward), 0.0, 1e-15);
+    f64::spotPixelRay(eye, forward, right, up, false, size, f64::rvec2(0.0), o, d);
+    EXPECT_NEAR(glm::length(d - glm::normalize(forward - right + up)), 0.0, 1e-15);
+    f64::spotPixelRay(eye, forward, right, up, true, size, size, o, d);
+    EXPECT_NEAR(glm::length(o - (eye + right - up)), 0.0, 1e-15);
+    EXPECT_EQ(d, forward);
+}
+
+TEST(SharedHeader, GradientNormalFallsBackWhereTheGradientVanishes) {
+    // The sum of the lobes' gradient terms points out of the strands: at a point beside one
+    // lobe's centre, away from the centre.
+    const f64::rmat3 A(2.0); // lobe space = 2 x world
+    const f64::rvec3 u = A * f64::rvec3(0.3, 0.0, 0.0);
+    const f64::rvec3 g = f64::spotLobeGradient(A, u, f64::spotLobeDensity(u, 3.0));
+    const f64::rvec3 fallback(0.0, 0.0, 1.0);
+    const f64::rvec3 n = f64::spotGradientNormal(g, fallback, 1e30);
+    EXPECT_NEAR(glm::length(n - f64::rvec3(1.0, 0.0, 0.0)), 0.0, 1e-15);
+    EXPECT_EQ(f64::spotGradientNormal(f64::rvec3(0.0), fallback, 1e30), fallback);
+    EXPECT_EQ(f64::spotGradientNormal(f64::rvec3(1e31, 0.0, 0.0), fallback, 1e30), fallback);
+    EXPECT_EQ(f64::spotGradientNormal(f64::rvec3(std::numeric_limits<double>::infinity(), 0.0, 0.0),
+                                      fallback, std::numeric_limits<double>::infinity()),
+              fallback);
 }
 
 } // namespace

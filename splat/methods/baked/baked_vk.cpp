@@ -322,25 +322,21 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         for (std::uint32_t t = 0; t < triangles; ++t)
             tris[t] = glm::uvec3(indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]);
         const std::vector<noise::ShellTetrahedron> tets = noise::shellTetrahedra(tris, vertexCount);
-        const auto neighbours = noise::shellNeighbours(tets);
-        std::vector<glm::ivec4> packed(std::max<std::size_t>(neighbours.size(), 1), glm::ivec4(-1));
+        // The neighbours as the walk reads them (the one packing, noise::shellWalkNeighbours).
+        std::vector<glm::ivec4> packed = noise::shellWalkNeighbours(tets);
         std::vector<std::uint32_t> entries;
         for (std::size_t t = 0; t < tets.size(); ++t)
             for (std::uint32_t f = 0; f < 4; ++f) {
-                // The neighbour and the face it shares, as that neighbour numbers it.
-                const std::int32_t n = neighbours[t][f];
-                std::int32_t back = 0;
-                while (n >= 0 && back < 3 && neighbours[std::size_t(n)][std::size_t(back)] != std::int32_t(t))
-                    ++back;
-                packed[t][int(f)] = n < 0 ? -1 : n * 4 + back;
                 // Boundary faces but the base (all three corners on the mesh): the top surface
                 // and the sides of open edges.
                 bool base = true;
                 for (std::uint32_t i = 1; i < 4; ++i)
                     base = base && tets[t].vertices[(f + i) % 4] < vertexCount;
-                if (neighbours[t][f] < 0 && !base)
+                if (packed[t][int(f)] < 0 && !base)
                     entries.push_back(std::uint32_t(t) * 4 + f);
             }
+        if (packed.empty())
+            packed.assign(1, glm::ivec4(-1)); // a buffer is never empty
         m_entryFaceCount = std::uint32_t(entries.size());
         std::vector<std::uint32_t> masks(std::max<std::size_t>(triangles, 1), 0u);
         for (const std::uint32_t e : entries)
