@@ -23,51 +23,64 @@ constexpr KindName kKinds[] = {{BrushKind::DensityAdd, "density-add"},
                                {BrushKind::Color, "color"},
                                {BrushKind::Smooth, "smooth"}};
 
-/// The voxel's new value under one dab of weight w = strength x falloff (w in [0, 1] except for
-/// the signed kinds, which take the sign from the strength).
-glm::vec3 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& sv, glm::vec3 v,
-                float falloff, const noise::PaintedGrid& grid) {
+/// "Over" compositing of target `t` with weight `a` onto the override (value v, weight w) of
+/// `old`: the field b (1 - w) + v w becomes (that) (1 - a) + t a whatever the base b.
+glm::vec4 over(glm::vec4 old, glm::vec3 t, float a) {
+    const float w = old.w + a * (1.0f - old.w);
+    if (!(w > 0.0f))
+        return old;
+    return glm::vec4((glm::vec3(old) * (old.w * (1.0f - a)) + t * a) / w, w);
+}
+
+/// The voxel's new layer state (value xyz, weight w) under one dab of weight a = |strength| x
+/// falloff; the signed kinds take their direction from the strength's sign.
+glm::vec4 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& sv, glm::vec4 old,
+                float falloff, const noise::PaintLayer& layer, const noise::Field* base) {
     const float s = brush.strength;
-    const float w = std::clamp(std::abs(s) * falloff, 0.0f, 1.0f);
+    const float a = std::clamp(std::abs(s) * falloff, 0.0f, 1.0f);
     switch (brush.kind) {
     case BrushKind::DensityAdd:
-        return glm::vec3(v.x + (1.0f - v.x) * w, 0.0f, 0.0f);
+        // The multiplier back towards 1 (the field's own density); the raise only on request.
+        return glm::vec4(old.x + (1.0f - old.x) * a, 0.0f, 0.0f,
+                         brush.raise ? old.w + (1.0f - old.w) * a : old.w);
     case BrushKind::DensityErase:
-        // v (1 - w): exactly 0 for w = 1, so no impulse passes the density test there.
-        return glm::vec3(v.x * (1.0f - w), 0.0f, 0.0f);
+        // m (1 - a): exactly 0 for a = 1, so no impulse passes the density test there.
+        return glm::vec4(old.x * (1.0f - a), 0.0f, 0.0f, old.w * (1.0f - a));
     case BrushKind::Comb: {
         const glm::vec3 n = sv.point.normal;
         glm::vec3 d = dab.direction - n * glm::dot(dab.direction, n);
         if (glm::dot(d, d) < 1e-20f)
-            return v;
-        d = glm::normalize(d);
-        const glm::vec3 mixed =
-            glm::dot(v, v) > 1e-20f ? glm::normalize(v) * (1.0f - w) + d * w : d;
-        return glm::dot(mixed, mixed) > 1e-20f ? glm::normalize(mixed) : d;
+            return old;
+        glm::vec4 v = over(old, glm::normalize(d), a);
+        const glm::vec3 dir(v);
+        if (glm::dot(dir, dir) > 1e-20f)
+            v = glm::vec4(glm::normalize(dir), v.w);
+        return v;
     }
-    case BrushKind::Tilt: {
+    case BrushKind::Tilt:
         // Positive strength lays the strands down towards 90 degrees, negative lifts them (puff)
         // towards the normal.
-        const float target = s >= 0.0f ? 90.0f : 0.0f;
-        return glm::vec3(v.x + (target - v.x) * w, 0.0f, 0.0f);
-    }
+        return over(old, glm::vec3(s >= 0.0f ? 90.0f : 0.0f, 0.0f, 0.0f), a);
     case BrushKind::Length: {
-        // Up to +-25% per dab; the scale stays positive.
-        const float factor = std::max(1.0f + 0.25f * s * falloff, 0.05f);
-        return glm::max(v * factor, glm::vec3(1e-6f));
+        // The field as it is here (base under the layer) 25% longer or shorter, by weight a: up
+        // to +-25% per dab; the scale stays positive.
+        const glm::vec3 b = base ? base->eval(sv.point) : sv.point.tangent;
+        const glm::vec3 now = b * (1.0f - old.w) + glm::vec3(old) * old.w;
+        glm::vec4 v = over(old, now * (s >= 0.0f ? 1.25f : 0.75f), a);
+        return glm::vec4(glm::max(glm::vec3(v), glm::vec3(1e-6f)), v.w);
     }
     case BrushKind::Color:
-        return glm::mix(v, brush.color, w);
+        return over(old, brush.color, a);
     case BrushKind::Smooth: {
-        glm::vec3 sum(0.0f);
+        glm::vec4 sum(0.0f);
         constexpr glm::ivec3 kSteps[6] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
                                           {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
         for (const glm::ivec3& o : kSteps)
-            sum += grid.get(sv.ijk + o);
-        return glm::mix(v, sum / 6.0f, w);
+            sum += layer.get(sv.ijk + o);
+        return glm::mix(old, sum / 6.0f, a);
     }
     }
-    return v;
+    return old;
 }
 
 } // namespace
@@ -208,7 +221,7 @@ std::size_t deltaBytes(const GridDelta& delta) {
     return delta.size() * (sizeof(glm::ivec3) + sizeof(VoxelChange) + 4 * sizeof(void*));
 }
 
-void applyDelta(noise::PaintedGrid& grid, const GridDelta& delta, bool after) {
+void applyDelta(noise::PaintLayer& grid, const GridDelta& delta, bool after) {
     for (const auto& [ijk, change] : delta) {
         const bool active = after ? change.activeAfter : change.activeBefore;
         if (active)
@@ -219,35 +232,39 @@ void applyDelta(noise::PaintedGrid& grid, const GridDelta& delta, bool after) {
 }
 
 std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
-                     noise::PaintedGrid& grid, GridDelta& delta, std::vector<glm::ivec3>* touched) {
-    if (!(dab.radius > 0.0f))
+                     noise::PaintLayer& layer, const noise::Field* base, GridDelta& delta,
+                     std::vector<glm::ivec3>* touched) {
+    // Written voxels stay a voxel diagonal inside the radius: the lookups that read them are
+    // those of points inside it (the 8 voxels around a point lie within a diagonal of it).
+    const float inner = dab.radius - layer.voxelSize() * std::sqrt(3.0f) * 1.001f;
+    if (!(inner > 0.0f))
         return 0;
     const std::vector<SurfaceVoxel> voxels =
-        surface.voxelsNear(dab.centre, dab.radius, grid.voxelSize());
-    // Every new value is computed from the grid before this dab (smooth reads neighbours).
-    std::vector<std::pair<glm::ivec3, glm::vec3>> writes;
+        surface.voxelsNear(dab.centre, inner, layer.voxelSize());
+    const int components = layer.components();
+    // Every new value is computed from the layer before this dab (smooth reads neighbours).
+    std::vector<std::pair<glm::ivec3, glm::vec4>> writes;
     writes.reserve(voxels.size());
     for (const SurfaceVoxel& sv : voxels) {
-        const glm::vec3 p = grid.voxelPosition(sv.ijk);
+        const glm::vec3 p = layer.value().voxelPosition(sv.ijk);
         if (brush.frontFacesOnly && glm::dot(sv.point.normal, dab.eye - p) <= 0.0f)
             continue;
-        const float f = falloffWeight(brush.falloff, glm::length(p - dab.centre) / dab.radius);
+        const float f = falloffWeight(brush.falloff, glm::length(p - dab.centre) / inner);
         if (f <= 0.0f)
             continue;
-        const glm::vec3 old = grid.get(sv.ijk);
-        glm::vec3 v = paint(brush, dab, sv, old, f, grid);
-        if (grid.components() == 1)
-            v = glm::vec3(v.x, 0.0f, 0.0f);
+        glm::vec4 v = paint(brush, dab, sv, layer.get(sv.ijk), f, layer, base);
+        if (components == 1)
+            v = glm::vec4(v.x, 0.0f, 0.0f, v.w);
         writes.emplace_back(sv.ijk, v);
     }
     for (const auto& [ijk, v] : writes) {
         auto [it, inserted] = delta.try_emplace(ijk);
         if (inserted) {
-            it->second.before = grid.get(ijk);
-            it->second.activeBefore = grid.active(ijk);
+            it->second.before = layer.get(ijk);
+            it->second.activeBefore = layer.active(ijk);
         }
-        grid.set(ijk, v);
-        it->second.after = grid.get(ijk);
+        layer.set(ijk, v);
+        it->second.after = layer.get(ijk);
         it->second.activeAfter = true;
         if (touched)
             touched->push_back(ijk);

@@ -2,11 +2,16 @@
 /// @brief The editor's brushes: what a dab of each kind does to the voxels of a painted grid
 /// near the surface, and the sparse record of what it changed (the undo delta).
 ///
+/// A brush paints a slot's paint layer (noise::PaintLayer), never the field under it: density
+/// brushes its multiplier and raise, the others a weighted override ("over" compositing of the
+/// brush's target with weight strength x falloff onto the layer's value and weight).
+///
 /// Units: the brush radius is in window pixels (converted to world units at the hit depth by the
 /// session), a dab's centre and radius in world units, the tilt in degrees, the colour linear
-/// RGB. A dab only touches voxels whose lattice point lies within the dab's world radius of its
-/// centre and within one voxel diagonal of the surface (the 8 voxels the trilinear lookup of any
-/// surface point reads: noise/painted.h).
+/// RGB. A dab only touches voxels whose lattice point lies within one voxel diagonal of the
+/// surface (the 8 voxels the trilinear lookup of any surface point reads: noise/painted.h) and
+/// within the dab's radius less a voxel diagonal of its centre: every point whose lookup reads a
+/// written voxel lies inside the dab's radius, so the field beyond it stays bit for bit.
 #pragma once
 
 #include <cstddef>
@@ -56,6 +61,9 @@ struct BrushSettings {
     bool mirrorX = false;       ///< also paint the dab mirrored about x = 0 (mesh space)
     bool frontFacesOnly = true; ///< skip voxels whose surface faces away from the camera
     glm::vec3 color{1.0f};      ///< Color: linear RGB
+    /// DensityAdd: also raise the density above the field under the layer, towards 1 (the
+    /// layer's raise); otherwise adding only undoes erasing (the multiplier towards 1).
+    bool raise = false;
     /// Smooth: the slot it averages (the other kinds imply theirs).
     Slot smoothTarget = Slot::Density;
 };
@@ -98,10 +106,10 @@ private:
     std::vector<glm::vec3> m_lo, m_hi;
 };
 
-/// What a stroke changed in one grid: per voxel the state before its first change and after its
-/// last one.
+/// What a stroke changed in one layer: per voxel the state (value in xyz, weight in w) before its
+/// first change and after its last one.
 struct VoxelChange {
-    glm::vec3 before{0.0f}, after{0.0f};
+    glm::vec4 before{0.0f}, after{0.0f};
     bool activeBefore = false, activeAfter = false;
 };
 struct IjkLess {
@@ -114,13 +122,14 @@ using GridDelta = std::map<glm::ivec3, VoxelChange, IjkLess>;
 /// Bytes a delta holds (the undo budget counts these).
 std::size_t deltaBytes(const GridDelta& delta);
 /// Set every voxel of `delta` to its `after` (redo) or `before` (undo) state.
-void applyDelta(noise::PaintedGrid& grid, const GridDelta& delta, bool after);
+void applyDelta(noise::PaintLayer& layer, const GridDelta& delta, bool after);
 
-/// Apply one dab of `brush` to `grid` (the brush's slot), recording every change in `delta`
-/// and, when given, appending the voxels written to `touched`. Returns the number of voxels
-/// written.
+/// Apply one dab of `brush` to `layer` (the brush's slot's), recording every change in `delta`
+/// and, when given, appending the voxels written to `touched`. `base` is the field under the
+/// layer (null: the surface tangent), which the length brush scales. Returns the number of
+/// voxels written.
 std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
-                     noise::PaintedGrid& grid, GridDelta& delta,
+                     noise::PaintLayer& layer, const noise::Field* base, GridDelta& delta,
                      std::vector<glm::ivec3>* touched = nullptr);
 
 } // namespace spot::edit

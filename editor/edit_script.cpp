@@ -133,6 +133,8 @@ void parseBrush(Line& line, BrushSettings& b) {
             } catch (const InputError& e) {
                 line.fail(e.what());
             }
+        } else if (key == "raise") {
+            b.raise = true;
         } else if (key == "mirror") {
             if (line.word("mirror axis") != "x")
                 line.fail("only 'mirror x' is supported");
@@ -157,7 +159,7 @@ void parseBrush(Line& line, BrushSettings& b) {
                 line.fail(cat("target '", slot, "' is not density, comb, tilt, length or color"));
         } else {
             line.fail(cat("unknown brush option '", key,
-                          "' (radius, strength, falloff, mirror, color, backfaces, target)"));
+                          "' (radius, strength, falloff, mirror, color, raise, backfaces, target)"));
         }
     }
 }

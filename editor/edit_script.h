@@ -5,9 +5,12 @@
 ///     camera eye X Y Z target X Y Z [fov DEG]
 ///     method NAME [key value ...]        # keys of `render`: steps, supersample, ewa, lod, ...
 ///     brush KIND [radius PX] [strength S] [falloff smooth|linear|constant] [mirror x]
-///                [color R G B] [backfaces] [target SLOT]
-///                # target (smooth): density, comb, tilt, length or color
-///     stroke X,Y X,Y ...                 # a drag through these window points
+///                [color R G B] [raise] [backfaces] [target SLOT]
+///                # target (smooth): density, comb, tilt, length or color; raise (density-add):
+///                # above the field's own density, towards 1
+///     stroke X,Y X,Y ...                 # a drag through these window points (clipped to the
+///                                        # window grown by the brush radius)
+///     set fields.density.base.frequency 6   # a painted slot's field stays editable under it
 ///     undo | redo
 ///     lobe I offset X Y Z | rotation X Y Z | sigma X Y Z | extinction A | color R G B
 ///     lobe add I | lobe remove I

@@ -28,11 +28,20 @@ bool paintedIn(const nlohmann::json& preset, Slot slot) {
     if (!preset.contains(ptr))
         return false;
     const nlohmann::json& j = preset.at(ptr);
-    return j.is_object() && j.value("type", std::string()) == "painted";
+    return j.is_object() && j.contains("paint");
 }
 
-/// The kind of a painted field (noise/painted.h's SpotField).
-constexpr std::int32_t kPaintedFieldKind = shared::f32::SharedGenerator::kFieldPainted;
+using Generator = shared::f32::SharedGenerator;
+
+/// The value grid's name of `slot`'s layer in the .vdb file (its weight grid adds ".weight"):
+/// distinct from the names of painted base fields (the slot's key).
+std::string layerGrid(Slot slot) {
+    return cat(slotKey(slot), ".paint");
+}
+
+noise::PaintMode paintMode(Slot slot) {
+    return slot == Slot::Density ? noise::PaintMode::Density : noise::PaintMode::Override;
+}
 
 /// The part of the segment from -> to inside the window grown by `margin` pixels.
 struct ClippedSegment {
@@ -133,16 +142,17 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
         throw InputError(cat("preset ", m_presetFile.string(), ": ", e.what()));
     }
     m_vdbName = m_presetFile.stem().string() + ".vdb";
-    // Painted fields of a saved preset are read once and then edited in memory.
+    // The paint layers of a saved preset are read once and then edited in memory (painted base
+    // fields are read by the generator, like images).
     const noise::PresetDesc loaded = noise::loadPreset(m_presetFile);
     for (int s = 0; s < kSlotCount; ++s) {
         const Slot slot = Slot(s);
         const noise::FieldDesc* d = noise::presetField(loaded, slotField(slot));
-        if (d && d->kind == noise::FieldDesc::Kind::Painted) {
-            const std::filesystem::path file = loaded.baseDir / d->file;
-            m_grids[s] = std::make_shared<noise::PaintedGrid>(
-                noise::readPaintedGrid(file, d->grid, slotComponents(slot)));
-            m_vdbName = d->file;
+        if (d && d->paint) {
+            const std::filesystem::path file = loaded.baseDir / d->paint->file;
+            m_layers[s] = std::make_shared<noise::PaintLayer>(noise::readPaintLayer(
+                file, d->paint->grid, slotComponents(slot), paintMode(slot)));
+            m_vdbName = d->paint->file;
         }
     }
     m_ctx = std::make_unique<splat::Context>(options.context);
@@ -212,16 +222,25 @@ nlohmann::json Session::slotJson(Slot slot) const {
     return m_presetJson.contains(ptr) ? m_presetJson.at(ptr) : nlohmann::json();
 }
 
+const noise::PaintLayer* Session::layer(Slot slot) const {
+    return painted(slot) ? m_layers[int(slot)].get() : nullptr;
+}
+
 const noise::PaintedGrid* Session::grid(Slot slot) const {
-    return painted(slot) ? m_grids[int(slot)].get() : nullptr;
+    const noise::PaintLayer* l = layer(slot);
+    return l ? &l->value() : nullptr;
 }
 
 noise::FieldDesc* Session::slotDesc(Slot slot) {
     return noise::presetField(m_preset, slotField(slot));
 }
 
-nlohmann::json Session::paintedJson(Slot slot) const {
-    return {{"type", "painted"}, {"file", m_vdbName}, {"grid", slotKey(slot)}};
+nlohmann::json Session::layeredJson(Slot slot) const {
+    nlohmann::json j = {{"paint", {{"file", m_vdbName}, {"grid", layerGrid(slot)}}}};
+    const nlohmann::json base = slotJson(slot);
+    if (!base.is_null())
+        j["base"] = base; // absent: the slot's default (the comb's: the surface tangent)
+    return j;
 }
 
 float Session::voxelSize() const {
@@ -235,44 +254,27 @@ noise::PresetDesc Session::parseDocument(const nlohmann::json& json) const {
         const Slot slot = Slot(s);
         if (!paintedIn(json, slot))
             continue;
-        // A slot painted in `json` but not in the document is an armed, bound one.
-        const std::shared_ptr<noise::PaintedGrid>& grid =
-            painted(slot) ? m_grids[s] : m_armed[s].grid;
-        if (!grid)
+        const std::shared_ptr<noise::PaintLayer>& layer = m_layers[s];
+        if (!layer)
             throw InputError(cat("preset ", m_presetFile.string(), ": fields.", slotKey(slot),
-                                 " is painted but its grid is not loaded"));
+                                 " is painted but its layer is not loaded"));
         noise::FieldDesc* d = noise::presetField(preset, slotField(slot));
-        SPOT_CHECK(d != nullptr);
-        d->painted = grid;
+        SPOT_CHECK(d != nullptr && d->paint);
+        d->paint->layer = layer;
     }
     return preset;
 }
 
 void Session::rebuild() {
-    // An armed grid stands for the slot's field as it was armed: a changed or painted field
+    // An armed layer stands for the slot's field as it was armed: a changed or painted field
     // disarms it.
-    bool armed = false;
-    for (int s = 0; s < kSlotCount; ++s) {
-        if (m_armed[s].grid && (painted(Slot(s)) || slotJson(Slot(s)) != m_armed[s].field))
+    for (int s = 0; s < kSlotCount; ++s)
+        if (m_armed[s].layer && (painted(Slot(s)) || slotJson(Slot(s)) != m_armed[s].field))
             m_armed[s] = {};
-        armed |= m_armed[s].bound;
-    }
     m_preset = parseDocument(m_presetJson);
-    noise::PresetDesc bound;
-    if (armed) {
-        // The generator reads the armed slots as the painted fields the first stroke makes of
-        // them; m_preset (sampling, the panels) keeps the document's fields.
-        nlohmann::json json = m_presetJson;
-        for (int s = 0; s < kSlotCount; ++s)
-            if (m_armed[s].bound)
-                json[keyPathPointer(std::string("fields.") + slotKey(Slot(s)))] =
-                    paintedJson(Slot(s));
-        bound = parseDocument(json);
-    }
     noise::GeneratorOptions options;
     options.seed = m_scene.seed;
-    auto generator =
-        std::make_unique<noise::ImpulseGenerator>(m_mesh, armed ? bound : m_preset, options);
+    auto generator = std::make_unique<noise::ImpulseGenerator>(m_mesh, m_preset, options);
     m_frame.reset();
     m_generator = std::move(generator);
     m_frame = std::make_unique<splat::Frame>(*m_ctx, m_mesh, *m_generator);
@@ -294,6 +296,7 @@ void Session::refreshFields(const std::vector<glm::vec3>* changed, float voxelSi
         rebuild();
         return;
     }
+    m_windBase.clear(); // the comb may have changed
     if (!changed || m_windOn) {
         m_frame->fieldsChanged();
         return;
@@ -318,27 +321,19 @@ void Session::refreshFields(const std::vector<glm::vec3>* changed, float voxelSi
     m_frame->fieldsChanged(touched);
 }
 
-bool Session::constantSlot(Slot slot) {
-    const noise::FieldDesc* d = slotDesc(slot);
-    return d && d->kind == noise::FieldDesc::Kind::Constant;
+std::shared_ptr<noise::PaintLayer> Session::startLayer(Slot slot) const {
+    return std::make_shared<noise::PaintLayer>(layerGrid(slot), slotComponents(slot), voxelSize(),
+                                               paintMode(slot));
 }
 
-std::shared_ptr<noise::PaintedGrid> Session::startGrid(Slot slot) {
-    noise::FieldDesc old;
-    if (const noise::FieldDesc* d = slotDesc(slot))
-        old = *d;
-    const bool constant = constantSlot(slot);
-    auto grid = std::make_shared<noise::PaintedGrid>(
-        slotKey(slot), slotComponents(slot), voxelSize(), constant ? old.value : glm::vec3(0.0f));
-    if (!constant) {
-        // Sample the old field into every voxel near the surface, so painting starts from what
-        // was there.
-        const std::vector<glm::vec3> values = sampleSlot(slot);
-        const std::vector<SurfaceVoxel>& voxels = surfaceVoxels();
-        for (std::size_t i = 0; i < voxels.size(); ++i)
-            grid->set(voxels[i].ijk, values[i]);
-    }
-    return grid;
+std::int32_t Session::layeredKind(Slot slot) const {
+    const gpu::SpotField& f = m_generator->sharedParams().fields[slotField(slot)];
+    // An unset comb (no field: the surface tangent) is layered over the tangent field.
+    const std::int32_t base = slot == Slot::Comb && m_generator->sharedParams().flags.z == 0u
+                                  ? Generator::kFieldTangent
+                                  : (f.kind.x & Generator::kFieldKindMask);
+    return base | (slot == Slot::Density ? Generator::kFieldLayeredDensity
+                                         : Generator::kFieldLayered);
 }
 
 EditCost Session::setBrush(const BrushSettings& brush) {
@@ -356,36 +351,25 @@ EditCost Session::armBrush() {
     const Slot slot = brushSlot(m_brush);
     const int s = int(slot);
     const Armed& a = m_armed[s];
-    const bool arm = !painted(slot) &&
-                     !(a.grid && a.grid->voxelSize() == voxelSize() && a.field == slotJson(slot));
-    bool others = false, othersBound = false;
+    const bool arm = !painted(slot) && !(a.layer && a.layer->voxelSize() == voxelSize() &&
+                                         a.field == slotJson(slot));
+    bool others = false;
     for (int t = 0; t < kSlotCount; ++t)
-        if (t != s) {
-            others |= m_armed[t].grid != nullptr;
-            othersBound |= m_armed[t].bound;
-        }
+        others |= t != s && m_armed[t].layer != nullptr;
     if (!arm && !others)
         return cost;
     if (m_stroke)
         endStroke();
     const auto start = Clock::now();
-    // Only the current brush's slot stays armed (memory: one grid over the whole surface).
+    // Only the current brush's slot stays armed.
     for (int t = 0; t < kSlotCount; ++t)
         if (t != s)
             m_armed[t] = {};
-    // A constant field is bound now (its grid reads the constant exactly); a sampled grid only
-    // approximates its field, so it waits for the first stroke, which swaps it in with
-    // setField (no new generator or frame).
-    const bool bind = arm && constantSlot(slot);
-    if (arm)
-        m_armed[s] = Armed{startGrid(slot), slotJson(slot), bind};
-    if (bind || othersBound) {
-        rebuild();
-        cost.generatorRebuilt = true;
-    }
-    if (arm && !bind)
-        m_frame->generator().prepareFieldKind(std::uint32_t(slotField(slot)), kPaintedFieldKind,
+    if (arm) {
+        m_armed[s] = Armed{startLayer(slot), slotJson(slot)};
+        m_frame->generator().prepareFieldKind(std::uint32_t(slotField(slot)), layeredKind(slot),
                                               slotComponents(slot));
+    }
     cost.armed = arm;
     cost.milliseconds = msSince(start);
     return cost;
@@ -395,36 +379,30 @@ bool Session::ensurePainted(Slot slot, Edit& edit) {
     if (painted(slot))
         return false;
     const int s = int(slot);
-    // The armed grid is already bound to the generator: the stroke only makes it the document's.
     const Armed& a = m_armed[s];
-    const bool bound = a.grid && a.grid->voxelSize() == voxelSize() && a.field == slotJson(slot);
-    const bool swap = bound && !a.bound; // a sampled grid, swapped in below
-    const std::shared_ptr<noise::PaintedGrid> grid = bound ? a.grid : startGrid(slot);
+    const bool armed =
+        a.layer && a.layer->voxelSize() == voxelSize() && a.field == slotJson(slot);
+    const std::shared_ptr<noise::PaintLayer> layer = armed ? a.layer : startLayer(slot);
     m_armed[s] = {};
     const auto ptr = keyPathPointer(std::string("fields.") + slotKey(slot));
-    JsonChange change{ptr, std::nullopt, paintedJson(slot)};
+    JsonChange change{ptr, std::nullopt, layeredJson(slot)};
     if (m_presetJson.contains(ptr))
         change.before = m_presetJson.at(ptr);
-    edit.created.emplace_back(slot, m_grids[s], grid);
+    edit.created.emplace_back(slot, m_layers[s], layer);
     edit.json.push_back(change);
-    m_grids[s] = grid;
+    m_layers[s] = layer;
     m_presetJson[ptr] = *change.after;
-    if (!bound) {
+    // The empty layer gives its base bit for bit: bound without a new generator or frame.
+    m_preset = parseDocument(m_presetJson);
+    noise::FieldDesc* d = slotDesc(slot);
+    SPOT_CHECK(d != nullptr);
+    try {
+        m_generator->setField(slotField(slot), *d);
+    } catch (const InputError&) {
         rebuild();
         return true;
     }
-    m_preset = parseDocument(m_presetJson);
-    if (swap) {
-        noise::FieldDesc* d = slotDesc(slot);
-        SPOT_CHECK(d != nullptr);
-        try {
-            m_generator->setField(slotField(slot), *d);
-        } catch (const InputError&) {
-            rebuild(); // a scale the generator's cells cannot hold: start over
-            return true;
-        }
-        m_frame->fieldsChanged();
-    }
+    m_frame->fieldsChanged();
     return false;
 }
 
@@ -454,8 +432,7 @@ std::vector<glm::vec3> Session::sampleSlot(Slot slot) {
 
 void Session::applyWind() {
     const std::vector<SurfaceVoxel>& voxels = surfaceVoxels();
-    const noise::PaintedGrid* comb = grid(Slot::Comb);
-    if (!comb && m_windBase.size() != voxels.size())
+    if (m_windBase.size() != voxels.size())
         m_windBase = sampleSlot(Slot::Comb);
     const noise::Bounds b = m_mesh.bounds();
     const float wavelength = std::max(glm::length(b.size()), 1e-6f);
@@ -465,7 +442,7 @@ void Session::applyWind() {
         std::make_shared<noise::PaintedGrid>(slotKey(Slot::Comb), 3, voxelSize(), glm::vec3(0.0f));
     for (std::size_t i = 0; i < voxels.size(); ++i) {
         const glm::vec3 p = glm::vec3(voxels[i].ijk) * voxelSize();
-        const glm::vec3 base = comb ? comb->get(voxels[i].ijk) : m_windBase[i];
+        const glm::vec3 base = m_windBase[i];
         const float phase = twoPi * (m_windFrequencyHz * float(m_time) - p.x / wavelength);
         wind->set(voxels[i].ijk,
                   base + gain * glm::length(base) * std::sin(phase) * glm::vec3(1.0f, 0.0f, 0.0f));
@@ -522,8 +499,8 @@ std::size_t Session::undoBytes() const {
 
 std::size_t Session::memoryBytes() const {
     std::size_t n = undoBytes();
-    for (const auto& g : m_grids)
-        n += g ? std::size_t(g->memoryBytes()) : 0;
+    for (const auto& l : m_layers)
+        n += l ? std::size_t(l->memoryBytes()) : 0;
     return n;
 }
 
@@ -542,6 +519,15 @@ EditCost Session::beginStroke(glm::vec2 pixel, bool invert) {
     const Slot slot = brushSlot(m_brush);
     if (!painted(slot))
         cost.generatorRebuilt = ensurePainted(slot, *m_stroke);
+    // The field under the layer, which the length brush scales (null: the surface tangent).
+    m_strokeBase.reset();
+    if (const noise::FieldDesc* d = slotDesc(slot); d && d->kind != noise::FieldDesc::Kind::Tangent) {
+        noise::FieldDesc base = *d;
+        base.paint.reset();
+        m_strokeBase = noise::makeField(base, m_mesh, m_preset.baseDir,
+                                        cat("preset ", m_presetFile.string(), ", fields.",
+                                            slotKey(slot), ".base"));
+    }
     m_strokeLast = pixel;
     m_strokeCarry = 0.0f;
     m_strokeDabs = m_strokeVoxels = 0;
@@ -664,7 +650,7 @@ EditCost Session::stroke(const std::vector<glm::vec2>& points) {
 }
 
 void Session::refreshEvent() {
-    const float size = m_grids[int(brushSlot(m_brush))]->voxelSize();
+    const float size = m_layers[int(brushSlot(m_brush))]->voxelSize();
     std::vector<glm::vec3> changed;
     changed.reserve(m_eventVoxels.size());
     for (const glm::ivec3& v : m_eventVoxels)
@@ -678,7 +664,7 @@ void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
     if (!hit)
         return;
     const Slot slot = brushSlot(m_brush);
-    noise::PaintedGrid& grid = *m_grids[int(slot)];
+    noise::PaintLayer& layer = *m_layers[int(slot)];
     auto it = std::find_if(m_stroke->grids.begin(), m_stroke->grids.end(),
                            [&](const auto& g) { return g.first == slot; });
     if (it == m_stroke->grids.end()) {
@@ -691,14 +677,16 @@ void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
     d.eye = glm::vec3(m_camera.eye);
     d.direction = screenToWorld(drag);
     const BrushSettings brush = strokeBrush();
-    m_strokeVoxels += applyDab(brush, d, *m_surface, grid, it->second, &m_eventVoxels);
+    m_strokeVoxels +=
+        applyDab(brush, d, *m_surface, layer, m_strokeBase.get(), it->second, &m_eventVoxels);
     if (brush.mirrorX) {
         // The mirrored dab sees the mirrored camera, so front faces stay front faces.
         Dab m = d;
         m.centre = mirrorX(d.centre);
         m.eye = mirrorX(d.eye);
         m.direction = mirrorX(d.direction);
-        m_strokeVoxels += applyDab(brush, m, *m_surface, grid, it->second, &m_eventVoxels);
+        m_strokeVoxels +=
+            applyDab(brush, m, *m_surface, layer, m_strokeBase.get(), it->second, &m_eventVoxels);
     }
     ++m_strokeDabs;
 }
@@ -799,7 +787,7 @@ void Session::refreshDeltas(const Edit& edit) {
     std::vector<glm::vec3> changed;
     float size = 0.0f;
     for (const auto& [slot, delta] : edit.grids) {
-        const float s = m_grids[int(slot)]->voxelSize();
+        const float s = m_layers[int(slot)]->voxelSize();
         size = std::max(size, s);
         for (const auto& [ijk, change] : delta)
             changed.push_back(glm::vec3(ijk) * s);
@@ -816,26 +804,24 @@ bool Session::undo(EditCost* cost) {
     Edit e = std::move(m_undo.back());
     m_undo.pop_back();
     for (auto it = e.grids.rbegin(); it != e.grids.rend(); ++it)
-        applyDelta(*m_grids[int(it->first)], it->second, false);
+        applyDelta(*m_layers[int(it->first)], it->second, false);
     for (auto it = e.created.rbegin(); it != e.created.rend(); ++it)
-        m_grids[int(std::get<0>(*it))] = std::get<1>(*it);
+        m_layers[int(std::get<0>(*it))] = std::get<1>(*it);
     applyJson(e.json, false);
-    // Undoing the first stroke on the brush's slot returns to the armed state: the grid it
-    // created, its voxels back to what arming wrote, bound again by the rebuild below when the
-    // field is a constant (m_preset parsed first: constantSlot reads the field as it is again).
-    if (!e.created.empty())
-        m_preset = parseDocument(m_presetJson);
+    // Undoing the first stroke on the brush's slot returns to the armed state: the layer it
+    // created, empty again.
     for (const auto& [slot, before, after] : e.created)
         if (after && !painted(slot) && slot == brushSlot(m_brush))
-            m_armed[int(slot)] = Armed{after, slotJson(slot), constantSlot(slot)};
+            m_armed[int(slot)] = Armed{after, slotJson(slot)};
     const bool full = !e.json.empty();
     if (full)
         rebuild();
     else
         refreshDeltas(e);
     for (int t = 0; t < kSlotCount; ++t)
-        if (full && m_armed[t].grid && !m_armed[t].bound)
-            m_frame->generator().prepareFieldKind(std::uint32_t(slotField(Slot(t))), kPaintedFieldKind,
+        if (full && m_armed[t].layer)
+            m_frame->generator().prepareFieldKind(std::uint32_t(slotField(Slot(t))),
+                                                  layeredKind(Slot(t)),
                                                   slotComponents(Slot(t)));
     m_current = m_undo.empty() ? 0 : m_undo.back().id;
     m_redo.push_back(std::move(e));
@@ -856,10 +842,10 @@ bool Session::redo(EditCost* cost) {
     Edit e = std::move(m_redo.back());
     m_redo.pop_back();
     for (const auto& [slot, before, after] : e.created)
-        m_grids[int(slot)] = after;
+        m_layers[int(slot)] = after;
     applyJson(e.json, true);
     for (const auto& [slot, delta] : e.grids)
-        applyDelta(*m_grids[int(slot)], delta, true);
+        applyDelta(*m_layers[int(slot)], delta, true);
     const bool full = !e.json.empty();
     if (full)
         rebuild();
@@ -885,24 +871,43 @@ void Session::save(const std::filesystem::path& file) {
     const std::string vdbName = vdb.filename().string();
     nlohmann::json out = m_presetJson;
     std::vector<const noise::PaintedGrid*> grids;
+    std::vector<std::unique_ptr<noise::PaintedGrid>> bases; // painted base fields, read back
     const std::filesystem::path from = std::filesystem::absolute(m_presetFile).parent_path();
     const std::filesystem::path to = std::filesystem::absolute(file).parent_path();
+    // A field's files, kept reachable: an image from the new folder, a painted grid copied into
+    // the new .vdb (which replaces the file it may have come from).
+    const auto keepFiles = [&](nlohmann::json& field, const noise::FieldSlot& slot) {
+        if (!field.is_object())
+            return;
+        const std::string type = field.value("type", std::string());
+        const std::filesystem::path path(field.value("file", std::string()));
+        if (type == "painted") {
+            bases.push_back(std::make_unique<noise::PaintedGrid>(noise::readPaintedGrid(
+                path.is_absolute() ? path : from / path, field.value("grid", std::string()),
+                slot.components)));
+            grids.push_back(bases.back().get());
+            field["file"] = vdbName;
+        } else if (type == "image" && from != to && path.is_relative()) {
+            field["file"] = std::filesystem::relative(from / path, to).generic_string();
+        }
+    };
     if (out.contains("fields"))
         for (auto& [key, field] : out["fields"].items()) {
-            if (!field.is_object())
+            const noise::FieldSlot* slot = noise::findFieldSlot(key);
+            if (!slot || !field.is_object())
                 continue;
-            const std::string type = field.value("type", std::string());
-            if (type == "painted") {
-                field["file"] = vdbName;
-                for (int s = 0; s < kSlotCount; ++s)
-                    if (key == slotKey(Slot(s)))
-                        grids.push_back(m_grids[s].get());
-            } else if (type == "image" && from != to) {
-                // Keep the image reachable from the new folder.
-                const std::filesystem::path image(field.value("file", std::string()));
-                if (image.is_relative())
-                    field["file"] = std::filesystem::relative(from / image, to).generic_string();
+            if (!field.contains("paint")) {
+                keepFiles(field, *slot);
+                continue;
             }
+            if (field.contains("base"))
+                keepFiles(field["base"], *slot);
+            field["paint"]["file"] = vdbName;
+            for (int s = 0; s < kSlotCount; ++s)
+                if (slotField(Slot(s)) == slot->index) {
+                    grids.push_back(&m_layers[s]->value());
+                    grids.push_back(&m_layers[s]->weight());
+                }
         }
     // The grids first: a preset on disk never names a .vdb that is not there yet.
     if (!grids.empty())

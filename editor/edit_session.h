@@ -5,8 +5,10 @@
 ///
 /// The window (or the script runner) drives it: pointer events become beginStroke / dragStroke /
 /// endStroke in window pixels (top-left origin, noise/camera.h), panels call set() and the lobe
-/// edits, and every frame calls render(). A stroke's dabs update the painted grids and refresh
-/// the generator's field data, so the next render() regenerates the impulses and shows them.
+/// edits, and every frame calls render(). A stroke paints the slot's paint layer
+/// (noise::PaintLayer), which lies over the slot's field (its base) and never replaces it: the
+/// base's parameters stay editable (set "fields.density.base.frequency"). The dabs refresh the
+/// generator's field data, so the next render() regenerates the impulses and shows them.
 ///
 /// Undo keeps at least kMinUndoSteps edits within a byte budget: a stroke stores per touched grid
 /// a sparse delta (voxel, value and activity before and after), a parameter edit the JSON before
@@ -104,25 +106,20 @@ public:
     /// Replace the brush, or only its kind, and arm its slot (armBrush).
     EditCost setBrush(const BrushSettings& brush);
     EditCost setBrushKind(BrushKind kind);
-    /// Arm the slot the brush paints, so that its first stroke neither creates a grid nor
-    /// rebuilds the generator and the frame: when the slot's field is not painted yet, create
-    /// the grid the first stroke would create. A constant field's grid (every voxel reads the
-    /// constant) is bound to the generator now, rebuilding it and the frame here instead of in
-    /// the stroke; the first stroke then only writes voxels and regenerates the cells it
-    /// touched. Any other field is sampled at the voxels near the surface, which only
-    /// approximates it, so the grid is swapped in by the first stroke (ImpulseGenerator::
-    /// setField, every impulse generated again, no new generator or frame); the generation
-    /// pipeline for the painted kind is compiled here (GpuGenerator::prepareFieldKind), not in
-    /// the stroke's frame (a later rebuild, e.g. a parameter edit, drops it). Either way the
-    /// impulses stay bit for bit until the first stroke. Only the current brush's slot stays
-    /// armed. Not an edit: the document, dirty() and the undo history are unchanged, and save()
-    /// writes the slot's field as it was; undoing the first stroke arms the slot again when it
-    /// is still the brush's. A change of the slot's field (set, undo) disarms it: the next
-    /// first stroke creates its grid as before. Returns the cost (armed: false when the slot
-    /// was painted or already armed).
+    /// Arm the slot the brush paints, so that its first stroke neither creates a layer nor
+    /// compiles a pipeline: when the slot has no paint layer yet, create the empty layer the
+    /// first stroke would create and compile the generation pipeline for the layered field
+    /// (GpuGenerator::prepareFieldKind; a later rebuild, e.g. a parameter edit, drops it). The
+    /// first stroke then binds the layer (ImpulseGenerator::setField: every impulse generated
+    /// again, no new generator or frame); an empty layer gives its base bit for bit, so the
+    /// impulses outside the stroke never move. Only the current brush's slot stays armed. Not an
+    /// edit: the document, dirty() and the undo history are unchanged, and save() writes the
+    /// slot's field as it was; undoing the first stroke arms the slot again when it is still the
+    /// brush's. A change of the slot's field (set, undo) disarms it. Returns the cost (armed:
+    /// false when the slot was painted or already armed).
     EditCost armBrush();
-    /// The grid bound to `slot` by arming, or null.
-    const noise::PaintedGrid* armedGrid(Slot slot) const { return m_armed[int(slot)].grid.get(); }
+    /// The layer made for `slot` by arming, or null.
+    const noise::PaintLayer* armedLayer(Slot slot) const { return m_armed[int(slot)].layer.get(); }
     /// What arming the default brush cost when the session started.
     const EditCost& startArmCost() const { return m_startArmCost; }
     /// Pointer pressed / moved / released. Dabs are spaced radius/4 pixels along the drag; each
@@ -182,7 +179,7 @@ public:
     std::size_t undoBytes() const;
 
     // --- document -----------------------------------------------------------------------------
-    /// The preset as JSON; painted fields read {"type":"painted","file":...,"grid":...}.
+    /// The preset as JSON; a painted slot reads {"base": field, "paint": {"file", "grid"}}.
     const nlohmann::json& presetJson() const { return m_presetJson; }
     const noise::PresetDesc& preset() const { return m_preset; }
     const noise::SceneDesc& scene() const { return m_scene; }
@@ -190,16 +187,19 @@ public:
     const noise::ImpulseGenerator& generator() const { return *m_generator; }
     splat::Frame& frame() { return *m_frame; }
     splat::Context& context() { return *m_ctx; }
-    /// The painted grid of `slot`, or null when the slot's field is not painted.
+    /// The paint layer of `slot`, or null when the slot is not painted.
+    const noise::PaintLayer* layer(Slot slot) const;
+    /// Its value grid (the density's multiplier), or null.
     const noise::PaintedGrid* grid(Slot slot) const;
     /// Voxel size of grids created from now on, world units.
     float voxelSize() const;
     /// Unsaved changes since the load or the last save.
     bool dirty() const { return m_current != m_saved; }
-    /// Write the preset to `file` and its painted grids to `file` with the extension .vdb (both
-    /// atomically, the grids first). Loading `file` back gives the same impulses.
+    /// Write the preset to `file` and its paint layers (and the grids of painted base fields) to
+    /// `file` with the extension .vdb (both atomically, the grids first). Loading `file` back
+    /// gives the same impulses.
     void save(const std::filesystem::path& file);
-    /// Painted grids plus the undo history, bytes.
+    /// Paint layers plus the undo history, bytes.
     std::size_t memoryBytes() const;
 
 private:
@@ -211,37 +211,36 @@ private:
         std::uint64_t id = 0;
         std::vector<JsonChange> json;
         std::vector<std::pair<Slot, GridDelta>> grids;
-        /// Grids a stroke created (before: the slot's grid until then, usually null).
-        std::vector<std::tuple<Slot, std::shared_ptr<noise::PaintedGrid>,
-                               std::shared_ptr<noise::PaintedGrid>>>
+        /// Layers a stroke created (before: the slot's layer until then, usually null).
+        std::vector<std::tuple<Slot, std::shared_ptr<noise::PaintLayer>,
+                               std::shared_ptr<noise::PaintLayer>>>
             created;
         std::size_t bytes() const;
     };
 
-    /// The grid a slot whose field is not painted was armed with (armBrush), the slot's JSON
-    /// when it was armed (a change of it disarms), and whether the generator reads the grid
-    /// already (a constant field) or only from the first stroke on (a sampled one).
+    /// The layer a slot without paint was armed with (armBrush) and the slot's JSON when it was
+    /// armed (a change of it disarms).
     struct Armed {
-        std::shared_ptr<noise::PaintedGrid> grid;
+        std::shared_ptr<noise::PaintLayer> layer;
         nlohmann::json field;
-        bool bound = false;
     };
 
     void rebuild();
-    /// m_preset from m_presetJson, with the painted grids attached.
+    /// m_preset from m_presetJson, with the paint layers attached.
     noise::PresetDesc parseDocument(const nlohmann::json& json) const;
     nlohmann::json slotJson(Slot slot) const;
-    /// Whether `slot`'s field is a constant (its painted grid is then exact: all background).
-    bool constantSlot(Slot slot);
-    /// The grid a first stroke on `slot` starts from (see armBrush).
-    std::shared_ptr<noise::PaintedGrid> startGrid(Slot slot);
+    /// The empty layer a first stroke on `slot` starts from (see armBrush).
+    std::shared_ptr<noise::PaintLayer> startLayer(Slot slot) const;
+    /// The generator's kind of `slot`'s field with a layer (SpotField.kind.x, for the pipeline).
+    std::int32_t layeredKind(Slot slot) const;
     /// After voxels of grids changed in place: the CPU generator re-flattens its fields, and
     /// the frame regenerates only the cells whose impulses read the voxels `changed` (world
     /// positions of voxels of size `voxelSize`), or every cell when `changed` is null.
     void refreshFields(const std::vector<glm::vec3>* changed = nullptr, float voxelSize = 0.0f);
     bool painted(Slot slot) const;
     noise::FieldDesc* slotDesc(Slot slot);
-    nlohmann::json paintedJson(Slot slot) const;
+    /// `slot`'s JSON with a layer over its field.
+    nlohmann::json layeredJson(Slot slot) const;
     /// Make `slot` painted for a stroke; true when that rebuilt the generator (not armed).
     bool ensurePainted(Slot slot, Edit& edit);
     void applyJson(const std::vector<JsonChange>& changes, bool after);
@@ -265,7 +264,7 @@ private:
     std::string m_vdbName; ///< file name the painted fields reference
     nlohmann::json m_presetJson;
     noise::PresetDesc m_preset;
-    std::array<std::shared_ptr<noise::PaintedGrid>, kSlotCount> m_grids;
+    std::array<std::shared_ptr<noise::PaintLayer>, kSlotCount> m_layers;
     std::array<Armed, kSlotCount> m_armed;
     EditCost m_startArmCost;
     float m_voxelScale = 0.25f;
@@ -285,6 +284,7 @@ private:
     std::size_t m_strokeDabs = 0, m_strokeVoxels = 0;
     bool m_strokeInvert = false;
     std::vector<glm::ivec3> m_eventVoxels; ///< written by the current pointer event's dabs
+    std::unique_ptr<noise::Field> m_strokeBase; ///< the stroke's slot's field without its layer
 
     std::deque<Edit> m_undo;
     std::vector<Edit> m_redo;
@@ -296,7 +296,7 @@ private:
     double m_time = 0.0;
     std::vector<SurfaceVoxel> m_surfaceVoxels; ///< cache of surfaceVoxels()
     float m_surfaceVoxelSize = 0.0f;           ///< ... for this voxel size
-    std::vector<glm::vec3> m_windBase;         ///< unpainted comb at the surface voxels
+    std::vector<glm::vec3> m_windBase;         ///< the document's comb at the surface voxels
 };
 
 /// The process's peak resident memory, bytes (getrusage).

@@ -1,6 +1,9 @@
 #include "noise/field.h"
 
 #include <algorithm>
+#include <bit>
+#include <cstring>
+#include <iterator>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -271,6 +274,60 @@ private:
     std::shared_ptr<const PaintedGrid> m_grid;
 };
 
+/// The surface tangent (an unset comb), as the base of a painted comb.
+class TangentField final : public Field {
+public:
+    FieldRange range() const override { return {glm::vec3(-1.0f), glm::vec3(1.0f)}; }
+    gpu::SpotField shared(std::vector<float>&) const override {
+        return sharedField(Generator::kFieldTangent, 3);
+    }
+};
+
+/// A paint layer over a base field (PaintMode): spotFieldLayer over the base's value.
+class LayeredField final : public Field {
+public:
+    LayeredField(std::unique_ptr<Field> base, std::shared_ptr<const PaintLayer> layer,
+                 const Mesh& mesh)
+        : m_base(std::move(base)), m_layer(std::move(layer)) {
+        m_triangles = mesh.triangles.data();
+    }
+    FieldRange range() const override {
+        const FieldRange b = m_base->range();
+        glm::vec3 vLo, vHi, wLo, wHi;
+        m_layer->value().valueRange(vLo, vHi);
+        m_layer->weight().valueRange(wLo, wHi);
+        if (m_layer->mode() == PaintMode::Density) {
+            // b m + (1 - b m) r grows with b m and with r (all in [0, 1]).
+            const auto f = [](float bm, float r) { return bm + (1.0f - bm) * r; };
+            return {glm::vec3(f(b.lo.x * vLo.x, wLo.x), 0.0f, 0.0f),
+                    glm::vec3(f(b.hi.x * vHi.x, wHi.x), 0.0f, 0.0f)};
+        }
+        // A convex combination of the base and the values (w in [0, 1]).
+        const int n = m_layer->components();
+        return {keepComponents(glm::min(b.lo, vLo), n), keepComponents(glm::max(b.hi, vHi), n)};
+    }
+    gpu::SpotField shared(std::vector<float>& data) const override {
+        gpu::SpotField f = m_base->shared(data);
+        const gpu::SpotField grids[2] = {m_layer->value().flatten(data),
+                                         m_layer->weight().flatten(data)};
+        static_assert(sizeof(gpu::SpotField) == Generator::kFieldFloats * sizeof(float));
+        float stored[2 * Generator::kFieldFloats];
+        std::memcpy(stored, grids, sizeof(grids));
+        const std::uint32_t at = appendData(data, stored, std::size(stored));
+        f.axis.w = std::bit_cast<float>(at);
+        f.kind.x |= m_layer->mode() == PaintMode::Density ? Generator::kFieldLayeredDensity
+                                                          : Generator::kFieldLayered;
+        return f;
+    }
+
+protected:
+    std::uint64_t version() const override { return m_layer->version(); }
+
+private:
+    std::unique_ptr<Field> m_base;
+    std::shared_ptr<const PaintLayer> m_layer;
+};
+
 std::unique_ptr<Field> makePaintedField(const FieldDesc& desc, const std::filesystem::path& baseDir,
                                         const std::string& context) {
     std::shared_ptr<const PaintedGrid> grid = desc.painted;
@@ -412,8 +469,44 @@ float valueNoise(glm::vec3 p, int octaves, std::uint32_t seed) {
     return spot::shared::f32::spotValueNoise(p, octaves, seed);
 }
 
+namespace {
+std::unique_ptr<Field> makeBaseField(const FieldDesc& desc, const Mesh& mesh,
+                                     const std::filesystem::path& baseDir,
+                                     const std::string& context);
+} // namespace
+
 std::unique_ptr<Field> makeField(const FieldDesc& desc, const Mesh& mesh,
                                  const std::filesystem::path& baseDir, const std::string& context) {
+    std::unique_ptr<Field> base = makeBaseField(desc, mesh, baseDir, context);
+    if (!desc.paint)
+        return base;
+    std::shared_ptr<const PaintLayer> layer = desc.paint->layer;
+    if (!layer) {
+        if (desc.paint->file.empty())
+            throw InputError(cat(context, ": paint has no file"));
+        const std::filesystem::path file = std::filesystem::path(desc.paint->file).is_absolute()
+                                               ? std::filesystem::path(desc.paint->file)
+                                               : baseDir / desc.paint->file;
+        try {
+            layer = std::make_shared<const PaintLayer>(
+                readPaintLayer(file, desc.paint->grid, desc.components, desc.paint->mode));
+        } catch (const InputError& e) {
+            throw InputError(cat(context, ".paint: ", e.what()));
+        }
+    }
+    if (layer->components() != desc.components)
+        throw InputError(cat(context, ".paint: grid \"", layer->value().name(), "\" has ",
+                             layer->components(), " components, the slot needs ", desc.components));
+    if (layer->mode() != desc.paint->mode)
+        throw InputError(cat(context, ".paint: the layer's mode is not the slot's"));
+    return std::make_unique<LayeredField>(std::move(base), std::move(layer), mesh);
+}
+
+namespace {
+
+std::unique_ptr<Field> makeBaseField(const FieldDesc& desc, const Mesh& mesh,
+                                     const std::filesystem::path& baseDir,
+                                     const std::string& context) {
     if (desc.components != 1 && desc.components != 3)
         throw InputError(cat(context, ": a field has 1 or 3 components, not ", desc.components));
     const int n = desc.components;
@@ -448,8 +541,14 @@ std::unique_ptr<Field> makeField(const FieldDesc& desc, const Mesh& mesh,
         return makeImageField(desc, mesh, baseDir, context);
     case FieldDesc::Kind::Painted:
         return makePaintedField(desc, baseDir, context);
+    case FieldDesc::Kind::Tangent:
+        if (desc.components != 3)
+            throw InputError(cat(context, ": the surface tangent has 3 components"));
+        return std::make_unique<TangentField>();
     }
     throw InputError(cat(context, ": unknown field kind ", static_cast<int>(desc.kind)));
 }
+
+} // namespace
 
 } // namespace spot::noise

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,19 @@ namespace spot::noise {
 
 struct Mesh;
 class PaintedGrid;
+class PaintLayer;
+
+/// How a paint layer combines with the field under it (presets/README.md, "Paint layers").
+enum class PaintMode {
+    /// comb, tilt, scale, colour: per voxel a value v (the slot's components, background 0) and
+    /// a weight w in [0, 1] (background 0); the field is b (1 - w) + v w over the base b.
+    Override,
+    /// The density: per voxel a multiplier m in [0, 1] (background 1) and a raise r in [0, 1]
+    /// (background 0); the density is b m + (1 - b m) r. Erasing lowers m (and r), so it only
+    /// removes impulses; adding raises m back towards 1 (up to the base's value) and, with the
+    /// brush's raise option, r (up to 1).
+    Density,
+};
 
 /// Where a field is evaluated: a point on the mesh surface, world units.
 struct SurfacePoint {
@@ -39,7 +53,9 @@ struct SurfacePoint {
 /// Parsed description of a field. Values are 1 or 3 components (`components`, fixed by the slot
 /// the field fills: density is scalar, colour is RGB); scalars are stored in `.x`.
 struct FieldDesc {
-    enum class Kind { Constant, Gradient, Noise, Vertex, Image, Painted };
+    /// Tangent: the surface tangent (+u), what an unset comb reads; only as the base of a comb
+    /// whose preset has paint and no base.
+    enum class Kind { Constant, Gradient, Noise, Vertex, Image, Painted, Tangent };
     Kind kind = Kind::Constant;
     int components = 1;
 
@@ -67,6 +83,18 @@ struct FieldDesc {
     /// bound field shares it: after changing the grid, rebuild the shared form
     /// (ImpulseGenerator::refreshFields).
     std::shared_ptr<const PaintedGrid> painted;
+
+    /// The paint layered over the field (the editor's strokes; presets/README.md "Paint
+    /// layers"): its grids in `file` (resolved like an image), the value grid `grid` and the weight
+    /// grid paintWeightGrid(grid); or, when `layer` is set, that layer in memory (the editor's
+    /// live one, shared as `painted` is).
+    struct Paint {
+        std::string file;
+        std::string grid;
+        PaintMode mode = PaintMode::Override;
+        std::shared_ptr<const PaintLayer> layer;
+    };
+    std::optional<Paint> paint;
 };
 
 /// Inclusive bounds of every value a field can return (componentwise).

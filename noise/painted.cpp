@@ -346,6 +346,64 @@ glm::vec3 PaintedGrid::sample(glm::vec3 world) const {
     return generator.spotFieldEval(0u, s);
 }
 
+std::string paintWeightGrid(const std::string& grid) {
+    return grid + ".weight";
+}
+
+PaintLayer::PaintLayer(const std::string& name, int components, float voxelSize, PaintMode mode)
+    : m_value(name, components, voxelSize,
+              glm::vec3(mode == PaintMode::Density ? 1.0f : 0.0f, 0.0f, 0.0f)),
+      m_weight(paintWeightGrid(name), 1, voxelSize, glm::vec3(0.0f)), m_mode(mode) {}
+
+PaintLayer::PaintLayer(PaintedGrid value, PaintedGrid weight, PaintMode mode)
+    : m_value(std::move(value)), m_weight(std::move(weight)), m_mode(mode) {
+    if (m_weight.components() != 1 || m_weight.voxelSize() != m_value.voxelSize())
+        throw InputError(cat("paint layer \"", m_value.name(), "\": its weight grid \"",
+                             m_weight.name(), "\" needs 1 component and the same voxel size"));
+}
+
+glm::vec4 PaintLayer::get(glm::ivec3 v) const {
+    return glm::vec4(m_value.get(v), m_weight.get(v).x);
+}
+
+bool PaintLayer::active(glm::ivec3 v) const {
+    return m_value.active(v);
+}
+
+void PaintLayer::set(glm::ivec3 v, glm::vec4 value) {
+    m_value.set(v, glm::vec3(value));
+    m_weight.set(v, glm::vec3(value.w, 0.0f, 0.0f));
+}
+
+void PaintLayer::clear(glm::ivec3 v) {
+    m_value.clear(v);
+    m_weight.clear(v);
+}
+
+std::shared_ptr<PaintLayer> PaintLayer::clone() const {
+    return std::make_shared<PaintLayer>(std::move(*m_value.clone()), std::move(*m_weight.clone()),
+                                        m_mode);
+}
+
+PaintLayer readPaintLayer(const std::filesystem::path& file, const std::string& grid,
+                          int components, PaintMode mode) {
+    PaintedGrid value = readPaintedGrid(file, grid, components);
+    PaintedGrid weight = readPaintedGrid(file, paintWeightGrid(grid), 1);
+    const auto inUnit = [](const PaintedGrid& g) {
+        glm::vec3 lo, hi;
+        g.valueRange(lo, hi);
+        return lo.x >= 0.0f && hi.x <= 1.0f;
+    };
+    const std::string where = cat("paint layer \"", grid, "\" of ", file.string());
+    if (!inUnit(weight))
+        throw InputError(cat(where, ": its weight grid holds values outside [0, 1]"));
+    if (mode == PaintMode::Density && !inUnit(value))
+        throw InputError(cat(where, ": a density multiplier outside [0, 1]"));
+    if (weight.voxelSize() != value.voxelSize())
+        throw InputError(cat(where, ": its two grids have different voxel sizes"));
+    return PaintLayer(std::move(value), std::move(weight), mode);
+}
+
 PaintedGrid readPaintedGrid(const std::filesystem::path& file, const std::string& grid,
                             int components) {
     initializeOpenVdb();

@@ -22,6 +22,8 @@
 
 #include <glm/glm.hpp>
 
+#include "noise/field.h"
+
 namespace spot::gpu {
 struct SpotField;
 }
@@ -100,6 +102,43 @@ private:
 
     std::unique_ptr<Impl> m_impl;
 };
+
+/// A paint layer: two painted grids over the same voxels, `value` (v or m) and `weight` (w or
+/// r, 1 component). Where both read their backgrounds the field is the base bit for bit.
+class PaintLayer {
+public:
+    /// An empty layer; `name` names the value grid, `name` + ".weight" the weight grid.
+    PaintLayer(const std::string& name, int components, float voxelSize, PaintMode mode);
+    PaintLayer(PaintedGrid value, PaintedGrid weight, PaintMode mode);
+
+    PaintMode mode() const { return m_mode; }
+    int components() const { return m_value.components(); }
+    float voxelSize() const { return m_value.voxelSize(); }
+    const PaintedGrid& value() const { return m_value; }
+    const PaintedGrid& weight() const { return m_weight; }
+
+    /// Voxel `v`: the value in xyz (scalars in x), the weight (or raise) in w.
+    glm::vec4 get(glm::ivec3 v) const;
+    bool active(glm::ivec3 v) const;
+    void set(glm::ivec3 v, glm::vec4 value);
+    void clear(glm::ivec3 v);
+    std::uint64_t version() const { return m_value.version() + m_weight.version(); }
+    std::uint64_t memoryBytes() const { return m_value.memoryBytes() + m_weight.memoryBytes(); }
+    std::shared_ptr<PaintLayer> clone() const;
+
+private:
+    PaintedGrid m_value, m_weight;
+    PaintMode m_mode;
+};
+
+/// The weight grid's name of a layer whose value grid is `grid`.
+std::string paintWeightGrid(const std::string& grid);
+
+/// Read the layer whose value grid is `grid` (and weight grid paintWeightGrid(grid)) from
+/// `file`. Throws InputError as readPaintedGrid does, and for values outside [0, 1] where the
+/// mode needs them there (weights; the density's multiplier and raise).
+PaintLayer readPaintLayer(const std::filesystem::path& file, const std::string& grid,
+                          int components, PaintMode mode);
 
 /// Read grid `grid` of `file` as a painted grid of `components` components. Throws InputError
 /// with one line naming the file and the grid for: a missing, unreadable, corrupt or truncated

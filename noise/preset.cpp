@@ -162,6 +162,35 @@ public:
         return desc;
     }
 
+    /// A slot's field: a field, or {"base": field, "paint": {"file", "grid"}} (a paint layer
+    /// over the base; an absent base is the slot's default, the surface tangent for the comb).
+    FieldDesc slotField(const Json& j, const std::string& path, const FieldSlot& slot,
+                        const Interval& r) const {
+        if (!j.is_object() || !find(j, "paint"))
+            return field(j, path, slot.components, r);
+        requireObject(j, path, {"base", "paint"});
+        FieldDesc desc;
+        if (const Json* base = find(j, "base")) {
+            desc = field(*base, join(path, "base"), slot.components, r);
+        } else if (slot.optional) {
+            desc.kind = FieldDesc::Kind::Tangent;
+            desc.components = slot.components;
+        } else {
+            desc.kind = FieldDesc::Kind::Constant;
+            desc.components = slot.components;
+            desc.value = slot.components == 1 ? glm::vec3(slot.byDefault, 0.0f, 0.0f)
+                                              : glm::vec3(slot.byDefault);
+        }
+        const std::string paintPath = join(path, "paint");
+        const Json& paint = require(j, path, "paint");
+        requireObject(paint, paintPath, {"file", "grid"});
+        FieldDesc::Paint layer;
+        layer.file = string(require(paint, paintPath, "file"), join(paintPath, "file"), false);
+        layer.grid = string(require(paint, paintPath, "grid"), join(paintPath, "grid"), false);
+        layer.mode = slot.index == SPOT_FIELD_DENSITY ? PaintMode::Density : PaintMode::Override;
+        desc.paint = std::move(layer);
+        return desc;
+    }
 };
 
 FieldDesc constantField(int components, float v) {
@@ -237,7 +266,7 @@ void parseFields(const Reader& rd, const Json& j, const std::string& path, Prese
         if (!v)
             continue;
         const Interval range{slot.lo, slot.hi, slot.loOpen, false};
-        FieldDesc desc = rd.field(*v, join(path, slot.key), slot.components, range);
+        FieldDesc desc = rd.slotField(*v, join(path, slot.key), slot, range);
         if (slot.optional)
             p.comb = std::move(desc);
         else

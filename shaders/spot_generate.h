@@ -31,6 +31,7 @@ SPOT_CONST int kFieldNoise = 2;
 SPOT_CONST int kFieldVertex = 3;
 SPOT_CONST int kFieldImage = 4;
 SPOT_CONST int kFieldPainted = 5;
+SPOT_CONST int kFieldTangent = 6; /* the surface tangent: the base of a painted, unset comb */
 
 /* The surface at a point of a triangle (SpotSurface, spotSurfaceAt, spotUnit,
  * spotDefaultTangent): shared with the CPU's noise::surfacePoint. */
@@ -136,12 +137,63 @@ SPOT_FN rvec3 spotPaintedSample(SpotField f, rvec3 p, int components) {
     return spotKeepComponents(clamp(v, rvec3(f.clampLo), rvec3(f.clampHi)), components);
 }
 
-/* A field's value at a surface point (scalars in .x). */
-SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
-    SpotField f = spotParamField(slot);
-    ivec2 kindComponents = spotParamFieldKind(slot);
-    int kind = kindComponents.x;
-    int components = kindComponents.y;
+/* ---- Paint layers (noise/painted.h PaintLayer; presets/README.md "Painted layers") ---------- */
+/* A field may carry a painted layer over its base: its kind is then the base kind plus
+ * kFieldLayered (a weighted override: value v and weight w per voxel, out = b (1 - w) + v w) or
+ * kFieldLayeredDensity (a multiplier m and a raise r per voxel, out = b m + (1 - b m) r). Both
+ * give the base bit for bit where the layer reads its background (w = 0; m = 1, r = 0), so an
+ * empty layer, and every point beyond a stroke's voxels, keeps the base's exact value. The
+ * layer's two grids are painted grids (kFieldPainted) whose SpotFields are stored in the field
+ * data, one after the other (36 floats each, the struct's bits), at the offset in the base
+ * field's axis.w (bits). */
+SPOT_CONST int kFieldKindMask = 15;
+SPOT_CONST int kFieldLayered = 16;
+SPOT_CONST int kFieldLayeredDensity = 32;
+SPOT_CONST uint kFieldFloats = 36u;
+
+SPOT_FN ivec4 spotDataIvec4(uint at) {
+    return ivec4(floatBitsToInt(spotFieldData(at)), floatBitsToInt(spotFieldData(at + 1u)),
+                 floatBitsToInt(spotFieldData(at + 2u)), floatBitsToInt(spotFieldData(at + 3u)));
+}
+
+SPOT_FN vec4 spotDataVec4(uint at) {
+    return vec4(spotFieldData(at), spotFieldData(at + 1u), spotFieldData(at + 2u), spotFieldData(at + 3u));
+}
+
+/* The SpotField stored at `at` in the field data (the members a painted grid uses). */
+SPOT_FN SpotField spotStoredField(uint at) {
+    SpotField f;
+    f.kind = spotDataIvec4(at);
+    f.value = spotDataVec4(at + 4u);
+    f.lo = vec4(0.0);
+    f.hi = vec4(0.0);
+    f.from = spotDataVec4(at + 16u);
+    f.axis = vec4(0.0);
+    f.data = uvec4(spotDataIvec4(at + 24u));
+    f.clampLo = spotDataVec4(at + 28u);
+    f.clampHi = spotDataVec4(at + 32u);
+    return f;
+}
+
+/* The layer of a field whose kind carries `flags` over the base value `base` at point p. The
+ * layer's components are its value grid's (SpotField.kind.y): the base's may be 3 for a scalar
+ * slot (a constant, gradient or noise base maps all three). */
+SPOT_FN rvec3 spotFieldLayer(uint at, int flags, rvec3 base, rvec3 p) {
+    SpotField valueGrid = spotStoredField(at);
+    SpotField weightGrid = spotStoredField(at + kFieldFloats);
+    int components = valueGrid.kind.y;
+    rvec3 v = spotPaintedSample(valueGrid, p, components);
+    real w = spotPaintedSample(weightGrid, p, 1).x;
+    if ((flags & kFieldLayeredDensity) != 0) {
+        real d = base.x * v.x;
+        d = d + (real(1.0) - d) * w;
+        return rvec3(d, real(0.0), real(0.0));
+    }
+    return spotKeepComponents(base * (real(1.0) - w) + v * w, components);
+}
+
+/* A field's base value (its kind without a layer) at a surface point (scalars in .x). */
+SPOT_FN rvec3 spotFieldBase(SpotField f, int kind, int components, SpotSurface s) {
     if (kind == kFieldGradient) {
         rvec3 from = rvec3(f.from);
         real t = clamp(dot(s.position - from, rvec3(f.axis)), real(0.0), real(1.0));
@@ -200,7 +252,20 @@ SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
     }
     if (kind == kFieldPainted)
         return spotPaintedSample(f, s.position, components);
+    if (kind == kFieldTangent)
+        return s.tangent;
     return rvec3(f.value);
+}
+
+/* A field's value at a surface point (scalars in .x): its base, and its layer when it has one. */
+SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
+    SpotField f = spotParamField(slot);
+    ivec2 kindComponents = spotParamFieldKind(slot);
+    int flags = kindComponents.x & ~kFieldKindMask;
+    rvec3 base = spotFieldBase(f, kindComponents.x & kFieldKindMask, kindComponents.y, s);
+    if (flags == 0)
+        return base;
+    return spotFieldLayer(floatBitsToUint(f.axis.w), flags, base, s.position);
 }
 
 SPOT_FN real spotSymmetric(uint key, uint counter) { return real(2.0) * spotRand(key, counter) - real(1.0); }

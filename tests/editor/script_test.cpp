@@ -179,10 +179,13 @@ TEST(EditScript, RunsAndSavesAndRejectsBadGrids) {
     };
     test::writeText(dir / "corrupt.vdb", "this is not a vdb file at all");
     expectFails(variant("corrupt.json", "painted.vdb", "corrupt.vdb"), "corrupt.vdb");
-    expectFails(variant("wrongname.json", "\"grid\": \"density\"", "\"grid\": \"nothing\""),
+    // The paint layers' grids are named "<slot>.paint" (and "<slot>.paint.weight").
+    expectFails(variant("wrongname.json", "\"grid\": \"density.paint\"",
+                        "\"grid\": \"nothing\""),
                 "nothing");
-    // The density grid (scalar) where the comb (3 components) is expected.
-    expectFails(variant("wrongtype.json", "\"grid\": \"comb\"", "\"grid\": \"density\""),
+    // The density's value grid (scalar) where the comb's (3 components) is expected.
+    expectFails(variant("wrongtype.json", "\"grid\": \"comb.paint\"",
+                        "\"grid\": \"density.paint\""),
                 "density");
 }
 
@@ -205,4 +208,17 @@ TEST(EditScript, WindowOptionsNeedTheWindow) {
         EXPECT_NE(err.find(name + " needs the window"), std::string::npos) << err;
         EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
     }
+}
+
+// A stroke to a point 1e9 pixels away ends (clipped to the window) and the script goes on.
+TEST(EditScript, StrokeFarOutsideTheWindowEnds) {
+    const fs::path script = test::tmpPath("edit_far_stroke.script");
+    test::writeText(script, "brush density-erase radius 10\nstroke 64,64 1000000000,64\n"
+                            "stroke 1000000000,1000000000 -1000000000,64\nframes 1\n");
+    std::string err;
+    EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() +
+                                  " --size 128x128 --script " + script.string(),
+                              &err),
+              0)
+        << err;
 }

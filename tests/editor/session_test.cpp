@@ -35,8 +35,8 @@ glm::vec3 anchorOf(const noise::Impulse& i) {
 // radius plus the trilinear lookup's reach the impulses are bit-identical.
 TEST(EditSession, EraseLeavesNoImpulseUnderTheBrush) {
     edit::Session s(test::bunnyScene(), editOptions());
-    // A first stroke that changes no value makes the density painted (the noise sampled into the
-    // grid), so the comparison below sees only the erase.
+    // A first stroke that changes no value makes the density painted (an unchanged layer over
+    // the noise), so the comparison below sees only the erase.
     s.brush().kind = edit::BrushKind::DensityAdd;
     s.brush().strength = 0.0f;
     s.stroke({{20.0f, 20.0f}});
@@ -153,7 +153,7 @@ TEST(EditSession, UndoRestoresBitIdenticalState) {
     test::expectSameImpulses(s.generator().generate(), impulses1, "after undoing to stroke 1");
     ASSERT_TRUE(s.undo()); // the first stroke, which made the density painted
     EXPECT_EQ(s.grid(edit::Slot::Density), nullptr);
-    EXPECT_NE(s.armedGrid(edit::Slot::Density), nullptr);
+    EXPECT_NE(s.armedLayer(edit::Slot::Density), nullptr);
     EXPECT_EQ(s.presetJson(), json0);
     test::expectSameImpulses(s.generator().generate(), impulses0, "after undoing everything");
     EXPECT_FALSE(s.undo());
@@ -528,10 +528,10 @@ std::string savedText(edit::Session& session, const std::string& name) {
 
 } // namespace
 
-// Arming a constant field's slot (tilt_deg 35) binds a grid whose every voxel reads the constant:
-// the impulses stay bit for bit, the document is unchanged (not dirty, no undo step, saving
-// writes the constant back and no .vdb). The first stroke then rebuilds nothing, and undoing it
-// returns to the armed state.
+// Arming a constant field's slot (tilt_deg 35) makes its empty paint layer and compiles the
+// layered pipeline: the impulses stay bit for bit, the document is unchanged (not dirty, no undo
+// step, saving writes the constant back and no .vdb). The first stroke then rebuilds nothing
+// (it binds the layer), and undoing it returns to the armed state.
 TEST(EditSession, ArmingAConstantFieldKeepsTheImpulses) {
     edit::SessionOptions o = editOptions();
     o.armBrush = false;
@@ -539,13 +539,15 @@ TEST(EditSession, ArmingAConstantFieldKeepsTheImpulses) {
     const nlohmann::json json0 = s.presetJson();
     const std::string saved0 = savedText(s, "edit_arm_unarmed.json");
     const std::vector<noise::Impulse> impulses0 = s.generator().generate();
-    EXPECT_EQ(s.armedGrid(edit::Slot::Tilt), nullptr);
+    EXPECT_EQ(s.armedLayer(edit::Slot::Tilt), nullptr);
 
     const edit::EditCost arm = s.setBrushKind(edit::BrushKind::Tilt);
     std::printf("arming tilt_deg (constant): %.1f ms\n", arm.milliseconds);
     EXPECT_TRUE(arm.armed);
-    EXPECT_TRUE(arm.generatorRebuilt);
-    ASSERT_NE(s.armedGrid(edit::Slot::Tilt), nullptr);
+    // Paint layers: an empty layer is exact over any field, so arming binds nothing and rebuilds
+    // nothing (a grid standing in for the constant was bound, with a rebuild, before layers).
+    EXPECT_FALSE(arm.generatorRebuilt);
+    ASSERT_NE(s.armedLayer(edit::Slot::Tilt), nullptr);
     EXPECT_EQ(s.grid(edit::Slot::Tilt), nullptr) << "armed is not painted";
     test::expectSameImpulses(s.generator().generate(), impulses0, "after arming tilt");
     EXPECT_FALSE(s.dirty());
@@ -560,16 +562,17 @@ TEST(EditSession, ArmingAConstantFieldKeepsTheImpulses) {
     const edit::EditCost first = s.beginStroke({120.0f, 120.0f});
     s.dragStroke({150.0f, 130.0f});
     s.endStroke();
-    EXPECT_FALSE(first.generatorRebuilt) << "the armed grid is already bound";
+    EXPECT_FALSE(first.generatorRebuilt) << "the armed layer is bound without a rebuild";
     EXPECT_NE(s.grid(edit::Slot::Tilt), nullptr);
-    EXPECT_EQ(s.armedGrid(edit::Slot::Tilt), nullptr);
+    EXPECT_EQ(s.armedLayer(edit::Slot::Tilt), nullptr);
     EXPECT_TRUE(s.dirty());
     EXPECT_EQ(s.undoSteps(), 1u);
-    EXPECT_EQ(s.presetJson()["fields"]["tilt_deg"]["type"], "painted");
+    EXPECT_TRUE(s.presetJson()["fields"]["tilt_deg"].contains("paint"));
+    EXPECT_EQ(s.presetJson()["fields"]["tilt_deg"]["base"], json0["fields"]["tilt_deg"]);
 
     ASSERT_TRUE(s.undo());
     EXPECT_EQ(s.grid(edit::Slot::Tilt), nullptr);
-    EXPECT_NE(s.armedGrid(edit::Slot::Tilt), nullptr) << "undo returns to the armed state";
+    EXPECT_NE(s.armedLayer(edit::Slot::Tilt), nullptr) << "undo returns to the armed state";
     EXPECT_EQ(s.presetJson(), json0);
     EXPECT_FALSE(s.dirty());
     test::expectSameImpulses(s.generator().generate(), impulses0, "after undoing the stroke");
@@ -582,15 +585,14 @@ TEST(EditSession, ArmingAConstantFieldKeepsTheImpulses) {
     ASSERT_TRUE(s.undo());
     ASSERT_TRUE(s.redo());
     EXPECT_NE(s.grid(edit::Slot::Tilt), nullptr);
-    EXPECT_EQ(s.armedGrid(edit::Slot::Tilt), nullptr);
+    EXPECT_EQ(s.armedLayer(edit::Slot::Tilt), nullptr);
     test::expectNoValidationErrors(s.context());
 }
 
-// The bunny's density is a noise field: arming samples it at the voxels near the surface (as a
-// first stroke does) but leaves the noise bound, since the grid's trilinear interpolation only
-// approximates it; the impulses stay bit for bit, the document as it was. The first stroke swaps
-// the grid in without a new generator: its impulses are those of the saved stroke (a session
-// loading the saved preset), and undoing it gives back the noise's impulses.
+// The bunny's density is a noise field: arming makes the empty layer over it; the impulses stay
+// bit for bit, the document as it was. The first stroke binds the layer without a new
+// generator: its impulses are those of the saved stroke (a session loading the saved preset),
+// and undoing it gives back the noise's impulses.
 TEST(EditSession, ArmingASampledFieldKeepsTheImpulses) {
     edit::SessionOptions o = editOptions();
     o.armBrush = false;
@@ -601,8 +603,8 @@ TEST(EditSession, ArmingASampledFieldKeepsTheImpulses) {
     const edit::EditCost arm = s.armBrush(); // density-add: the density slot
     std::printf("arming the noise density: %.1f ms\n", arm.milliseconds);
     EXPECT_TRUE(arm.armed);
-    EXPECT_FALSE(arm.generatorRebuilt) << "a sampled grid is not bound before the stroke";
-    ASSERT_NE(s.armedGrid(edit::Slot::Density), nullptr);
+    EXPECT_FALSE(arm.generatorRebuilt) << "the layer is not bound before the stroke";
+    ASSERT_NE(s.armedLayer(edit::Slot::Density), nullptr);
     test::expectSameImpulses(s.generator().generate(), impulses0, "after arming the density");
     EXPECT_FALSE(s.dirty());
     EXPECT_EQ(s.undoSteps(), 0u);
@@ -626,7 +628,7 @@ TEST(EditSession, ArmingASampledFieldKeepsTheImpulses) {
 
     ASSERT_TRUE(s.undo());
     EXPECT_EQ(s.grid(edit::Slot::Density), nullptr);
-    EXPECT_NE(s.armedGrid(edit::Slot::Density), nullptr) << "undo returns to the armed state";
+    EXPECT_NE(s.armedLayer(edit::Slot::Density), nullptr) << "undo returns to the armed state";
     test::expectSameImpulses(s.generator().generate(), impulses0, "after undoing the stroke");
     test::expectNoValidationErrors(s.context());
 }
@@ -635,7 +637,7 @@ TEST(EditSession, ArmingASampledFieldKeepsTheImpulses) {
 TEST(EditSession, SwitchingBrushesDisarmsTheOtherSlots) {
     edit::Session s(test::bunnyScene(), editOptions()); // arms the density at the start
     EXPECT_TRUE(s.startArmCost().armed);
-    ASSERT_NE(s.armedGrid(edit::Slot::Density), nullptr);
+    ASSERT_NE(s.armedLayer(edit::Slot::Density), nullptr);
     const std::vector<noise::Impulse> impulses0 = s.generator().generate();
     for (const edit::BrushKind kind :
          {edit::BrushKind::Tilt, edit::BrushKind::Comb, edit::BrushKind::Length,
@@ -644,7 +646,7 @@ TEST(EditSession, SwitchingBrushesDisarmsTheOtherSlots) {
         const edit::Slot slot = edit::brushSlot(s.brush());
         EXPECT_TRUE(cost.armed) << edit::brushKindName(kind);
         for (int t = 0; t < edit::kSlotCount; ++t)
-            EXPECT_EQ(s.armedGrid(edit::Slot(t)) != nullptr, edit::Slot(t) == slot)
+            EXPECT_EQ(s.armedLayer(edit::Slot(t)) != nullptr, edit::Slot(t) == slot)
                 << edit::brushKindName(kind) << " slot " << t;
         test::expectSameImpulses(s.generator().generate(), impulses0, edit::brushKindName(kind));
     }
@@ -668,6 +670,81 @@ TEST(EditSession, StrokeFarOutsideTheWindowEnds) {
     EXPECT_GT(cost.dabs, 10u);
     EXPECT_LT(seconds, 60.0);
     EXPECT_THROW(s.stroke({{64.0f, 64.0f}, {INFINITY, 64.0f}}), InputError);
+}
+
+} // namespace
+
+namespace {
+
+bool sameImpulse(const noise::Impulse& a, const noise::Impulse& b) {
+    return a.position == b.position && a.normal == b.normal && a.comb == b.comb &&
+           a.frame == b.frame && a.scale == b.scale && a.color == b.color &&
+           a.weight == b.weight && a.bend == b.bend && a.cell == b.cell &&
+           a.triangle == b.triangle && a.barycentric == b.barycentric;
+}
+
+// Paint layers over the procedural fields: an erase stroke on fur's noise density keeps every
+// impulse outside the brush bit for bit and adds none; undo gives back the original impulses bit
+// for bit; the noise under the layer stays editable after the stroke.
+TEST(EditSession, EraseKeepsEveryImpulseOutsideTheBrush) {
+    edit::Session s(test::bunnyScene(), editOptions());
+    ASSERT_EQ(s.preset().density.kind, noise::FieldDesc::Kind::Noise) << "fur's density is noise";
+    const std::vector<noise::Impulse> before = s.generator().generate();
+    const glm::vec2 at(128.0f, 120.0f);
+    const std::optional<edit::Hit> hit = s.pick(at);
+    ASSERT_TRUE(hit);
+    s.brush().kind = edit::BrushKind::DensityErase;
+    s.brush().radiusPx = 20.0f;
+    s.brush().strength = 1.0f;
+    s.brush().falloff = edit::Falloff::Constant;
+    EXPECT_EQ(s.stroke({at}).dabs, 1u);
+    ASSERT_NE(s.layer(edit::Slot::Density), nullptr);
+    EXPECT_TRUE(s.presetJson()["fields"]["density"].contains("base"));
+    const std::vector<noise::Impulse> after = s.generator().generate();
+
+    const float radius = test::worldRadius(s, *hit, 20.0f);
+    const auto outside = [&](const noise::Impulse& i) {
+        return glm::length(i.position - hit->position) > radius;
+    };
+    std::vector<noise::Impulse> outsideBefore, outsideAfter;
+    for (const noise::Impulse& i : before)
+        if (outside(i))
+            outsideBefore.push_back(i);
+    for (const noise::Impulse& i : after)
+        if (outside(i))
+            outsideAfter.push_back(i);
+    // None new: `after` is `before` less some impulses (both in generation order).
+    std::size_t j = 0;
+    for (const noise::Impulse& i : after) {
+        while (j < before.size() && !sameImpulse(before[j], i))
+            ++j;
+        ASSERT_LT(j, before.size()) << "an impulse the erase added";
+        ++j;
+    }
+    std::printf("erase on the noise density: %zu impulses before, %zu after, %zu outside the "
+                "brush (radius %.4f)\n",
+                before.size(), after.size(), outsideAfter.size(), radius);
+    EXPECT_LT(after.size() + 20, before.size()) << "the brush must remove impulses";
+    ASSERT_EQ(outsideAfter.size(), outsideBefore.size());
+    for (std::size_t k = 0; k < outsideAfter.size(); ++k)
+        ASSERT_TRUE(sameImpulse(outsideAfter[k], outsideBefore[k])) << k;
+
+    // The noise stays editable under the layer; the erased patch stays erased.
+    s.set("fields.density.base.frequency", 6.0);
+    EXPECT_EQ(s.preset().density.frequency, 6.0f);
+    const std::vector<noise::Impulse> edited = s.generator().generate();
+    std::size_t under = 0;
+    const float voxel = s.grid(edit::Slot::Density)->voxelSize();
+    for (const noise::Impulse& i : edited)
+        under += glm::length(i.position - hit->position) < radius - 2.0f * std::sqrt(3.0f) * voxel &&
+                 facing(i, glm::vec3(s.camera().eye));
+    EXPECT_EQ(under, 0u);
+    EXPECT_NE(edited.size(), after.size());
+
+    ASSERT_TRUE(s.undo()); // the frequency
+    ASSERT_TRUE(s.undo()); // the erase
+    test::expectSameImpulses(s.generator().generate(), before, "after undoing the erase");
+    test::expectNoValidationErrors(s.context());
 }
 
 } // namespace

@@ -493,5 +493,45 @@ TEST(Preset, ImageFieldReadsTheShippedTexture) {
     EXPECT_NEAR(f->range().hi.x, 1.0, 1e-6);
 }
 
+// Paint layers: {"base": FIELD, "paint": {"file", "grid"}}; an absent base is the slot's default
+// (the comb's: the surface tangent); the density's layer multiplies, the others override; a
+// plain painted field (presets written before layers) is still a field of its own.
+TEST(Preset, PaintLayerForms) {
+    const PresetDesc p = parsePreset(withFields(R"({
+            "density": {"base": {"type": "noise", "range": [0.5, 1]},
+                        "paint": {"file": "p.vdb", "grid": "density.paint"}},
+            "comb": {"paint": {"file": "p.vdb", "grid": "comb.paint"}},
+            "scale": {"paint": {"file": "p.vdb", "grid": "scale.paint"}},
+            "color": {"type": "painted", "file": "old.vdb", "grid": "color"}
+        })"),
+                                     "t.json");
+    EXPECT_EQ(p.density.kind, FieldDesc::Kind::Noise);
+    ASSERT_TRUE(p.density.paint);
+    EXPECT_EQ(p.density.paint->file, "p.vdb");
+    EXPECT_EQ(p.density.paint->grid, "density.paint");
+    EXPECT_EQ(p.density.paint->mode, PaintMode::Density);
+    ASSERT_TRUE(p.comb.has_value());
+    EXPECT_EQ(p.comb->kind, FieldDesc::Kind::Tangent);
+    ASSERT_TRUE(p.comb->paint);
+    EXPECT_EQ(p.comb->paint->mode, PaintMode::Override);
+    EXPECT_EQ(p.scale.kind, FieldDesc::Kind::Constant);
+    EXPECT_EQ(p.scale.value, glm::vec3(1.0f));
+    ASSERT_TRUE(p.scale.paint);
+    EXPECT_EQ(p.color.kind, FieldDesc::Kind::Painted);
+    EXPECT_FALSE(p.color.paint);
+
+    EXPECT_NE(parseError(withFields(R"({"density": {"paint": {"file": "p.vdb"}}})"))
+                  .find("fields.density.paint.grid"),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"density": {"base": 0.5, "paint": {"file": "p.vdb",
+               "grid": "g"}, "more": 1}})"))
+                  .find("fields.density.more"),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"density": {"base": 2, "paint": {"file": "p.vdb",
+               "grid": "g"}}})"))
+                  .find("fields.density.base"),
+              std::string::npos);
+}
+
 } // namespace
 } // namespace spot::noise

@@ -152,6 +152,73 @@ TEST_P(PaintedGpu, DensityCombAndColourGiveTheCpuImpulses) {
                 double(std::max(before.worstColor, after.worstColor)));
 }
 
+// Paint layers over procedural fields on the GPU (spotFieldLayer): a noise density under a
+// multiplier and raise layer, the surface tangent (an unset comb) and a gradient colour under
+// override layers. The impulses equal the CPU generator's, before and after the layers are painted
+// in place; an empty layer gives the base's impulses bit for bit.
+TEST(PaintedGpuLayers, LayersOverProceduralFieldsGiveTheCpuImpulses) {
+    const Mesh mesh = makeSphere(1.0f, 32, 64);
+    PresetDesc preset = test::uniformPreset(4000.0f, 0.01f, DistributionType::Poisson);
+    preset.density.kind = FieldDesc::Kind::Noise;
+    preset.density.frequency = 3.0f;
+    preset.density.octaves = 2;
+    preset.density.seed = 5;
+    preset.density.lo = glm::vec3(0.3f, 0.0f, 0.0f);
+    preset.density.hi = glm::vec3(0.9f, 0.0f, 0.0f);
+    preset.color.kind = FieldDesc::Kind::Gradient;
+    preset.color.from = glm::vec3(0.0f, -1.0f, 0.0f);
+    preset.color.to = glm::vec3(0.0f, 1.0f, 0.0f);
+    preset.color.lo = glm::vec3(0.2f, 0.3f, 0.4f);
+    preset.color.hi = glm::vec3(0.9f, 0.6f, 0.1f);
+    GeneratorOptions options;
+    options.seed = 11;
+    const std::vector<Impulse> unlayered = ImpulseGenerator(mesh, preset, options).generate();
+
+    auto density = std::make_shared<PaintLayer>("density.paint", 1, 0.08f, PaintMode::Density);
+    auto comb = std::make_shared<PaintLayer>("comb.paint", 3, 0.08f, PaintMode::Override);
+    auto color = std::make_shared<PaintLayer>("color.paint", 3, 0.08f, PaintMode::Override);
+    const auto layered = [](FieldDesc d, std::shared_ptr<PaintLayer> layer) {
+        d.paint = FieldDesc::Paint{"", "", layer->mode(), std::move(layer)};
+        return d;
+    };
+    preset.density = layered(preset.density, density);
+    FieldDesc tangent;
+    tangent.kind = FieldDesc::Kind::Tangent;
+    tangent.components = 3;
+    preset.comb = layered(tangent, comb);
+    preset.color = layered(preset.color, color);
+    ImpulseGenerator generator(mesh, preset, options);
+    const std::vector<Impulse> empty = generator.generate();
+    ASSERT_EQ(empty.size(), unlayered.size()) << "empty layers";
+    for (std::size_t i = 0; i < empty.size(); ++i) {
+        EXPECT_EQ(empty[i].position, unlayered[i].position) << i;
+        EXPECT_EQ(empty[i].comb, unlayered[i].comb) << i;
+        EXPECT_EQ(empty[i].color, unlayered[i].color) << i;
+        EXPECT_EQ(empty[i].frame, unlayered[i].frame) << i;
+    }
+
+    splat::Context ctx(test::validated());
+    splat::GpuGenerator gpuGenerator(ctx, mesh, generator);
+    compare(generator, gpuGenerator, true);
+
+    Rng rnd;
+    for (int i = 0; i < 6000; ++i) {
+        const glm::vec3 dir =
+            glm::normalize(glm::vec3(rnd() - 0.5f, rnd() - 0.5f, rnd() - 0.5f) + 1e-3f);
+        const glm::ivec3 v = density->value().nearestVoxel(dir * (0.9f + 0.2f * rnd()));
+        density->set(v, glm::vec4(rnd(), 0.0f, 0.0f, rnd() < 0.5f ? 0.0f : rnd()));
+        comb->set(v, glm::vec4(rnd() - 0.5f, rnd() - 0.5f, rnd() - 0.5f, rnd()));
+        color->set(v, glm::vec4(rnd(), rnd(), rnd(), rnd()));
+    }
+    generator.refreshFields();
+    gpuGenerator.refreshFields();
+    const Comparison painted = compare(generator, gpuGenerator, true);
+    EXPECT_GT(painted.count, 2000u);
+    EXPECT_NE(painted.count, unlayered.size());
+    test::expectNoValidationErrors(ctx);
+    std::printf("layers: %zu impulses unlayered, %zu painted\n", unlayered.size(), painted.count);
+}
+
 INSTANTIATE_TEST_SUITE_P(Distributions, PaintedGpu,
                          ::testing::Values(DistributionType::Poisson, DistributionType::Jittered),
                          [](const auto& info) {
