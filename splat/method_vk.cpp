@@ -49,7 +49,7 @@ SceneGpu::SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& k
       m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}
 
 // The registry: each method's module makes its entry (its folder under splat/methods/). Adding a
-// method is its folder and one line here.
+// method is its folder, its declaration below and its place in the list.
 MethodInfo referenceMethod();
 MethodInfo instancedMethod();
 MethodInfo oitMethod();

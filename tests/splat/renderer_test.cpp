@@ -28,7 +28,7 @@
 #include "splat/image_compare.h"
 #include "splat/layout.h"
 #include "splat_test_support.h"
-#include "splat/renderer_vk.h"
+#include "splat/passes/splatting_vk.h"
 
 namespace {
 

@@ -20,7 +20,7 @@
 #include "noise/scene.h"
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
-#include "splat/renderer_vk.h"
+#include "splat/passes/splatting_vk.h"
 #include "splat/layout.h"
 
 namespace spot::test {

@@ -1,4 +1,4 @@
-#include "renderer_vk.h"
+#include "splatting_vk.h"
 
 #include <algorithm>
 #include <array>
@@ -754,43 +754,16 @@ FrameCounters SplatRenderer::counters() const {
     return c;
 }
 
-namespace {
-
-MethodInfo splatMethod(Method method, const char* summary, std::vector<const Setting*> taken) {
+MethodInfo splattingMethod(Method method, std::string summary,
+                           std::vector<const Setting*> settings) {
     MethodInfo m;
     m.name = methodName(method);
-    m.summary = summary;
-    m.settings = std::move(taken);
+    m.summary = std::move(summary);
+    m.settings = std::move(settings);
     m.make = [method](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<SplatRenderer>(scene, method);
     };
     return m;
-}
-
-} // namespace
-
-MethodInfo instancedMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Instanced, "opaque kernels with the depth test (paper fig. 4 left)",
-                       {&s::kernelSamples, &s::ewa, &s::smallPixels, &s::lod, &s::countFragments});
-}
-
-MethodInfo oitMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Oit, "weighted blended OIT EWA splatting (paper eq. 10-12)",
-                       {&s::kernelSamples, &s::ewa, &s::weight, &s::smallPixels, &s::lod, &s::countFragments});
-}
-
-MethodInfo hybridMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Hybrid, "oit plus the closest kernel composited over it (paper eq. 13)",
-                       {&s::kernelSamples, &s::ewa, &s::weight, &s::closest, &s::smallPixels, &s::lod, &s::countFragments});
-}
-
-MethodInfo sortedMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Sorted, "kernels sorted by depth, composited back to front",
-                       {&s::kernelSamples, &s::ewa, &s::lod, &s::countFragments});
 }
 
 } // namespace spot::splat

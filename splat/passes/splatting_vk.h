@@ -1,4 +1,4 @@
-/// @file renderer_vk.h
+/// @file splatting_vk.h
 /// @brief The splatting renderers of docs/design.md section 4 (paper sec. 4, fig. 4):
 /// `instanced`, `oit`, `hybrid` and `sorted`, over an opaque base mesh, behind the Renderer
 /// interface of method_vk.h.
@@ -48,7 +48,7 @@
 #include "splat/context_vk.h"
 #include "splat/method_vk.h"
 #include "splat/pass_vk.h"
-#include "splat/sort_vk.h"
+#include "splat/passes/radix_sort_vk.h"
 
 namespace spot::splat {
 
@@ -56,6 +56,11 @@ enum class Method { Instanced, Oit, Hybrid, Sorted };
 
 /// "instanced", "oit", "hybrid", "sorted".
 const char* methodName(Method method);
+
+/// The registry entry of a splatting method (its module under splat/methods/ gives the summary
+/// and the settings it takes).
+MethodInfo splattingMethod(Method method, std::string summary,
+                           std::vector<const Setting*> settings);
 
 class SplatRenderer final : public Renderer {
 public:
