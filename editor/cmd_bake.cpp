@@ -77,7 +77,7 @@ int bake(int argc, char** argv) {
         }
     } else {
         // 32 voxels per cell edge: on fur-bunny 0.0019, about 1.7 sigmas of the thinnest lobe
-        // (docs/design.md section 5 has the measured costs).
+        // (docs/bench/measurements.md has the measured costs).
         options.voxelSize =
             float(args.number("voxel-size", double(job.generator->cellSize()) / 32.0, 1e-30, 1e30));
     }

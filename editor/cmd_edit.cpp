@@ -1,10 +1,13 @@
 // `spotshell edit`: the editor. One option set for both ways to run it: the window (GLFW,
 // Vulkan, Dear ImGui; edit_window.h) on an edit::Session, or a script replayed on the session
 // without a window (--script), or replayed in the window (--script with --window).
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
@@ -27,9 +30,7 @@ void writeReport(const std::string& file, const nlohmann::json& j) {
     writeFileAtomic(file, [&](std::ostream& o) { o << j.dump(2) << "\n"; });
 }
 
-} // namespace
-
-int edit(int argc, char** argv) {
+std::vector<cli::OptionSpec> editOptions() {
     std::vector<cli::OptionSpec> specs = {
         {"scene", "FILE", "scene JSON to edit (presets/scenes/*.json)", true},
         {"preset", "FILE", "edit this preset instead of the scene's (e.g. one saved by the editor)",
@@ -50,45 +51,26 @@ int edit(int argc, char** argv) {
         specs.push_back(o);
     for (const cli::OptionSpec& o : cli::renderOptions())
         specs.push_back(o);
-    cli::Args args("edit",
-                   "Paint density, comb, tilt, length and colour on the surface and edit the "
-                   "kernel, in a window: the GPU methods live, with Blender-like navigation "
-                   "(middle drag orbits, shift+middle pans, the wheel zooms, alt+left orbits, F "
-                   "or Home frames the mesh), the left button paints. Needs a display (DISPLAY), "
-                   "or xvfb-run. --script replays a session without a window.",
-                   specs, argc, argv);
-    if (args.helpRequested()) {
-        std::fputs(args.usage().c_str(), stdout);
-        return 0;
-    }
-    const auto threads = args.integer("threads", 0, 0, 1024);
-    std::optional<tbb::global_control> threadLimit;
-    if (threads > 0)
-        threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-    const bool inWindow = !args.has("script") || args.has("window");
+    return specs;
+}
+
+/// Whether the session runs in the window; the window's options without it are refused.
+bool inWindow(const cli::Args& args) {
+    const bool window = !args.has("script") || args.has("window");
     if (args.has("window") && !args.has("script"))
         throw InputError("--window replays a script: give --script FILE too");
-    if (!inWindow)
+    if (!window)
         for (const char* option : {"frames", "orbit", "resize", "cycle-methods",
                                    "window-screenshot", "render-scale", "refine"})
             if (args.has(option))
                 throw InputError(cat("--", option,
                                      " needs the window: give --window too (a --script without "
                                      "it has no window)"));
+    return window;
+}
 
-    // Everything is checked before anything is loaded or written.
-    std::vector<edit::ScriptAction> actions;
-    const std::string scriptFile = args.has("script") ? args.str("script") : std::string();
-    if (!scriptFile.empty())
-        actions = edit::loadScript(scriptFile);
-    std::optional<std::filesystem::path> screenshot;
-    if (args.has("screenshot")) {
-        screenshot = args.str("screenshot");
-        const std::string ext = screenshot->extension().string();
-        if (ext != ".png" && ext != ".exr")
-            throw InputError(
-                cat("--screenshot '", screenshot->string(), "' must end in .png or .exr"));
-    }
+/// --size, --preset and --voxel-scale.
+edit::SessionOptions sessionOptions(const cli::Args& args) {
     edit::SessionOptions options;
     if (args.has("size")) {
         const std::string size = args.str("size");
@@ -102,73 +84,109 @@ int edit(int argc, char** argv) {
     if (args.has("preset"))
         options.preset = args.str("preset");
     options.voxelScale = float(args.number("voxel-scale", 0.25, 1e-3, 1.0));
-    const std::string method = args.str("method", "instanced");
-    const splat::RenderSettings settings = cli::renderSettings(args);
-    splat::gpuMethod(method); // InputError naming the methods
+    return options;
+}
 
-    if (inWindow) {
-        const noise::SceneDesc desc = noise::loadScene(args.str("scene"));
-        const int width = options.width > 0 ? options.width : desc.camera.width;
-        const int height = options.height > 0 ? options.height : desc.camera.height;
-        editor::EditWindowOptions window =
-            editor::editWindowOptions(args, width, height, desc.name);
-        window.script = actions;
-        window.scriptName = scriptFile;
-        window.log = stdout;
-        const std::filesystem::path scene = args.str("scene");
-        const editor::EditWindowReport r = editor::runEditWindow(
-            [&](const splat::ContextOptions& context) {
-                edit::SessionOptions o = options;
-                o.context = context;
-                auto session = std::make_unique<edit::Session>(scene, o);
-                session->setMethod(method, settings);
-                return session;
-            },
-            window);
-        const std::string timing =
-            r.warmFrames == 0
-                ? std::string("no warm frames (each changed method or size)")
-                : cat("warm frames: median ", r.frameMs, " ms (render ", r.renderMs,
-                      " ms, present with ImGui ", r.presentMs, " ms, panels ", r.overlayMs, " ms)");
-        std::printf("edit: %d frames (%d rendered) of %s; %s%s%s\n", r.frames, r.rendered,
-                    desc.name.c_str(), timing.c_str(), window.screenshot.empty() ? "" : "; wrote ",
-                    window.screenshot.string().c_str());
-        if (!r.strokeToFrameMs.empty()) {
-            std::vector<double> s = r.strokeToFrameMs;
-            std::sort(s.begin(), s.end());
-            std::printf("edit: stroke to frame: median %.1f ms, max %.1f ms over %zu events; "
-                        "frames while painting: median %.1f ms (at 1/%d size)\n",
-                        s[s.size() / 2], s.back(), s.size(), r.strokeFrameMs, r.lowScale);
-        }
-        if (r.refined > 0)
-            std::printf("edit: idle refinement: %d steps, %.1f ms each (median; the average and "
-                        "its upload %.1f ms)\n",
-                        r.refined, r.refineMs, r.refineAverageMs);
-        if (r.previewMs > 0.0)
-            std::printf("edit: kernel preview: %.1f ms (the last render)\n", r.previewMs);
-        if (r.validation)
-            std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
-        if (args.has("report"))
-            writeReport(args.str("report"), {{"frames", r.frames},
-                                             {"rendered", r.rendered},
-                                             {"frame_ms", r.frameMs},
-                                             {"render_ms", r.renderMs},
-                                             {"present_ms", r.presentMs},
-                                             {"panels_ms", r.overlayMs},
-                                             {"refined", r.refined},
-                                             {"refine_ms", r.refineMs},
-                                             {"refine_average_ms", r.refineAverageMs},
-                                             {"stroke_to_frame_ms", r.strokeToFrameMs},
-                                             {"stroke_frame_ms", r.strokeFrameMs},
-                                             {"low_scale", r.lowScale}});
-        return 0;
+/// What `edit` was asked to do, checked before anything is loaded or written.
+struct EditJob {
+    edit::SessionOptions options;
+    std::vector<edit::ScriptAction> actions;
+    std::string scriptFile;
+    std::optional<std::filesystem::path> screenshot;
+    std::string method;
+    splat::RenderSettings settings;
+};
+
+EditJob editJob(const cli::Args& args) {
+    EditJob job;
+    job.scriptFile = args.has("script") ? args.str("script") : std::string();
+    if (!job.scriptFile.empty())
+        job.actions = edit::loadScript(job.scriptFile);
+    if (args.has("screenshot")) {
+        job.screenshot = args.str("screenshot");
+        const std::string ext = job.screenshot->extension().string();
+        if (ext != ".png" && ext != ".exr")
+            throw InputError(
+                cat("--screenshot '", job.screenshot->string(), "' must end in .png or .exr"));
     }
+    job.options = sessionOptions(args);
+    job.method = args.str("method", "instanced");
+    job.settings = cli::renderSettings(args);
+    splat::gpuMethod(job.method); // InputError naming the methods
+    return job;
+}
 
-    edit::Session session(args.str("scene"), options);
-    session.setMethod(method, settings);
-    const edit::ScriptReport report = edit::runScript(session, actions, scriptFile, stdout);
-    if (screenshot)
-        session.exportImage(*screenshot);
+/// The window's timings, one line each.
+void printWindowReport(const editor::EditWindowReport& r, const std::string& sceneName,
+                       const std::filesystem::path& screenshot) {
+    const std::string timing =
+        r.warmFrames == 0
+            ? std::string("no warm frames (each changed method or size)")
+            : cat("warm frames: median ", r.frameMs, " ms (render ", r.renderMs,
+                  " ms, present with ImGui ", r.presentMs, " ms, panels ", r.overlayMs, " ms)");
+    std::printf("edit: %d frames (%d rendered) of %s; %s%s%s\n", r.frames, r.rendered,
+                sceneName.c_str(), timing.c_str(), screenshot.empty() ? "" : "; wrote ",
+                screenshot.string().c_str());
+    if (!r.strokeToFrameMs.empty()) {
+        std::vector<double> s = r.strokeToFrameMs;
+        std::sort(s.begin(), s.end());
+        std::printf("edit: stroke to frame: median %.1f ms, max %.1f ms over %zu events; "
+                    "frames while painting: median %.1f ms (at 1/%d size)\n",
+                    s[s.size() / 2], s.back(), s.size(), r.strokeFrameMs, r.lowScale);
+    }
+    if (r.refined > 0)
+        std::printf("edit: idle refinement: %d steps, %.1f ms each (median; the average and "
+                    "its upload %.1f ms)\n",
+                    r.refined, r.refineMs, r.refineAverageMs);
+    if (r.previewMs > 0.0)
+        std::printf("edit: kernel preview: %.1f ms (the last render)\n", r.previewMs);
+    if (r.validation)
+        std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
+}
+
+/// The session in the window (the script, if any, replayed there).
+int editInWindow(const cli::Args& args, const EditJob& job) {
+    const noise::SceneDesc desc = noise::loadScene(args.str("scene"));
+    const int width = job.options.width > 0 ? job.options.width : desc.camera.width;
+    const int height = job.options.height > 0 ? job.options.height : desc.camera.height;
+    editor::EditWindowOptions window = editor::editWindowOptions(args, width, height, desc.name);
+    window.script = job.actions;
+    window.scriptName = job.scriptFile;
+    window.log = stdout;
+    const std::filesystem::path scene = args.str("scene");
+    const editor::EditWindowReport r = editor::runEditWindow(
+        [&](const splat::ContextOptions& context) {
+            edit::SessionOptions o = job.options;
+            o.context = context;
+            auto session = std::make_unique<edit::Session>(scene, o);
+            session->setMethod(job.method, job.settings);
+            return session;
+        },
+        window);
+    printWindowReport(r, desc.name, window.screenshot);
+    if (args.has("report"))
+        writeReport(args.str("report"), {{"frames", r.frames},
+                                         {"rendered", r.rendered},
+                                         {"frame_ms", r.frameMs},
+                                         {"render_ms", r.renderMs},
+                                         {"present_ms", r.presentMs},
+                                         {"panels_ms", r.overlayMs},
+                                         {"refined", r.refined},
+                                         {"refine_ms", r.refineMs},
+                                         {"refine_average_ms", r.refineAverageMs},
+                                         {"stroke_to_frame_ms", r.strokeToFrameMs},
+                                         {"stroke_frame_ms", r.strokeFrameMs},
+                                         {"low_scale", r.lowScale}});
+    return 0;
+}
+
+/// The script replayed on a session without a window.
+int editHeadless(const cli::Args& args, const EditJob& job) {
+    edit::Session session(args.str("scene"), job.options);
+    session.setMethod(job.method, job.settings);
+    const edit::ScriptReport report = edit::runScript(session, job.actions, job.scriptFile, stdout);
+    if (job.screenshot)
+        session.exportImage(*job.screenshot);
     if (args.has("report"))
         writeReport(args.str("report"),
                     {{"strokes", report.strokes},
@@ -189,9 +207,34 @@ int edit(int argc, char** argv) {
                      {"gpu_memory_bytes", session.context().peakAllocatedBytes()}});
     std::printf("edited %s: %d strokes, %d frames, %zu undo steps (%zu bytes)%s%s\n",
                 session.scene().name.c_str(), report.strokes, report.frames, session.undoSteps(),
-                session.undoBytes(), screenshot ? "; wrote " : "",
-                screenshot ? screenshot->string().c_str() : "");
+                session.undoBytes(), job.screenshot ? "; wrote " : "",
+                job.screenshot ? job.screenshot->string().c_str() : "");
     return 0;
+}
+
+} // namespace
+
+int edit(int argc, char** argv) {
+    cli::Args args("edit",
+                   "Paint density, comb, tilt, length and colour on the surface and edit the "
+                   "kernel, in a window: the GPU methods live, with Blender-like navigation "
+                   "(middle drag orbits, shift+middle pans, the wheel zooms, alt+left orbits, F "
+                   "or Home frames the mesh), the left button paints, F12 exports the view. "
+                   "Needs a display (DISPLAY), or xvfb-run. --script replays a session without a "
+                   "window.",
+                   editOptions(), argc, argv);
+    if (args.helpRequested()) {
+        std::fputs(args.usage().c_str(), stdout);
+        return 0;
+    }
+    const auto threads = args.integer("threads", 0, 0, 1024);
+    std::optional<tbb::global_control> threadLimit;
+    if (threads > 0)
+        threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    const bool window = inWindow(args);
+    // Everything is checked before anything is loaded or written.
+    const EditJob job = editJob(args);
+    return window ? editInWindow(args, job) : editHeadless(args, job);
 }
 
 } // namespace spot::cmd

@@ -12,7 +12,8 @@ int info(int argc, char** argv) {
     cli::Args args("info",
                    "Load and validate a mesh (OBJ or PLY) and print its counts and bounds, or read "
                    "a bake (spotshell bake) and print its levels.",
-                   {{"mesh", "FILE", "mesh to inspect (.obj or .ply)", false},
+                   {{"mesh", "FILE",
+                     "mesh to inspect (.obj or .ply, or generated:NAME as scenes take)", false},
                     {"bake", "FILE", "bake to inspect (.vdb written by spotshell bake)", false}},
                    argc, argv);
     if (args.helpRequested()) {
@@ -35,7 +36,7 @@ int info(int argc, char** argv) {
                     double(noise::kBakeDistanceCap));
         return 0;
     }
-    const noise::Mesh mesh = noise::loadMesh(args.str("mesh"));
+    const noise::Mesh mesh = noise::loadMeshOrGenerated(args.str("mesh"));
     const noise::Bounds b = mesh.bounds();
     std::printf("mesh %s\n", mesh.name.c_str());
     std::printf("  vertices   %zu\n", mesh.positions.size());

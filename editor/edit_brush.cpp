@@ -5,6 +5,7 @@
 
 #include "noise/error.h"
 #include "noise/surface.h"
+#include "shaders/spot_layout.hpp"
 
 namespace spot::edit {
 
@@ -71,24 +72,18 @@ glm::vec3 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& 
 
 } // namespace
 
+int slotField(Slot slot) {
+    constexpr int kFields[kSlotCount] = {SPOT_FIELD_DENSITY, SPOT_FIELD_COMB, SPOT_FIELD_TILT,
+                                         SPOT_FIELD_SCALE, SPOT_FIELD_COLOR};
+    return kFields[int(slot)];
+}
+
 const char* slotKey(Slot slot) {
-    switch (slot) {
-    case Slot::Density:
-        return "density";
-    case Slot::Comb:
-        return "comb";
-    case Slot::Tilt:
-        return "tilt_deg";
-    case Slot::Scale:
-        return "scale";
-    case Slot::Color:
-        return "color";
-    }
-    return "?";
+    return noise::kFieldSlots[slotField(slot)].key;
 }
 
 int slotComponents(Slot slot) {
-    return slot == Slot::Density || slot == Slot::Tilt ? 1 : 3;
+    return noise::kFieldSlots[slotField(slot)].components;
 }
 
 const char* brushKindName(BrushKind kind) {

@@ -22,6 +22,7 @@
 #include "noise/field.h"
 #include "noise/mesh.h"
 #include "noise/painted.h"
+#include "noise/preset.h"
 
 namespace spot::edit {
 
@@ -32,10 +33,12 @@ enum class Falloff { Smooth, Linear, Constant };
 enum class Slot { Density, Comb, Tilt, Scale, Color };
 inline constexpr int kSlotCount = 5;
 
+/// The generator's field slot a painted slot is (SPOT_FIELD_*: an index into noise::kFieldSlots).
+int slotField(Slot slot);
 /// `density`, `comb`, `tilt_deg`, `scale`, `color`: the slot's key under the preset's `fields`
-/// (also the grid's name in the .vdb file).
+/// (also the grid's name in the .vdb file; noise::kFieldSlots).
 const char* slotKey(Slot slot);
-/// 1 or 3.
+/// 1 or 3 (noise::kFieldSlots).
 int slotComponents(Slot slot);
 
 /// "density-add", ...; parse throws InputError listing the kinds.

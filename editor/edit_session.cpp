@@ -9,6 +9,7 @@
 
 #include "noise/error.h"
 #include "noise/field.h"
+#include "noise/generator_shared.h"
 #include "noise/surface.h"
 #include "noise/system.h"
 
@@ -51,11 +52,46 @@ bool paintedIn(const nlohmann::json& preset, Slot slot) {
     return j.is_object() && j.value("type", std::string()) == "painted";
 }
 
-/// The generator's field of each slot (SPOT_FIELD_*), and the kind of a painted field
-/// (noise/painted.h's SpotField).
-constexpr int kSlotField[kSlotCount] = {SPOT_FIELD_DENSITY, SPOT_FIELD_COMB, SPOT_FIELD_TILT,
-                                        SPOT_FIELD_SCALE, SPOT_FIELD_COLOR};
-constexpr std::int32_t kPaintedFieldKind = 5;
+/// The kind of a painted field (noise/painted.h's SpotField).
+constexpr std::int32_t kPaintedFieldKind = shared::f32::SharedGenerator::kFieldPainted;
+
+/// The part of the segment from -> to inside the window grown by `margin` pixels.
+struct ClippedSegment {
+    bool inside = false;
+    glm::vec2 from{0.0f}, to{0.0f};
+    bool startClipped = false, endClipped = false;
+};
+
+ClippedSegment clipSegment(glm::vec2 from, glm::vec2 to, glm::dvec2 lo, glm::dvec2 hi) {
+    // Liang-Barsky in double: the parameters where the segment enters and leaves the box.
+    const glm::dvec2 a(from), d = glm::dvec2(to) - a;
+    double t0 = 0.0, t1 = 1.0;
+    for (int axis = 0; axis < 2; ++axis) {
+        const double p[2] = {-d[axis], d[axis]};
+        const double q[2] = {a[axis] - lo[axis], hi[axis] - a[axis]};
+        for (int k = 0; k < 2; ++k) {
+            if (p[k] == 0.0) {
+                if (q[k] < 0.0)
+                    return {};
+                continue;
+            }
+            const double t = q[k] / p[k];
+            if (p[k] < 0.0)
+                t0 = std::max(t0, t);
+            else
+                t1 = std::min(t1, t);
+        }
+    }
+    if (t0 > t1)
+        return {};
+    ClippedSegment c;
+    c.inside = true;
+    c.startClipped = t0 > 0.0;
+    c.endClipped = t1 < 1.0;
+    c.from = c.startClipped ? glm::vec2(a + d * t0) : from;
+    c.to = c.endClipped ? glm::vec2(a + d * t1) : to;
+    return c;
+}
 
 glm::vec3 mirrorX(glm::vec3 v) {
     return glm::vec3(-v.x, v.y, v.z);
@@ -122,24 +158,7 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
     const noise::PresetDesc loaded = noise::loadPreset(m_presetFile);
     for (int s = 0; s < kSlotCount; ++s) {
         const Slot slot = Slot(s);
-        const noise::FieldDesc* d = nullptr;
-        switch (slot) {
-        case Slot::Density:
-            d = &loaded.density;
-            break;
-        case Slot::Comb:
-            d = loaded.comb ? &*loaded.comb : nullptr;
-            break;
-        case Slot::Tilt:
-            d = &loaded.tiltDeg;
-            break;
-        case Slot::Scale:
-            d = &loaded.scale;
-            break;
-        case Slot::Color:
-            d = &loaded.color;
-            break;
-        }
+        const noise::FieldDesc* d = noise::presetField(loaded, slotField(slot));
         if (d && d->kind == noise::FieldDesc::Kind::Painted) {
             const std::filesystem::path file = loaded.baseDir / d->file;
             m_grids[s] = std::make_shared<noise::PaintedGrid>(
@@ -237,19 +256,7 @@ const noise::PaintedGrid* Session::grid(Slot slot) const {
 }
 
 noise::FieldDesc* Session::slotDesc(Slot slot) {
-    switch (slot) {
-    case Slot::Density:
-        return &m_preset.density;
-    case Slot::Comb:
-        return m_preset.comb ? &*m_preset.comb : nullptr;
-    case Slot::Tilt:
-        return &m_preset.tiltDeg;
-    case Slot::Scale:
-        return &m_preset.scale;
-    case Slot::Color:
-        return &m_preset.color;
-    }
-    return nullptr;
+    return noise::presetField(m_preset, slotField(slot));
 }
 
 nlohmann::json Session::paintedJson(Slot slot) const {
@@ -258,12 +265,6 @@ nlohmann::json Session::paintedJson(Slot slot) const {
 
 float Session::voxelSize() const {
     return m_generator->cellSize() * m_voxelScale;
-}
-
-void Session::setVoxelScale(float fraction) {
-    if (!(fraction > 0.0f && fraction <= 1.0f))
-        throw InputError(cat("voxel scale ", fraction, " must be in (0, 1]"));
-    m_voxelScale = fraction;
 }
 
 noise::PresetDesc Session::parseDocument(const nlohmann::json& json) const {
@@ -279,24 +280,7 @@ noise::PresetDesc Session::parseDocument(const nlohmann::json& json) const {
         if (!grid)
             throw InputError(cat("preset ", m_presetFile.string(), ": fields.", slotKey(slot),
                                  " is painted but its grid is not loaded"));
-        noise::FieldDesc* d = nullptr;
-        switch (slot) {
-        case Slot::Density:
-            d = &preset.density;
-            break;
-        case Slot::Comb:
-            d = preset.comb ? &*preset.comb : nullptr;
-            break;
-        case Slot::Tilt:
-            d = &preset.tiltDeg;
-            break;
-        case Slot::Scale:
-            d = &preset.scale;
-            break;
-        case Slot::Color:
-            d = &preset.color;
-            break;
-        }
+        noise::FieldDesc* d = noise::presetField(preset, slotField(slot));
         SPOT_CHECK(d != nullptr);
         d->painted = grid;
     }
@@ -439,7 +423,7 @@ EditCost Session::armBrush() {
         cost.generatorRebuilt = true;
     }
     if (arm && !bind)
-        m_frame->generator().prepareFieldKind(std::uint32_t(kSlotField[s]), kPaintedFieldKind,
+        m_frame->generator().prepareFieldKind(std::uint32_t(slotField(slot)), kPaintedFieldKind,
                                               slotComponents(slot));
     cost.armed = arm;
     cost.milliseconds = msSince(start);
@@ -473,7 +457,7 @@ bool Session::ensurePainted(Slot slot, Edit& edit) {
         noise::FieldDesc* d = slotDesc(slot);
         SPOT_CHECK(d != nullptr);
         try {
-            m_generator->setField(kSlotField[s], *d);
+            m_generator->setField(slotField(slot), *d);
         } catch (const InputError&) {
             rebuild(); // a scale the generator's cells cannot hold: start over
             return true;
@@ -585,6 +569,8 @@ std::size_t Session::memoryBytes() const {
 // --- strokes ------------------------------------------------------------------------------------
 
 EditCost Session::beginStroke(glm::vec2 pixel, bool invert) {
+    if (!std::isfinite(pixel.x) || !std::isfinite(pixel.y))
+        throw InputError(cat("stroke point (", pixel.x, ", ", pixel.y, ") is not finite"));
     if (m_stroke)
         endStroke();
     m_strokeInvert = invert;
@@ -611,24 +597,41 @@ EditCost Session::beginStroke(glm::vec2 pixel, bool invert) {
 }
 
 EditCost Session::dragStroke(glm::vec2 pixel) {
+    if (!std::isfinite(pixel.x) || !std::isfinite(pixel.y))
+        throw InputError(cat("stroke point (", pixel.x, ", ", pixel.y, ") is not finite"));
     if (!m_stroke)
         return beginStroke(pixel);
     const auto start = Clock::now();
     const std::size_t dabs = m_strokeDabs, voxels = m_strokeVoxels;
-    const glm::vec2 from = m_strokeLast, to = pixel;
-    const float length = glm::length(to - from);
+    const float spacing = std::max(m_brush.radiusPx * 0.25f, 1.0f);
+    // Only the part of the drag within a brush radius of the window can reach what the window
+    // shows: clipping to it bounds the dabs (and keeps `at` below where adding the spacing in
+    // float stops advancing it: a point 1e9 pixels away).
+    glm::vec2 from = m_strokeLast, to = pixel;
+    const double margin = std::max(double(m_brush.radiusPx), 0.0);
+    const ClippedSegment clipped =
+        clipSegment(from, to, glm::dvec2(-margin),
+                    glm::dvec2(m_camera.width + margin, m_camera.height + margin));
+    m_strokeLast = pixel;
     EditCost cost;
-    if (length > 0.0f) {
-        const glm::vec2 dir = (to - from) / length;
-        const float spacing = std::max(m_brush.radiusPx * 0.25f, 1.0f);
-        float at = spacing - m_strokeCarry;
-        for (; at <= length; at += spacing)
-            dab(from + dir * at, dir);
-        m_strokeCarry = length - (at - spacing);
-        m_strokeLast = to;
-        if (m_strokeDabs > dabs) {
-            refreshEvent();
-            cost.fieldsRefreshed = true;
+    if (!clipped.inside) {
+        m_strokeCarry = 0.0f;
+    } else {
+        from = clipped.from;
+        to = clipped.to;
+        if (clipped.startClipped)
+            m_strokeCarry = spacing; // the first dab where the drag enters
+        const float length = glm::length(to - from);
+        if (length > 0.0f) {
+            const glm::vec2 dir = (to - from) / length;
+            float at = spacing - m_strokeCarry;
+            for (; at <= length; at += spacing)
+                dab(from + dir * at, dir);
+            m_strokeCarry = clipped.endClipped ? 0.0f : length - (at - spacing);
+            if (m_strokeDabs > dabs) {
+                refreshEvent();
+                cost.fieldsRefreshed = true;
+            }
         }
     }
     cost.dabs = m_strokeDabs - dabs;
@@ -871,7 +874,7 @@ bool Session::undo(EditCost* cost) {
         refreshDeltas(e);
     for (int t = 0; t < kSlotCount; ++t)
         if (full && m_armed[t].grid && !m_armed[t].bound)
-            m_frame->generator().prepareFieldKind(std::uint32_t(kSlotField[t]), kPaintedFieldKind,
+            m_frame->generator().prepareFieldKind(std::uint32_t(slotField(Slot(t))), kPaintedFieldKind,
                                                   slotComponents(Slot(t)));
     m_current = m_undo.empty() ? 0 : m_undo.back().id;
     m_redo.push_back(std::move(e));

@@ -194,7 +194,6 @@ public:
     const noise::PaintedGrid* grid(Slot slot) const;
     /// Voxel size of grids created from now on, world units.
     float voxelSize() const;
-    void setVoxelScale(float fractionOfCell);
     /// Unsaved changes since the load or the last save.
     bool dirty() const { return m_current != m_saved; }
     /// Write the preset to `file` and its painted grids to `file` with the extension .vdb (both
@@ -247,7 +246,6 @@ private:
     bool ensurePainted(Slot slot, Edit& edit);
     void applyJson(const std::vector<JsonChange>& changes, bool after);
     void push(Edit edit);
-    EditCost dabsAlong(glm::vec2 from, glm::vec2 to);
     void dab(glm::vec2 pixel, glm::vec2 dragPixels);
     void refreshEvent();
     /// The brush as the current stroke applies it (m_strokeInvert).

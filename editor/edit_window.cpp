@@ -15,7 +15,9 @@
 #include <imgui_impl_glfw.h>
 #include <imgui_impl_vulkan.h>
 
+#include "edit_input.h"
 #include "edit_panels.h"
+#include "edit_present_vk.h"
 #include "edit_script.h"
 #include "edit_session.h"
 #include "edit_view.h"
@@ -101,326 +103,17 @@ splat::ContextOptions windowContextOptions() {
     return o;
 }
 
-// --- Vulkan presentation ------------------------------------------------------------------
-
-struct Surface {
-    Surface(splat::Context& ctx, GLFWwindow* window) : m_ctx(ctx) {
-        splat::vkCheck(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &handle),
-                       "glfwCreateWindowSurface");
-        VkBool32 supported = VK_FALSE;
-        vkGetPhysicalDeviceSurfaceSupportKHR(ctx.physicalDevice(), ctx.queueFamily(), handle,
-                                             &supported);
-        if (!supported) {
-            vkDestroySurfaceKHR(ctx.instance(), handle, nullptr);
-            throw std::runtime_error(cat("Vulkan: queue family ", ctx.queueFamily(), " of ",
-                                         ctx.deviceName(), " cannot present to the window"));
-        }
-    }
-    ~Surface() { vkDestroySurfaceKHR(m_ctx.instance(), handle, nullptr); }
-    Surface(const Surface&) = delete;
-    Surface& operator=(const Surface&) = delete;
-    splat::Context& m_ctx;
-    VkSurfaceKHR handle = VK_NULL_HANDLE;
-};
-
-bool canBlitTo(VkPhysicalDevice device, VkFormat format) {
-    VkFormatProperties p;
-    vkGetPhysicalDeviceFormatProperties(device, format, &p);
-    return (p.optimalTilingFeatures & VK_FORMAT_FEATURE_BLIT_DST_BIT) != 0;
-}
-
-/// An sRGB format the blit can write (it then encodes linear to sRGB), else the first format.
-VkSurfaceFormatKHR chooseFormat(VkPhysicalDevice device, VkSurfaceKHR surface, bool& srgb) {
-    std::uint32_t n = 0;
-    vkGetPhysicalDeviceSurfaceFormatsKHR(device, surface, &n, nullptr);
-    std::vector<VkSurfaceFormatKHR> formats(n);
-    vkGetPhysicalDeviceSurfaceFormatsKHR(device, surface, &n, formats.data());
-    if (formats.empty())
-        throw std::runtime_error("Vulkan: the window surface has no formats");
-    for (VkFormat wanted : {VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_SRGB})
-        for (const VkSurfaceFormatKHR& f : formats)
-            if (f.format == wanted && f.colorSpace == VK_COLOR_SPACE_SRGB_NONLINEAR_KHR &&
-                canBlitTo(device, f.format)) {
-                srgb = true;
-                return f;
-            }
-    srgb = false;
-    for (const VkSurfaceFormatKHR& f : formats)
-        if (canBlitTo(device, f.format))
-            return f;
-    throw std::runtime_error("Vulkan: no window surface format can be a blit destination");
-}
-
-/// The swapchain with its images' views and the ImGui render pass's framebuffers, recreated
-/// when the window's size changes.
-class Swapchain {
-public:
-    Swapchain(splat::Context& ctx, VkSurfaceKHR surface) : m_ctx(ctx), m_surface(surface) {
-        format = chooseFormat(ctx.physicalDevice(), surface, srgb);
-        VkAttachmentDescription color{};
-        color.format = format.format;
-        color.samples = VK_SAMPLE_COUNT_1_BIT;
-        color.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD; // the blitted scene
-        color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-        color.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
-        color.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-        color.initialLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-        color.finalLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
-        VkAttachmentReference ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
-        VkSubpassDescription subpass{};
-        subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-        subpass.colorAttachmentCount = 1;
-        subpass.pColorAttachments = &ref;
-        // The blit's writes before ImGui's blending reads and writes.
-        VkSubpassDependency dependency{};
-        dependency.srcSubpass = VK_SUBPASS_EXTERNAL;
-        dependency.dstSubpass = 0;
-        dependency.srcStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT;
-        dependency.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-        dependency.dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
-        dependency.dstAccessMask =
-            VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
-        VkRenderPassCreateInfo rpi{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-        rpi.attachmentCount = 1;
-        rpi.pAttachments = &color;
-        rpi.subpassCount = 1;
-        rpi.pSubpasses = &subpass;
-        rpi.dependencyCount = 1;
-        rpi.pDependencies = &dependency;
-        splat::vkCheck(vkCreateRenderPass(ctx.device(), &rpi, nullptr, &renderPass),
-                       "vkCreateRenderPass");
-    }
-    ~Swapchain() {
-        destroyViews();
-        for (VkSemaphore s : renderDone)
-            vkDestroySemaphore(m_ctx.device(), s, nullptr);
-        vkDestroySwapchainKHR(m_ctx.device(), handle, nullptr);
-        vkDestroyRenderPass(m_ctx.device(), renderPass, nullptr);
-    }
-    Swapchain(const Swapchain&) = delete;
-    Swapchain& operator=(const Swapchain&) = delete;
-
-    /// (Re)create for the framebuffer size; false when the window is minimized (size 0).
-    bool recreate(int fbWidth, int fbHeight) {
-        VkSurfaceCapabilitiesKHR caps;
-        splat::vkCheck(
-            vkGetPhysicalDeviceSurfaceCapabilitiesKHR(m_ctx.physicalDevice(), m_surface, &caps),
-            "vkGetPhysicalDeviceSurfaceCapabilitiesKHR");
-        VkExtent2D e = caps.currentExtent;
-        if (e.width == 0xffffffffu)
-            e = {std::uint32_t(fbWidth), std::uint32_t(fbHeight)};
-        e.width = std::clamp(e.width, caps.minImageExtent.width, caps.maxImageExtent.width);
-        e.height = std::clamp(e.height, caps.minImageExtent.height, caps.maxImageExtent.height);
-        if (e.width == 0 || e.height == 0 || fbWidth == 0 || fbHeight == 0)
-            return false;
-        vkDeviceWaitIdle(m_ctx.device());
-        destroyViews();
-        std::uint32_t n = 0;
-        vkGetPhysicalDeviceSurfacePresentModesKHR(m_ctx.physicalDevice(), m_surface, &n, nullptr);
-        std::vector<VkPresentModeKHR> modes(n);
-        vkGetPhysicalDeviceSurfacePresentModesKHR(m_ctx.physicalDevice(), m_surface, &n,
-                                                  modes.data());
-        // MAILBOX never blocks on the display's refresh; FIFO is always there.
-        presentMode =
-            std::find(modes.begin(), modes.end(), VK_PRESENT_MODE_MAILBOX_KHR) != modes.end()
-                ? VK_PRESENT_MODE_MAILBOX_KHR
-                : VK_PRESENT_MODE_FIFO_KHR;
-        minImageCount = std::max(2u, caps.minImageCount);
-        if (caps.maxImageCount > 0)
-            minImageCount = std::min(minImageCount, caps.maxImageCount);
-        VkSwapchainCreateInfoKHR sci{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
-        sci.surface = m_surface;
-        sci.minImageCount = minImageCount;
-        sci.imageFormat = format.format;
-        sci.imageColorSpace = format.colorSpace;
-        sci.imageExtent = e;
-        sci.imageArrayLayers = 1;
-        sci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-        // Read back for --window-screenshot where the surface allows it.
-        readable = caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-        if (readable)
-            sci.imageUsage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-        sci.imageSharingMode = VK_SHARING_MODE_EXCLUSIVE;
-        sci.preTransform = caps.currentTransform;
-        sci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
-        sci.presentMode = presentMode;
-        sci.clipped = VK_TRUE;
-        sci.oldSwapchain = handle;
-        VkSwapchainKHR created = VK_NULL_HANDLE;
-        splat::vkCheck(vkCreateSwapchainKHR(m_ctx.device(), &sci, nullptr, &created),
-                       "vkCreateSwapchainKHR");
-        vkDestroySwapchainKHR(m_ctx.device(), handle, nullptr);
-        handle = created;
-        extent = e;
-        vkGetSwapchainImagesKHR(m_ctx.device(), handle, &n, nullptr);
-        images.resize(n);
-        vkGetSwapchainImagesKHR(m_ctx.device(), handle, &n, images.data());
-        for (VkImage image : images) {
-            VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-            vi.image = image;
-            vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-            vi.format = format.format;
-            vi.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-            VkImageView view = VK_NULL_HANDLE;
-            splat::vkCheck(vkCreateImageView(m_ctx.device(), &vi, nullptr, &view),
-                           "vkCreateImageView");
-            views.push_back(view);
-            VkFramebufferCreateInfo fi{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-            fi.renderPass = renderPass;
-            fi.attachmentCount = 1;
-            fi.pAttachments = &view;
-            fi.width = e.width;
-            fi.height = e.height;
-            fi.layers = 1;
-            VkFramebuffer fb = VK_NULL_HANDLE;
-            splat::vkCheck(vkCreateFramebuffer(m_ctx.device(), &fi, nullptr, &fb),
-                           "vkCreateFramebuffer");
-            framebuffers.push_back(fb);
-        }
-        // One "rendering done" semaphore per image: the present of an image waits on its own,
-        // so a semaphore is only signalled again after its image came back from the presenter.
-        while (renderDone.size() < images.size()) {
-            VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-            VkSemaphore s = VK_NULL_HANDLE;
-            splat::vkCheck(vkCreateSemaphore(m_ctx.device(), &si, nullptr, &s),
-                           "vkCreateSemaphore");
-            renderDone.push_back(s);
-        }
-        return true;
-    }
-
-    VkSwapchainKHR handle = VK_NULL_HANDLE;
-    VkSurfaceFormatKHR format{};
-    bool srgb = false;
-    bool readable = false; ///< the images can be copied from (--window-screenshot)
-    VkPresentModeKHR presentMode = VK_PRESENT_MODE_FIFO_KHR;
-    std::uint32_t minImageCount = 2;
-    VkExtent2D extent{0, 0};
-    VkRenderPass renderPass = VK_NULL_HANDLE;
-    std::vector<VkImage> images;
-    std::vector<VkImageView> views;
-    std::vector<VkFramebuffer> framebuffers;
-    std::vector<VkSemaphore> renderDone;
-
-private:
-    void destroyViews() {
-        for (VkFramebuffer fb : framebuffers)
-            vkDestroyFramebuffer(m_ctx.device(), fb, nullptr);
-        for (VkImageView v : views)
-            vkDestroyImageView(m_ctx.device(), v, nullptr);
-        framebuffers.clear();
-        views.clear();
-    }
-    splat::Context& m_ctx;
-    VkSurfaceKHR m_surface;
-};
-
-/// The present's command buffer, its fence and the acquire semaphore (one frame in flight).
-struct PresentSync {
-    explicit PresentSync(splat::Context& ctx) : m_ctx(ctx) {
-        VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-        ai.commandPool = ctx.commandPool();
-        ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-        ai.commandBufferCount = 1;
-        splat::vkCheck(vkAllocateCommandBuffers(ctx.device(), &ai, &cmd),
-                       "vkAllocateCommandBuffers");
-        VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-        splat::vkCheck(vkCreateFence(ctx.device(), &fci, nullptr, &fence), "vkCreateFence");
-        VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-        splat::vkCheck(vkCreateSemaphore(ctx.device(), &si, nullptr, &acquired),
-                       "vkCreateSemaphore");
-    }
-    ~PresentSync() {
-        vkDeviceWaitIdle(m_ctx.device());
-        vkDestroySemaphore(m_ctx.device(), acquired, nullptr);
-        vkDestroyFence(m_ctx.device(), fence, nullptr);
-        vkFreeCommandBuffers(m_ctx.device(), m_ctx.commandPool(), 1, &cmd);
-    }
-    PresentSync(const PresentSync&) = delete;
-    PresentSync& operator=(const PresentSync&) = delete;
-    splat::Context& m_ctx;
-    VkCommandBuffer cmd = VK_NULL_HANDLE;
-    VkFence fence = VK_NULL_HANDLE;
-    VkSemaphore acquired = VK_NULL_HANDLE;
-};
-
-// --- Dear ImGui ----------------------------------------------------------------------------
-
-void checkImGuiVk(VkResult r) {
-    if (r != VK_SUCCESS)
-        throw std::runtime_error(cat("Vulkan (Dear ImGui backend): VkResult ", int(r)));
-}
-
-/// The ImGui context, its GLFW and Vulkan backends, their descriptor pool and font texture.
-class ImGuiLayer {
-public:
-    ImGuiLayer(splat::Context& ctx, GLFWwindow* window, const Swapchain& swapchain) : m_ctx(ctx) {
-        IMGUI_CHECKVERSION();
-        ImGui::CreateContext();
-        ImGui::GetIO().IniFilename = nullptr; // no imgui.ini beside the user's files
-        ImGui::StyleColorsDark();
-        // The swapchain is sRGB: ImGui's colours are sRGB values, so decode them to linear or
-        // the panels would come out washed out.
-        if (swapchain.srgb)
-            for (ImVec4& c : ImGui::GetStyle().Colors)
-                c = ImVec4(noise::srgbDecode(c.x), noise::srgbDecode(c.y), noise::srgbDecode(c.z),
-                           c.w);
-        // Chains to the callbacks the window installed before (navigation and the brush).
-        ImGui_ImplGlfw_InitForVulkan(window, true);
-        m_glfw = true;
-        const VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 16};
-        VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-        pi.flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT;
-        pi.maxSets = 16;
-        pi.poolSizeCount = 1;
-        pi.pPoolSizes = &size;
-        splat::vkCheck(vkCreateDescriptorPool(ctx.device(), &pi, nullptr, &m_pool),
-                       "vkCreateDescriptorPool");
-        ImGui_ImplVulkan_InitInfo info{};
-        info.Instance = ctx.instance();
-        info.PhysicalDevice = ctx.physicalDevice();
-        info.Device = ctx.device();
-        info.QueueFamily = ctx.queueFamily();
-        info.Queue = ctx.queue();
-        info.DescriptorPool = m_pool;
-        info.MinImageCount = swapchain.minImageCount;
-        info.ImageCount = std::uint32_t(swapchain.images.size());
-        info.MSAASamples = VK_SAMPLE_COUNT_1_BIT;
-        info.CheckVkResultFn = checkImGuiVk;
-        if (!ImGui_ImplVulkan_Init(&info, swapchain.renderPass))
-            throw std::runtime_error("Dear ImGui: the Vulkan backend did not initialize");
-        m_vulkan = true;
-        ctx.submitAndWait([](VkCommandBuffer cmd) { ImGui_ImplVulkan_CreateFontsTexture(cmd); });
-        ImGui_ImplVulkan_DestroyFontUploadObjects();
-    }
-    ~ImGuiLayer() {
-        vkDeviceWaitIdle(m_ctx.device());
-        if (m_vulkan)
-            ImGui_ImplVulkan_Shutdown();
-        if (m_glfw)
-            ImGui_ImplGlfw_Shutdown();
-        ImGui::DestroyContext();
-        vkDestroyDescriptorPool(m_ctx.device(), m_pool, nullptr);
-    }
-    ImGuiLayer(const ImGuiLayer&) = delete;
-    ImGuiLayer& operator=(const ImGuiLayer&) = delete;
-
-private:
-    splat::Context& m_ctx;
-    VkDescriptorPool m_pool = VK_NULL_HANDLE;
-    bool m_glfw = false, m_vulkan = false;
-};
-
 // --- the window's state and input -----------------------------------------------------------
 
 /// What the GLFW callbacks change (through the window's user pointer).
 struct InputState {
-    enum class Drag { None, Orbit, Pan, Brush };
     OrbitView* view = nullptr;
     edit::Session* session = nullptr;
     BoundingSphere sphere;
     Drag drag = Drag::None;
-    double lastX = 0.0, lastY = 0.0;
+    double lastX = 0.0, lastY = 0.0; ///< the pointer at the last cursor event
+    bool pointerKnown = false;       ///< a cursor event came (else lastX, lastY are queried)
+    bool exportRequested = false;    ///< F12: export the view when the panels are built
     bool sceneDirty = true;       ///< render the scene again
     bool resized = true;          ///< recreate the swapchain
     bool closeRequested = false;  ///< the close button, with unsaved changes (the modal asks)
@@ -457,61 +150,6 @@ InputState& state(GLFWwindow* window) {
     return *static_cast<InputState*>(glfwGetWindowUserPointer(window));
 }
 
-void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
-    InputState& s = state(window);
-    glfwGetCursorPos(window, &s.lastX, &s.lastY);
-    if (action == GLFW_RELEASE) {
-        if (s.drag == InputState::Drag::Brush && button == GLFW_MOUSE_BUTTON_LEFT)
-            s.brush(edit::Session::PointerPhase::Release, s.windowCamera(window), s.lastX, s.lastY,
-                    false);
-        s.drag = InputState::Drag::None;
-        return;
-    }
-    if (action != GLFW_PRESS || ImGui::GetIO().WantCaptureMouse || s.drag != InputState::Drag::None)
-        return;
-    const bool shift = mods & GLFW_MOD_SHIFT, alt = mods & GLFW_MOD_ALT;
-    if (button == GLFW_MOUSE_BUTTON_MIDDLE || (button == GLFW_MOUSE_BUTTON_LEFT && alt)) {
-        s.drag = shift ? InputState::Drag::Pan : InputState::Drag::Orbit;
-    } else if (button == GLFW_MOUSE_BUTTON_LEFT) {
-        s.drag = InputState::Drag::Brush;
-        // Shift or ctrl at the press inverts the stroke: density-add erases, length shrinks.
-        s.brush(edit::Session::PointerPhase::Press, s.windowCamera(window), s.lastX, s.lastY,
-                (mods & (GLFW_MOD_SHIFT | GLFW_MOD_CONTROL)) != 0);
-    }
-}
-
-void onCursor(GLFWwindow* window, double x, double y) {
-    InputState& s = state(window);
-    const double dx = x - s.lastX, dy = y - s.lastY;
-    s.lastX = x;
-    s.lastY = y;
-    int w = 0, h = 0;
-    glfwGetWindowSize(window, &w, &h);
-    switch (s.drag) {
-    case InputState::Drag::Orbit:
-        s.view->orbit(dx, dy, h);
-        s.moved();
-        break;
-    case InputState::Drag::Pan:
-        s.view->pan(dx, dy, h);
-        s.moved();
-        break;
-    case InputState::Drag::Brush:
-        s.brush(edit::Session::PointerPhase::Drag, s.windowCamera(window), x, y, false);
-        break;
-    case InputState::Drag::None:
-        break;
-    }
-}
-
-void onScroll(GLFWwindow* window, double, double dy) {
-    if (ImGui::GetIO().WantCaptureMouse)
-        return;
-    InputState& s = state(window);
-    s.view->dolly(dy);
-    s.moved();
-}
-
 void frameMesh(GLFWwindow* window, InputState& s) {
     int w = 0, h = 0;
     glfwGetWindowSize(window, &w, &h);
@@ -519,39 +157,119 @@ void frameMesh(GLFWwindow* window, InputState& s) {
     s.moved();
 }
 
-void onKey(GLFWwindow* window, int key, int, int action, int mods) {
-    if ((action != GLFW_PRESS && action != GLFW_REPEAT) || ImGui::GetIO().WantCaptureKeyboard)
-        return;
-    InputState& s = state(window);
-    edit::Session& session = *s.session;
-    edit::BrushSettings& brush = session.brush();
-    const bool shift = mods & GLFW_MOD_SHIFT, control = mods & GLFW_MOD_CONTROL;
-    if (s.drag == InputState::Drag::Brush) // no undo or brush change in the middle of a stroke
-        return;
+/// A brush key's action on the session's brush (radius, strength, kind, mirror).
+void applyBrushKey(InputState& s, const InputAction& a) {
+    edit::BrushSettings& brush = s.session->brush();
+    switch (a.type) {
+    case InputAction::Type::BrushRadius:
+        brush.radiusPx =
+            std::clamp(brush.radiusPx * (a.step > 0 ? 1.15f : 1.0f / 1.15f), 2.0f, 400.0f);
+        break;
+    case InputAction::Type::BrushStrength:
+        brush.strength = std::clamp(brush.strength + (a.step > 0 ? 0.05f : -0.05f), -1.0f, 1.0f);
+        break;
+    case InputAction::Type::BrushKind:
+        s.sceneDirty |= s.session->setBrushKind(edit::BrushKind(a.kind)).generatorRebuilt;
+        break;
+    case InputAction::Type::MirrorX:
+        brush.mirrorX = !brush.mirrorX;
+        break;
+    default:
+        break;
+    }
+}
+
+/// Carry out what mapInput() made of an event: the view moves, the session paints or undoes.
+void applyInput(GLFWwindow* window, InputState& s, const InputAction& a) {
+    using T = InputAction::Type;
+    using Phase = edit::Session::PointerPhase;
+    s.drag = a.drag;
+    int w = 0, h = 0;
+    glfwGetWindowSize(window, &w, &h);
     try {
-        if (control && key == GLFW_KEY_Z)
-            s.sceneDirty |= shift ? session.redo() : session.undo();
-        else if (control && key == GLFW_KEY_Y)
-            s.sceneDirty |= session.redo();
-        else if (control)
-            return;
-        else if (key == GLFW_KEY_F || key == GLFW_KEY_HOME)
+        switch (a.type) {
+        case T::None:
+        case T::Navigate:
+            break;
+        case T::Orbit:
+            s.view->orbit(a.dx, a.dy, h);
+            s.moved();
+            break;
+        case T::Pan:
+            s.view->pan(a.dx, a.dy, h);
+            s.moved();
+            break;
+        case T::Dolly:
+            s.view->dolly(a.dy);
+            s.moved();
+            break;
+        case T::BrushPress:
+        case T::BrushDrag:
+        case T::BrushRelease:
+            s.brush(a.type == T::BrushPress  ? Phase::Press
+                    : a.type == T::BrushDrag ? Phase::Drag
+                                             : Phase::Release,
+                    s.windowCamera(window), a.x, a.y, a.invert);
+            break;
+        case T::Undo:
+            s.sceneDirty |= s.session->undo();
+            break;
+        case T::Redo:
+            s.sceneDirty |= s.session->redo();
+            break;
+        case T::FrameMesh:
             frameMesh(window, s);
-        else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
-            const bool up = key == GLFW_KEY_RIGHT_BRACKET;
-            if (shift)
-                brush.strength = std::clamp(brush.strength + (up ? 0.05f : -0.05f), -1.0f, 1.0f);
-            else
-                brush.radiusPx =
-                    std::clamp(brush.radiusPx * (up ? 1.15f : 1.0f / 1.15f), 2.0f, 400.0f);
-        } else if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7)
-            s.sceneDirty |=
-                session.setBrushKind(edit::BrushKind(key - GLFW_KEY_1)).generatorRebuilt;
-        else if (key == GLFW_KEY_X)
-            brush.mirrorX = !brush.mirrorX;
+            break;
+        case T::BrushRadius:
+        case T::BrushStrength:
+        case T::BrushKind:
+        case T::MirrorX:
+            applyBrushKey(s, a);
+            break;
+        case T::Export:
+            s.exportRequested = true;
+            break;
+        }
     } catch (const InputError& e) {
         s.error = e.what();
     }
+}
+
+InputContext inputContext(const InputState& s, bool panelWantsMouse, bool panelWantsKeyboard) {
+    return {s.drag, s.lastX, s.lastY, panelWantsMouse, panelWantsKeyboard};
+}
+
+void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
+    InputState& s = state(window);
+    // The pointer as the last cursor event left it (queued events replay in order, however
+    // late they are read); asked of the display only before the first one.
+    if (!s.pointerKnown)
+        glfwGetCursorPos(window, &s.lastX, &s.lastY);
+    const InputEvent e = InputEvent::button(button, action, mods, s.lastX, s.lastY);
+    applyInput(window, s, mapInput(e, inputContext(s, ImGui::GetIO().WantCaptureMouse, false)));
+}
+
+void onCursor(GLFWwindow* window, double x, double y) {
+    InputState& s = state(window);
+    const InputAction a = mapInput(InputEvent::cursor(x, y), inputContext(s, false, false));
+    s.lastX = x;
+    s.lastY = y;
+    s.pointerKnown = true;
+    applyInput(window, s, a);
+}
+
+void onScroll(GLFWwindow* window, double dx, double dy) {
+    InputState& s = state(window);
+    applyInput(window, s,
+               mapInput(InputEvent::scroll(dx, dy),
+                        inputContext(s, ImGui::GetIO().WantCaptureMouse, false)));
+}
+
+void onKey(GLFWwindow* window, int key, int, int action, int mods) {
+    InputState& s = state(window);
+    applyInput(window, s,
+               mapInput(InputEvent::key(key, action, mods),
+                        inputContext(s, false, ImGui::GetIO().WantCaptureKeyboard)));
 }
 
 void onClose(GLFWwindow* window) {
@@ -691,211 +409,6 @@ void statusLine(const splat::FrameStats& st, int renderW, int renderH, int windo
     draw->AddText(at, IM_COL32(255, 255, 255, 255), text.c_str());
 }
 
-// --- the frame's presentation --------------------------------------------------------------
-
-/// The presented image (scene and panels) copied back for --window-screenshot.
-struct WindowGrab {
-    splat::Buffer buffer;
-    std::uint32_t width = 0, height = 0;
-    VkFormat format = VK_FORMAT_UNDEFINED;
-
-    void record(splat::Context& ctx, VkCommandBuffer cmd, VkImage image, VkExtent2D extent,
-                VkFormat imageFormat) {
-        const VkDeviceSize bytes = VkDeviceSize(extent.width) * extent.height * 4;
-        if (buffer.size() < bytes)
-            buffer = splat::Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                   splat::Buffer::Memory::HostVisible, "window screenshot");
-        width = extent.width;
-        height = extent.height;
-        format = imageFormat;
-        splat::transitionImage(
-            cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
-            VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-            VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
-            VK_ACCESS_2_TRANSFER_READ_BIT);
-        VkBufferImageCopy region{};
-        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        region.imageExtent = {width, height, 1};
-        vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1,
-                               &region);
-        splat::transitionImage(
-            cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-            VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
-            VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE);
-        splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                             VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
-    }
-
-    /// Linear RGB; the 8-bit values are sRGB-encoded when the swapchain is sRGB.
-    noise::Image read(bool srgb) const {
-        noise::Image image(static_cast<int>(width), static_cast<int>(height));
-        const auto* p = static_cast<const std::uint8_t*>(buffer.mapped());
-        const bool bgr = format == VK_FORMAT_B8G8R8A8_SRGB || format == VK_FORMAT_B8G8R8A8_UNORM;
-        for (std::size_t i = 0; i < image.pixels.size(); ++i) {
-            glm::vec3 c(p[4 * i] / 255.0f, p[4 * i + 1] / 255.0f, p[4 * i + 2] / 255.0f);
-            if (bgr)
-                std::swap(c.x, c.z);
-            image.pixels[i] = srgb ? glm::vec3(noise::srgbDecode(c.x), noise::srgbDecode(c.y),
-                                               noise::srgbDecode(c.z))
-                                   : c;
-        }
-        return image;
-    }
-};
-
-/// Blit the scene into the swapchain image, draw ImGui over it, present; with `grab`, also copy
-/// the presented image back. Returns false when the swapchain is out of date (then recreated by
-/// the caller).
-bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
-             const splat::Image& scene, WindowGrab* grab = nullptr,
-             const splat::Image* inset = nullptr, VkOffset2D insetAt = {0, 0}) {
-    std::uint32_t index = 0;
-    const VkResult acquired = vkAcquireNextImageKHR(ctx.device(), swapchain.handle, UINT64_MAX,
-                                                    sync.acquired, VK_NULL_HANDLE, &index);
-    if (acquired == VK_ERROR_OUT_OF_DATE_KHR)
-        return false;
-    if (acquired != VK_SUBOPTIMAL_KHR)
-        splat::vkCheck(acquired, "vkAcquireNextImageKHR");
-    VkCommandBuffer cmd = sync.cmd;
-    splat::vkCheck(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
-    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    splat::vkCheck(vkBeginCommandBuffer(cmd, &bi), "vkBeginCommandBuffer");
-    const VkImage target = swapchain.images[index];
-    // The renderer's last pass (a compute shader, in an earlier submit) wrote the scene; the
-    // renderers keep it in the general layout, the blit reads it best as a transfer source.
-    splat::transitionImage(cmd, scene.handle(), VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
-                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
-                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-    splat::transitionImage(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                           VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE,
-                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-    VkImageBlit blit{};
-    blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    blit.srcOffsets[1] = {std::int32_t(scene.width()), std::int32_t(scene.height()), 1};
-    blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    blit.dstOffsets[1] = {std::int32_t(swapchain.extent.width),
-                          std::int32_t(swapchain.extent.height), 1};
-    const bool scaled =
-        scene.width() != swapchain.extent.width || scene.height() != swapchain.extent.height;
-    VkFormatProperties fp;
-    vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), scene.format(), &fp);
-    const bool linear =
-        scaled && (fp.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
-    vkCmdBlitImage(cmd, scene.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
-                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
-                   linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST);
-    splat::transitionImage(cmd, scene.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
-                           VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                           VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_NONE,
-                           VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                           VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-    if (inset) {
-        // The kernel preview over a corner of the scene, at its own size.
-        splat::transitionImage(cmd, inset->handle(), VK_IMAGE_ASPECT_COLOR_BIT,
-                               VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                               VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
-                               VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-        splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                             VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-        VkImageBlit b{};
-        b.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        b.srcOffsets[1] = {std::int32_t(inset->width()), std::int32_t(inset->height()), 1};
-        b.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        b.dstOffsets[0] = {insetAt.x, insetAt.y, 0};
-        b.dstOffsets[1] = {insetAt.x + std::int32_t(inset->width()),
-                           insetAt.y + std::int32_t(inset->height()), 1};
-        vkCmdBlitImage(cmd, inset->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
-                       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &b, VK_FILTER_NEAREST);
-        splat::transitionImage(cmd, inset->handle(), VK_IMAGE_ASPECT_COLOR_BIT,
-                               VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                               VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_NONE,
-                               VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                               VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-    }
-    VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-    rp.renderPass = swapchain.renderPass;
-    rp.framebuffer = swapchain.framebuffers[index];
-    rp.renderArea.extent = swapchain.extent;
-    vkCmdBeginRenderPass(cmd, &rp, VK_SUBPASS_CONTENTS_INLINE);
-    ImGui_ImplVulkan_RenderDrawData(ImGui::GetDrawData(), cmd);
-    vkCmdEndRenderPass(cmd);
-    if (grab)
-        grab->record(ctx, cmd, target, swapchain.extent, swapchain.format.format);
-    splat::vkCheck(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
-
-    const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
-    VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    si.waitSemaphoreCount = 1;
-    si.pWaitSemaphores = &sync.acquired;
-    si.pWaitDstStageMask = &waitStage;
-    si.commandBufferCount = 1;
-    si.pCommandBuffers = &cmd;
-    si.signalSemaphoreCount = 1;
-    si.pSignalSemaphores = &swapchain.renderDone[index];
-    splat::vkCheck(vkResetFences(ctx.device(), 1, &sync.fence), "vkResetFences");
-    splat::vkCheck(vkQueueSubmit(ctx.queue(), 1, &si, sync.fence), "vkQueueSubmit");
-    VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
-    pi.waitSemaphoreCount = 1;
-    pi.pWaitSemaphores = &swapchain.renderDone[index];
-    pi.swapchainCount = 1;
-    pi.pSwapchains = &swapchain.handle;
-    pi.pImageIndices = &index;
-    const VkResult presented = vkQueuePresentKHR(ctx.queue(), &pi);
-    // One frame in flight: the next frame's renderer writes the image the blit reads.
-    splat::vkCheck(vkWaitForFences(ctx.device(), 1, &sync.fence, VK_TRUE, UINT64_MAX),
-                   "vkWaitForFences");
-    if (presented == VK_ERROR_OUT_OF_DATE_KHR || presented == VK_SUBOPTIMAL_KHR)
-        return false;
-    splat::vkCheck(presented, "vkQueuePresentKHR");
-    return true;
-}
-
-/// A host image uploaded into an RGBA32F image in the general layout (as the renderers leave
-/// their results), for present() to blit.
-struct UploadedImage {
-    splat::Image image;
-    splat::Buffer staging;
-
-    void upload(splat::Context& ctx, const noise::Image& pixels, const char* what) {
-        const auto w = std::uint32_t(pixels.width), h = std::uint32_t(pixels.height);
-        if (image.width() != w || image.height() != h)
-            image = splat::Image(ctx, w, h, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                 VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
-                                     VK_IMAGE_USAGE_STORAGE_BIT,
-                                 VK_IMAGE_ASPECT_COLOR_BIT, what);
-        const VkDeviceSize bytes = VkDeviceSize(w) * h * 4 * sizeof(float);
-        if (staging.size() < bytes)
-            staging = splat::Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                    splat::Buffer::Memory::HostVisible, what);
-        auto* p = static_cast<float*>(staging.mapped());
-        for (const glm::vec3& c : pixels.pixels) {
-            *p++ = c.x;
-            *p++ = c.y;
-            *p++ = c.z;
-            *p++ = 1.0f;
-        }
-        ctx.submitAndWait([&](VkCommandBuffer cmd) {
-            splat::transitionImage(cmd, image.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
-                                   VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE,
-                                   VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-            VkBufferImageCopy region{};
-            region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-            region.imageExtent = {w, h, 1};
-            vkCmdCopyBufferToImage(cmd, staging.handle(), image.handle(),
-                                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-            splat::transitionImage(cmd, image.handle(), VK_IMAGE_ASPECT_COLOR_BIT,
-                                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
-                                   VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                                   VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-        });
-    }
-};
-
 /// The idle refinement: the running average of jittered full-resolution frames, on the host
 /// and uploaded for the present to blit like a renderer's result.
 struct Refinement {
@@ -1021,11 +534,8 @@ QuitAnswer quitModal(InputState& input, const SessionPanels& panels) {
     return answer;
 }
 
-} // namespace
-
-EditWindowReport runEditWindow(const SessionFactory& makeSession,
-                               const EditWindowOptions& options) {
-    const auto& methods = splat::gpuMethods();
+/// The Render panel's state from the command line's options.
+PanelState initialPanel(const EditWindowOptions& options) {
     PanelState panel;
     panel.method = methodIndex(options.method);
     panel.settings = options.settings;
@@ -1035,373 +545,523 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
                       std::begin(kScales));
     if (panel.scale == int(std::size(kScales)))
         throw InputError(cat("render scale ", options.renderScale, " must be 1, 2 or 4"));
+    return panel;
+}
 
-    // Destroyed in reverse: ImGui, the swapchain, the surface, the session (its frame and
-    // context), the window, GLFW. The display is checked before anything else is made.
-    GlfwLibrary glfw;
-    GlfwWindow window(options.width, options.height, options.title);
-    const std::unique_ptr<edit::Session> owned = makeSession(windowContextOptions());
-    edit::Session& session = *owned;
-    splat::Context& ctx = session.context();
-    Surface surface(ctx, window.handle);
-    Swapchain swapchain(ctx, surface.handle);
-    PresentSync sync(ctx);
+/// What one pass of the window's loop decided, shared by its steps.
+struct FrameState {
+    Clock::time_point start;
+    int fullW = 0, fullH = 0;               ///< the swapchain's size
+    std::optional<glm::vec2> scriptPointer; ///< the script's stroke point this frame
+    bool stroking = false, lowRes = false;
+    double overlayMs = 0.0;
+    bool last = false;     ///< the last of options.frames
+    bool warm = true;      ///< the same method and size as the frame before
+    bool rendered = false; ///< the scene was rendered (not the overlay alone)
+    const splat::Image* shown = nullptr;
+};
 
-    OrbitView view(session.camera());
-    InputState input;
-    input.view = &view;
-    input.session = &session;
-    input.sphere = boundingSphere(session.mesh());
-    glfwSetWindowUserPointer(window.handle, &input);
-    glfwSetMouseButtonCallback(window.handle, onMouseButton);
-    glfwSetCursorPosCallback(window.handle, onCursor);
-    glfwSetScrollCallback(window.handle, onScroll);
-    glfwSetKeyCallback(window.handle, onKey);
-    glfwSetFramebufferSizeCallback(window.handle, onFramebufferSize);
-    glfwSetWindowCloseCallback(window.handle, onClose);
+/// The window, its session and everything the loop keeps between frames. Members are destroyed
+/// in reverse: the kernel preview and the refinement's images, ImGui, the present's
+/// synchronization, the swapchain, the surface, the session (its frame and context), the
+/// window, GLFW. The display is checked before anything else is made.
+class EditWindow {
+public:
+    EditWindow(const SessionFactory& makeSession, const EditWindowOptions& options)
+        : m_options(options), m_panel(initialPanel(options)),
+          m_window(options.width, options.height, options.title),
+          m_owned(makeSession(windowContextOptions())), m_session(*m_owned),
+          m_ctx(m_session.context()), m_surface(makeSurface(m_ctx, m_window.handle)),
+          m_swapchain(m_ctx, m_surface.get()), m_sync(m_ctx), m_view(m_session.camera()) {
+        installCallbacks();
+        int fbW = 0, fbH = 0;
+        glfwGetFramebufferSize(m_window.handle, &fbW, &fbH);
+        m_swapchain.recreate(fbW, fbH);
+        m_input.resized = false;
+        m_imgui.emplace(m_ctx, m_window.handle, m_swapchain);
+        m_panels.savePath = cat(m_session.scene().name, "-edited.json");
+        m_panels.exportPath = cat(m_session.scene().name, "-view.png");
+        m_navigationScaleChosen = m_panel.navigationScale;
+    }
 
-    int fbW = 0, fbH = 0;
-    glfwGetFramebufferSize(window.handle, &fbW, &fbH);
-    swapchain.recreate(fbW, fbH);
-    input.resized = false;
-    ImGuiLayer imgui(ctx, window.handle, swapchain);
-    SessionPanels panels;
-    panels.savePath = cat(session.scene().name, "-edited.json");
-    panels.exportPath = cat(session.scene().name, "-view.png");
+    EditWindowReport run() {
+        m_lastTick = Clock::now();
+        while (!glfwWindowShouldClose(m_window.handle) && !m_quit) {
+            if (m_options.frames > 0 && m_report.frames >= m_options.frames && scriptDone())
+                break;
+            FrameState f;
+            f.start = Clock::now();
+            if (!pollEvents(f))
+                continue;
+            scriptedNavigation();
+            f.scriptPointer = scriptStep(f);
+            advanceWind();
+            f.stroking = m_input.drag == Drag::Brush || m_strokePoint > 0;
+            const bool navigating =
+                m_input.drag == Drag::Orbit || m_input.drag == Drag::Pan ||
+                std::chrono::duration<double>(Clock::now() - m_input.lastMotion).count() < 0.3;
+            f.lowRes = navigating || f.stroking;
+            buildOverlay(f);
+            if (!renderScene(f))
+                continue;
+            presentFrame(f);
+            countFrame(f);
+        }
+        vkDeviceWaitIdle(m_ctx.device());
+        writeScreenshots();
+        return finalReport();
+    }
 
-    splat::FrameStats stats;
-    const splat::Image* scene = nullptr;
-    int renderW = 0, renderH = 0;
-    std::string renderedWith; ///< method and size of the last render (warm-frame bookkeeping)
-    std::vector<double> frameMs, renderMs, presentMs, overlayMs, refineMs, refineAddMs,
-        strokeFrameMs;
-    EditWindowReport report;
-    double lastFrameMs = 0.0, lastPresentMs = 0.0;
-    std::optional<noise::Image> screenshot, windowImage;
-    WindowGrab windowGrab;
-    Refinement refine;
-    KernelPreview preview;
-    int movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
-    std::vector<double> recentLowMs; ///< the last moving or painting frames' times
-    int slowWindows = 0;             ///< ... groups of five in a row with a slow median
-    int navigationScaleChosen = panel.navigationScale;
-    edit::ScriptReport scriptReport;
-    std::size_t scriptNext = 0, strokePoint = 0; ///< the next action; a stroke's next point
-    auto scriptDone = [&] { return scriptNext >= options.script.size(); };
-    auto lastTick = Clock::now();
-    bool quit = false;
+private:
+    bool scriptDone() const { return m_scriptNext >= m_options.script.size(); }
+    const std::string& methodName() const {
+        return splat::gpuMethods()[std::size_t(m_panel.method)].name;
+    }
 
-    while (!glfwWindowShouldClose(window.handle) && !quit) {
-        if (options.frames > 0 && report.frames >= options.frames && scriptDone())
-            break;
-        const auto frameStart = Clock::now();
-        const bool busy = panel.continuous || input.drag != InputState::Drag::None ||
-                          !scriptDone() || session.wind() ||
-                          (panel.refineFrames > 0 && refine.count < panel.refineFrames);
+    void installCallbacks() {
+        m_input.view = &m_view;
+        m_input.session = &m_session;
+        m_input.sphere = boundingSphere(m_session.mesh());
+        glfwSetWindowUserPointer(m_window.handle, &m_input);
+        glfwSetMouseButtonCallback(m_window.handle, onMouseButton);
+        glfwSetCursorPosCallback(m_window.handle, onCursor);
+        glfwSetScrollCallback(m_window.handle, onScroll);
+        glfwSetKeyCallback(m_window.handle, onKey);
+        glfwSetFramebufferSizeCallback(m_window.handle, onFramebufferSize);
+        glfwSetWindowCloseCallback(m_window.handle, onClose);
+    }
+
+    /// Events (waiting a little when idle), then the swapchain for the window's size; false
+    /// when there is nothing to draw into (minimized, or the swapchain not recreated).
+    bool pollEvents(FrameState& f) {
+        const bool busy = m_panel.continuous || m_input.drag != Drag::None || !scriptDone() ||
+                          m_session.wind() ||
+                          (m_panel.refineFrames > 0 && m_refine.count < m_panel.refineFrames);
         if (busy)
             glfwPollEvents();
         else
             glfwWaitEventsTimeout(0.25); // idle: redraw the overlay a few times a second
-        glfwGetFramebufferSize(window.handle, &fbW, &fbH);
+        int fbW = 0, fbH = 0;
+        glfwGetFramebufferSize(m_window.handle, &fbW, &fbH);
         if (fbW == 0 || fbH == 0) { // minimized
             glfwWaitEvents();
-            continue;
+            return false;
         }
-        if (input.resized) {
-            if (!swapchain.recreate(fbW, fbH))
-                continue;
-            ImGui_ImplVulkan_SetMinImageCount(swapchain.minImageCount);
-            input.resized = false;
+        if (m_input.resized) {
+            if (!m_swapchain.recreate(fbW, fbH))
+                return false;
+            ImGui_ImplVulkan_SetMinImageCount(m_swapchain.minImageCount);
+            m_input.resized = false;
         }
-        const int fullW = int(swapchain.extent.width), fullH = int(swapchain.extent.height);
-        if (options.cycleMethods) {
-            int next = report.frames % int(methods.size());
-            if (methods[std::size_t(next)].takes(splat::settings::bake) && !panel.settings.bake)
+        f.fullW = int(m_swapchain.extent.width);
+        f.fullH = int(m_swapchain.extent.height);
+        return true;
+    }
+
+    /// --cycle-methods and --orbit.
+    void scriptedNavigation() {
+        const auto& methods = splat::gpuMethods();
+        if (m_options.cycleMethods) {
+            int next = m_report.frames % int(methods.size());
+            if (methods[std::size_t(next)].takes(splat::settings::bake) && !m_panel.settings.bake)
                 next = 0; // `baked` needs a bake file (--bake)
-            input.sceneDirty |= next != panel.method;
-            panel.method = next;
+            m_input.sceneDirty |= next != m_panel.method;
+            m_panel.method = next;
         }
-        if (options.orbitDegreesPerFrame != 0.0 && report.frames > 0) {
-            view.orbit(options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
-            input.moved();
+        if (m_options.orbitDegreesPerFrame != 0.0 && m_report.frames > 0) {
+            m_view.orbit(m_options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
+            m_input.moved();
         }
+    }
 
-        // The script: one action between two frames; a stroke one pointer event per frame.
-        std::optional<glm::vec2> scriptPointer;
-        if (!scriptDone()) {
-            const edit::ScriptAction& a = options.script[scriptNext];
-            if (a.type == edit::ScriptAction::Type::Stroke) {
-                using Phase = edit::Session::PointerPhase;
-                const std::size_t i = std::min(strokePoint, a.points.size() - 1);
-                const Phase phase = strokePoint == 0                ? Phase::Press
-                                    : strokePoint < a.points.size() ? Phase::Drag
-                                                                    : Phase::Release;
-                try {
-                    if (!input.pendingBrush && phase != Phase::Release)
-                        input.pendingBrush = Clock::now();
-                    session.pointer(phase, a.points[i], input.windowCamera(window.handle));
-                } catch (const InputError& e) {
-                    throw InputError(
-                        cat("script ", options.scriptName, ":", a.line, ": ", e.what()));
-                }
-                scriptPointer = a.points[i];
-                input.sceneDirty = true;
-                if (phase == Phase::Release) {
-                    ++scriptReport.strokes;
-                    ++scriptNext;
-                    strokePoint = 0;
-                    if (options.log)
-                        std::fprintf(options.log, "%4d  %s\n", a.line, a.text.c_str());
-                } else {
-                    ++strokePoint;
-                }
-            } else {
-                // The window's view, so that `screenshot` and `frames` show what it shows.
-                session.setCamera(view.camera(fullW, fullH));
-                edit::runScriptAction(session, a, options.scriptName, options.log, scriptReport);
-                ++scriptNext;
-                panel.method = methodIndex(session.method());
-                panel.settings = session.settings();
-                const noise::Camera now = session.camera(), shown = view.camera(fullW, fullH);
-                if (now.eye != shown.eye || now.target != shown.target ||
-                    now.fovYDeg != shown.fovYDeg)
-                    view = OrbitView(now);
-                input.sceneDirty = true;
-            }
-        }
-        // Wind animates: the session's time advances (1/30 s a frame when scripted).
-        const double tick = std::chrono::duration<double>(Clock::now() - lastTick).count();
-        lastTick = Clock::now();
-        if (session.wind() && scriptDone()) {
-            session.setTime(session.time() + (options.frames > 0 ? 1.0 / 30.0 : tick));
-            input.sceneDirty = true;
-        }
+    /// The script: one action between two frames; a stroke one pointer event per frame. Returns
+    /// the stroke's pointer this frame (for the brush's circle).
+    std::optional<glm::vec2> scriptStep(const FrameState& f) {
+        if (scriptDone())
+            return std::nullopt;
+        const edit::ScriptAction& a = m_options.script[m_scriptNext];
+        if (a.type == edit::ScriptAction::Type::Stroke)
+            return scriptStrokeStep(a);
+        // The window's view, so that `screenshot` and `frames` show what it shows.
+        m_session.setCamera(m_view.camera(f.fullW, f.fullH));
+        edit::runScriptAction(m_session, a, m_options.scriptName, m_options.log, m_scriptReport);
+        ++m_scriptNext;
+        m_panel.method = methodIndex(m_session.method());
+        m_panel.settings = m_session.settings();
+        const noise::Camera now = m_session.camera(), shown = m_view.camera(f.fullW, f.fullH);
+        if (now.eye != shown.eye || now.target != shown.target || now.fovYDeg != shown.fovYDeg)
+            m_view = OrbitView(now);
+        m_input.sceneDirty = true;
+        return std::nullopt;
+    }
 
-        const bool stroking = input.drag == InputState::Drag::Brush || strokePoint > 0;
-        const bool navigating =
-            input.drag == InputState::Drag::Orbit || input.drag == InputState::Drag::Pan ||
-            std::chrono::duration<double>(Clock::now() - input.lastMotion).count() < 0.3;
-        const bool lowRes = navigating || stroking;
+    /// One pointer event of the script's stroke `a`: the press, a drag, or the release.
+    glm::vec2 scriptStrokeStep(const edit::ScriptAction& a) {
+        using Phase = edit::Session::PointerPhase;
+        const std::size_t i = std::min(m_strokePoint, a.points.size() - 1);
+        const Phase phase = m_strokePoint == 0                ? Phase::Press
+                            : m_strokePoint < a.points.size() ? Phase::Drag
+                                                              : Phase::Release;
+        try {
+            if (!m_input.pendingBrush && phase != Phase::Release)
+                m_input.pendingBrush = Clock::now();
+            m_session.pointer(phase, a.points[i], m_input.windowCamera(m_window.handle));
+        } catch (const InputError& e) {
+            throw InputError(cat("script ", m_options.scriptName, ":", a.line, ": ", e.what()));
+        }
+        m_input.sceneDirty = true;
+        if (phase == Phase::Release) {
+            ++m_scriptReport.strokes;
+            ++m_scriptNext;
+            m_strokePoint = 0;
+            if (m_options.log)
+                std::fprintf(m_options.log, "%4d  %s\n", a.line, a.text.c_str());
+        } else {
+            ++m_strokePoint;
+        }
+        return a.points[i];
+    }
+
+    /// Wind animates: the session's time advances (1/30 s a frame when scripted).
+    void advanceWind() {
+        const double tick = std::chrono::duration<double>(Clock::now() - m_lastTick).count();
+        m_lastTick = Clock::now();
+        if (m_session.wind() && scriptDone()) {
+            m_session.setTime(m_session.time() + (m_options.frames > 0 ? 1.0 / 30.0 : tick));
+            m_input.sceneDirty = true;
+        }
+    }
+
+    /// The ImGui frame: the panels (whose edits reach the session), F12's export, the quit
+    /// modal, the stats, the status line, the brush circle and the kernel preview's frame.
+    void buildOverlay(FrameState& f) {
         const auto overlayStart = Clock::now();
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
-        const int methodShown = panel.method;
-        input.sceneDirty |= methodPanel(panel);
-        if (panel.navigationScale != navigationScaleChosen || panel.method != methodShown) {
-            navigationScaleChosen = panel.navigationScale;
-            movingScale = 0;
+        const int methodShown = m_panel.method;
+        m_input.sceneDirty |= methodPanel(m_panel);
+        if (m_panel.navigationScale != m_navigationScaleChosen || m_panel.method != methodShown) {
+            m_navigationScaleChosen = m_panel.navigationScale;
+            m_movingScale = 0;
         }
-        if (!input.error.empty()) {
-            panels.message = input.error;
-            panels.messageIsError = true;
-            input.error.clear();
+        if (!m_input.error.empty()) {
+            m_panels.message = m_input.error;
+            m_panels.messageIsError = true;
+            m_input.error.clear();
         }
         // The panels' Export renders the view as the window shows it.
-        session.setMethod(methods[std::size_t(panel.method)].name, panel.settings);
-        session.setCamera(view.camera(fullW, fullH));
-        input.sceneDirty |= sessionPanels(session, panels);
-        const QuitStep quitting = quitStep(session.dirty(), false, quitModal(input, panels));
-        if (quitting.close && (!quitting.save || saveSession(session, panels)))
-            quit = true;
+        m_session.setMethod(methodName(), m_panel.settings);
+        m_session.setCamera(m_view.camera(f.fullW, f.fullH));
+        m_input.sceneDirty |= sessionPanels(m_session, m_panels);
+        if (m_input.exportRequested)
+            exportView();
+        const QuitStep quitting = quitStep(m_session.dirty(), false, quitModal(m_input, m_panels));
+        if (quitting.close && (!quitting.save || saveSession(m_session, m_panels)))
+            m_quit = true;
+        drawStatus(f);
+        drawBrushAndPreviewFrame(f);
+        ImGui::Render();
+        f.overlayMs = msSince(overlayStart);
+    }
+
+    /// F12: what the File panel's Export does.
+    void exportView() {
+        m_input.exportRequested = false;
+        try {
+            m_session.exportImage(m_panels.exportPath);
+            m_panels.message = "wrote " + m_panels.exportPath;
+            m_panels.messageIsError = false;
+        } catch (const InputError& e) {
+            m_panels.message = e.what();
+            m_panels.messageIsError = true;
+        }
+    }
+
+    /// The Stats panel and the status line.
+    void drawStatus(const FrameState& f) {
         std::string refining;
-        if (panel.refineFrames > 0 && refine.count > 0)
-            refining =
-                refine.count < panel.refineFrames
-                    ? cat("refining ", refine.count, "/", panel.refineFrames, " (sorted, jittered)")
-                    : cat("refined ", refine.count, "/", panel.refineFrames, " (sorted, jittered)");
-        statsPanel(stats, renderW, renderH, fullW, fullH, lastFrameMs, lastPresentMs,
-                   lowRes && std::max(panel.navigationScale, movingScale) > panel.scale,
-                   swapchain.srgb, refining);
-        statusLine(stats, renderW, renderH, fullW, fullH, lastFrameMs,
-                   lowRes && std::max(panel.navigationScale, movingScale) > panel.scale, refining);
-        // The brush under the pointer (or the script's pointer).
+        if (m_panel.refineFrames > 0 && m_refine.count > 0)
+            refining = m_refine.count < m_panel.refineFrames
+                           ? cat("refining ", m_refine.count, "/", m_panel.refineFrames,
+                                 " (sorted, jittered)")
+                           : cat("refined ", m_refine.count, "/", m_panel.refineFrames,
+                                 " (sorted, jittered)");
+        const bool scaledUp =
+            f.lowRes && std::max(m_panel.navigationScale, m_movingScale) > m_panel.scale;
+        statsPanel(m_stats, m_renderW, m_renderH, f.fullW, f.fullH, m_lastFrameMs, m_lastPresentMs,
+                   scaledUp, m_swapchain.srgb, refining);
+        statusLine(m_stats, m_renderW, m_renderH, f.fullW, f.fullH, m_lastFrameMs, scaledUp,
+                   refining);
+    }
+
+    /// The brush under the pointer (or the script's pointer), and a frame around the kernel
+    /// preview.
+    void drawBrushAndPreviewFrame(const FrameState& f) {
         const ImVec2 mouse = ImGui::GetIO().MousePos;
         const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid();
-        if (scriptPointer || (overScene && input.drag != InputState::Drag::Orbit &&
-                              input.drag != InputState::Drag::Pan)) {
-            const ImVec2 at = scriptPointer ? ImVec2(scriptPointer->x, scriptPointer->y) : mouse;
-            ImGui::GetForegroundDrawList()->AddCircle(at, session.brush().radiusPx,
+        if (f.scriptPointer ||
+            (overScene && m_input.drag != Drag::Orbit && m_input.drag != Drag::Pan)) {
+            const ImVec2 at =
+                f.scriptPointer ? ImVec2(f.scriptPointer->x, f.scriptPointer->y) : mouse;
+            ImGui::GetForegroundDrawList()->AddCircle(at, m_session.brush().radiusPx,
                                                       IM_COL32(255, 255, 255, 200), 48, 1.5f);
         }
-        if (panels.kernelOpen) { // a frame around the kernel preview
-            const float x = float(fullW - 330 - 8 - KernelPreview::kSize);
+        if (m_panels.kernelOpen) {
+            const float x = float(f.fullW - 330 - 8 - KernelPreview::kSize);
             ImGui::GetForegroundDrawList()->AddRect(
                 ImVec2(x - 1, 7), ImVec2(x + KernelPreview::kSize + 1, 9 + KernelPreview::kSize),
                 IM_COL32(120, 120, 140, 255));
         }
-        ImGui::Render();
-        const double overlay = msSince(overlayStart);
+    }
 
+    /// The scene for this frame: one more refinement step when idle, a render when something
+    /// changed (or every frame when asked), else the last image. False when the method refused
+    /// the settings interactively (the frame is dropped; the panel shows why).
+    bool renderScene(FrameState& f) {
         // Navigation or a stroke ended: back to the resolution chosen.
-        if (!lowRes && scene && refine.count == 0 &&
-            (renderW != std::max(1, fullW / kScales[panel.scale]) ||
-             renderH != std::max(1, fullH / kScales[panel.scale])))
-            input.sceneDirty = true;
-        const bool change = input.sceneDirty || !scene;
+        if (!f.lowRes && m_scene && m_refine.count == 0 &&
+            (m_renderW != std::max(1, f.fullW / kScales[m_panel.scale]) ||
+             m_renderH != std::max(1, f.fullH / kScales[m_panel.scale])))
+            m_input.sceneDirty = true;
+        const bool change = m_input.sceneDirty || !m_scene;
         if (change)
-            refine.count = 0;
-        const bool last = options.frames > 0 && scriptDone() && report.frames + 1 >= options.frames;
-        const bool refineNow = !change && !lowRes && panel.refineFrames > 0 &&
-                               refine.count < panel.refineFrames && !session.wind();
-        const std::string& method = methods[std::size_t(panel.method)].name;
-        bool warm = true, rendered = false;
-        const splat::Image* shown = refine.count > 0 ? &refine.image() : scene;
-        if (refineNow) {
-            // One more jittered frame of the most accurate method into the running average.
-            const auto refineStart = Clock::now();
-            // Without EWA: the average of the jittered point-sampled frames is the box-filtered
-            // image; EWA's widened kernels would blur it twice.
-            splat::RenderSettings refineSettings = panel.settings;
-            refineSettings.ewa = false;
-            session.setMethod("sorted", refineSettings);
-            const glm::dvec2 jitter = haltonJitter(refine.count);
-            session.setCamera(jitteredCamera(view.camera(fullW, fullH), jitter.x, jitter.y));
-            noise::Image image;
-            stats = session.render(&image);
-            const auto addStart = Clock::now();
-            refine.add(ctx, image);
-            refineAddMs.push_back(msSince(addStart));
-            refineMs.push_back(msSince(refineStart));
-            ++report.refined;
-            renderW = fullW;
-            renderH = fullH;
-            shown = &refine.image();
-            warm = false;
-            renderedWith = "refine";
-        } else if (change || (panel.continuous && refine.count == 0)) {
-            const int scale =
-                kScales[lowRes ? std::max({panel.scale, panel.navigationScale, movingScale})
-                               : panel.scale];
-            renderW = std::max(1, fullW / scale);
-            renderH = std::max(1, fullH / scale);
-            noise::Image image;
-            const bool capture = last && !options.screenshot.empty();
-            const auto renderStart = Clock::now();
-            try {
-                session.setMethod(method, panel.settings);
-                session.setCamera(view.camera(renderW, renderH));
-                stats = session.render(capture ? &image : nullptr);
-                panel.error.clear();
-            } catch (const InputError& e) {
-                // Interactively, a setting the method refuses (or a frame beyond the memory
-                // budget) is shown in the panel; scripted, it fails. The session may have
-                // rebuilt its frame: the last image is gone.
-                if (!scene || options.frames > 0)
-                    throw;
-                panel.error = e.what();
-                input.sceneDirty = false;
-                scene = nullptr;
-                ImGui::EndFrame();
-                continue;
-            }
-            const double renderWall = msSince(renderStart);
-            if (capture)
-                screenshot = std::move(image);
-            scene = &session.frame().renderer(method).result();
-            shown = scene;
-            input.sceneDirty = false;
-            rendered = true;
-            ++report.rendered;
-            // Warm: the same method at the same size as the last render (the first frame after
-            // a change creates targets and compiles pipelines).
-            const std::string key = cat(method, " ", renderW, "x", renderH);
-            warm = key == renderedWith;
-            renderedWith = key;
-            if (warm)
-                renderMs.push_back(renderWall);
+            m_refine.count = 0;
+        f.last = m_options.frames > 0 && scriptDone() && m_report.frames + 1 >= m_options.frames;
+        const bool refineNow = !change && !f.lowRes && m_panel.refineFrames > 0 &&
+                               m_refine.count < m_panel.refineFrames && !m_session.wind();
+        f.shown = m_refine.count > 0 ? &m_refine.image() : m_scene;
+        if (refineNow)
+            refineStep(f);
+        else if (change || (m_panel.continuous && m_refine.count == 0))
+            return renderInteractive(f);
+        return true;
+    }
+
+    /// One more jittered frame of the most accurate method into the running average.
+    void refineStep(FrameState& f) {
+        const auto refineStart = Clock::now();
+        // Without EWA: the average of the jittered point-sampled frames is the box-filtered
+        // image; EWA's widened kernels would blur it twice.
+        splat::RenderSettings refineSettings = m_panel.settings;
+        refineSettings.ewa = false;
+        m_session.setMethod("sorted", refineSettings);
+        const glm::dvec2 jitter = haltonJitter(m_refine.count);
+        m_session.setCamera(jitteredCamera(m_view.camera(f.fullW, f.fullH), jitter.x, jitter.y));
+        noise::Image image;
+        m_stats = m_session.render(&image);
+        const auto addStart = Clock::now();
+        m_refine.add(m_ctx, image);
+        m_refineAddMs.push_back(msSince(addStart));
+        m_refineMs.push_back(msSince(refineStart));
+        ++m_report.refined;
+        m_renderW = f.fullW;
+        m_renderH = f.fullH;
+        f.shown = &m_refine.image();
+        f.warm = false;
+        m_renderedWith = "refine";
+    }
+
+    /// The chosen method at the interactive resolution (lower while moving or painting).
+    bool renderInteractive(FrameState& f) {
+        const int scale =
+            kScales[f.lowRes ? std::max({m_panel.scale, m_panel.navigationScale, m_movingScale})
+                             : m_panel.scale];
+        m_renderW = std::max(1, f.fullW / scale);
+        m_renderH = std::max(1, f.fullH / scale);
+        noise::Image image;
+        const bool capture = f.last && !m_options.screenshot.empty();
+        const std::string& method = methodName();
+        const auto renderStart = Clock::now();
+        try {
+            m_session.setMethod(method, m_panel.settings);
+            m_session.setCamera(m_view.camera(m_renderW, m_renderH));
+            m_stats = m_session.render(capture ? &image : nullptr);
+            m_panel.error.clear();
+        } catch (const InputError& e) {
+            // Interactively, a setting the method refuses (or a frame beyond the memory
+            // budget) is shown in the panel; scripted, it fails. The session may have
+            // rebuilt its frame: the last image is gone.
+            if (!m_scene || m_options.frames > 0)
+                throw;
+            m_panel.error = e.what();
+            m_input.sceneDirty = false;
+            m_scene = nullptr;
+            ImGui::EndFrame();
+            return false;
         }
-        if (last && !options.screenshot.empty() && refine.count > 0)
-            screenshot = refine.average;
+        const double renderWall = msSince(renderStart);
+        if (capture)
+            m_screenshot = std::move(image);
+        m_scene = &m_session.frame().renderer(method).result();
+        f.shown = m_scene;
+        m_input.sceneDirty = false;
+        f.rendered = true;
+        ++m_report.rendered;
+        // Warm: the same method at the same size as the last render (the first frame after
+        // a change creates targets and compiles pipelines).
+        const std::string key = cat(method, " ", m_renderW, "x", m_renderH);
+        f.warm = key == m_renderedWith;
+        m_renderedWith = key;
+        if (f.warm)
+            m_renderMs.push_back(renderWall);
+        return true;
+    }
+
+    /// Blit the scene (and the kernel preview), draw the panels, present; read the window back
+    /// for --window-screenshot on the last frame.
+    void presentFrame(FrameState& f) {
+        if (f.last && !m_options.screenshot.empty() && m_refine.count > 0)
+            m_screenshot = m_refine.average;
         const auto presentStart = Clock::now();
-        const bool grab = last && !options.windowScreenshot.empty();
-        if (grab && !swapchain.readable)
+        const bool grab = f.last && !m_options.windowScreenshot.empty();
+        if (grab && !m_swapchain.readable)
             throw std::runtime_error("--window-screenshot: the window's images cannot be read back "
                                      "on this surface");
         // The kernel preview while the Kernel panel is open (rendered again when the kernel
         // changed), left of the panel's place at the top right.
         const splat::Image* inset = nullptr;
-        const int insetX = fullW - 330 - 8 - KernelPreview::kSize;
-        if (panels.kernelOpen && insetX >= 8 && fullH >= KernelPreview::kSize + 16) {
+        const int insetX = f.fullW - 330 - 8 - KernelPreview::kSize;
+        if (m_panels.kernelOpen && insetX >= 8 && f.fullH >= KernelPreview::kSize + 16) {
             try {
-                inset = &preview.update(ctx, session);
+                inset = &m_preview.update(m_ctx, m_session);
             } catch (const InputError& e) {
-                panels.message = e.what();
-                panels.messageIsError = true;
+                m_panels.message = e.what();
+                m_panels.messageIsError = true;
             }
         }
-        if (!present(ctx, swapchain, sync, *shown, grab ? &windowGrab : nullptr, inset,
+        if (!present(m_ctx, m_swapchain, m_sync, *f.shown, grab ? &m_windowGrab : nullptr, inset,
                      VkOffset2D{insetX, 8}))
-            input.resized = true;
+            m_input.resized = true;
         if (grab)
-            windowImage = windowGrab.read(swapchain.srgb);
-        lastPresentMs = msSince(presentStart);
-        lastFrameMs = msSince(frameStart);
-        if (rendered && input.pendingBrush) {
-            report.strokeToFrameMs.push_back(msSince(*input.pendingBrush));
-            input.pendingBrush.reset();
-        }
-        if (rendered && stroking && warm)
-            strokeFrameMs.push_back(lastFrameMs);
-        // Moving or painting below 10 frames a second (the median of five such frames, twice
-        // in a row: not the rebuild after a parameter edit): a lower resolution for the rest of the
-        // session (a quarter at most); the Render panel's choice resets it.
-        if (rendered && lowRes && warm) {
-            recentLowMs.push_back(lastFrameMs);
-            if (recentLowMs.size() == 5) {
-                slowWindows = median(recentLowMs) > kInteractiveMs ? slowWindows + 1 : 0;
-                if (slowWindows == 2 && movingScale < int(std::size(kScales)) - 1) {
-                    movingScale = std::max(movingScale, panel.navigationScale) + 1;
-                    slowWindows = 0;
-                }
-                recentLowMs.clear();
-            }
-        }
-        if (warm && report.frames > 0) {
-            presentMs.push_back(lastPresentMs);
-            frameMs.push_back(lastFrameMs);
-            overlayMs.push_back(overlay);
-        }
-        ++report.frames;
-        if (report.frames == 1 && options.resizeWidth > 0 && options.resizeHeight > 0)
-            glfwSetWindowSize(window.handle, options.resizeWidth, options.resizeHeight);
+            m_windowImage = m_windowGrab.read(m_swapchain.srgb);
+        m_lastPresentMs = msSince(presentStart);
+        m_lastFrameMs = msSince(f.start);
     }
-    vkDeviceWaitIdle(ctx.device());
 
-    if (!options.screenshot.empty()) {
-        if (!screenshot) { // closed by the user: the view as it was last shown
-            session.setMethod(methods[std::size_t(panel.method)].name, panel.settings);
-            session.setCamera(
-                view.camera(int(swapchain.extent.width), int(swapchain.extent.height)));
-            noise::Image image;
-            session.render(&image);
-            screenshot = std::move(image);
+    /// The frame's timings, and the resolution while moving lowered when those frames are slow.
+    void countFrame(const FrameState& f) {
+        if (f.rendered && m_input.pendingBrush) {
+            m_report.strokeToFrameMs.push_back(msSince(*m_input.pendingBrush));
+            m_input.pendingBrush.reset();
         }
-        noise::writeImage(options.screenshot, *screenshot,
-                          {{"method", refine.count > 0 ? std::string("sorted (refined)")
-                                                       : methods[std::size_t(panel.method)].name},
-                           {"scene", session.scene().name}});
+        if (f.rendered && f.stroking && f.warm)
+            m_strokeFrameMs.push_back(m_lastFrameMs);
+        if (f.rendered && f.lowRes && f.warm)
+            adaptMovingScale();
+        if (f.warm && m_report.frames > 0) {
+            m_presentMs.push_back(m_lastPresentMs);
+            m_frameMs.push_back(m_lastFrameMs);
+            m_overlayMs.push_back(f.overlayMs);
+        }
+        ++m_report.frames;
+        if (m_report.frames == 1 && m_options.resizeWidth > 0 && m_options.resizeHeight > 0)
+            glfwSetWindowSize(m_window.handle, m_options.resizeWidth, m_options.resizeHeight);
     }
-    if (windowImage)
-        noise::writeImage(options.windowScreenshot, *windowImage,
-                          {{"scene", session.scene().name}});
-    const splat::ValidationCounts v = ctx.validation();
-    if (v.errors > 0)
-        throw std::runtime_error(cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
-    report.validation = ctx.validationEnabled();
-    report.validationWarnings = v.warnings;
-    report.warmFrames = int(frameMs.size());
-    report.frameMs = median(frameMs);
-    report.renderMs = median(renderMs);
-    report.presentMs = median(presentMs);
-    report.overlayMs = median(overlayMs);
-    report.refineMs = median(refineMs);
-    report.refineAverageMs = median(refineAddMs);
-    report.previewMs = preview.lastMs;
-    report.strokeFrameMs = median(strokeFrameMs);
-    report.strokeFrames = int(strokeFrameMs.size());
-    report.lowScale = kScales[std::max(panel.navigationScale, movingScale)];
-    return report;
+
+    /// Moving or painting below 10 frames a second (the median of five such frames, twice in a
+    /// row: not the rebuild after a parameter edit): a lower resolution for the rest of the
+    /// session (a quarter at most); the Render panel's choice resets it.
+    void adaptMovingScale() {
+        m_recentLowMs.push_back(m_lastFrameMs);
+        if (m_recentLowMs.size() < 5)
+            return;
+        m_slowWindows = median(m_recentLowMs) > kInteractiveMs ? m_slowWindows + 1 : 0;
+        if (m_slowWindows == 2 && m_movingScale < int(std::size(kScales)) - 1) {
+            m_movingScale = std::max(m_movingScale, m_panel.navigationScale) + 1;
+            m_slowWindows = 0;
+        }
+        m_recentLowMs.clear();
+    }
+
+    /// --screenshot (the scene; rendered now when the user closed the window) and
+    /// --window-screenshot.
+    void writeScreenshots() {
+        if (!m_options.screenshot.empty()) {
+            if (!m_screenshot) { // closed by the user: the view as it was last shown
+                m_session.setMethod(methodName(), m_panel.settings);
+                m_session.setCamera(
+                    m_view.camera(int(m_swapchain.extent.width), int(m_swapchain.extent.height)));
+                noise::Image image;
+                m_session.render(&image);
+                m_screenshot = std::move(image);
+            }
+            noise::writeImage(
+                m_options.screenshot, *m_screenshot,
+                {{"method", m_refine.count > 0 ? std::string("sorted (refined)") : methodName()},
+                 {"scene", m_session.scene().name}});
+        }
+        if (m_windowImage)
+            noise::writeImage(m_options.windowScreenshot, *m_windowImage,
+                              {{"scene", m_session.scene().name}});
+    }
+
+    /// The medians, and validation's verdict (errors throw).
+    EditWindowReport finalReport() {
+        const splat::ValidationCounts v = m_ctx.validation();
+        if (v.errors > 0)
+            throw std::runtime_error(
+                cat(v.errors, " Vulkan validation errors, first: ", v.firstError));
+        EditWindowReport report = m_report;
+        report.validation = m_ctx.validationEnabled();
+        report.validationWarnings = v.warnings;
+        report.warmFrames = int(m_frameMs.size());
+        report.frameMs = median(m_frameMs);
+        report.renderMs = median(m_renderMs);
+        report.presentMs = median(m_presentMs);
+        report.overlayMs = median(m_overlayMs);
+        report.refineMs = median(m_refineMs);
+        report.refineAverageMs = median(m_refineAddMs);
+        report.previewMs = m_preview.lastMs;
+        report.strokeFrameMs = median(m_strokeFrameMs);
+        report.strokeFrames = int(m_strokeFrameMs.size());
+        report.lowScale = kScales[std::max(m_panel.navigationScale, m_movingScale)];
+        return report;
+    }
+
+    const EditWindowOptions& m_options;
+    PanelState m_panel;
+    GlfwLibrary m_glfw;
+    GlfwWindow m_window;
+    const std::unique_ptr<edit::Session> m_owned;
+    edit::Session& m_session;
+    splat::Context& m_ctx;
+    const splat::UniqueSurface m_surface;
+    Swapchain m_swapchain;
+    PresentSync m_sync;
+    OrbitView m_view;
+    InputState m_input;
+    std::optional<ImGuiLayer> m_imgui;
+    SessionPanels m_panels;
+
+    splat::FrameStats m_stats;
+    const splat::Image* m_scene = nullptr; ///< the last interactive render (null: none)
+    int m_renderW = 0, m_renderH = 0;
+    std::string m_renderedWith; ///< method and size of the last render (warm-frame bookkeeping)
+    std::vector<double> m_frameMs, m_renderMs, m_presentMs, m_overlayMs, m_refineMs, m_refineAddMs,
+        m_strokeFrameMs;
+    EditWindowReport m_report;
+    double m_lastFrameMs = 0.0, m_lastPresentMs = 0.0;
+    std::optional<noise::Image> m_screenshot, m_windowImage;
+    WindowGrab m_windowGrab;
+    Refinement m_refine;
+    KernelPreview m_preview;
+    int m_movingScale = 0; ///< index into kScales: lowered when moving frames are too slow
+    std::vector<double> m_recentLowMs; ///< the last moving or painting frames' times
+    int m_slowWindows = 0;             ///< ... groups of five in a row with a slow median
+    int m_navigationScaleChosen = 0;
+    edit::ScriptReport m_scriptReport;
+    std::size_t m_scriptNext = 0, m_strokePoint = 0; ///< the next action; a stroke's next point
+    Clock::time_point m_lastTick;                    ///< the wind's last time step
+    bool m_quit = false;
+};
+
+} // namespace
+
+EditWindowReport runEditWindow(const SessionFactory& makeSession,
+                               const EditWindowOptions& options) {
+    EditWindow window(makeSession, options);
+    return window.run();
 }
 
 std::vector<cli::OptionSpec> editWindowOptions() {

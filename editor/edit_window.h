@@ -13,6 +13,9 @@
 /// While the camera moves or a stroke is in progress the scene renders at a lower resolution;
 /// when idle the window refines: it averages sub-pixel-jittered `sorted` frames at full
 /// resolution (read back, averaged on the host, uploaded to an image the blit shows).
+///
+/// The mouse and keys map to actions through edit_input.h (a tested pure function); the
+/// swapchain, the ImGui layer and the present are in edit_present_vk.h.
 #pragma once
 
 #include <cstdint>

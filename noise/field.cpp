@@ -4,12 +4,14 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include <OpenImageIO/imageio.h>
 
 #include "noise/error.h"
+#include "noise/generator_shared.h"
 #include "noise/mesh.h"
 #include "noise/painted.h"
 #include "noise/system.h"
@@ -17,6 +19,51 @@
 #include "shaders/spot_shared.hpp"
 
 namespace spot::noise {
+
+using Generator = shared::f32::SharedGenerator;
+
+/// The field's own shared form, for eval: the parameters (the field in slot 0) and its data.
+struct Field::Flat {
+    std::mutex mutex;
+    bool valid = false;
+    std::uint64_t version = 0;
+    gpu::SpotGenParams params{};
+    std::vector<float> data;
+};
+
+Field::~Field() = default;
+
+glm::vec3 Field::eval(const SurfacePoint& p) const {
+    // m_flat is made by the first call; concurrent first calls are not supported (a field is
+    // evaluated first by the thread that bound it: the generator, the editor).
+    if (!m_flat)
+        m_flat = std::make_unique<Flat>();
+    Flat& f = *m_flat;
+    {
+        std::lock_guard lock(f.mutex);
+        const std::uint64_t v = version();
+        if (!f.valid || f.version != v) {
+            f.data.clear();
+            f.params = gpu::SpotGenParams{};
+            f.params.fields[0] = shared(f.data);
+            f.version = v;
+            f.valid = true;
+        }
+    }
+    shared::f32::GeneratorArrays arrays;
+    arrays.triangles = m_triangles;
+    arrays.fieldData = f.data.data();
+    arrays.params = &f.params;
+    Generator generator(arrays);
+    Generator::SpotSurface s{};
+    s.position = p.position;
+    s.normal = p.normal;
+    s.tangent = p.tangent;
+    s.uv = p.uv;
+    s.triangle = p.triangle;
+    s.bary = p.barycentric;
+    return generator.spotFieldEval(0u, s);
+}
 
 namespace {
 
@@ -43,8 +90,9 @@ glm::vec3 keepComponents(glm::vec3 v, int components) {
     return components == 1 ? glm::vec3(v.x, 0.0f, 0.0f) : v;
 }
 
-/// Outputs of the mapped kinds (gradient, noise, image) are clamped to the interval spanned by
-/// lo and hi: `mix` in float can land one ulp outside it, and range() promises exact bounds.
+/// The map of the mapped kinds (gradient, noise, image): spotFieldMap clamps their outputs to the
+/// interval lo and hi span (`mix` in float can land one ulp outside it; range() promises exact
+/// bounds).
 struct LinearMap {
     glm::vec3 lo;
     glm::vec3 hi;
@@ -52,16 +100,14 @@ struct LinearMap {
     glm::vec3 max;
 
     LinearMap(glm::vec3 l, glm::vec3 h) : lo(l), hi(h), min(glm::min(l, h)), max(glm::max(l, h)) {}
-    glm::vec3 operator()(float t) const { return glm::clamp(lo * (1.0f - t) + hi * t, min, max); }
 };
 
 class ConstantField final : public Field {
 public:
     explicit ConstantField(glm::vec3 value) : m_value(value) {}
-    glm::vec3 eval(const SurfacePoint&) const override { return m_value; }
     FieldRange range() const override { return {m_value, m_value}; }
     gpu::SpotField shared(std::vector<float>&) const override {
-        gpu::SpotField f = sharedField(0, 3);
+        gpu::SpotField f = sharedField(Generator::kFieldConstant, 3);
         f.value = glm::vec4(m_value, 0.0f);
         return f;
     }
@@ -75,14 +121,10 @@ class GradientField final : public Field {
 public:
     GradientField(glm::vec3 from, glm::vec3 to, LinearMap map)
         : m_from(from), m_axis((to - from) / glm::dot(to - from, to - from)), m_map(map) {}
-    glm::vec3 eval(const SurfacePoint& p) const override {
-        const float t = glm::clamp(glm::dot(p.position - m_from, m_axis), 0.0f, 1.0f);
-        return m_map(std::isnan(t) ? 0.0f : t);
-    }
     FieldRange range() const override { return {m_map.min, m_map.max}; }
     gpu::SpotField shared(std::vector<float>&) const override {
         // Unused components have lo = hi = 0, so all three map to the same values as eval.
-        gpu::SpotField f = sharedField(1, 3);
+        gpu::SpotField f = sharedField(Generator::kFieldGradient, 3);
         f.from = glm::vec4(m_from, 0.0f);
         f.axis = glm::vec4(m_axis, 0.0f);
         f.lo = glm::vec4(m_map.lo, 0.0f);
@@ -100,12 +142,9 @@ class NoiseField final : public Field {
 public:
     NoiseField(float frequency, int octaves, std::uint32_t seed, LinearMap map)
         : m_frequency(frequency), m_octaves(octaves), m_seed(seed), m_map(map) {}
-    glm::vec3 eval(const SurfacePoint& p) const override {
-        return m_map(valueNoise(p.position * m_frequency, m_octaves, m_seed));
-    }
     FieldRange range() const override { return {m_map.min, m_map.max}; }
     gpu::SpotField shared(std::vector<float>&) const override {
-        gpu::SpotField f = sharedField(2, 3);
+        gpu::SpotField f = sharedField(Generator::kFieldNoise, 3);
         f.kind.z = m_octaves;
         f.kind.w = static_cast<std::int32_t>(m_seed);
         f.from = glm::vec4(0.0f, 0.0f, 0.0f, m_frequency);
@@ -126,7 +165,8 @@ private:
 class VertexField final : public Field {
 public:
     VertexField(const Mesh& mesh, std::vector<const std::vector<float>*> attributes)
-        : m_mesh(&mesh), m_attributes(std::move(attributes)) {
+        : m_attributes(std::move(attributes)) {
+        m_triangles = mesh.triangles.data();
         m_range.lo = glm::vec3(0.0f);
         m_range.hi = glm::vec3(0.0f);
         for (std::size_t c = 0; c < m_attributes.size(); ++c) {
@@ -136,21 +176,9 @@ public:
             m_range.hi[static_cast<int>(c)] = hi == m_attributes[c]->end() ? 0.0f : *hi;
         }
     }
-    glm::vec3 eval(const SurfacePoint& p) const override {
-        SPOT_CHECK_LT(p.triangle, m_mesh->triangles.size());
-        const glm::uvec3 tri = m_mesh->triangles[p.triangle];
-        glm::vec3 out(0.0f);
-        for (std::size_t c = 0; c < m_attributes.size(); ++c) {
-            const std::vector<float>& a = *m_attributes[c];
-            out[static_cast<int>(c)] = p.barycentric.x * a[tri.x] + p.barycentric.y * a[tri.y] +
-                                       p.barycentric.z * a[tri.z];
-        }
-        // A convex combination stays inside [min, max] up to rounding; clamp so range() is exact.
-        return glm::clamp(out, m_range.lo, m_range.hi);
-    }
     FieldRange range() const override { return m_range; }
     gpu::SpotField shared(std::vector<float>& data) const override {
-        gpu::SpotField f = sharedField(3, static_cast<int>(m_attributes.size()));
+        gpu::SpotField f = sharedField(Generator::kFieldVertex, static_cast<int>(m_attributes.size()));
         std::uint32_t offsets[3] = {0, 0, 0};
         for (std::size_t c = 0; c < m_attributes.size() && c < 3; ++c)
             offsets[c] = appendData(data, m_attributes[c]->data(), m_attributes[c]->size());
@@ -161,7 +189,6 @@ public:
     }
 
 private:
-    const Mesh* m_mesh;
     std::vector<const std::vector<float>*> m_attributes; ///< one per component
     FieldRange m_range;
 };
@@ -191,38 +218,9 @@ public:
                    keepComponents(glm::max(a, b), m_components)};
     }
 
-    glm::vec3 eval(const SurfacePoint& p) const override {
-        float u = std::isfinite(p.uv.x) ? p.uv.x : 0.0f;
-        float v = std::isfinite(p.uv.y) ? p.uv.y : 0.0f;
-        if (m_repeat) {
-            u -= std::floor(u);
-            v -= std::floor(v);
-        } else {
-            u = std::clamp(u, 0.0f, 1.0f);
-            v = std::clamp(v, 0.0f, 1.0f);
-        }
-        const float x = u * static_cast<float>(m_width) - 0.5f;
-        const float y = (1.0f - v) * static_cast<float>(m_height) - 0.5f;
-        const float xf = std::floor(x);
-        const float yf = std::floor(y);
-        const float fx = x - xf;
-        const float fy = y - yf;
-        const int x0 = static_cast<int>(xf);
-        const int y0 = static_cast<int>(yf);
-        const int xs[2] = {wrap(x0, m_width), wrap(x0 + 1, m_width)};
-        const int ys[2] = {wrap(y0, m_height), wrap(y0 + 1, m_height)};
-        glm::vec3 t(0.0f);
-        for (int c = 0; c < m_components; ++c) {
-            const float top = lerp(texel(xs[0], ys[0], c), texel(xs[1], ys[0], c), fx);
-            const float bottom = lerp(texel(xs[0], ys[1], c), texel(xs[1], ys[1], c), fx);
-            t[c] = std::clamp(lerp(top, bottom, fy), m_tMin[c], m_tMax[c]);
-        }
-        return keepComponents(mapEach(t), m_components);
-    }
-
     FieldRange range() const override { return m_range; }
     gpu::SpotField shared(std::vector<float>& data) const override {
-        gpu::SpotField f = sharedField(4, m_components);
+        gpu::SpotField f = sharedField(Generator::kFieldImage, m_components);
         f.data = glm::uvec4(appendData(data, m_texels.data(), m_texels.size()),
                             static_cast<std::uint32_t>(m_width), static_cast<std::uint32_t>(m_height),
                             m_repeat ? 1u : 0u);
@@ -234,21 +232,6 @@ public:
     }
 
 private:
-    static float lerp(float a, float b, float t) { return a + (b - a) * t; }
-
-    int wrap(int i, int n) const {
-        if (m_repeat)
-            return ((i % n) + n) % n;
-        return std::clamp(i, 0, n - 1);
-    }
-
-    float texel(int x, int y, int c) const {
-        return m_texels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(m_width) +
-                         static_cast<std::size_t>(x)) *
-                            static_cast<std::size_t>(m_components) +
-                        static_cast<std::size_t>(c)];
-    }
-
     /// Each component maps through its own lo/hi (a texel value t per component).
     glm::vec3 mapEach(glm::vec3 t) const {
         glm::vec3 out;
@@ -274,13 +257,15 @@ private:
 class PaintedField final : public Field {
 public:
     explicit PaintedField(std::shared_ptr<const PaintedGrid> grid) : m_grid(std::move(grid)) {}
-    glm::vec3 eval(const SurfacePoint& p) const override { return m_grid->sample(p.position); }
     FieldRange range() const override {
         FieldRange r;
         m_grid->valueRange(r.lo, r.hi);
         return r;
     }
     gpu::SpotField shared(std::vector<float>& data) const override { return m_grid->flatten(data); }
+
+protected:
+    std::uint64_t version() const override { return m_grid->version(); }
 
 private:
     std::shared_ptr<const PaintedGrid> m_grid;

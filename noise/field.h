@@ -75,17 +75,34 @@ struct FieldRange {
     glm::vec3 hi{0.0f};
 };
 
+/// A field bound to a mesh. Its value is what the generator evaluates: `eval` runs the shared
+/// header's spotFieldEval (shaders/spot_generate.h) on the field's shared form, the code that
+/// renders, so CPU tests exercise it; the kinds differ only in how they build that form.
 class Field {
 public:
-    virtual ~Field() = default;
-    /// Value at a surface point; scalars in `.x`, unused components zero.
-    virtual glm::vec3 eval(const SurfacePoint& p) const = 0;
+    Field() = default;
+    Field(const Field&) = delete;
+    Field& operator=(const Field&) = delete;
+    virtual ~Field();
+    /// Value at a surface point; scalars in `.x`, unused components zero. Builds the shared form
+    /// on the first call, and again after a painted grid it reads changed (thread-safe).
+    glm::vec3 eval(const SurfacePoint& p) const;
     /// Bounds of every value `eval` can return.
     virtual FieldRange range() const = 0;
     /// The field in the form the shared generator evaluates on the CPU and the GPU
-    /// (shaders/spot_generate.h, spotFieldEval: the same arithmetic as eval). Per-vertex columns
-    /// and image texels are appended to `data` and referenced by offset.
+    /// (shaders/spot_generate.h, spotFieldEval). Per-vertex columns, image texels and grids are
+    /// appended to `data` and referenced by offset.
     virtual gpu::SpotField shared(std::vector<float>& data) const = 0;
+
+protected:
+    /// Changes when a painted grid the field reads changes (eval then builds its form again).
+    virtual std::uint64_t version() const { return 0; }
+    /// The mesh's triangles, for a field that reads per-vertex data (spotMeshTriangle).
+    const glm::uvec3* m_triangles = nullptr;
+
+private:
+    struct Flat;
+    mutable std::unique_ptr<Flat> m_flat;
 };
 
 /// Bind a description to a mesh. Throws InputError naming `context` (e.g. "preset fur.json,

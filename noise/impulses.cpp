@@ -23,8 +23,9 @@ namespace {
 constexpr double kMaxExpectedPerCell = 4096.0;
 
 std::unique_ptr<Field> bind(const FieldDesc& desc, const Mesh& mesh, const PresetDesc& preset,
-                            const char* slot) {
-    return makeField(desc, mesh, preset.baseDir, cat("preset ", preset.name, ", fields.", slot));
+                            int slot) {
+    return makeField(desc, mesh, preset.baseDir,
+                     cat("preset ", preset.name, ", fields.", kFieldSlots[slot].key));
 }
 
 } // namespace
@@ -32,18 +33,12 @@ std::unique_ptr<Field> bind(const FieldDesc& desc, const Mesh& mesh, const Prese
 ImpulseGenerator::ImpulseGenerator(const Mesh& mesh, const PresetDesc& preset,
                                    const GeneratorOptions& options)
     : m_mesh(mesh), m_preset(preset), m_options(options) {
-    m_fields.density = bind(preset.density, mesh, preset, "density");
-    if (preset.comb)
-        m_fields.comb = bind(*preset.comb, mesh, preset, "comb");
-    m_fields.tiltDeg = bind(preset.tiltDeg, mesh, preset, "tilt_deg");
-    m_fields.spinDeg = bind(preset.spinDeg, mesh, preset, "spin_deg");
-    m_fields.bendDeg = bind(preset.bendDeg, mesh, preset, "bend_deg");
-    m_fields.scale = bind(preset.scale, mesh, preset, "scale");
-    m_fields.color = bind(preset.color, mesh, preset, "color");
-    m_fields.weight = bind(preset.weight, mesh, preset, "weight");
+    for (const FieldSlot& slot : kFieldSlots)
+        if (const FieldDesc* desc = presetField(preset, slot.index))
+            m_fields[slot.index] = bind(*desc, mesh, preset, slot.index);
     m_kernel = buildKernel(preset.kernel);
 
-    m_minCellSize = minimumCellSizeFor(*m_fields.scale);
+    m_minCellSize = minimumCellSizeFor(*m_fields[SPOT_FIELD_SCALE]);
     if (!(m_minCellSize > 0.0f) || !std::isfinite(m_minCellSize))
         throw InputError(cat("preset ", preset.name, ": kernel support radius ", m_minCellSize,
                              " world units is not a usable cell size"));
@@ -58,7 +53,7 @@ ImpulseGenerator::ImpulseGenerator(const Mesh& mesh, const PresetDesc& preset,
 
     // Budget the impulses before building anything large.
     const double expected = preset.distribution.densityMax * mesh.surfaceArea() *
-                            std::clamp(double(m_fields.density->range().hi.x), 0.0, 1.0);
+                            std::clamp(double(m_fields[SPOT_FIELD_DENSITY]->range().hi.x), 0.0, 1.0);
     requireMemory(std::uint64_t((expected * 1.1 + 1024.0) * sizeof(Impulse)),
                   cat(std::llround(expected), " impulses of preset ", preset.name));
 
@@ -89,10 +84,6 @@ ImpulseGenerator::ImpulseGenerator(const Mesh& mesh, const PresetDesc& preset,
 
 ImpulseGenerator::~ImpulseGenerator() = default;
 
-double ImpulseGenerator::expectedCandidates() const {
-    return m_preset.distribution.densityMax * m_cells.totalArea;
-}
-
 float ImpulseGenerator::minimumCellSizeFor(const Field& scale) const {
     const FieldRange scaleRange = scale.range();
     const float maxScale = std::max({scaleRange.hi.x, scaleRange.hi.y, scaleRange.hi.z}) *
@@ -101,45 +92,20 @@ float ImpulseGenerator::minimumCellSizeFor(const Field& scale) const {
            m_preset.distribution.heightJitter;
 }
 
-std::unique_ptr<Field>& ImpulseGenerator::boundField(int slot) {
-    switch (slot) {
-    case SPOT_FIELD_DENSITY: return m_fields.density;
-    case SPOT_FIELD_COMB: return m_fields.comb;
-    case SPOT_FIELD_TILT: return m_fields.tiltDeg;
-    case SPOT_FIELD_SPIN: return m_fields.spinDeg;
-    case SPOT_FIELD_BEND: return m_fields.bendDeg;
-    case SPOT_FIELD_SCALE: return m_fields.scale;
-    case SPOT_FIELD_COLOR: return m_fields.color;
-    case SPOT_FIELD_WEIGHT: return m_fields.weight;
-    }
-    throw InputError(cat("field slot ", slot, " is not one of 0..", SPOT_FIELD_COUNT - 1));
-}
-
 const FieldDesc* ImpulseGenerator::fieldDesc(int slot) const {
-    switch (slot) {
-    case SPOT_FIELD_DENSITY: return &m_preset.density;
-    case SPOT_FIELD_COMB: return m_preset.comb ? &*m_preset.comb : nullptr;
-    case SPOT_FIELD_TILT: return &m_preset.tiltDeg;
-    case SPOT_FIELD_SPIN: return &m_preset.spinDeg;
-    case SPOT_FIELD_BEND: return &m_preset.bendDeg;
-    case SPOT_FIELD_SCALE: return &m_preset.scale;
-    case SPOT_FIELD_COLOR: return &m_preset.color;
-    case SPOT_FIELD_WEIGHT: return &m_preset.weight;
-    }
-    throw InputError(cat("field slot ", slot, " is not one of 0..", SPOT_FIELD_COUNT - 1));
+    return presetField(m_preset, slot);
 }
 
 void ImpulseGenerator::setField(int slot, const FieldDesc& desc) {
-    static const char* const kNames[SPOT_FIELD_COUNT] = {
-        "density", "comb", "tilt_deg", "spin_deg", "bend_deg", "scale", "color", "weight"};
-    std::unique_ptr<Field>& bound = boundField(slot);
-    const int components =
-        slot == SPOT_FIELD_COMB || slot == SPOT_FIELD_SCALE || slot == SPOT_FIELD_COLOR ? 3 : 1;
-    if (desc.components != components)
-        throw InputError(cat("fields.", kNames[slot], " has ", components,
-                             components == 1 ? " component" : " components", ", not ",
+    if (slot < 0 || slot >= kFieldSlotCount)
+        throw InputError(cat("field slot ", slot, " is not one of 0..", kFieldSlotCount - 1));
+    const FieldSlot& info = kFieldSlots[slot];
+    if (desc.components != info.components)
+        throw InputError(cat("fields.", info.key, " has ", info.components,
+                             info.components == 1 ? " component" : " components", ", not ",
                              desc.components));
-    std::unique_ptr<Field> field = bind(desc, m_mesh, m_preset, kNames[slot]);
+    std::unique_ptr<Field>& bound = m_fields[slot];
+    std::unique_ptr<Field> field = bind(desc, m_mesh, m_preset, slot);
     if (slot == SPOT_FIELD_SCALE) {
         const float need = minimumCellSizeFor(*field);
         if (!(need <= m_cells.cellSize * (1.0f + 1e-6f)))
@@ -155,20 +121,16 @@ void ImpulseGenerator::setField(int slot, const FieldDesc& desc) {
         buildFieldData();
         throw;
     }
-    switch (slot) {
-    case SPOT_FIELD_DENSITY: m_preset.density = desc; break;
-    case SPOT_FIELD_COMB: m_preset.comb = desc; break;
-    case SPOT_FIELD_TILT: m_preset.tiltDeg = desc; break;
-    case SPOT_FIELD_SPIN: m_preset.spinDeg = desc; break;
-    case SPOT_FIELD_BEND: m_preset.bendDeg = desc; break;
-    case SPOT_FIELD_SCALE: m_preset.scale = desc; m_minCellSize = minimumCellSizeFor(*bound); break;
-    case SPOT_FIELD_COLOR: m_preset.color = desc; break;
-    case SPOT_FIELD_WEIGHT: m_preset.weight = desc; break;
-    }
+    if (info.optional)
+        m_preset.comb = desc;
+    else
+        *presetField(m_preset, slot) = desc;
+    if (slot == SPOT_FIELD_SCALE)
+        m_minCellSize = minimumCellSizeFor(*bound);
 }
 
 void ImpulseGenerator::refreshFields() {
-    const float need = minimumCellSizeFor(*m_fields.scale);
+    const float need = minimumCellSizeFor(*m_fields[SPOT_FIELD_SCALE]);
     if (!(need <= m_cells.cellSize * (1.0f + 1e-6f)))
         throw InputError(cat("preset ", m_preset.name, ", fields.scale: the scale needs cells of ",
                              need, " world units, larger than the generator's ",
@@ -191,15 +153,11 @@ void ImpulseGenerator::buildFieldData() {
     m_params.variation1 = glm::vec4(v.color, v.weight, m_cells.cellSize,
                                     1.0f / std::sqrt(d.densityMax));
     m_params.flags = glm::uvec4(m_options.seed, d.type == DistributionType::Jittered ? 1u : 0u,
-                                m_fields.comb ? 1u : 0u,
+                                m_fields[SPOT_FIELD_COMB] ? 1u : 0u,
                                 (m_mesh.hasUv() ? 1u : 0u) | (m_mesh.tangents.empty() ? 0u : 2u));
-    const Field* slots[SPOT_FIELD_COUNT] = {m_fields.density.get(), m_fields.comb.get(),
-                                            m_fields.tiltDeg.get(), m_fields.spinDeg.get(),
-                                            m_fields.bendDeg.get(), m_fields.scale.get(),
-                                            m_fields.color.get(),   m_fields.weight.get()};
     gpu::SpotField fields[SPOT_FIELD_COUNT];
     for (int i = 0; i < SPOT_FIELD_COUNT; ++i)
-        fields[i] = slots[i] ? slots[i]->shared(data) : gpu::SpotField{};
+        fields[i] = m_fields[i] ? m_fields[i]->shared(data) : gpu::SpotField{};
     // Nothing changes until every field is flattened (a painted grid may refuse).
     m_fieldData = std::move(data);
     std::copy(std::begin(fields), std::end(fields), std::begin(m_params.fields));

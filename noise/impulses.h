@@ -9,6 +9,7 @@
 /// the same impulses on any thread count and on the GPU.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -56,10 +57,8 @@ struct GeneratorOptions {
     CellLimits limits;
 };
 
-/// Fields of a preset bound to one mesh.
-struct BoundFields {
-    std::unique_ptr<Field> density, comb, tiltDeg, spinDeg, bendDeg, scale, color, weight;
-};
+/// Fields of a preset bound to one mesh, indexed by slot (kFieldSlots; null: an unset comb).
+using BoundFields = std::array<std::unique_ptr<Field>, kFieldSlotCount>;
 
 class ImpulseGenerator {
 public:
@@ -75,8 +74,6 @@ public:
     /// Smallest valid cell size for this preset: the kernel's world support radius plus the
     /// largest height offset.
     float minimumCellSize() const { return m_minCellSize; }
-    /// Expected impulse count over the whole mesh before the density test (density_max x area).
-    double expectedCandidates() const;
 
     /// Append the impulses of cell `cellIndex` to `out`, in a fixed order.
     void generateCell(std::size_t cellIndex, std::vector<Impulse>& out) const;
@@ -106,7 +103,6 @@ public:
 private:
     void buildSharedData();
     void buildFieldData();
-    std::unique_ptr<Field>& boundField(int slot);
     /// Smallest valid cell size with `scale` as the scale field.
     float minimumCellSizeFor(const Field& scale) const;
     shared::f32::GeneratorArrays arrays() const;

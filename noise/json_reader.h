@@ -12,6 +12,7 @@
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
@@ -66,6 +67,10 @@ public:
     /// `obj` must be an object whose keys are all in `allowed`.
     void requireObject(const Json& obj, const std::string& path,
                        std::initializer_list<std::string_view> allowed) const {
+        requireObject(obj, path, std::vector<std::string_view>(allowed));
+    }
+    void requireObject(const Json& obj, const std::string& path,
+                       const std::vector<std::string_view>& allowed) const {
         if (!obj.is_object())
             fail(cat(path.empty() ? "the document" : path, " must be an object, got ",
                      obj.type_name()));

@@ -76,6 +76,7 @@ struct PaintedGrid::Impl {
     /// The flattened form, rebuilt by sample() after a change.
     mutable std::mutex flatMutex;
     mutable bool flatValid = false;
+    std::atomic<std::uint64_t> version{0};
     mutable std::vector<float> flatData;
     mutable gpu::SpotGenParams flatParams{};
 
@@ -178,6 +179,11 @@ void PaintedGrid::clear(glm::ivec3 v) {
 void PaintedGrid::changed() {
     std::lock_guard lock(m_impl->flatMutex);
     m_impl->flatValid = false;
+    ++m_impl->version;
+}
+
+std::uint64_t PaintedGrid::version() const {
+    return m_impl->version;
 }
 
 std::size_t PaintedGrid::activeCount() const {
@@ -304,7 +310,7 @@ gpu::SpotField PaintedGrid::flatten(std::vector<float>& data) const {
     }
 
     gpu::SpotField f{};
-    f.kind = glm::ivec4(5, n, 0, 0);
+    f.kind = glm::ivec4(shared::f32::SharedGenerator::kFieldPainted, n, 0, 0);
     f.value = glm::vec4(m.background, 0.0f);
     f.from = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f / m.voxelSize);
     const auto tableOffset = std::uint32_t(data.size());

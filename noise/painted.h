@@ -68,6 +68,9 @@ public:
     /// first call after a change (thread-safe).
     glm::vec3 sample(glm::vec3 world) const;
 
+    /// Counts the changes (set, clear): a field reading the grid rebuilds its form when it moved.
+    std::uint64_t version() const;
+
     std::size_t activeCount() const;
     /// Calls `f` on every active voxel, in OpenVDB's tree order (deterministic for a grid's
     /// content).

@@ -14,6 +14,7 @@
 #include "noise/error.h"
 #include "noise/json_reader.h"
 #include "noise/system.h"
+#include "shaders/spot_layout.hpp"
 
 // This file must not depend on OpenImageIO or field.cpp: the fuzz target compiles it with the mesh
 // parsers only. Everything here is pure parsing and validation of data.
@@ -43,11 +44,6 @@ constexpr Interval kDensityMax{0.0, 1e8, true, false};
 constexpr Interval kHeightOffset{-1e3, 1e3};
 constexpr Interval kHeightJitter{0.0, 1e3};
 constexpr Interval kWorldPosition{-1e6, 1e6};
-constexpr Interval kDirection{-1e6, 1e6};
-constexpr Interval kAngleDeg{-360.0, 360.0};
-constexpr Interval kBendDeg{-3600.0, 3600.0};
-constexpr Interval kScale{0.0, 1e3, true, false};
-constexpr Interval kWeight{0.0, 1e3};
 constexpr Interval kFrequency{0.0, 1e6, true, false};
 constexpr Interval kVariationAngle{0.0, 180.0};
 constexpr Interval kVariationBend{0.0, 3600.0};
@@ -232,25 +228,21 @@ DistributionDesc parseDistribution(const Reader& rd, const Json& j, const std::s
 }
 
 void parseFields(const Reader& rd, const Json& j, const std::string& path, PresetDesc& p) {
-    rd.requireObject(
-        j, path,
-        {"density", "comb", "tilt_deg", "spin_deg", "bend_deg", "scale", "color", "weight"});
-    const auto slot = [&](std::string_view key, int components, const Interval& r, FieldDesc& out) {
-        if (const Json* v = Reader::find(j, key))
-            out = rd.field(*v, join(path, key), components, r);
-    };
-    slot("density", 1, kUnit, p.density);
-    if (Reader::find(j, "comb")) {
-        FieldDesc comb;
-        slot("comb", 3, kDirection, comb);
-        p.comb = comb;
+    std::vector<std::string_view> keys;
+    for (const FieldSlot& slot : kFieldSlots)
+        keys.push_back(slot.key);
+    rd.requireObject(j, path, keys);
+    for (const FieldSlot& slot : kFieldSlots) {
+        const Json* v = Reader::find(j, slot.key);
+        if (!v)
+            continue;
+        const Interval range{slot.lo, slot.hi, slot.loOpen, false};
+        FieldDesc desc = rd.field(*v, join(path, slot.key), slot.components, range);
+        if (slot.optional)
+            p.comb = std::move(desc);
+        else
+            *presetField(p, slot.index) = std::move(desc);
     }
-    slot("tilt_deg", 1, kAngleDeg, p.tiltDeg);
-    slot("spin_deg", 1, kAngleDeg, p.spinDeg);
-    slot("bend_deg", 1, kBendDeg, p.bendDeg);
-    slot("scale", 3, kScale, p.scale);
-    slot("color", 3, kUnit, p.color);
-    slot("weight", 1, kWeight, p.weight);
 }
 
 VariationDesc parseVariation(const Reader& rd, const Json& j, const std::string& path) {
@@ -270,6 +262,36 @@ VariationDesc parseVariation(const Reader& rd, const Json& j, const std::string&
 }
 
 } // namespace
+
+const FieldSlot* findFieldSlot(std::string_view key) {
+    for (const FieldSlot& slot : kFieldSlots)
+        if (key == slot.key)
+            return &slot;
+    return nullptr;
+}
+
+const FieldDesc* presetField(const PresetDesc& p, int index) {
+    return presetField(const_cast<PresetDesc&>(p), index);
+}
+
+FieldDesc* presetField(PresetDesc& p, int index) {
+    static_assert(kFieldSlotCount == SPOT_FIELD_COUNT);
+    static_assert(kFieldSlots[SPOT_FIELD_DENSITY].index == SPOT_FIELD_DENSITY &&
+                  kFieldSlots[SPOT_FIELD_COMB].index == SPOT_FIELD_COMB &&
+                  kFieldSlots[SPOT_FIELD_TILT].index == SPOT_FIELD_TILT &&
+                  kFieldSlots[SPOT_FIELD_SPIN].index == SPOT_FIELD_SPIN &&
+                  kFieldSlots[SPOT_FIELD_BEND].index == SPOT_FIELD_BEND &&
+                  kFieldSlots[SPOT_FIELD_SCALE].index == SPOT_FIELD_SCALE &&
+                  kFieldSlots[SPOT_FIELD_COLOR].index == SPOT_FIELD_COLOR &&
+                  kFieldSlots[SPOT_FIELD_WEIGHT].index == SPOT_FIELD_WEIGHT);
+    // The PresetDesc members, in the table's order.
+    FieldDesc* const members[] = {&p.density, p.comb ? &*p.comb : nullptr, &p.tiltDeg, &p.spinDeg,
+                                  &p.bendDeg, &p.scale, &p.color, &p.weight};
+    static_assert(std::size(members) == std::size(kFieldSlots));
+    if (index < 0 || index >= kFieldSlotCount)
+        throw InputError(cat("field slot ", index, " is not one of 0..", kFieldSlotCount - 1));
+    return members[index];
+}
 
 PresetDesc parsePreset(std::string_view text, const std::string& name) {
     if (text.size() > kMaxPresetBytes)
@@ -302,13 +324,9 @@ PresetDesc parsePreset(std::string_view text, const std::string& name) {
     p.kernel = parseKernel(rd, rd.require(root, "", "kernel"), "kernel");
     p.distribution = parseDistribution(rd, rd.require(root, "", "distribution"), "distribution");
 
-    p.density = constantField(1, 1.0f);
-    p.tiltDeg = constantField(1, 0.0f);
-    p.spinDeg = constantField(1, 0.0f);
-    p.bendDeg = constantField(1, 0.0f);
-    p.scale = constantField(3, 1.0f);
-    p.color = constantField(3, 1.0f);
-    p.weight = constantField(1, 1.0f);
+    for (const FieldSlot& slot : kFieldSlots)
+        if (!slot.optional)
+            *presetField(p, slot.index) = constantField(slot.components, slot.byDefault);
     if (const Json* f = Reader::find(root, "fields"))
         parseFields(rd, *f, "fields", p);
     if (const Json* v = Reader::find(root, "variation"))

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <filesystem>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -72,6 +73,38 @@ struct PresetDesc {
     VariationDesc variation;
     std::filesystem::path baseDir;  ///< folder the preset came from (for relative image paths)
 };
+
+/// One field slot of a preset: the one table of the slots (name, components, index), read by the
+/// parser, the generator, the editor and its panels.
+struct FieldSlot {
+    int index;        ///< the generator's slot: SPOT_FIELD_* (shaders/spot_layout.h)
+    const char* key;  ///< the key under the preset's `fields`
+    int components;   ///< 1 (scalar, in `.x`) or 3
+    double lo, hi;    ///< the range of a value (lo excluded when loOpen)
+    bool loOpen;
+    float byDefault;  ///< the constant of an absent field (every component)
+    bool optional;    ///< absent means no field (comb: the surface tangent), not the default
+};
+
+/// Indexed by FieldSlot::index; the order of `fields` in presets/README.md.
+inline constexpr FieldSlot kFieldSlots[] = {
+    {0, "density", 1, 0.0, 1.0, false, 1.0f, false},       // probability in [0, 1]
+    {1, "comb", 3, -1e6, 1e6, false, 0.0f, true},          // world direction
+    {2, "tilt_deg", 1, -360.0, 360.0, false, 0.0f, false}, // degrees
+    {3, "spin_deg", 1, -360.0, 360.0, false, 0.0f, false}, // degrees
+    {4, "bend_deg", 1, -3600.0, 3600.0, false, 0.0f, false}, // degrees per kernel unit
+    {5, "scale", 3, 0.0, 1e3, true, 1.0f, false},          // world units per kernel unit
+    {6, "color", 3, 0.0, 1.0, false, 1.0f, false},         // linear RGB
+    {7, "weight", 1, 0.0, 1e3, false, 1.0f, false},        // multiplies extinction
+};
+inline constexpr int kFieldSlotCount = int(std::size(kFieldSlots));
+
+/// The slot of `key` under `fields`, or null.
+const FieldSlot* findFieldSlot(std::string_view key);
+/// The field of slot `index` (FieldSlot::index); null for an unset comb. Throws InputError for
+/// an index out of range.
+FieldDesc* presetField(PresetDesc& preset, int index);
+const FieldDesc* presetField(const PresetDesc& preset, int index);
 
 /// Parse preset JSON from memory; `name` (the file) is used in messages.
 PresetDesc parsePreset(std::string_view json, const std::string& name);

@@ -4,7 +4,8 @@
 
 Prints the grids Blender found (name, type, channels) and exits 1 unless `density` (float) and
 `color` (vector) are among them; then renders the volume from the scene's camera, lit by a grey
-sky, with Blender's default volume shader (no material: the `density` grid drives it), into OUT.png.
+sky, into OUT.png, with a Principled Volume whose density is the `density` grid and whose colour
+is the `color` grid (linear RGB, as spotshell writes it).
 Blender is not one of spotshell's dependencies (`apt-get install blender`); README "Bake" shows
 the result. Blender is z-up and spotshell y-up: the file is placed as written, so the camera is
 aimed with the scene's own up vector.
@@ -38,6 +39,22 @@ scene = bpy.context.scene
 obj = bpy.data.objects.new("bake", volume)
 scene.collection.objects.link(obj)
 
+# The bake's own colour: a Principled Volume reading both grids by name (Blender's default volume
+# shader would read `density` only and render the fur grey).
+material = bpy.data.materials.new("spotshell")
+material.use_nodes = True
+nodes = material.node_tree.nodes
+nodes.clear()
+shader = nodes.new("ShaderNodeVolumePrincipled")
+shader.inputs["Density"].default_value = 1.0
+shader.inputs["Density Attribute"].default_value = "density"
+colour = nodes.new("ShaderNodeAttribute")
+colour.attribute_name = "color"
+output = nodes.new("ShaderNodeOutputMaterial")
+material.node_tree.links.new(colour.outputs["Color"], shader.inputs["Color"])
+material.node_tree.links.new(shader.outputs["Volume"], output.inputs["Volume"])
+volume.materials.append(material)
+
 with open(scene_file) as f:
     camera = json.load(f)["camera"]
 eye = mathutils.Vector(camera["eye"])
@@ -48,7 +65,8 @@ right = forward.cross(up).normalized()
 rotation = mathutils.Matrix((right, right.cross(forward), -forward)).transposed()
 cam_data = bpy.data.cameras.new("camera")
 cam_data.sensor_fit = "VERTICAL"
-cam_data.angle_y = camera.get("fov_deg", 30.0) * 3.141592653589793 / 180.0
+# 40 degrees: a scene's default field of view (noise/camera.h).
+cam_data.angle_y = camera.get("fov_deg", 40.0) * 3.141592653589793 / 180.0
 cam = bpy.data.objects.new("camera", cam_data)
 cam.matrix_world = mathutils.Matrix.Translation(eye) @ rotation.to_4x4()
 scene.collection.objects.link(cam)

@@ -10,11 +10,15 @@ packages=(
   libglm-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
   # Vulkan on the CPU (lavapipe) with validation, shaders
-  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
+  # (vulkan-validationlayers-dev: vk_enum_string_helper.h, the names of VkResult values)
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-validationlayers-dev
+  glslang-tools
   # tests; vdb_print (libopenvdb-tools) reads the bake's files as users' tools do
   libgtest-dev libgmock-dev libbenchmark-dev libopenvdb-tools
   # the editor's window: GLFW, Dear ImGui (core and backend sources), a virtual display for tests
   libglfw3-dev libimgui-dev xvfb xauth
+  # X events for the window test that drives the real window (tests/editor/window_test.cpp)
+  xdotool
   # the benchmark's charts
   python3 python3-matplotlib
 )

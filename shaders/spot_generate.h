@@ -23,6 +23,15 @@
 /* Piece areas in SpotPiece.c2.z are cumulative within their cell (area up to and including the
  * piece), so a candidate finds its piece by binary search. */
 
+/* Field kinds (SpotField.kind.x), the one numbering of both sides: noise/field.cpp builds fields
+ * with these, spotFieldEval branches on them, splat/generate_vk.cpp specializes on them. */
+SPOT_CONST int kFieldConstant = 0;
+SPOT_CONST int kFieldGradient = 1;
+SPOT_CONST int kFieldNoise = 2;
+SPOT_CONST int kFieldVertex = 3;
+SPOT_CONST int kFieldImage = 4;
+SPOT_CONST int kFieldPainted = 5;
+
 struct SpotSurface {
     rvec3 position;
     rvec3 normal;
@@ -84,7 +93,7 @@ SPOT_FN real spotImageTexel(SpotField f, int x, int y, int c) {
     return spotFieldData(f.data.x + (uint(y) * f.data.y + uint(x)) * uint(f.kind.y) + uint(c));
 }
 
-/* ---- Painted sparse grid (kind 5, noise/painted.h; docs/design.md section 3) ---------------- */
+/* ---- Painted sparse grid (kFieldPainted, noise/painted.h; docs/design.md section 3) ---------------- */
 /* The grid flattened into the field data: each OpenVDB leaf (8^3 voxels) is a block of 512 x
  * components values (voxel n = (x & 7) << 6 | (y & 7) << 3 | (z & 7), components interleaved;
  * inactive voxels hold the background), found through an open-addressing hash table of the
@@ -171,18 +180,18 @@ SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
     ivec2 kindComponents = spotParamFieldKind(slot);
     int kind = kindComponents.x;
     int components = kindComponents.y;
-    if (kind == 1) {
+    if (kind == kFieldGradient) {
         rvec3 from = rvec3(f.from);
         real t = clamp(dot(s.position - from, rvec3(f.axis)), real(0.0), real(1.0));
         if (!(t == t))
             t = real(0.0);
         return spotKeepComponents(spotFieldMap(f, rvec3(t)), components);
     }
-    if (kind == 2) {
+    if (kind == kFieldNoise) {
         real v = spotValueNoise(s.position * f.from.w, f.kind.z, uint(f.kind.w));
         return spotKeepComponents(spotFieldMap(f, rvec3(v)), components);
     }
-    if (kind == 3) {
+    if (kind == kFieldVertex) {
         uvec3 t = spotMeshTriangle(s.triangle);
         rvec3 acc = rvec3(real(0.0));
         for (int c = 0; c < components; ++c) {
@@ -192,7 +201,7 @@ SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
         }
         return spotKeepComponents(clamp(acc, rvec3(f.clampLo), rvec3(f.clampHi)), components);
     }
-    if (kind == 4) {
+    if (kind == kFieldImage) {
         bool repeat = f.data.w != 0u;
         real u = s.uv.x == s.uv.x && abs(s.uv.x) < real(1e30) ? s.uv.x : real(0.0);
         real v = s.uv.y == s.uv.y && abs(s.uv.y) < real(1e30) ? s.uv.y : real(0.0);
@@ -227,7 +236,7 @@ SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
         }
         return spotKeepComponents(spotFieldMap(f, t), components);
     }
-    if (kind == 5)
+    if (kind == kFieldPainted)
         return spotPaintedSample(f, s.position, components);
     return rvec3(f.value);
 }

@@ -5,17 +5,33 @@
 #include <cstdlib>
 #include <cstring>
 #include <malloc.h>
+#include <optional>
 #include <stdexcept>
 #include <string_view>
+
+#include <vulkan/vk_enum_string_helper.h>
 
 #include "noise/error.h"
 #include "noise/system.h"
 
 namespace spot::splat {
 
-void vkCheck(VkResult result, const char* what) {
+std::string vkFailure(VkResult result, const char* what, const char* file, int line) {
+    // The folder and the name: the build's absolute (or ccache-relative) path says nothing more.
+    const std::string_view path = file ? file : "?";
+    const std::size_t name = path.rfind('/');
+    const std::size_t folder = name == std::string_view::npos || name == 0
+                                   ? std::string_view::npos
+                                   : path.rfind('/', name - 1);
+    const std::string_view shown =
+        folder == std::string_view::npos ? path : path.substr(folder + 1);
+    return cat("Vulkan: ", what, " failed: ", string_VkResult(result), " (", int(result), ") at ",
+               shown, ":", line);
+}
+
+void vkCheck(VkResult result, const char* what, const char* file, int line) {
     if (result != VK_SUCCESS)
-        throw std::runtime_error(cat("Vulkan: ", what, " failed (VkResult ", int(result), ")"));
+        throw std::runtime_error(vkFailure(result, what, file, line));
 }
 
 ContextOptions contextOptionsFromEnvironment() {
@@ -112,6 +128,192 @@ void destroyHandles(VkInstance instance, VkDebugUtilsMessengerEXT messenger, VkD
         vkDestroyInstance(instance, nullptr);
 }
 
+constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+/// What the debug messenger reports (warnings and errors of every type) to onMessage.
+VkDebugUtilsMessengerCreateInfoEXT messengerInfo(Context::Messenger* messages) {
+    VkDebugUtilsMessengerCreateInfoEXT info{
+        VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
+                           VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    info.pfnUserCallback = onMessage;
+    info.pUserData = messages;
+    return info;
+}
+
+/// A Vulkan 1.3 instance with the options' extensions, and with validation: the layer, the
+/// debug-utils extension, and `messenger` chained to catch messages from the creation itself.
+VkInstance createInstance(const ContextOptions& options,
+                          const VkDebugUtilsMessengerCreateInfoEXT* messenger) {
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "spotshell";
+    app.apiVersion = VK_API_VERSION_1_3;
+    std::vector<const char*> extensions;
+    std::vector<const char*> layers;
+    if (messenger) {
+        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+        layers.push_back(kValidationLayer);
+    }
+    for (const std::string& e : options.instanceExtensions)
+        extensions.push_back(e.c_str());
+    VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    ici.pNext = messenger;
+    ici.pApplicationInfo = &app;
+    ici.enabledExtensionCount = std::uint32_t(extensions.size());
+    ici.ppEnabledExtensionNames = extensions.data();
+    ici.enabledLayerCount = std::uint32_t(layers.size());
+    ici.ppEnabledLayerNames = layers.data();
+    VkInstance instance = VK_NULL_HANDLE;
+    const VkResult created = vkCreateInstance(&ici, nullptr, &instance);
+    if (created != VK_SUCCESS)
+        throw std::runtime_error(cat("Vulkan: no instance (", string_VkResult(created), " (",
+                                     int(created), ")",
+                                     created == VK_ERROR_EXTENSION_NOT_PRESENT
+                                         ? "; an instance extension is missing"
+                                         : "; is the Vulkan loader (libvulkan1) installed?",
+                                     ")"));
+    return instance;
+}
+
+/// The physical device and queue family a context runs on.
+struct DeviceChoice {
+    VkPhysicalDevice device = VK_NULL_HANDLE;
+    std::uint32_t family = 0;
+    VkPhysicalDeviceProperties properties{};
+};
+
+/// Why `d` cannot be used (empty: it can), given its properties.
+std::string whyUnusable(VkPhysicalDevice d, const VkPhysicalDeviceProperties& p,
+                        const ContextOptions& options) {
+    if (!options.device.empty() && !containsIgnoringCase(p.deviceName, options.device))
+        return cat("name does not contain '", options.device, "'");
+    if (p.apiVersion < VK_API_VERSION_1_3)
+        return "Vulkan < 1.3";
+    if (options.swapchain && !hasDeviceExtension(d, VK_KHR_SWAPCHAIN_EXTENSION_NAME))
+        return "no VK_KHR_swapchain";
+    return {};
+}
+
+/// The first graphics+compute queue family of `d` with timestamps (and, when the options ask,
+/// one that can present).
+std::optional<std::uint32_t> usableFamily(VkInstance instance, VkPhysicalDevice d,
+                                          const ContextOptions& options) {
+    std::uint32_t families = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(d, &families, nullptr);
+    std::vector<VkQueueFamilyProperties> fam(families);
+    vkGetPhysicalDeviceQueueFamilyProperties(d, &families, fam.data());
+    for (std::uint32_t f = 0; f < families; ++f)
+        if ((fam[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) &&
+            (fam[f].queueFlags & VK_QUEUE_COMPUTE_BIT) && fam[f].timestampValidBits > 0 &&
+            (!options.canPresent || options.canPresent(instance, d, f)))
+            return f;
+    return std::nullopt;
+}
+
+/// A device with a graphics+compute queue, Vulkan 1.3, push descriptors, 64-bit buffer atomics;
+/// a real GPU when there is one (the device tool's machines), else lavapipe. Throws naming the
+/// devices rejected and why (an InputError when the user named a device: SPOT_DEVICE).
+DeviceChoice chooseDevice(VkInstance instance, const ContextOptions& options) {
+    std::uint32_t n = 0;
+    vkEnumeratePhysicalDevices(instance, &n, nullptr);
+    std::vector<VkPhysicalDevice> devices(n);
+    vkEnumeratePhysicalDevices(instance, &n, devices.data());
+    DeviceChoice chosen;
+    std::string rejected;
+    for (VkPhysicalDevice d : devices) {
+        VkPhysicalDeviceProperties p;
+        vkGetPhysicalDeviceProperties(d, &p);
+        const std::string why = whyUnusable(d, p, options);
+        if (!why.empty()) {
+            rejected += cat(" ", p.deviceName, " (", why, ")");
+            continue;
+        }
+        const std::optional<std::uint32_t> f = usableFamily(instance, d, options);
+        if (f && (!chosen.device || p.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU))
+            chosen = {d, *f, p};
+    }
+    if (chosen.device)
+        return chosen;
+    const std::string message = cat(
+        "Vulkan: no usable device (need Vulkan 1.3 with a graphics and compute queue",
+        options.canPresent ? " that can present to the window" : "",
+        options.device.empty() ? ""
+                               : cat(", a name containing '", options.device, "' (SPOT_DEVICE)"),
+        "; install mesa-vulkan-drivers for lavapipe)",
+        rejected.empty() ? "" : "; rejected:", rejected);
+    // A device the user named and cannot have is bad input (exit code 2), not our failure.
+    if (!options.device.empty())
+        throw InputError(message);
+    throw std::runtime_error(message);
+}
+
+/// The features every renderer needs (throws naming them when the device lacks one), and the
+/// optional ones it has, to enable: filled into `want` (its pNext chain points into `chain`).
+struct DeviceFeatures {
+    VkPhysicalDeviceVulkan13Features want13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceVulkan12Features want12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    VkPhysicalDeviceFeatures2 want{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+
+    DeviceFeatures(VkPhysicalDevice physical, const VkPhysicalDeviceProperties& properties) {
+        VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+        VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+        VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+        f12.pNext = &f13;
+        f2.pNext = &f12;
+        vkGetPhysicalDeviceFeatures2(physical, &f2);
+        if (!f13.dynamicRendering || !f13.synchronization2 || !f13.maintenance4 ||
+            !f12.shaderBufferInt64Atomics || !f2.features.shaderInt64 ||
+            !f2.features.fragmentStoresAndAtomics)
+            throw std::runtime_error(
+                cat("Vulkan: device ", properties.deviceName,
+                    " lacks dynamic rendering, synchronization2, maintenance4, "
+                    "shaderInt64, 64-bit buffer atomics or fragment stores"));
+        want13.dynamicRendering = VK_TRUE;
+        want13.synchronization2 = VK_TRUE;
+        // glslang targeting Vulkan 1.3 declares workgroup sizes with LocalSizeId, which needs this.
+        want13.maintenance4 = f13.maintenance4;
+        want12.shaderBufferInt64Atomics = VK_TRUE;
+        want12.scalarBlockLayout = f12.scalarBlockLayout;
+        want12.pNext = &want13;
+        want.features.shaderInt64 = VK_TRUE;
+        want.features.fragmentStoresAndAtomics = VK_TRUE;
+        want.features.vertexPipelineStoresAndAtomics = f2.features.vertexPipelineStoresAndAtomics;
+        want.features.geometryShader = f2.features.geometryShader;
+        // No shader uses float64 (the impulse generator is single precision on both sides), so
+        // shaderFloat64 is neither required nor enabled: a shader that declared it would fail
+        // validation.
+        want.pNext = &want12;
+    }
+    DeviceFeatures(const DeviceFeatures&) = delete; // the pNext chain points into this object
+    DeviceFeatures& operator=(const DeviceFeatures&) = delete;
+};
+
+/// The logical device with one queue of the chosen family, push descriptors and (for the
+/// editor's window) the swapchain extension.
+VkDevice createDevice(const DeviceChoice& chosen, const ContextOptions& options) {
+    const DeviceFeatures features(chosen.device, chosen.properties);
+    const float priority = 1.0f;
+    VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    qci.queueFamilyIndex = chosen.family;
+    qci.queueCount = 1;
+    qci.pQueuePriorities = &priority;
+    std::vector<const char*> deviceExtensions = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+    if (options.swapchain)
+        deviceExtensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+    VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    dci.pNext = &features.want;
+    dci.queueCreateInfoCount = 1;
+    dci.pQueueCreateInfos = &qci;
+    dci.enabledExtensionCount = std::uint32_t(deviceExtensions.size());
+    dci.ppEnabledExtensionNames = deviceExtensions.data();
+    VkDevice device = VK_NULL_HANDLE;
+    vkCheck(vkCreateDevice(chosen.device, &dci, nullptr, &device), "vkCreateDevice");
+    return device;
+}
+
 } // namespace
 
 Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Messenger>()) {
@@ -126,153 +328,29 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
         }
     } releaseOnThrow{*this};
     m_validation = options.validation;
-    const char* validationLayer = "VK_LAYER_KHRONOS_validation";
-    if (m_validation && !hasLayer(validationLayer))
+    if (m_validation && !hasLayer(kValidationLayer))
         throw std::runtime_error("Vulkan validation requested (SPOT_VALIDATION=1) but "
                                  "VK_LAYER_KHRONOS_validation is not installed "
                                  "(Debian package vulkan-validationlayers)");
-
-    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-    app.pApplicationName = "spotshell";
-    app.apiVersion = VK_API_VERSION_1_3;
-    std::vector<const char*> extensions;
-    std::vector<const char*> layers;
-    VkDebugUtilsMessengerCreateInfoEXT messengerInfo{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    messengerInfo.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
-                                    VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-    messengerInfo.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
-                                VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                                VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
-    messengerInfo.pfnUserCallback = onMessage;
-    messengerInfo.pUserData = m_messages.get();
-    if (m_validation) {
-        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
-        layers.push_back(validationLayer);
-    }
-    for (const std::string& e : options.instanceExtensions)
-        extensions.push_back(e.c_str());
-    VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-    ici.pApplicationInfo = &app;
-    ici.enabledExtensionCount = std::uint32_t(extensions.size());
-    ici.ppEnabledExtensionNames = extensions.data();
-    ici.enabledLayerCount = std::uint32_t(layers.size());
-    ici.ppEnabledLayerNames = layers.data();
-    if (m_validation)
-        ici.pNext = &messengerInfo; // also catch messages from instance creation itself
-    const VkResult created = vkCreateInstance(&ici, nullptr, &m_instance);
-    if (created != VK_SUCCESS)
-        throw std::runtime_error(cat("Vulkan: no instance (VkResult ", int(created),
-                                     created == VK_ERROR_EXTENSION_NOT_PRESENT
-                                         ? "; an instance extension is missing"
-                                         : "; is the Vulkan loader (libvulkan1) installed?",
-                                     ")"));
+    const VkDebugUtilsMessengerCreateInfoEXT messenger = messengerInfo(m_messages.get());
+    m_instance = createInstance(options, m_validation ? &messenger : nullptr);
     if (m_validation) {
         auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
             vkGetInstanceProcAddr(m_instance, "vkCreateDebugUtilsMessengerEXT"));
-        vkCheck(create ? create(m_instance, &messengerInfo, nullptr, &m_messenger)
+        vkCheck(create ? create(m_instance, &messenger, nullptr, &m_messenger)
                        : VK_ERROR_EXTENSION_NOT_PRESENT,
                 "vkCreateDebugUtilsMessengerEXT");
     }
 
-    // A device with a graphics+compute queue, Vulkan 1.3, push descriptors, 64-bit buffer atomics.
-    std::uint32_t n = 0;
-    vkEnumeratePhysicalDevices(m_instance, &n, nullptr);
-    std::vector<VkPhysicalDevice> devices(n);
-    vkEnumeratePhysicalDevices(m_instance, &n, devices.data());
-    std::string rejected;
-    for (VkPhysicalDevice d : devices) {
-        VkPhysicalDeviceProperties p;
-        vkGetPhysicalDeviceProperties(d, &p);
-        if (!options.device.empty() && !containsIgnoringCase(p.deviceName, options.device)) {
-            rejected += cat(" ", p.deviceName, " (name does not contain '", options.device, "')");
-            continue;
-        }
-        if (p.apiVersion < VK_API_VERSION_1_3) {
-            rejected += cat(" ", p.deviceName, " (Vulkan < 1.3)");
-            continue;
-        }
-        if (options.swapchain && !hasDeviceExtension(d, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
-            rejected += cat(" ", p.deviceName, " (no VK_KHR_swapchain)");
-            continue;
-        }
-        std::uint32_t families = 0;
-        vkGetPhysicalDeviceQueueFamilyProperties(d, &families, nullptr);
-        std::vector<VkQueueFamilyProperties> fam(families);
-        vkGetPhysicalDeviceQueueFamilyProperties(d, &families, fam.data());
-        for (std::uint32_t f = 0; f < families; ++f)
-            if ((fam[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (fam[f].queueFlags & VK_QUEUE_COMPUTE_BIT) &&
-                fam[f].timestampValidBits > 0 &&
-                (!options.canPresent || options.canPresent(m_instance, d, f))) {
-                // Prefer a real GPU when there is one (the device tool's machines), else lavapipe.
-                if (!m_physical || p.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU) {
-                    m_physical = d;
-                    m_queueFamily = f;
-                    m_properties = p;
-                }
-                break;
-            }
-    }
-    if (!m_physical) {
-        const std::string message =
-            cat("Vulkan: no usable device (need Vulkan 1.3 with a graphics and compute queue",
-                options.canPresent ? " that can present to the window" : "",
-                options.device.empty() ? "" : cat(", a name containing '", options.device, "' (SPOT_DEVICE)"),
-                "; install mesa-vulkan-drivers for lavapipe)", rejected.empty() ? "" : "; rejected:",
-                rejected);
-        // A device the user named and cannot have is bad input (exit code 2), not our failure.
-        if (!options.device.empty())
-            throw InputError(message);
-        throw std::runtime_error(message);
-    }
+    const DeviceChoice chosen = chooseDevice(m_instance, options);
+    m_physical = chosen.device;
+    m_queueFamily = chosen.family;
+    m_properties = chosen.properties;
     vkGetPhysicalDeviceMemoryProperties(m_physical, &m_memory);
     if (m_properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU)
         keepFreedHostMemory();
 
-    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-    f12.pNext = &f13;
-    f2.pNext = &f12;
-    vkGetPhysicalDeviceFeatures2(m_physical, &f2);
-    if (!f13.dynamicRendering || !f13.synchronization2 || !f13.maintenance4 || !f12.shaderBufferInt64Atomics ||
-        !f2.features.shaderInt64 || !f2.features.fragmentStoresAndAtomics)
-        throw std::runtime_error(cat("Vulkan: device ", m_properties.deviceName,
-                                     " lacks dynamic rendering, synchronization2, maintenance4, shaderInt64, "
-                                     "64-bit buffer atomics or fragment stores"));
-    VkPhysicalDeviceVulkan13Features want13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-    want13.dynamicRendering = VK_TRUE;
-    want13.synchronization2 = VK_TRUE;
-    // glslang targeting Vulkan 1.3 declares workgroup sizes with LocalSizeId, which needs this.
-    want13.maintenance4 = f13.maintenance4;
-    VkPhysicalDeviceVulkan12Features want12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-    want12.shaderBufferInt64Atomics = VK_TRUE;
-    want12.scalarBlockLayout = f12.scalarBlockLayout;
-    want12.pNext = &want13;
-    VkPhysicalDeviceFeatures2 want{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-    want.features.shaderInt64 = VK_TRUE;
-    want.features.fragmentStoresAndAtomics = VK_TRUE;
-    want.features.vertexPipelineStoresAndAtomics = f2.features.vertexPipelineStoresAndAtomics;
-    want.features.geometryShader = f2.features.geometryShader;
-    // No shader uses float64 (the impulse generator is single precision on both sides), so
-    // shaderFloat64 is neither required nor enabled: a shader that declared it would fail
-    // validation.
-    want.pNext = &want12;
-
-    const float priority = 1.0f;
-    VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-    qci.queueFamilyIndex = m_queueFamily;
-    qci.queueCount = 1;
-    qci.pQueuePriorities = &priority;
-    std::vector<const char*> deviceExtensions = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
-    if (options.swapchain)
-        deviceExtensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
-    VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
-    dci.pNext = &want;
-    dci.queueCreateInfoCount = 1;
-    dci.pQueueCreateInfos = &qci;
-    dci.enabledExtensionCount = std::uint32_t(deviceExtensions.size());
-    dci.ppEnabledExtensionNames = deviceExtensions.data();
-    vkCheck(vkCreateDevice(m_physical, &dci, nullptr, &m_device), "vkCreateDevice");
+    m_device = createDevice(chosen, options);
     vkGetDeviceQueue(m_device, m_queueFamily, 0, &m_queue);
     pushDescriptorSet = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(
         vkGetDeviceProcAddr(m_device, "vkCmdPushDescriptorSetKHR"));
@@ -361,15 +439,35 @@ VkCommandBuffer CommandBuffer::begin() {
 }
 
 void CommandBuffer::submitAndWait() {
+    submit();
+    wait();
+}
+
+void CommandBuffer::submit(VkSemaphore wait, VkPipelineStageFlags waitStage, VkSemaphore signal) {
     SPOT_CHECK(m_recording);
     m_recording = false;
     vkCheck(vkEndCommandBuffer(m_cmd), "vkEndCommandBuffer");
     vkCheck(vkResetFences(m_ctx.device(), 1, &m_fence), "vkResetFences");
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.waitSemaphoreCount = wait ? 1 : 0;
+    si.pWaitSemaphores = &wait;
+    si.pWaitDstStageMask = &waitStage;
     si.commandBufferCount = 1;
     si.pCommandBuffers = &m_cmd;
+    si.signalSemaphoreCount = signal ? 1 : 0;
+    si.pSignalSemaphores = &signal;
     vkCheck(vkQueueSubmit(m_ctx.queue(), 1, &si, m_fence), "vkQueueSubmit");
+}
+
+void CommandBuffer::wait() {
     vkCheck(vkWaitForFences(m_ctx.device(), 1, &m_fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+}
+
+UniqueSemaphore makeSemaphore(Context& ctx) {
+    VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    VkSemaphore s = VK_NULL_HANDLE;
+    vkCheck(vkCreateSemaphore(ctx.device(), &si, nullptr, &s), "vkCreateSemaphore");
+    return UniqueSemaphore(ctx.device(), s);
 }
 
 std::uint32_t Context::findMemoryType(std::uint32_t typeBits, VkMemoryPropertyFlags props) const {

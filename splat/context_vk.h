@@ -17,6 +17,7 @@
 #include <mutex>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <vulkan/vulkan.h>
@@ -106,8 +107,62 @@ private:
     std::atomic<std::uint64_t> m_peak{0};
 };
 
+/// An owned Vulkan handle whose parent (a device or an instance) destroys it with `Destroy`
+/// (vkDestroySemaphore, vkDestroySwapchainKHR, ...) when the owner goes away or is assigned
+/// another: the small objects the editor's window makes (semaphores, fences, render passes,
+/// framebuffers, image views, the swapchain, the surface, a descriptor pool), so that a create
+/// that throws part way releases what was made before it. Move-only.
+template <typename Parent, typename T, void (*Destroy)(Parent, T, const VkAllocationCallbacks*)>
+class UniqueHandle {
+public:
+    UniqueHandle() = default;
+    /// Takes `handle` (made on `parent`); a null handle owns nothing.
+    UniqueHandle(Parent parent, T handle) noexcept : m_parent(parent), m_handle(handle) {}
+    ~UniqueHandle() { reset(); }
+    UniqueHandle(UniqueHandle&& o) noexcept
+        : m_parent(o.m_parent), m_handle(std::exchange(o.m_handle, T{})) {}
+    UniqueHandle& operator=(UniqueHandle&& o) noexcept {
+        if (this != &o) {
+            reset();
+            m_parent = o.m_parent;
+            m_handle = std::exchange(o.m_handle, T{});
+        }
+        return *this;
+    }
+    UniqueHandle(const UniqueHandle&) = delete;
+    UniqueHandle& operator=(const UniqueHandle&) = delete;
+
+    T get() const { return m_handle; }
+    /// For the create infos that take an array of handles (pWaitSemaphores, pSwapchains, ...).
+    const T* address() const { return &m_handle; }
+    explicit operator bool() const { return m_handle != T{}; }
+    /// Destroy the handle now (nothing when null).
+    void reset() noexcept {
+        if (m_handle != T{})
+            Destroy(m_parent, m_handle, nullptr);
+        m_handle = T{};
+    }
+
+private:
+    Parent m_parent{};
+    T m_handle{};
+};
+
+using UniqueSemaphore = UniqueHandle<VkDevice, VkSemaphore, vkDestroySemaphore>;
+using UniqueFence = UniqueHandle<VkDevice, VkFence, vkDestroyFence>;
+using UniqueRenderPass = UniqueHandle<VkDevice, VkRenderPass, vkDestroyRenderPass>;
+using UniqueFramebuffer = UniqueHandle<VkDevice, VkFramebuffer, vkDestroyFramebuffer>;
+using UniqueImageView = UniqueHandle<VkDevice, VkImageView, vkDestroyImageView>;
+using UniqueDescriptorPool = UniqueHandle<VkDevice, VkDescriptorPool, vkDestroyDescriptorPool>;
+using UniqueSwapchain = UniqueHandle<VkDevice, VkSwapchainKHR, vkDestroySwapchainKHR>;
+using UniqueSurface = UniqueHandle<VkInstance, VkSurfaceKHR, vkDestroySurfaceKHR>;
+
+/// A binary semaphore of `ctx`'s device.
+UniqueSemaphore makeSemaphore(Context& ctx);
+
 /// A primary command buffer and its fence, allocated once and reused for every frame: begin()
-/// resets and starts recording, submitAndWait() submits and blocks until the GPU is done.
+/// resets and starts recording, submitAndWait() submits and blocks until the GPU is done. The
+/// editor's present splits the two: submit() with its semaphores, then wait() after presenting.
 class CommandBuffer {
 public:
     explicit CommandBuffer(Context& ctx);
@@ -117,6 +172,13 @@ public:
 
     VkCommandBuffer begin();
     void submitAndWait();
+    /// End recording and submit, waiting on `wait` (at `waitStage`) and signalling `signal`
+    /// (either null: none), without waiting for the GPU.
+    void submit(VkSemaphore wait = VK_NULL_HANDLE,
+                VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                VkSemaphore signal = VK_NULL_HANDLE);
+    /// Block until the last submit() finished.
+    void wait();
     VkCommandBuffer handle() const { return m_cmd; }
 
 private:
@@ -323,7 +385,17 @@ private:
     std::uint32_t m_count = 0;
 };
 
-/// Throw a descriptive error for a failed Vulkan call.
-void vkCheck(VkResult result, const char* what);
+/// The message for a failed Vulkan call: what failed, the result's name (string_VkResult) and
+/// value, and the calling source line, e.g. "Vulkan: vkCreateFence failed:
+/// VK_ERROR_OUT_OF_HOST_MEMORY (-1) at splat/context_vk.cpp:313". `file` is shortened to its
+/// folder and name.
+std::string vkFailure(VkResult result, const char* what, const char* file, int line);
+
+/// Throw std::runtime_error(vkFailure(...)) unless `result` is VK_SUCCESS. The default
+/// arguments capture the caller's file and line, so a call reads `vkCheck(vkCreateFence(...),
+/// "vkCreateFence")`. (__builtin_FILE and __builtin_LINE: what std::source_location::current()
+/// does, which clang 14 with libstdc++ 12 cannot compile.)
+void vkCheck(VkResult result, const char* what, const char* file = __builtin_FILE(),
+             int line = __builtin_LINE());
 
 } // namespace spot::splat

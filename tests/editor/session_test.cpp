@@ -651,3 +651,23 @@ TEST(EditSession, SwitchingBrushesDisarmsTheOtherSlots) {
     EXPECT_FALSE(s.dirty());
     EXPECT_EQ(s.undoSteps(), 0u);
 }
+
+namespace {
+
+// A stroke to a point 1e9 pixels away ends: the drag is clipped to the window.
+TEST(EditSession, StrokeFarOutsideTheWindowEnds) {
+    edit::Session s(test::bunnyScene(), editOptions(128));
+    s.brush().kind = edit::BrushKind::DensityErase;
+    s.brush().radiusPx = 8.0f;
+    const auto start = std::chrono::steady_clock::now();
+    const edit::EditCost cost = s.stroke({{64.0f, 64.0f}, {1e9f, 64.0f}, {64.0f, 1e9f}});
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // At most the dabs along the window's width and height (spacing: a quarter radius).
+    EXPECT_LE(cost.dabs, 2u * (128u + 16u) / 2u + 3u);
+    EXPECT_GT(cost.dabs, 10u);
+    EXPECT_LT(seconds, 60.0);
+    EXPECT_THROW(s.stroke({{64.0f, 64.0f}, {INFINITY, 64.0f}}), InputError);
+}
+
+} // namespace

@@ -1,12 +1,15 @@
 // The editor's window (`spotshell edit`) as a user runs it, under a virtual display (xvfb-run):
 // validation on, the scene it shows identical to `spotshell render`'s, the panels drawn over it,
-// every registry method and a resize in one scripted run, and one clear error without a display.
-// Also the navigation's camera math (edit_view.h), which needs no window.
+// every registry method and a resize in one scripted run, and one clear error without a display;
+// the real window driven by X events (xdotool) ends on the script's images. Also the navigation's
+// camera math (edit_view.h), which needs no window.
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -21,6 +24,7 @@
 #include "noise/camera.h"
 #include "noise/image.h"
 #include "noise/mesh.h"
+#include "noise/scene.h"
 #include "splat/context_vk.h"
 #include "splat/image_compare.h"
 
@@ -324,6 +328,149 @@ TEST(EditWindowSession, KernelPreviewFollowsTheKernel) {
         }
     EXPECT_GT(strand, 300u) << "no kernel in the preview";
     EXPECT_GT(redder, 20.0) << "the preview did not turn red with the lobe";
+}
+
+// --- the real window, driven by X events ------------------------------------------------------
+
+/// A pointer gesture in window pixels: a press at the first point, motion through the others, a
+/// release at the last.
+using Gesture = std::vector<glm::ivec2>;
+
+Gesture horizontal(int x0, int x1, int step, int y) {
+    Gesture g;
+    for (int x = x0; x <= x1; x += step)
+        g.push_back({x, y});
+    return g;
+}
+
+/// xdotool's commands for `gesture` with `button` held (and `modifier` held around it).
+std::string xdotoolDrag(const Gesture& gesture, int button, const std::string& modifier) {
+    std::string s = "xdotool mousemove --window $win " + std::to_string(gesture[0].x) + " " +
+                    std::to_string(gesture[0].y) + "\n";
+    s += "xdotool " + (modifier.empty() ? "" : "keydown " + modifier + " ") + "mousedown " +
+         std::to_string(button) + "\n";
+    for (std::size_t i = 1; i < gesture.size(); ++i)
+        s += "xdotool mousemove --window $win " + std::to_string(gesture[i].x) + " " +
+             std::to_string(gesture[i].y) + "\n";
+    s += "xdotool mouseup " + std::to_string(button) +
+         (modifier.empty() ? "" : " keyup " + modifier) + "\n";
+    return s;
+}
+
+/// The largest difference between two 8-bit images in display levels (0-255), or -1 when their
+/// sizes differ.
+int maxLevelDifference(const spot::noise::Image& a, const spot::noise::Image& b) {
+    if (a.width != b.width || a.height != b.height)
+        return -1;
+    int most = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const long da = std::lround(
+                spot::noise::srgbEncode(std::clamp(a.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            const long db = std::lround(
+                spot::noise::srgbEncode(std::clamp(b.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            most = std::max(most, int(std::abs(da - db)));
+        }
+    return most;
+}
+
+// The window as a user drives it: X events from xdotool under a virtual display, through GLFW's
+// callbacks and the input mapping (edit_input.h), to the session. A shift-drag erases, ctrl+z
+// undoes it, a middle drag orbits; F12 exports the view after each (the File panel's Export: the
+// scene at the window's size, without the panels, whose timings change from run to run). The
+// same actions as a script replayed in the window (its stroke through the same points, the orbit
+// as the camera OrbitView computes for the same motion) give the same images, to the 8-bit
+// level: the same pointer events reach the same session, and `instanced` renders the same
+// impulses the same way every time.
+TEST(EditWindowInput, XEventsDoWhatTheScriptDoes) {
+    ASSERT_EQ(std::system("command -v xdotool >/dev/null 2>&1"), 0)
+        << "xdotool is not installed (scripts/install-deps.sh installs it)";
+    const std::string dir = tmp("xevents");
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    const int width = 320, height = 240;
+    // Over the bunny's body, clear of the folded panels (top left) and the status line.
+    const Gesture erase = horizontal(120, 220, 10, 130);
+    const Gesture orbit = horizontal(160, 250, 15, 120);
+    const spot::noise::SceneDesc desc = spot::noise::loadScene(scene());
+    const std::string exported = desc.name + "-view.png";
+
+    // The window, driven by X events: each step ends with F12 and waits for the export.
+    std::string driver = "set -u\ncd '" + dir + "'\n" + "SPOT_VALIDATION=1 '" +
+                         std::string(SPOT_SPOTSHELL) + "' edit --scene '" + scene() + "' --size " +
+                         std::to_string(width) + "x" + std::to_string(height) +
+                         " --method instanced --refine 0 >edit.log 2>&1 &\n"
+                         "pid=$!\ntrap 'kill $pid 2>/dev/null' EXIT\n"
+                         "win=$(timeout 120 xdotool search --sync --onlyvisible --name "
+                         "'spotshell edit' | head -n1)\n"
+                         "[ -n \"$win\" ] || { echo 'no window'; cat edit.log; exit 3; }\n"
+                         "xdotool windowfocus --sync $win\n"
+                         "capture() {\n"
+                         "  xdotool key F12\n"
+                         "  for i in $(seq 1 1200); do [ -f '" +
+                         exported +
+                         "' ] && break; kill -0 $pid || break; sleep 0.1; done\n"
+                         "  mv '" +
+                         exported +
+                         "' \"$1.png\" || { echo \"no $1\"; cat edit.log; exit 4; }\n"
+                         "}\n";
+    driver += "xdotool mousemove --window $win " + std::to_string(erase[0].x) + " " +
+              std::to_string(erase[0].y) + "\ncapture window-0\n";
+    driver += xdotoolDrag(erase, 1, "shift") + "capture window-1\n";
+    driver += "xdotool key ctrl+z\ncapture window-2\n";
+    driver += xdotoolDrag(orbit, 2, "") + "capture window-3\n";
+    driver += "kill $pid\nwait $pid\ncat edit.log\n";
+    const std::string driverFile = dir + "/drive.sh";
+    std::ofstream(driverFile) << driver;
+    std::string driven;
+    FILE* pipe = popen(
+        ("xvfb-run -a -s '-screen 0 1024x768x24' bash '" + driverFile + "' 2>&1").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), int(buf.size()), pipe))
+        driven += buf.data();
+    ASSERT_EQ(pclose(pipe), 0) << driven;
+
+    // The same actions as a script in the window.
+    spot::editor::OrbitView view(desc.camera);
+    for (std::size_t i = 1; i < orbit.size(); ++i)
+        view.orbit(double(orbit[i].x - orbit[i - 1].x), double(orbit[i].y - orbit[i - 1].y),
+                   double(height));
+    std::string script = "screenshot " + dir + "/script-0.png\nbrush density-erase\nstroke";
+    for (const glm::ivec2& p : erase)
+        script += " " + std::to_string(p.x) + "," + std::to_string(p.y);
+    script += "\nscreenshot " + dir + "/script-1.png\nundo\nscreenshot " + dir + "/script-2.png\n";
+    char camera[256];
+    std::snprintf(camera, sizeof camera, "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g\n",
+                  view.eye().x, view.eye().y, view.eye().z, view.target().x, view.target().y,
+                  view.target().z);
+    script += camera;
+    script += "screenshot " + dir + "/script-3.png\n";
+    const std::string scriptFile = writeScript("xevents.script", script);
+    const Result scripted =
+        run(kXvfb, "edit --scene " + scene() + " --size " + std::to_string(width) + "x" +
+                       std::to_string(height) + " --method instanced --refine 0 --script " +
+                       scriptFile + " --window --frames 1");
+    ASSERT_EQ(scripted.code, 0) << scripted.err;
+
+    std::ifstream log(dir + "/edit.log");
+    const std::string editLog((std::istreambuf_iterator<char>(log)), {});
+    EXPECT_EQ(editLog.find("validation error"), std::string::npos) << editLog;
+    const char* steps[] = {"start", "shift-drag erase", "ctrl+z", "middle-drag orbit"};
+    std::vector<spot::noise::Image> shown;
+    for (int i = 0; i < 4; ++i) {
+        const std::string w = dir + "/window-" + std::to_string(i) + ".png";
+        ASSERT_TRUE(std::filesystem::exists(w)) << steps[i] << ": no export; the window's log:\n"
+                                                << editLog;
+        shown.push_back(spot::noise::readImage(w));
+        const spot::noise::Image s =
+            spot::noise::readImage(dir + "/script-" + std::to_string(i) + ".png");
+        EXPECT_EQ(maxLevelDifference(shown.back(), s), 0) << steps[i];
+    }
+    // Each step did something: the erase changed the image, undo restored it, the orbit moved.
+    EXPECT_GT(fractionDiffering(shown[0], shown[1], 4), 0.01) << "the erase changed nothing";
+    EXPECT_EQ(maxLevelDifference(shown[0], shown[2]), 0) << "undo did not restore the start";
+    EXPECT_GT(fractionDiffering(shown[0], shown[3], 4), 0.1) << "the orbit changed nothing";
 }
 
 TEST(EditWindowSession, BadScriptLineInTheWindowIsAnInputError) {

@@ -285,3 +285,12 @@ TEST(Cli, RenderRaymarchSplitsAndSupersamples) {
 }
 
 } // namespace
+
+// info takes the generated meshes scenes and `impulses` take (issue: it refused them).
+TEST(Cli, InfoTakesGeneratedMeshes) {
+    const Result r = run("info --mesh generated:torus");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("mesh torus"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("triangles"), std::string::npos) << r.out;
+    expectInputError("info --mesh generated:teapot", "teapot");
+}

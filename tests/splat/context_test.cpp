@@ -5,6 +5,7 @@
 #include <fstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <unistd.h>
 
@@ -180,6 +181,67 @@ TEST(VulkanContext, OnACpuDeviceFreedHostMemoryStaysInTheProcess) {
         }
     }).join();
     EXPECT_LT(dropped, 1.0) << "freeing 8 MiB returned " << dropped << " MiB to the kernel";
+}
+
+// A failed call names its result (string_VkResult), its value and the caller's file and line: a
+// real call that fails (a wait on a fence nobody signals, with no time to wait) and a result
+// passed directly.
+TEST(VulkanContext, AFailedCallNamesItsResultFileAndLine) {
+    splat::Context ctx(validated());
+    VkFenceCreateInfo fci{};
+    fci.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
+    VkFence raw = VK_NULL_HANDLE;
+    splat::vkCheck(vkCreateFence(ctx.device(), &fci, nullptr, &raw), "vkCreateFence");
+    const splat::UniqueFence fence(ctx.device(), raw);
+    auto message = [](auto&& call) {
+        try {
+            call();
+        } catch (const std::runtime_error& e) {
+            return std::string(e.what());
+        }
+        return std::string("(no exception)");
+    };
+    const int waitLine = __LINE__ + 2;
+    const std::string timeout = message([&] {
+        splat::vkCheck(vkWaitForFences(ctx.device(), 1, fence.address(), VK_TRUE, 0),
+                       "vkWaitForFences");
+    });
+    EXPECT_NE(timeout.find("vkWaitForFences failed: VK_TIMEOUT (2)"), std::string::npos) << timeout;
+    EXPECT_NE(timeout.find(" at splat/context_test.cpp:" + std::to_string(waitLine)),
+              std::string::npos)
+        << timeout;
+    const int memoryLine = __LINE__ + 2;
+    const std::string memory =
+        message([] { splat::vkCheck(VK_ERROR_OUT_OF_DEVICE_MEMORY, "vkAllocateMemory"); });
+    EXPECT_EQ(memory, "Vulkan: vkAllocateMemory failed: VK_ERROR_OUT_OF_DEVICE_MEMORY (-2) at "
+                      "splat/context_test.cpp:" +
+                          std::to_string(memoryLine));
+    EXPECT_NO_THROW(splat::vkCheck(VK_SUCCESS, "nothing"));
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
+
+// The editor's small handles: each destroyed once, by its last owner (validation counts a
+// double destroy or a handle left at the device's destruction as an error).
+TEST(VulkanContext, UniqueHandlesDestroyTheirObjectOnce) {
+    splat::ValidationCounts counts;
+    {
+        splat::Context ctx(validated());
+        splat::UniqueSemaphore a = splat::makeSemaphore(ctx);
+        EXPECT_TRUE(a);
+        splat::UniqueSemaphore b = std::move(a);
+        EXPECT_FALSE(a);
+        EXPECT_TRUE(b);
+        std::vector<splat::UniqueSemaphore> several;
+        for (int i = 0; i < 4; ++i)
+            several.push_back(splat::makeSemaphore(ctx));
+        several.erase(several.begin()); // the rest move down
+        b = std::move(several.back());  // b's first semaphore destroyed here
+        several.pop_back();
+        b.reset();
+        b.reset(); // nothing left to destroy
+        counts = ctx.validation();
+    }
+    EXPECT_EQ(counts.errors, 0u) << counts.firstError;
 }
 
 } // namespace
