@@ -138,6 +138,16 @@ private:
     /// Replace the bake on the GPU by `bake`.
     void uploadBake(const BakeData& bake);
     void ensureTargets(std::uint32_t width, std::uint32_t height);
+    // The passes record() records, in order (the file comment's steps).
+    /// 1. The frame's clears, then the shell's tetrahedra and the eye's.
+    void recordShell(VkCommandBuffer cmd);
+    /// 2. The base mesh, with the first layer's peel drawn in its rendering.
+    void recordMeshAndFirstPeel(VkCommandBuffer cmd);
+    /// 3. Layer k's peel (in a rendering the caller begins) and its march.
+    void recordPeel(VkCommandBuffer cmd, std::uint32_t k);
+    void recordMarch(VkCommandBuffer cmd, std::uint32_t k);
+    /// Layer `layer`'s list header, bound at its offset.
+    Descriptors& bindList(Descriptors& d, std::uint32_t layer) const;
     const Pipeline& marchPipeline(bool count, bool first, bool split);
 
     const SceneGpu& m_scene;
