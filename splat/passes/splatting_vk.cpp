@@ -581,18 +581,20 @@ void SplatRenderer::recordMesh(VkCommandBuffer cmd) {
     transitionImage(cmd, m_base.handle(), kColorAspect, kAttachment, kAttachment, kColorOut,
                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kColorOut, kColorRW);
     transitionImage(cmd, m_depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
-                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                    kTests, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
+                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kTests,
+                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
 }
 
-void SplatRenderer::pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline,
-                                        bool closest, bool counters) {
+void SplatRenderer::pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline, bool closest,
+                                        bool counters) {
     Descriptors d;
     d.buffer(kSplatBindBounds, m_bounds)
         .buffer(kSplatBindVisible, m_visible)
         .buffer(kSplatBindWorldLobes, m_worldLobes)
         .buffer(kSplatBindScreenLobes, m_screenLobes)
-        .image(kSplatBindMeshDistance, m_distance, passes::kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
+        .image(kSplatBindMeshDistance, m_distance, passes::kGeneral,
+               VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
     if (closest)
         d.buffer(kSplatBindClosest, m_closest.handle() ? m_closest : m_counters);
     if (counters)
@@ -618,9 +620,11 @@ void SplatRenderer::recordClosestPass(VkCommandBuffer cmd) {
         transitionImage(cmd, m_closestDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                         VK_PIPELINE_STAGE_2_NONE, 0, kTests, kDepthRW);
-        VkRenderingAttachmentInfo index = colorAttachment(m_closestKernel, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo index =
+            colorAttachment(m_closestKernel, VK_ATTACHMENT_LOAD_OP_CLEAR);
         index.clearValue.color.uint32[0] = 0xffffffffu; // no kernel
-        VkRenderingAttachmentInfo nearest = depthAttachment(m_closestDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo nearest =
+            depthAttachment(m_closestDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
         nearest.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
         nearest.clearValue.depthStencil = {1.0f, 0};
         beginRendering(cmd, width, height, {index}, &nearest);
@@ -640,17 +644,19 @@ void SplatRenderer::recordSplat(VkCommandBuffer cmd) {
     const Pipelines& p = *f.pipelines;
     const std::uint32_t width = m_width, height = m_height;
     // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
-    const VkRenderingAttachmentInfo depthInfo = depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
+    const VkRenderingAttachmentInfo depthInfo =
+        depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
     if (f.instanced) // nothing but the atomics, behind the mesh test
         beginRendering(cmd, width, height, {}, &depthInfo);
     else if (f.sorted)
         beginRendering(cmd, width, height, {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)},
                        &depthInfo);
     else
-        beginRendering(cmd, width, height,
-                       {colorAttachment(m_accum, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f)),
-                        colorAttachment(m_opticalDepth, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f))},
-                       &depthInfo);
+        beginRendering(
+            cmd, width, height,
+            {colorAttachment(m_accum, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f)),
+             colorAttachment(m_opticalDepth, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f))},
+            &depthInfo);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.splat.handle());
     pushFrame(cmd, p.splat, f.frame);
     const bool atomics = (usesOit(m_method) || f.instanced) && !f.settings.roofline;

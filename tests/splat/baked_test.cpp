@@ -21,8 +21,8 @@
 #include "noise/image.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
-#include "splat/methods/baked/baked_vk.h"
 #include "splat/image_compare.h"
+#include "splat/methods/baked/baked_vk.h"
 #include "splat_test_support.h"
 
 namespace spot {

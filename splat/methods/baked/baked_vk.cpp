@@ -40,7 +40,6 @@ void fullBarrier(VkCommandBuffer cmd) {
                   passes::kAll, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
 }
 
-
 } // namespace
 
 BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scene.context()) {
@@ -85,8 +84,8 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
         m_peel[first] = makeGraphicsPipeline(m_ctx, desc);
     }
     m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
-    m_loops = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
-                     "baked loop counter");
+    m_loops =
+        Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost, "baked loop counter");
     m_eyeTet = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                       "baked eye tetrahedron");
     const VkDeviceSize align =
@@ -133,7 +132,8 @@ void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer)
         if (bake.tableEnd[s] * sizeof(std::int32_t) > range) {
             const glm::i64vec3 d = bake.sectionBox[s];
             throw InputError(cat("baked: ", bake.file, "'s leaves span a box of ", d.x, "x", d.y,
-                                 "x", d.z, " leaves (level ", s, "), more than one storage "
+                                 "x", d.z, " leaves (level ", s,
+                                 "), more than one storage "
                                  "buffer of this device takes as a leaf table (",
                                  range >> 20, " MiB)"));
         }
@@ -184,7 +184,8 @@ void BakedRenderer::uploadBake(const BakeData& bake) {
     m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
     m_table.upload(std::span<const std::int32_t>(bake.table));
     for (std::uint64_t i = 0; i < bufferCount; ++i) {
-        const std::uint64_t n = std::min<std::uint64_t>(perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
+        const std::uint64_t n = std::min<std::uint64_t>(
+            perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
         m_bricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
                              cat("baked bricks (", n, ", buffer ", i, ")"));
     }
@@ -316,8 +317,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     if (m_bakeStats.tetrahedra != 3 * triangles || !m_neighbours.handle()) {
         const auto* indices =
             static_cast<const std::uint32_t*>(m_scene.meshPass().indices().mapped());
-        const std::uint32_t vertexCount = std::uint32_t(
-            m_scene.meshPass().vertices().size() / sizeof(gpu_splat::SpotMeshVertex));
+        const std::uint32_t vertexCount =
+            std::uint32_t(m_scene.meshPass().vertices().size() / sizeof(gpu_splat::SpotMeshVertex));
         std::vector<glm::uvec3> tris(triangles);
         for (std::uint32_t t = 0; t < triangles; ++t)
             tris[t] = glm::uvec3(indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]);
@@ -330,7 +331,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                 // The neighbour and the face it shares, as that neighbour numbers it.
                 const std::int32_t n = neighbours[t][f];
                 std::int32_t back = 0;
-                while (n >= 0 && back < 3 && neighbours[std::size_t(n)][std::size_t(back)] != std::int32_t(t))
+                while (n >= 0 && back < 3 &&
+                       neighbours[std::size_t(n)][std::size_t(back)] != std::int32_t(t))
                     ++back;
                 packed[t][int(f)] = n < 0 ? -1 : n * 4 + back;
                 // Boundary faces but the base (all three corners on the mesh): the top surface
@@ -364,14 +366,16 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_bakeStats.entryFaces = m_entryFaceCount;
     m_bakeStats.maxLayerTets = kBakedMaxLayerTets;
     m_bakeStats.maxLayerSamples = kBakedMaxLayerSamples;
-    const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
+    const std::uint32_t budget =
+        settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
     // baked_march.comp: M (1 + 4) + S (the trilinear sample is unrolled, no loop).
-    const std::uint64_t bound = std::uint64_t(kBakedMaxLayerTets) * 5 +
-                                std::uint64_t(kBakedMaxLayerSamples);
+    const std::uint64_t bound =
+        std::uint64_t(kBakedMaxLayerTets) * 5 + std::uint64_t(kBakedMaxLayerSamples);
     if (bound > budget)
-        throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets, " tetrahedra and take ",
-                             kBakedMaxLayerSamples, " samples, so one march invocation may loop ",
-                             bound, " times, more than the budget of ", budget,
+        throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets,
+                             " tetrahedra and take ", kBakedMaxLayerSamples,
+                             " samples, so one march invocation may loop ", bound,
+                             " times, more than the budget of ", budget,
                              " (lavapipe stops an invocation at 65,535)"));
     m_bakeStats.loopBound = std::uint32_t(bound);
     m_bakeStats.peelPasses = std::uint32_t(settings.peelPasses);
