@@ -332,6 +332,32 @@ TEST(BakedFrame, DeterministicWarmFramesAndTheLoopGuard) {
     expectNoValidationErrors(ctx);
 }
 
+// The bake is a resource read once: frames read no file. With its file gone after the load,
+// frames still render the same image, and a second renderer handed the same bake draws it too.
+TEST(BakedFrame, TheBakeIsReadOnceAndFramesReadNoFile) {
+    const BakedScene s = loadBakedScene("fur-bunny", 64, 0.004f, 4);
+    const fs::path copy = tmpDir() / "read-once.vdb";
+    fs::copy_file(s.bake, copy, fs::copy_options::overwrite_existing);
+    splat::RenderSettings settings;
+    settings.bake = splat::BakeData::load(copy.string());
+    EXPECT_EQ(settings.bake->file, copy.string());
+    splat::Context ctx(validated());
+    splat::Frame frame(ctx, s.mesh, *s.generator);
+    noise::Image first, second, other;
+    frame.render("baked", s.view(), settings, &first);
+    fs::remove(copy);
+    frame.render("baked", s.view(), settings, &second);
+    EXPECT_EQ(std::memcmp(first.pixels.data(), second.pixels.data(),
+                          first.pixels.size() * sizeof(glm::vec3)),
+              0);
+    splat::Frame another(ctx, s.mesh, *s.generator);
+    another.render("baked", s.view(), settings, &other);
+    EXPECT_EQ(std::memcmp(first.pixels.data(), other.pixels.data(),
+                          first.pixels.size() * sizeof(glm::vec3)),
+              0);
+    expectNoValidationErrors(ctx);
+}
+
 // The same image on 1 and 2 lavapipe threads, byte for byte (LP_NUM_THREADS is read when a
 // Context creates its device, so each Context below has its own). The frame's atomics come in a
 // different order with the threads: the shell pass's list of the faces the peel draws, the
