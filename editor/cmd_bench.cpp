@@ -23,11 +23,11 @@
 #include "progress.h"
 #include "render_options.h"
 #include "scene_job.h"
-#include "splat/methods/baked/baked_vk.h"
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/image_compare.h"
+#include "splat/methods/baked/baked_vk.h"
 
 namespace spot::cmd {
 
@@ -273,12 +273,10 @@ struct Bench {
         const splat::MethodInfo& method = splat::method("reference");
         splat::RenderSettings settings;
         settings.spp = suite.referenceSpp;
-        const splat::CpuScene scene{job.mesh,
-                                    job.generator->kernel(),
-                                    job.impulses,
-                                    {cam, job.scene.shading, job.scene.background, job.scene.baseColor},
-                                    job.scene.seed,
-                                    job.scene.referenceSpp};
+        const splat::CpuScene scene{
+            job.mesh,       job.generator->kernel(),
+            job.impulses,   {cam, job.scene.shading, job.scene.background, job.scene.baseColor},
+            job.scene.seed, job.scene.referenceSpp};
         const noise::Image image = method.renderCpu(scene, settings, {}).image;
         noise::writeImage(cached, image, {{"method", "reference"}});
         return image;
@@ -316,7 +314,8 @@ struct Bench {
     std::map<std::string, std::string> refusedBakes{};
 
     /// The bake baked variant `v` renders on `job`'s scene, found in DIR/cache or made now; sets
-    /// v.settings.bake (read once for the variant) and the row's bake columns. InputError when the bake is refused.
+    /// v.settings.bake (read once for the variant) and the row's bake columns. InputError when the
+    /// bake is refused.
     void prepareBake(cli::SceneJob& job, const std::string& meshBytes, Variant& v, json& row) {
         BenchBakeInputs in;
         in.mesh = meshBytes;
@@ -469,9 +468,10 @@ struct Bench {
         Variant roofline{"oit", "roofline", splatSettings(true, splat::OitWeight::McGuireBavoil, 0)};
         roofline.settings.roofline = true;
         std::vector<double> rooflineMs;
-        const bool splatting = std::any_of(suite.variants.begin(), suite.variants.end(), [](const Variant& v) {
-            return splat::gpuMethod(v.method).takes(splat::settings::countFragments);
-        });
+        const bool splatting =
+            std::any_of(suite.variants.begin(), suite.variants.end(), [](const Variant& v) {
+                return splat::gpuMethod(v.method).takes(splat::settings::countFragments);
+            });
         for (int f = 0; splatting && f <= suite.frames; ++f) {
             const Frame fr = render(job, frame, job.scene.camera, roofline, false);
             if (f > 0)
@@ -480,8 +480,9 @@ struct Bench {
         const double rooflineMedian = percentile(rooflineMs, 0.5);
         // The mesh's bytes, for the bake cache's keys.
         std::string meshBytes;
-        if (std::any_of(suite.variants.begin(), suite.variants.end(),
-                        [](const Variant& v) { return splat::gpuMethod(v.method).takes(splat::settings::bake); }))
+        if (std::any_of(suite.variants.begin(), suite.variants.end(), [](const Variant& v) {
+                return splat::gpuMethod(v.method).takes(splat::settings::bake);
+            }))
             meshBytes = slurp(job.scene.mesh);
         for (const Variant& v : suite.variants) {
             json row = runVariant(entry, job, frame, v, ref, refFlicker, rooflineMedian, meshBytes);

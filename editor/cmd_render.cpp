@@ -44,16 +44,16 @@ nlohmann::json statValue(double v) {
 /// A CPU method (the reference) on the scene's impulses, with a progress bar.
 Rendered renderCpu(const cli::Args& args, cli::SceneJob& job, const splat::MethodInfo& method) {
     const splat::RenderSettings settings = cli::renderSettings(args);
-    const splat::CpuScene scene{job.mesh,
-                                job.generator->kernel(),
-                                job.impulses,
-                                {job.scene.camera, job.scene.shading, job.scene.background,
-                                 job.scene.baseColor},
-                                job.scene.seed,
-                                job.scene.referenceSpp};
+    const splat::CpuScene scene{
+        job.mesh,
+        job.generator->kernel(),
+        job.impulses,
+        {job.scene.camera, job.scene.shading, job.scene.background, job.scene.baseColor},
+        job.scene.seed,
+        job.scene.referenceSpp};
     cli::ProgressBar bar(method.name);
-    splat::CpuFrame f = method.renderCpu(scene, settings,
-                                         [&](int done, int total) { bar.update(done, total); });
+    splat::CpuFrame f =
+        method.renderCpu(scene, settings, [&](int done, int total) { bar.update(done, total); });
     bar.finish();
     Rendered r;
     r.image = std::move(f.image);
@@ -184,8 +184,8 @@ int render(int argc, char** argv) {
     const std::string method = args.str("method");
     const splat::MethodInfo* info = splat::findMethod(method);
     if (!info)
-        throw InputError(cat("spotshell render: unknown method '", method, "' (",
-                             splat::methodNames(), ")"));
+        throw InputError(
+            cat("spotshell render: unknown method '", method, "' (", splat::methodNames(), ")"));
     cli::refuseSettingsNotTakenBy(args, *info, "spotshell render");
     if (!info->gpu() && args.has("repeat"))
         throw InputError(cat("spotshell render: --repeat times the warm frames of a GPU method (",

@@ -98,8 +98,8 @@ splat::RenderSettings methodSettings(Line& line, const std::string& method) {
         if (!setting)
             line.fail(cat("unknown setting '", key, "' of ", method));
         if (!info.takes(*setting))
-            line.fail(cat(key, " is a setting of ", splat::methodsTaking(*setting), ", not of ",
-                          method));
+            line.fail(
+                cat(key, " is a setting of ", splat::methodsTaking(*setting), ", not of ", method));
         given.emplace_back(setting, value);
     }
     splat::RenderSettings settings;

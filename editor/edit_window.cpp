@@ -28,7 +28,7 @@
 #include "render_options.h"
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
-#include "splat/renderer_vk.h"
+#include "splat/passes/splatting_vk.h"
 
 namespace spot::editor {
 

@@ -49,7 +49,7 @@ SceneGpu::SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& k
       m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}
 
 // The registry: each method's module makes its entry (its folder under splat/methods/). Adding a
-// method is its folder and one line here.
+// method is its folder, its declaration below and its place in the list.
 MethodInfo referenceMethod();
 MethodInfo instancedMethod();
 MethodInfo oitMethod();
@@ -59,9 +59,9 @@ MethodInfo raymarchMethod();
 MethodInfo bakedMethod();
 
 const std::vector<MethodInfo>& methods() {
-    static const std::vector<MethodInfo> all = {referenceMethod(), instancedMethod(), oitMethod(),
-                                                hybridMethod(),    sortedMethod(),    raymarchMethod(),
-                                                bakedMethod()};
+    static const std::vector<MethodInfo> all = {
+        referenceMethod(), instancedMethod(), oitMethod(),  hybridMethod(),
+        sortedMethod(),    raymarchMethod(),  bakedMethod()};
     return all;
 }
 
@@ -92,7 +92,9 @@ const MethodInfo* find(const std::vector<MethodInfo>& list, std::string_view nam
 
 } // namespace
 
-const MethodInfo* findMethod(std::string_view name) { return find(methods(), name); }
+const MethodInfo* findMethod(std::string_view name) {
+    return find(methods(), name);
+}
 
 const MethodInfo& method(std::string_view name) {
     if (const MethodInfo* m = findMethod(name))
@@ -100,7 +102,9 @@ const MethodInfo& method(std::string_view name) {
     throw InputError(cat("unknown method '", name, "' (", methodNames(), ")"));
 }
 
-std::string methodNames() { return names(methods()); }
+std::string methodNames() {
+    return names(methods());
+}
 
 std::vector<const Setting*> allSettings() {
     std::vector<const Setting*> out;
@@ -130,9 +134,13 @@ const std::vector<MethodInfo>& gpuMethods() {
     return gpu;
 }
 
-std::string gpuMethodNames() { return names(gpuMethods()); }
+std::string gpuMethodNames() {
+    return names(gpuMethods());
+}
 
-const MethodInfo* findGpuMethod(std::string_view name) { return find(gpuMethods(), name); }
+const MethodInfo* findGpuMethod(std::string_view name) {
+    return find(gpuMethods(), name);
+}
 
 const MethodInfo& gpuMethod(std::string_view name) {
     if (const MethodInfo* m = findGpuMethod(name))

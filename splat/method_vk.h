@@ -27,9 +27,9 @@
 
 #include "noise/camera.h"
 #include "noise/cells.h"
-#include "noise/kernel.h"
 #include "noise/image.h"
 #include "noise/impulses.h"
+#include "noise/kernel.h"
 #include "noise/reference.h"
 #include "splat/context_vk.h"
 #include "splat/pass_vk.h"

@@ -133,14 +133,14 @@ namespace settings {
 
 using T = SettingType;
 
-const Setting kernelSamples = numeric(
-    describe("kernel-samples", T::Integer, "N",
-             "march N samples per kernel (paper eq. 10); 0: the analytic integral",
-             0.0, double(gpu_splat::kSplatMaxKernelSamples), 64.0),
-    &RenderSettings::kernelSamples);
-const Setting ewa = numeric(describe("ewa", T::Toggle, "on|off",
-                                     "EWA filtering by the pixel footprint"),
-                            &RenderSettings::ewa);
+const Setting kernelSamples =
+    numeric(describe("kernel-samples", T::Integer, "N",
+                     "march N samples per kernel (paper eq. 10); 0: the analytic integral", 0.0,
+                     double(gpu_splat::kSplatMaxKernelSamples), 64.0),
+            &RenderSettings::kernelSamples);
+const Setting ewa =
+    numeric(describe("ewa", T::Toggle, "on|off", "EWA filtering by the pixel footprint"),
+            &RenderSettings::ewa);
 const Setting weight = choice(describe("weight", T::Choice, "W", "the OIT weight"),
                               {"constant", "mcguire-bavoil"}, &RenderSettings::weight);
 const Setting closest = choice(
@@ -186,9 +186,9 @@ const Setting spp = [] {
     s.defaultText = "the scene's";
     return s;
 }();
-const Setting stepScale = numeric(
-    describe("step-scale", T::Number, "X", "quadrature step multiplier", 1e-3, 1e3),
-    &RenderSettings::stepScale);
+const Setting stepScale =
+    numeric(describe("step-scale", T::Number, "X", "quadrature step multiplier", 1e-3, 1e3),
+            &RenderSettings::stepScale);
 
 } // namespace settings
 

@@ -100,7 +100,8 @@ struct Setting {
     std::string help;  ///< what it does; the methods that take it and the default are added
     double min = 0.0, max = 0.0;      ///< Integer, Number
     std::vector<std::string> choices; ///< Choice: the names, in the stored index's order
-    double panelMax = 0.0; ///< the editor's slider ends here (0: at max; the command line takes max)
+    double panelMax =
+        0.0; ///< the editor's slider ends here (0: at max; the command line takes max)
     /// Shown as the default instead of the value of RenderSettings{} (a default that is not a
     /// value: "the scene's").
     std::string defaultText;

@@ -21,8 +21,8 @@
 #include "noise/image.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
-#include "splat/methods/baked/baked_vk.h"
 #include "splat/image_compare.h"
+#include "splat/methods/baked/baked_vk.h"
 #include "splat_test_support.h"
 
 namespace spot {
@@ -329,6 +329,32 @@ TEST(BakedFrame, DeterministicWarmFramesAndTheLoopGuard) {
     settings.loopBudget = 0;
     settings.bake.reset();
     EXPECT_THROW(frame.render("baked", s.view(), settings), InputError);
+    expectNoValidationErrors(ctx);
+}
+
+// The bake is a resource read once: frames read no file. With its file gone after the load,
+// frames still render the same image, and a second renderer handed the same bake draws it too.
+TEST(BakedFrame, TheBakeIsReadOnceAndFramesReadNoFile) {
+    const BakedScene s = loadBakedScene("fur-bunny", 64, 0.004f, 4);
+    const fs::path copy = tmpDir() / "read-once.vdb";
+    fs::copy_file(s.bake, copy, fs::copy_options::overwrite_existing);
+    splat::RenderSettings settings;
+    settings.bake = splat::BakeData::load(copy.string());
+    EXPECT_EQ(settings.bake->file, copy.string());
+    splat::Context ctx(validated());
+    splat::Frame frame(ctx, s.mesh, *s.generator);
+    noise::Image first, second, other;
+    frame.render("baked", s.view(), settings, &first);
+    fs::remove(copy);
+    frame.render("baked", s.view(), settings, &second);
+    EXPECT_EQ(std::memcmp(first.pixels.data(), second.pixels.data(),
+                          first.pixels.size() * sizeof(glm::vec3)),
+              0);
+    splat::Frame another(ctx, s.mesh, *s.generator);
+    another.render("baked", s.view(), settings, &other);
+    EXPECT_EQ(std::memcmp(first.pixels.data(), other.pixels.data(),
+                          first.pixels.size() * sizeof(glm::vec3)),
+              0);
     expectNoValidationErrors(ctx);
 }
 

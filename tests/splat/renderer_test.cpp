@@ -27,8 +27,8 @@
 #include "shaders/spot_shared.hpp"
 #include "splat/image_compare.h"
 #include "splat/layout.h"
+#include "splat/passes/splatting_vk.h"
 #include "splat_test_support.h"
-#include "splat/renderer_vk.h"
 
 namespace {
 

@@ -16,7 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "noise/error.h"
-#include "splat/sort_vk.h"
+#include "splat/passes/radix_sort_vk.h"
 #include "splat_test_support.h"
 
 namespace {

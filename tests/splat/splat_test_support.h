@@ -20,8 +20,8 @@
 #include "noise/scene.h"
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
-#include "splat/renderer_vk.h"
 #include "splat/layout.h"
+#include "splat/passes/splatting_vk.h"
 
 namespace spot::test {
 

@@ -24,8 +24,8 @@ struct LeafKey {
 };
 struct LeafKeyHash {
     std::size_t operator()(const LeafKey& k) const {
-        std::uint32_t h = std::uint32_t(k.leaf.x) * 73856093u ^ std::uint32_t(k.leaf.y) * 19349663u ^
-                          std::uint32_t(k.leaf.z) * 83492791u;
+        std::uint32_t h = std::uint32_t(k.leaf.x) * 73856093u ^
+                          std::uint32_t(k.leaf.y) * 19349663u ^ std::uint32_t(k.leaf.z) * 83492791u;
         h ^= h >> 16u;
         h *= 0x7feb352du;
         return h ^ (h >> 15u);

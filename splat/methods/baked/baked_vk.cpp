@@ -40,7 +40,6 @@ void fullBarrier(VkCommandBuffer cmd) {
                   passes::kAll, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
 }
 
-
 } // namespace
 
 BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scene.context()) {
@@ -85,8 +84,8 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
         m_peel[first] = makeGraphicsPipeline(m_ctx, desc);
     }
     m_params = Buffer(m_ctx, sizeof(SpotBakedParams), kStorage, kHost, "baked parameters");
-    m_loops = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
-                     "baked loop counter");
+    m_loops =
+        Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost, "baked loop counter");
     m_eyeTet = Buffer(m_ctx, 16, kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kHost,
                       "baked eye tetrahedron");
     const VkDeviceSize align =
@@ -133,7 +132,8 @@ void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer)
         if (bake.tableEnd[s] * sizeof(std::int32_t) > range) {
             const glm::i64vec3 d = bake.sectionBox[s];
             throw InputError(cat("baked: ", bake.file, "'s leaves span a box of ", d.x, "x", d.y,
-                                 "x", d.z, " leaves (level ", s, "), more than one storage "
+                                 "x", d.z, " leaves (level ", s,
+                                 "), more than one storage "
                                  "buffer of this device takes as a leaf table (",
                                  range >> 20, " MiB)"));
         }
@@ -184,7 +184,8 @@ void BakedRenderer::uploadBake(const BakeData& bake) {
     m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
     m_table.upload(std::span<const std::int32_t>(bake.table));
     for (std::uint64_t i = 0; i < bufferCount; ++i) {
-        const std::uint64_t n = std::min<std::uint64_t>(perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
+        const std::uint64_t n = std::min<std::uint64_t>(
+            perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
         m_bricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
                              cat("baked bricks (", n, ", buffer ", i, ")"));
     }
@@ -316,8 +317,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     if (m_bakeStats.tetrahedra != 3 * triangles || !m_neighbours.handle()) {
         const auto* indices =
             static_cast<const std::uint32_t*>(m_scene.meshPass().indices().mapped());
-        const std::uint32_t vertexCount = std::uint32_t(
-            m_scene.meshPass().vertices().size() / sizeof(gpu_splat::SpotMeshVertex));
+        const std::uint32_t vertexCount =
+            std::uint32_t(m_scene.meshPass().vertices().size() / sizeof(gpu_splat::SpotMeshVertex));
         std::vector<glm::uvec3> tris(triangles);
         for (std::uint32_t t = 0; t < triangles; ++t)
             tris[t] = glm::uvec3(indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]);
@@ -360,14 +361,16 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_bakeStats.entryFaces = m_entryFaceCount;
     m_bakeStats.maxLayerTets = kBakedMaxLayerTets;
     m_bakeStats.maxLayerSamples = kBakedMaxLayerSamples;
-    const std::uint32_t budget = settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
+    const std::uint32_t budget =
+        settings.loopBudget > 0 ? settings.loopBudget : kBakedMarchLoopBudget;
     // baked_march.comp: M (1 + 4) + S (the trilinear sample is unrolled, no loop).
-    const std::uint64_t bound = std::uint64_t(kBakedMaxLayerTets) * 5 +
-                                std::uint64_t(kBakedMaxLayerSamples);
+    const std::uint64_t bound =
+        std::uint64_t(kBakedMaxLayerTets) * 5 + std::uint64_t(kBakedMaxLayerSamples);
     if (bound > budget)
-        throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets, " tetrahedra and take ",
-                             kBakedMaxLayerSamples, " samples, so one march invocation may loop ",
-                             bound, " times, more than the budget of ", budget,
+        throw InputError(cat("baked: a layer may walk ", kBakedMaxLayerTets,
+                             " tetrahedra and take ", kBakedMaxLayerSamples,
+                             " samples, so one march invocation may loop ", bound,
+                             " times, more than the budget of ", budget,
                              " (lavapipe stops an invocation at 65,535)"));
     m_bakeStats.loopBound = std::uint32_t(bound);
     m_bakeStats.peelPasses = std::uint32_t(settings.peelPasses);
@@ -394,14 +397,47 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
 }
 
 void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
+    recordShell(cmd);
+    timer.mark(cmd, "shell");
+    recordMeshAndFirstPeel(cmd);
+    timer.mark(cmd, "mesh+peel");
+    // Per layer: the peel (the nearest entry face behind the previous layer's exit, before the
+    // mesh: the mesh's depth tested and not written; the entry an atomicMax per pixel, the
+    // pixels listed as they get one), then the march over the list, from the entry (or, in the
+    // first layer, from the eye), composited under the earlier layers and over the mesh.
+    // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
+    const bool markLayers = m_frame.peelPasses <= kBakedMarkedLayers;
+    for (std::uint32_t k = 0; k < m_frame.peelPasses; ++k) {
+        if (k > 0) {
+            VkRenderingAttachmentInfo depthInfo =
+                depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
+            depthInfo.imageLayout = passes::kGeneral;
+            beginRendering(cmd, m_width, m_height, {}, &depthInfo);
+            recordPeel(cmd, k);
+            vkCmdEndRendering(cmd);
+            fullBarrier(cmd);
+            if (markLayers)
+                timer.mark(cmd, "peel");
+        }
+        recordMarch(cmd, k);
+        if (markLayers)
+            timer.mark(cmd, "march");
+    }
+    if (!markLayers)
+        timer.mark(cmd, "peel+march");
     using namespace passes;
+    memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kTransfer | kHostStage,
+                  kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
+}
+
+Descriptors& BakedRenderer::bindList(Descriptors& d, std::uint32_t layer) const {
+    return d.buffer(kBakedBindList, m_lists, layer * m_listStride, sizeof(SpotBakedList));
+}
+
+void BakedRenderer::recordShell(VkCommandBuffer cmd) {
     const Prepared& f = m_frame;
     const std::uint32_t triangles = m_bakeStats.tetrahedra / 3;
     const MeshPass& mesh = m_scene.meshPass();
-    const auto bindList = [&](Descriptors& d, std::uint32_t layer) -> Descriptors& {
-        return d.buffer(kBakedBindList, m_lists, layer * m_listStride, sizeof(SpotBakedList));
-    };
-
     // The frame starts with no tetrahedron holding the eye, no face to peel, every layer's list
     // empty and no pixel with an entry (each march clears the entries it takes).
     vkCmdFillBuffer(cmd, m_eyeTet.handle(), 0, VK_WHOLE_SIZE, kBakedNoTet);
@@ -431,8 +467,12 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         vkCmdDispatch(cmd, (triangles + 63) / 64, 1, 1);
     }
     fullBarrier(cmd);
-    timer.mark(cmd, "shell");
+}
 
+void BakedRenderer::recordMeshAndFirstPeel(VkCommandBuffer cmd) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const MeshPass& mesh = m_scene.meshPass();
     // The base mesh: its colour is the frame's result where no layer walks.
     for (const Image* image : {&m_base, &m_distance})
         transitionImage(cmd, image->handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kAttachment,
@@ -440,28 +480,13 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0, kTests,
                     kDepthRW);
-    // The first layer's peel is drawn in the mesh's rendering, against the depth the mesh has just
-    // written (a rendering and a barrier fewer).
-    const auto recordPeel = [&](VkCommandBuffer c, std::uint32_t k) {
-        if (m_entryFaceCount == 0)
-            return;
-        const Pipeline& peel = m_peel[k == 0];
-        vkCmdBindPipeline(c, VK_PIPELINE_BIND_POINT_GRAPHICS, peel.handle());
-        pushFrame(c, peel, f.frame);
-        Descriptors d;
-        d.buffer(kBakedBindTets, m_tets)
-            .buffer(kBakedBindPeelDraw, m_peelDraw)
-            .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(kBakedBindLayerEntry, m_layerEntry)
-            .buffer(kBakedBindListPixels, m_listPixels);
-        bindList(d, k).push(m_ctx, c, peel);
-        vkCmdDrawIndirect(c, m_peelDraw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
-    };
     // The exit depth: written by a layer's march at every pixel the next peel tests (a pixel
     // without an entry in the first layer has none in any), so never cleared.
     transitionImage(cmd, m_exitDepth.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                     VK_PIPELINE_STAGE_2_NONE, 0, kAll,
                     VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    // The first layer's peel is drawn in the mesh's rendering, against the depth the mesh has
+    // just written (a rendering and a barrier fewer).
     mesh.record(cmd, f.frame, m_base, m_distance, m_meshDepth, f.background,
                 [&](VkCommandBuffer c) { recordPeel(c, 0); });
     for (const Image* image : {&m_base, &m_distance})
@@ -477,60 +502,55 @@ void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
                         VK_PIPELINE_STAGE_2_NONE, 0, kAll,
                         VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
     fullBarrier(cmd);
-    timer.mark(cmd, "mesh+peel");
+}
 
-    // Per layer: the peel (the nearest entry face behind the previous layer's exit, before the
-    // mesh: the mesh's depth tested and not written; the entry an atomicMax per pixel, the
-    // pixels listed as they get one), then the march over the list, from the entry (or, in the
-    // first layer, from the eye), composited under the earlier layers and over the mesh.
-    // Per-layer marks while the timer has room for them (PassTimer takes 32), else one.
-    const bool markLayers = f.peelPasses <= kBakedMarkedLayers;
-    for (std::uint32_t k = 0; k < f.peelPasses; ++k) {
-        const bool first = k == 0;
-        if (!first) {
-            VkRenderingAttachmentInfo depthInfo =
-                depthAttachment(m_meshDepth, VK_ATTACHMENT_LOAD_OP_LOAD);
-            depthInfo.imageLayout = kGeneral;
-            beginRendering(cmd, m_width, m_height, {}, &depthInfo);
-            recordPeel(cmd, k);
-            vkCmdEndRendering(cmd);
-            fullBarrier(cmd);
-            if (markLayers)
-                timer.mark(cmd, "peel");
-        }
+void BakedRenderer::recordPeel(VkCommandBuffer cmd, std::uint32_t k) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    if (m_entryFaceCount == 0)
+        return;
+    const Pipeline& peel = m_peel[k == 0];
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, peel.handle());
+    pushFrame(cmd, peel, f.frame);
+    Descriptors d;
+    d.buffer(kBakedBindTets, m_tets)
+        .buffer(kBakedBindPeelDraw, m_peelDraw)
+        .image(kBakedBindPrevDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .buffer(kBakedBindLayerEntry, m_layerEntry)
+        .buffer(kBakedBindListPixels, m_listPixels);
+    bindList(d, k).push(m_ctx, cmd, peel);
+    vkCmdDrawIndirect(cmd, m_peelDraw.handle(), 0, 1, sizeof(VkDrawIndirectCommand));
+}
 
-        const Pipeline& march = m_march.at({f.count, first, f.split});
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
-        pushFrame(cmd, march, f.frame);
-        Descriptors d;
-        d.buffer(kBakedBindParams, m_params)
-            .buffer(kBakedBindTets, m_tets)
-            .buffer(kBakedBindNeighbours, m_neighbours)
-            .buffer(kBakedBindEyeTet, m_eyeTet)
-            .buffer(kBakedBindTable, m_table)
-            .buffer(kBakedBindBricks, m_bricks[0])
-            .buffer(kBakedBindBricks1, m_bricks[m_bricks[1].handle() ? 1 : 0])
-            .buffer(kBakedBindBricks2, m_bricks[m_bricks[2].handle() ? 2 : 0])
-            .buffer(kBakedBindBricks3, m_bricks[m_bricks[3].handle() ? 3 : 0])
-            .buffer(kBakedBindDistances, m_distances)
-            .buffer(kBakedBindLayerEntry, m_layerEntry)
-            .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindBase, m_base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindBaseKept, m_baseKept, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-            .buffer(kBakedBindLoops, m_loops)
-            .buffer(kBakedBindListPixels, m_listPixels);
-        bindList(d, k).push(m_ctx, cmd, march);
-        vkCmdDispatchIndirect(cmd, m_lists.handle(), k * m_listStride);
-        fullBarrier(cmd);
-        if (markLayers)
-            timer.mark(cmd, "march");
-    }
-    if (!markLayers)
-        timer.mark(cmd, "peel+march");
-    memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kTransfer | kHostStage,
-                  kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
+void BakedRenderer::recordMarch(VkCommandBuffer cmd, std::uint32_t k) {
+    using namespace passes;
+    const Prepared& f = m_frame;
+    const bool first = k == 0;
+    const Pipeline& march = m_march.at({f.count, first, f.split});
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
+    pushFrame(cmd, march, f.frame);
+    Descriptors d;
+    d.buffer(kBakedBindParams, m_params)
+        .buffer(kBakedBindTets, m_tets)
+        .buffer(kBakedBindNeighbours, m_neighbours)
+        .buffer(kBakedBindEyeTet, m_eyeTet)
+        .buffer(kBakedBindTable, m_table)
+        .buffer(kBakedBindBricks, m_bricks[0])
+        .buffer(kBakedBindBricks1, m_bricks[m_bricks[1].handle() ? 1 : 0])
+        .buffer(kBakedBindBricks2, m_bricks[m_bricks[2].handle() ? 2 : 0])
+        .buffer(kBakedBindBricks3, m_bricks[m_bricks[3].handle() ? 3 : 0])
+        .buffer(kBakedBindDistances, m_distances)
+        .buffer(kBakedBindLayerEntry, m_layerEntry)
+        .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .image(kBakedBindBase, m_base, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .image(kBakedBindBaseKept, m_baseKept, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+        .buffer(kBakedBindLoops, m_loops)
+        .buffer(kBakedBindListPixels, m_listPixels);
+    bindList(d, k).push(m_ctx, cmd, march);
+    vkCmdDispatchIndirect(cmd, m_lists.handle(), k * m_listStride);
+    fullBarrier(cmd);
 }
 
 BakedStats BakedRenderer::stats() const {

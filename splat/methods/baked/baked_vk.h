@@ -56,8 +56,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <map>
+#include <memory>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -67,33 +67,30 @@
 #include "shaders/spot_layout.hpp"
 #include "splat/context_vk.h"
 #include "splat/method_vk.h"
-#include "splat/pass_vk.h"
 #include "splat/methods/baked/bake_data.h"
+#include "splat/pass_vk.h"
 
 namespace spot::splat {
 
-
-
 /// What the last frame used (the stats' FrameCounters::extra gives them to `render --stats`).
 struct BakedStats {
-    float voxelSize = 0.0f;      ///< level 0's, world units
-    std::uint32_t levels = 0;    ///< mip levels in the bake
-    float thickness = 0.0f;      ///< the shell's, world units
+    float voxelSize = 0.0f;   ///< level 0's, world units
+    std::uint32_t levels = 0; ///< mip levels in the bake
+    float thickness = 0.0f;   ///< the shell's, world units
     std::uint32_t tetrahedra = 0;
     std::uint32_t bricks = 0;         ///< density leaves of every level
     std::uint32_t brickBuffers = 0;   ///< storage buffers they are split over
     std::uint32_t distanceBricks = 0; ///< distance leaves
     std::uint32_t entryFaces = 0;     ///< enterable boundary faces (the peel draws eye-facing ones)
     std::uint32_t maxLayerTets = 0;   ///< most tetrahedra one layer walks
-    std::uint32_t maxLayerSamples = 0; ///< most samples one layer takes (skipped ones included)
-    std::uint32_t tableEntries = 0;   ///< of the leaf tables (one int per leaf of each box)
-    std::uint32_t loopBound = 0;      ///< what one march invocation may run
+    std::uint32_t maxLayerSamples = 0;   ///< most samples one layer takes (skipped ones included)
+    std::uint32_t tableEntries = 0;      ///< of the leaf tables (one int per leaf of each box)
+    std::uint32_t loopBound = 0;         ///< what one march invocation may run
     std::uint32_t maxLoopIterations = 0; ///< counted (countLoops) in the last frame
     std::uint32_t peelPasses = 0;
     std::int64_t eyeTetrahedron = -1; ///< the one holding the eye in the last frame, -1: none
     std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
 };
-
 
 /// Throws InputError, with the reason, when `baked` cannot render `view` (an orthographic camera;
 /// Lambert shading, which needs normals the bake does not store).
@@ -138,6 +135,16 @@ private:
     /// Replace the bake on the GPU by `bake`.
     void uploadBake(const BakeData& bake);
     void ensureTargets(std::uint32_t width, std::uint32_t height);
+    // The passes record() records, in order (the file comment's steps).
+    /// 1. The frame's clears, then the shell's tetrahedra and the eye's.
+    void recordShell(VkCommandBuffer cmd);
+    /// 2. The base mesh, with the first layer's peel drawn in its rendering.
+    void recordMeshAndFirstPeel(VkCommandBuffer cmd);
+    /// 3. Layer k's peel (in a rendering the caller begins) and its march.
+    void recordPeel(VkCommandBuffer cmd, std::uint32_t k);
+    void recordMarch(VkCommandBuffer cmd, std::uint32_t k);
+    /// Layer `layer`'s list header, bound at its offset.
+    Descriptors& bindList(Descriptors& d, std::uint32_t layer) const;
     const Pipeline& marchPipeline(bool count, bool first, bool split);
 
     const SceneGpu& m_scene;

@@ -782,8 +782,8 @@ void RaymarchRenderer::listCulled(const Shell& shell, const SpotMarchParams& par
     for (const auto& [slot, entry] : pairs)
         list[fill[slot]++] = entry;
     for (std::uint32_t r = 0; r < records; ++r)
-        lists.cells[r].head.y = starts[std::size_t(r + 1) * kMarchSubCells] -
-                                starts[std::size_t(r) * kMarchSubCells];
+        lists.cells[r].head.y =
+            starts[std::size_t(r + 1) * kMarchSubCells] - starts[std::size_t(r) * kMarchSubCells];
 }
 
 std::vector<glm::uvec2> RaymarchRenderer::walkBits(const Shell& shell, const Lists& lists) const {

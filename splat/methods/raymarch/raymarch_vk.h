@@ -1,7 +1,7 @@
 /// @file raymarch_vk.h
-/// @brief The `raymarch` method of docs/design.md section 4: the baseline the paper beats (paper sec. 4,
-/// eq. 7-9). Each pixel's ray is marched through the shell, and at every step the kernels of the
-/// 27 cells around the sample are summed. A Renderer of the registry (method_vk.h).
+/// @brief The `raymarch` method of docs/design.md section 4: the baseline the paper beats (paper
+/// sec. 4, eq. 7-9). Each pixel's ray is marched through the shell, and at every step the kernels
+/// of the 27 cells around the sample are summed. A Renderer of the registry (method_vk.h).
 ///
 /// When the impulses change (ImpulseSet::version), prepare() redoes what depends only on them, in
 /// a submit of its own, waited for:

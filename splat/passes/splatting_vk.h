@@ -1,4 +1,4 @@
-/// @file renderer_vk.h
+/// @file splatting_vk.h
 /// @brief The splatting renderers of docs/design.md section 4 (paper sec. 4, fig. 4):
 /// `instanced`, `oit`, `hybrid` and `sorted`, over an opaque base mesh, behind the Renderer
 /// interface of method_vk.h.
@@ -15,7 +15,8 @@
 ///     (splat_sorted_keys.comp, then the radix sort of sort_vk.h).
 ///  2. mesh (raster): base colour (or the background), ray distance t to the mesh (R32F) and a
 ///     reversed float depth.
-///  3. splat (raster, and compute for small kernels): one quad per kept kernel; per pixel the kernel's colour and alpha along the
+///  3. splat (raster, and compute for small kernels): one quad per kept kernel; per pixel the
+///  kernel's colour and alpha along the
 ///     pixel's ray, through its lobes, up to the mesh (analytic optical depths, or N samples:
 ///     paper eq. 10). `instanced` draws the kernel opaque where alpha >= 0.5 with the depth test;
 ///     `oit` blends w x (premultiplied colour, alpha) additively and the optical depth into a
@@ -48,7 +49,7 @@
 #include "splat/context_vk.h"
 #include "splat/method_vk.h"
 #include "splat/pass_vk.h"
-#include "splat/sort_vk.h"
+#include "splat/passes/radix_sort_vk.h"
 
 namespace spot::splat {
 
@@ -56,6 +57,11 @@ enum class Method { Instanced, Oit, Hybrid, Sorted };
 
 /// "instanced", "oit", "hybrid", "sorted".
 const char* methodName(Method method);
+
+/// The registry entry of a splatting method (its module under splat/methods/ gives the summary
+/// and the settings it takes).
+MethodInfo splattingMethod(Method method, std::string summary,
+                           std::vector<const Setting*> settings);
 
 class SplatRenderer final : public Renderer {
 public:
@@ -78,8 +84,8 @@ private:
     /// What a pipeline is specialized for.
     struct Spec {
         std::uint32_t samples = 0;
-        bool lambert = false, orthographic = false, ewa = true, hybridAtomic = false,
-             count = false, closestPass = false;
+        bool lambert = false, orthographic = false, ewa = true, hybridAtomic = false, count = false,
+             closestPass = false;
         std::uint32_t weight = 0, resolve = 0;
         std::uint32_t smallPixels = 0; ///< the compute path's threshold (0: off)
         auto tie() const {
@@ -91,7 +97,8 @@ private:
     struct Pipelines {
         Pipeline prepare, compact, splat, small, closest, sortKeys, resolve;
         Pipeline prepareClipped; ///< prepare's second dispatch (the kernels the first listed)
-        Pipeline resolveList; ///< hybrid, instanced: the resolve's second dispatch (the listed pixels)
+        Pipeline
+            resolveList; ///< hybrid, instanced: the resolve's second dispatch (the listed pixels)
     };
     const Pipelines& pipelines(const Spec& spec, bool roofline);
     /// Whether a width x height frame's fixed-point sums fit one storage buffer binding (else
@@ -105,7 +112,8 @@ private:
         bool fixed = false;  ///< the compute path's fixed-point sums and tile flags
         bool list = false;   ///< the list of pixels with a closest kernel
     };
-    Targets targets(std::uint64_t width, std::uint64_t height, const RenderSettings& settings) const;
+    Targets targets(std::uint64_t width, std::uint64_t height,
+                    const RenderSettings& settings) const;
     /// GPU bytes of a width x height frame's targets with these settings (images, the closest
     /// kernels and their list, the fixed-point sums): what ensureTargets makes and frameBytes
     /// counts.
@@ -146,7 +154,7 @@ private:
     std::uint32_t m_width = 0, m_height = 0;
     Image m_base, m_distance, m_depth, m_accum, m_opticalDepth, m_closestKernel, m_closestDepth,
         m_result;
-    Buffer m_closest; ///< hybrid (atomic): uint64 per pixel
+    Buffer m_closest;     ///< hybrid (atomic): uint64 per pixel
     Buffer m_closestList; ///< hybrid, instanced: SpotSplatList and a uint per pixel
     /// oit, hybrid with the compute path: the small kernels' fixed-point OIT sums
     /// (kSplatFixedChannels uint64 per pixel), zero between frames (the resolve clears what it
@@ -157,7 +165,8 @@ private:
     // Per impulse capacity.
     std::uint32_t m_capacity = 0;
     Buffer m_quadIndices;
-    Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_small, m_draw, m_counters, m_sortKeys;
+    Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_small, m_draw, m_counters,
+        m_sortKeys;
     Buffer m_clipList; ///< SpotSplatList and a uint per kernel: prepare's second dispatch
     RadixSortScratch m_sortScratch;
 

@@ -1,4 +1,4 @@
-/// @file sort_vk.h
+/// @file radix_sort_vk.h
 /// @brief A GPU radix sort of (uint32 key, uint32 value) pairs: ascending keys, stable,
 /// deterministic (the same bytes whatever lavapipe's thread count: no atomics at all).
 ///

@@ -1,4 +1,4 @@
-#include "sort_vk.h"
+#include "radix_sort_vk.h"
 
 #include <algorithm>
 #include <span>

@@ -1,4 +1,4 @@
-#include "renderer_vk.h"
+#include "splatting_vk.h"
 
 #include <algorithm>
 #include <array>
@@ -581,18 +581,20 @@ void SplatRenderer::recordMesh(VkCommandBuffer cmd) {
     transitionImage(cmd, m_base.handle(), kColorAspect, kAttachment, kAttachment, kColorOut,
                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kColorOut, kColorRW);
     transitionImage(cmd, m_depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
-                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                    kTests, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
+                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, kTests,
+                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kTests, kDepthRW);
 }
 
-void SplatRenderer::pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline,
-                                        bool closest, bool counters) {
+void SplatRenderer::pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline, bool closest,
+                                        bool counters) {
     Descriptors d;
     d.buffer(kSplatBindBounds, m_bounds)
         .buffer(kSplatBindVisible, m_visible)
         .buffer(kSplatBindWorldLobes, m_worldLobes)
         .buffer(kSplatBindScreenLobes, m_screenLobes)
-        .image(kSplatBindMeshDistance, m_distance, passes::kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
+        .image(kSplatBindMeshDistance, m_distance, passes::kGeneral,
+               VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
     if (closest)
         d.buffer(kSplatBindClosest, m_closest.handle() ? m_closest : m_counters);
     if (counters)
@@ -618,9 +620,11 @@ void SplatRenderer::recordClosestPass(VkCommandBuffer cmd) {
         transitionImage(cmd, m_closestDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                         VK_PIPELINE_STAGE_2_NONE, 0, kTests, kDepthRW);
-        VkRenderingAttachmentInfo index = colorAttachment(m_closestKernel, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo index =
+            colorAttachment(m_closestKernel, VK_ATTACHMENT_LOAD_OP_CLEAR);
         index.clearValue.color.uint32[0] = 0xffffffffu; // no kernel
-        VkRenderingAttachmentInfo nearest = depthAttachment(m_closestDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo nearest =
+            depthAttachment(m_closestDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
         nearest.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
         nearest.clearValue.depthStencil = {1.0f, 0};
         beginRendering(cmd, width, height, {index}, &nearest);
@@ -640,17 +644,19 @@ void SplatRenderer::recordSplat(VkCommandBuffer cmd) {
     const Pipelines& p = *f.pipelines;
     const std::uint32_t width = m_width, height = m_height;
     // 3. The kernels: one quad each, drawn in impulse order (`sorted`: back to front).
-    const VkRenderingAttachmentInfo depthInfo = depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
+    const VkRenderingAttachmentInfo depthInfo =
+        depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
     if (f.instanced) // nothing but the atomics, behind the mesh test
         beginRendering(cmd, width, height, {}, &depthInfo);
     else if (f.sorted)
         beginRendering(cmd, width, height, {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)},
                        &depthInfo);
     else
-        beginRendering(cmd, width, height,
-                       {colorAttachment(m_accum, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f)),
-                        colorAttachment(m_opticalDepth, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f))},
-                       &depthInfo);
+        beginRendering(
+            cmd, width, height,
+            {colorAttachment(m_accum, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f)),
+             colorAttachment(m_opticalDepth, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(0.0f))},
+            &depthInfo);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.splat.handle());
     pushFrame(cmd, p.splat, f.frame);
     const bool atomics = (usesOit(m_method) || f.instanced) && !f.settings.roofline;
@@ -754,43 +760,16 @@ FrameCounters SplatRenderer::counters() const {
     return c;
 }
 
-namespace {
-
-MethodInfo splatMethod(Method method, const char* summary, std::vector<const Setting*> taken) {
+MethodInfo splattingMethod(Method method, std::string summary,
+                           std::vector<const Setting*> settings) {
     MethodInfo m;
     m.name = methodName(method);
-    m.summary = summary;
-    m.settings = std::move(taken);
+    m.summary = std::move(summary);
+    m.settings = std::move(settings);
     m.make = [method](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<SplatRenderer>(scene, method);
     };
     return m;
-}
-
-} // namespace
-
-MethodInfo instancedMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Instanced, "opaque kernels with the depth test (paper fig. 4 left)",
-                       {&s::kernelSamples, &s::ewa, &s::smallPixels, &s::lod, &s::countFragments});
-}
-
-MethodInfo oitMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Oit, "weighted blended OIT EWA splatting (paper eq. 10-12)",
-                       {&s::kernelSamples, &s::ewa, &s::weight, &s::smallPixels, &s::lod, &s::countFragments});
-}
-
-MethodInfo hybridMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Hybrid, "oit plus the closest kernel composited over it (paper eq. 13)",
-                       {&s::kernelSamples, &s::ewa, &s::weight, &s::closest, &s::smallPixels, &s::lod, &s::countFragments});
-}
-
-MethodInfo sortedMethod() {
-    namespace s = settings;
-    return splatMethod(Method::Sorted, "kernels sorted by depth, composited back to front",
-                       {&s::kernelSamples, &s::ewa, &s::lod, &s::countFragments});
 }
 
 } // namespace spot::splat
