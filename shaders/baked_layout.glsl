@@ -1,4 +1,4 @@
-/* baked_layout.glsl: what the baked renderer's host code (splat/baked_vk.cpp) and its shaders
+/* baked_layout.glsl: what the baked renderer's host code (splat/methods/baked/baked_vk.cpp) and its shaders
  * (baked_*.comp, baked_tet.vert, baked_peel.frag) share: bindings, the parameter block, the
  * sparse grid's leaf tables. Compiles as C++ (GLM types, SPOT_CONST and SPOT_FN
  * defined by the includer) and as GLSL. docs/design.md section 5 describes the renderer. */

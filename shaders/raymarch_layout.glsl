@@ -1,10 +1,10 @@
 /* raymarch_layout.glsl: the ray-march renderer's structs, push constants, bindings,
- * specialization constants and constants, shared by C++ and GLSL (splat/raymarch_vk.h,
+ * specialization constants and constants, shared by C++ and GLSL (splat/methods/raymarch/raymarch_vk.h,
  * raymarch_shared.glsl and the raymarch_*.comp shaders). C++ and GLSL name bindings and
  * specialization constants by these constants, never by number.
  *
  * Same rules as spot_layout.h: 16-byte members only, so std430 (and push-constant) layout equals
- * the C++ layout; splat/raymarch_vk.h includes this file inside a namespace with glm types and
+ * the C++ layout; splat/methods/raymarch/raymarch_vk.h includes this file inside a namespace with glm types and
  * static_asserts the sizes. Units: world units; cell (i, j, k) spans [i h, (i + 1) h) x ...
  * (noise/cells.h).
  *
@@ -13,7 +13,7 @@
  * 2). An open-addressing hash table maps a shell cell's ijk to its record. Each shell cell is cut
  * into kMarchSub^3 sub-cells, and each sub-cell lists the impulses of the cell's 27 neighbours
  * that may have density in it, each with the mask of its lobes that may (the lobe's box and the
- * slabs holding its support reach the sub-cell: splat/raymarch_vk.h); the march sums only those
+ * slabs holding its support reach the sub-cell: splat/methods/raymarch/raymarch_vk.h); the march sums only those
  * lobes, in impulse and lobe order (the list is a subset, in the same order, of the 27
  * neighbours' lobes, and each lobe it leaves out has exactly zero density there).
  */

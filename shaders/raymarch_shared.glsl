@@ -1,6 +1,6 @@
 /* raymarch_shared.glsl: the ray march (paper eq. 7-9), one source for the GPU and its CPU twin.
  *
- * Compiles as GLSL 450 and as C++ (inside a class body in splat/raymarch_vk.cpp, in namespace
+ * Compiles as GLSL 450 and as C++ (inside a class body in splat/methods/raymarch/raymarch_vk.cpp, in namespace
  * spot::shared::f32 with GLM, like spot_generate.h): keep to the common subset (no swizzles, no
  * references but SPOT_INOUT, float literals with an f suffix). Included after spot_shared.h and
  * raymarch_layout.glsl; the includer provides the data accessors

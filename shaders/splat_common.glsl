@@ -12,7 +12,7 @@
 
 layout(push_constant) uniform Push { SpotSplatFrame frame; };
 
-// Each pipeline is compiled for one setting (splat/renderer_vk.cpp sets these); the defaults
+// Each pipeline is compiled for one setting (splat/passes/splatting_vk.cpp sets these); the defaults
 // below are never used as such.
 layout(constant_id = kSplatSpecLobes) const uint kLobes = 1u;
 layout(constant_id = kSplatSpecSamples) const uint kSamples = 0u;

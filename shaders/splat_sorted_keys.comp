@@ -1,5 +1,5 @@
 #version 450
-// Sorted method: the sort key of each kept kernel, ahead of the radix sort (splat/sort_vk.h).
+// Sorted method: the sort key of each kept kernel, ahead of the radix sort (splat/passes/radix_sort_vk.h).
 // Kernels are composited back to front, so the key is the bitwise complement of the kernel's
 // view depth's float bits: for depths >= 0 the float bits order as the floats do, their
 // complement in reverse. The kernel's depth is the view depth of its centre of mass

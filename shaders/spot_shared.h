@@ -429,7 +429,7 @@ SPOT_FN real spotValueNoise(rvec3 p, int octaves, uint seed) {
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* Splatting (splat/renderer_vk.cpp and the splat_*.glsl shaders).                             */
+/* Splatting (splat/passes/splatting_vk.cpp and the splat_*.glsl shaders).                             */
 /* ------------------------------------------------------------------------------------------ */
 
 /* 1 - exp(-x) for x >= 0, without cancellation for small x (GLSL has no expm1): the opacity of

@@ -1,5 +1,5 @@
 /* spot_sort.h: the GPU radix sort's push constants and constants, shared by C++ and GLSL
- * (splat/sort_vk.cpp and the sort_*.comp shaders).
+ * (splat/passes/radix_sort_vk.cpp and the sort_*.comp shaders).
  *
  * Same rules as spot_layout.h: 16-byte members only, so the push-constant layout equals the C++
  * layout; sort_vk.cpp includes this file inside a namespace with glm types and static_asserts

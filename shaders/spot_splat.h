@@ -1,5 +1,5 @@
 /* spot_splat.h: the splatting renderer's structs, bindings, specialization constants and constants,
- * shared by C++ and GLSL (splat/renderer_vk.cpp and the splat_* shaders it runs).
+ * shared by C++ and GLSL (splat/passes/splatting_vk.cpp and the splat_* shaders it runs).
  *
  * Same rules as spot_layout.h: 16-byte members only, so std430 (and push-constant) layout equals
  * the C++ layout; pass_vk.h includes this file inside a namespace with glm types and

@@ -65,7 +65,7 @@ struct RenderSettings {
     // Ray-march.
     int steps = 32;      ///< samples along each ray through the shell, [1, 4096]
     int supersample = 1; ///< n x n rays per pixel, box-filtered, [1, 8]
-    /// Largest loop bound one march dispatch may reach (raymarch_vk.h); tests raise it past
+    /// Largest loop bound one march dispatch may reach (methods/raymarch/raymarch_vk.h); tests raise it past
     /// lavapipe's 65,535 to show what the guard prevents. 0: the default budget.
     std::uint32_t loopBudget = 0;
     bool cullImpulses = true; ///< skip impulses whose box misses the sample (exact)

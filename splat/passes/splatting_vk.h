@@ -12,7 +12,7 @@
 ///     bounded along their principal axis). A deterministic compaction lists the kernels whose
 ///     quad is not empty, in impulse order, and writes the indirect draw. `sorted` then sorts the
 ///     kept kernels back to front by the view depth of their centre of mass
-///     (splat_sorted_keys.comp, then the radix sort of sort_vk.h).
+///     (splat_sorted_keys.comp, then the radix sort of passes/radix_sort_vk.h).
 ///  2. mesh (raster): base colour (or the background), ray distance t to the mesh (R32F) and a
 ///     reversed float depth.
 ///  3. splat (raster, and compute for small kernels): one quad per kept kernel; per pixel the

@@ -1,4 +1,4 @@
-// The `baked` method (splat/baked_vk.h): a bake rendered through the shell's tetrahedra with
+// The `baked` method (splat/methods/baked/baked_vk.h): a bake rendered through the shell's tetrahedra with
 // depth peeling, against the CPU reference of the same impulses and against `hybrid`.
 #include <algorithm>
 #include <array>
