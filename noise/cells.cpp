@@ -167,7 +167,10 @@ double estimateCellCount(const Mesh& mesh, float cellSize) {
     return 1.8 * mesh.surfaceArea() / (h * h) + double(mesh.triangles.size()) + 8.0;
 }
 
-SurfaceCells buildSurfaceCells(const Mesh& mesh, float cellSize, const CellLimits& limits) {
+namespace {
+
+/// Refuses a cell size the mesh cannot be cut into within `limits` and the memory budget.
+void checkCellBudget(const Mesh& mesh, float cellSize, const CellLimits& limits) {
     if (!std::isfinite(cellSize) || !(cellSize > 0.0f))
         throw InputError(cat("cell size ", cellSize, " must be a positive finite number"));
     const Bounds box = mesh.bounds();
@@ -192,13 +195,12 @@ SurfaceCells buildSurfaceCells(const Mesh& mesh, float cellSize, const CellLimit
     const double vdbBytes = leaves * 512.0 * 8.0 * 2.0;
     const double ourBytes = estimated * (sizeof(SurfaceCell) + 4 * sizeof(SurfacePiece) + 64.0);
     requireMemory(std::uint64_t(vdbBytes + ourBytes), cat("surface cells of size ", cellSize));
+}
 
-    SurfaceCells result;
-    result.cellSize = cellSize;
-    const double h = cellSize;
-
-    // 1. Exact pieces: every triangle clipped into the cells it crosses, in parallel over fixed
-    //    blocks so the order (and hence the impulses) never depends on the thread count.
+/// 1. Exact pieces: every triangle clipped into the cells of edge `h` it crosses, in parallel
+///    over fixed blocks so the order (and hence the impulses) never depends on the thread count;
+///    sorted by cell, then triangle.
+std::vector<PieceEntry> clipIntoCells(const Mesh& mesh, double h) {
     constexpr std::size_t kBlock = 256;
     const std::size_t triangleCount = mesh.triangles.size();
     const std::size_t blockCount = (triangleCount + kBlock - 1) / kBlock;
@@ -226,7 +228,11 @@ SurfaceCells buildSurfaceCells(const Mesh& mesh, float cellSize, const CellLimit
             return a.ijk.z < b.ijk.z;
         return a.piece.triangle < b.piece.triangle;
     });
+    return entries;
+}
 
+/// The sorted pieces grouped into cells (each cell's pieces contiguous, its area their sum).
+void groupIntoCells(const std::vector<PieceEntry>& entries, SurfaceCells& result) {
     result.pieces.reserve(entries.size());
     for (std::size_t i = 0; i < entries.size();) {
         SurfaceCell cell;
@@ -245,9 +251,13 @@ SurfaceCells buildSurfaceCells(const Mesh& mesh, float cellSize, const CellLimit
         result.cells.push_back(cell);
         i = j;
     }
-    std::vector<PieceEntry>().swap(entries);
+}
 
-    // 2. OpenVDB's unsigned distance band over the same grid (voxel ijk centred at
+/// 2. Each cell's summary (closest point, normal, tangent, uv) from the polygon OpenVDB finds
+///    closest to its centre.
+void summarizeCells(const Mesh& mesh, double h, SurfaceCells& result) {
+    const std::size_t triangleCount = mesh.triangles.size();
+    // OpenVDB's unsigned distance band over the same grid (voxel ijk centred at
     //    (ijk + 1/2) h) with its closest-polygon index: the per-cell summary comes from the
     //    polygon closest to each cell centre, and every cell the pieces found must lie in the band
     //    (a cell the surface crosses has its centre within sqrt(3)/2 h of the surface).
@@ -290,7 +300,17 @@ SurfaceCells buildSurfaceCells(const Mesh& mesh, float cellSize, const CellLimit
         cell.tangent = sp.tangent;
         cell.uv = sp.uv;
     });
-    return result;
 }
 
+} // namespace
+
+SurfaceCells buildSurfaceCells(const Mesh& mesh, float cellSize, const CellLimits& limits) {
+    checkCellBudget(mesh, cellSize, limits);
+    SurfaceCells result;
+    result.cellSize = cellSize;
+    const double h = cellSize;
+    groupIntoCells(clipIntoCells(mesh, h), result);
+    summarizeCells(mesh, h, result);
+    return result;
+}
 } // namespace spot::noise

@@ -7,6 +7,7 @@
 #include "noise/mesh.h"
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <bit>
 #include <charconv>
@@ -643,6 +644,88 @@ struct PlyHeader {
     std::size_t dataOffset = 0;
 };
 
+/// `line` split at blanks into `tokens` (cleared first).
+void splitPlyTokens(std::string_view line, std::vector<std::string_view>& tokens) {
+    tokens.clear();
+    for (std::size_t i = 0; i < line.size();) {
+        while (i < line.size() && isBlank(line[i]))
+            ++i;
+        const std::size_t start = i;
+        while (i < line.size() && !isBlank(line[i]))
+            ++i;
+        if (i > start)
+            tokens.push_back(line.substr(start, i - start));
+    }
+}
+
+/// A header's failure on its current line: throws InputError naming the line (never returns).
+using PlyHeaderFail = std::function<void(const std::string&)>;
+
+/// An `element NAME COUNT` line; its name must be new (`elementNames`) and its count within
+/// `limits` for the vertex and face elements.
+PlyElement parsePlyElement(const std::vector<std::string_view>& tokens, const std::string& name,
+                           const MeshLimits& limits, std::unordered_set<std::string>& elementNames,
+                           const PlyHeaderFail& fail) {
+    if (tokens.size() != 3)
+        fail("expected 'element NAME COUNT'");
+    const std::string_view countText = tokens[2];
+    std::int64_t count = 0;
+    std::uint64_t ucount = 0;
+    if (parseInt(countText, count)) {
+        if (count < 0)
+            fail(cat("negative element count ", count));
+        ucount = static_cast<std::uint64_t>(count);
+    } else if (std::all_of(countText.begin(), countText.end(),
+                           [](char c) { return c >= '0' && c <= '9'; })) {
+        // Too large for 64 bits: still a count, refused below with the other huge ones.
+        ucount = std::numeric_limits<std::uint64_t>::max();
+    } else {
+        fail(cat("element count ", quote(countText), " is not a number"));
+    }
+    PlyElement element;
+    element.name = std::string(tokens[1]);
+    element.count = ucount;
+    if (!elementNames.insert(element.name).second)
+        fail(cat("element ", quote(element.name), " is declared twice"));
+    if (element.name == "vertex" && ucount > limits.maxVertices)
+        throw InputError(cat(name, ": header declares ", countText,
+                             " vertices, more than the limit ", limits.maxVertices));
+    if (element.name == "face" && ucount > limits.maxTriangles)
+        throw InputError(cat(name, ": header declares ", countText,
+                             " faces, more than the limit ", limits.maxTriangles));
+    return element;
+}
+
+/// A `property TYPE NAME` or `property list COUNT_TYPE ITEM_TYPE NAME` line.
+PlyProperty parsePlyProperty(const std::vector<std::string_view>& tokens,
+                             const PlyHeaderFail& fail) {
+    PlyProperty property;
+    auto lookup = [&](std::string_view typeToken) {
+        for (const PlyTypeInfo& info : kPlyTypeNames) {
+            if (info.name == typeToken)
+                return info.type;
+        }
+        fail(cat("unknown property type ", quote(typeToken)));
+        return PlyType::UInt8; // not reached
+    };
+    if (tokens.size() >= 2 && tokens[1] == "list") {
+        if (tokens.size() != 5)
+            fail("expected 'property list COUNT_TYPE ITEM_TYPE NAME'");
+        property.isList = true;
+        property.countType = lookup(tokens[2]);
+        property.type = lookup(tokens[3]);
+        property.name = std::string(tokens[4]);
+        if (!isIntegral(property.countType))
+            fail("a list's count type must be an integer type");
+    } else {
+        if (tokens.size() != 3)
+            fail("expected 'property TYPE NAME'");
+        property.type = lookup(tokens[1]);
+        property.name = std::string(tokens[2]);
+    }
+    return property;
+}
+
 PlyHeader parsePlyHeader(std::string_view bytes, const std::string& name,
                          const MeshLimits& limits) {
     if (bytes.substr(0, 3) != "ply" || bytes.size() < 4 ||
@@ -681,16 +764,7 @@ PlyHeader parsePlyHeader(std::string_view bytes, const std::string& name,
             throw InputError(cat(name, ": header line ", lineNo, " ", quote(line), ": ", what));
         };
 
-        tokens.clear();
-        for (std::size_t i = 0; i < line.size();) {
-            while (i < line.size() && isBlank(line[i]))
-                ++i;
-            const std::size_t start = i;
-            while (i < line.size() && !isBlank(line[i]))
-                ++i;
-            if (i > start)
-                tokens.push_back(line.substr(start, i - start));
-        }
+        splitPlyTokens(line, tokens);
         if (tokens.empty())
             continue;
         const std::string_view keyword = tokens[0];
@@ -716,63 +790,14 @@ PlyHeader parsePlyHeader(std::string_view bytes, const std::string& name,
         } else if (keyword == "element") {
             if (!haveFormat)
                 fail("element before the format line");
-            if (tokens.size() != 3)
-                fail("expected 'element NAME COUNT'");
-            const std::string_view countText = tokens[2];
-            std::int64_t count = 0;
-            std::uint64_t ucount = 0;
-            if (parseInt(countText, count)) {
-                if (count < 0)
-                    fail(cat("negative element count ", count));
-                ucount = static_cast<std::uint64_t>(count);
-            } else if (std::all_of(countText.begin(), countText.end(),
-                                   [](char c) { return c >= '0' && c <= '9'; })) {
-                // Too large for 64 bits: still a count, refused below with the other huge ones.
-                ucount = std::numeric_limits<std::uint64_t>::max();
-            } else {
-                fail(cat("element count ", quote(countText), " is not a number"));
-            }
-            PlyElement element;
-            element.name = std::string(tokens[1]);
-            element.count = ucount;
-            if (!elementNames.insert(element.name).second)
-                fail(cat("element ", quote(element.name), " is declared twice"));
+            header.elements.push_back(
+                parsePlyElement(tokens, name, limits, elementNames, fail));
             propertyNames.clear();
-            if (element.name == "vertex" && ucount > limits.maxVertices)
-                throw InputError(cat(name, ": header declares ", countText,
-                                     " vertices, more than the limit ", limits.maxVertices));
-            if (element.name == "face" && ucount > limits.maxTriangles)
-                throw InputError(cat(name, ": header declares ", countText,
-                                     " faces, more than the limit ", limits.maxTriangles));
-            header.elements.push_back(std::move(element));
         } else if (keyword == "property") {
             if (header.elements.empty())
                 fail("property before any element");
-            PlyProperty property;
-            auto lookup = [&](std::string_view typeToken) {
-                for (const PlyTypeInfo& info : kPlyTypeNames) {
-                    if (info.name == typeToken)
-                        return info.type;
-                }
-                fail(cat("unknown property type ", quote(typeToken)));
-                return PlyType::UInt8; // not reached
-            };
-            if (tokens.size() >= 2 && tokens[1] == "list") {
-                if (tokens.size() != 5)
-                    fail("expected 'property list COUNT_TYPE ITEM_TYPE NAME'");
-                property.isList = true;
-                property.countType = lookup(tokens[2]);
-                property.type = lookup(tokens[3]);
-                property.name = std::string(tokens[4]);
-                if (!isIntegral(property.countType))
-                    fail("a list's count type must be an integer type");
-            } else {
-                if (tokens.size() != 3)
-                    fail("expected 'property TYPE NAME'");
-                property.type = lookup(tokens[1]);
-                property.name = std::string(tokens[2]);
-            }
             PlyElement& element = header.elements.back();
+            PlyProperty property = parsePlyProperty(tokens, fail);
             if (!propertyNames.insert(property.name).second)
                 fail(cat("property ", quote(property.name), " is declared twice in element ",
                          quote(element.name)));
