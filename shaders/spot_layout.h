@@ -52,14 +52,17 @@ struct SpotWorldLobe {
 
 /* A bound field in the shared form (144 bytes): what the generator evaluates, on either side. */
 struct SpotField {
-    ivec4 kind;    /* x: 0 constant, 1 gradient, 2 noise, 3 vertex, 4 image, 5 painted;
+    ivec4 kind;    /* x: the kind (spot_generate.h kField*: 0 constant, 1 gradient, 2 noise,
+                      3 vertex, 4 image, 5 painted, 6 tangent), plus kFieldLayered or
+                      kFieldLayeredDensity when a paint layer lies over it (axis.w: where);
                       y: components (1|3); z: noise octaves; w: noise seed (bits) */
     vec4 value;    /* constant value; painted: the background */
     vec4 lo;       /* mapped kinds: output at t = 0 (per component) */
     vec4 hi;       /* output at t = 1 */
     vec4 from;     /* gradient: xyz start point; noise: w frequency (cells per world unit);
                       painted: w 1 / voxel size */
-    vec4 axis;     /* gradient: (to - from) / |to - from|^2 */
+    vec4 axis;     /* gradient: (to - from) / |to - from|^2; w: a layered field's layer offset
+                      in the field data (bits; spot_generate.h spotFieldLayer) */
     uvec4 data;    /* vertex: xyz offsets of the attribute columns in the field data array;
                       image: x offset, y width, z height, w repeat (1) or clamp (0);
                       painted: x hash table offset, y its size, z longest probe, w blocks'
