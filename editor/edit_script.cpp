@@ -178,6 +178,7 @@ void checkExtension(Line& line, const std::filesystem::path& file,
     line.fail(cat("'", file.string(), "' must end in ", list));
 }
 
+// One branch per verb, each a few lines (about 120 in all): the verbs read as one table.
 ScriptAction parseLine(Line& line, const std::string& verb) {
     using T = ScriptAction::Type;
     ScriptAction a;
@@ -344,6 +345,7 @@ ScriptReport runScript(Session& session, const std::vector<ScriptAction>& action
     return report;
 }
 
+// One branch per action type, each a few lines (about 120 in all), in the order of parseLine.
 void runScriptAction(Session& session, const ScriptAction& a, const std::string& name,
                      std::FILE* log, ScriptReport& report) {
     using T = ScriptAction::Type;

@@ -275,6 +275,9 @@ bool clippedConicBox(ScreenForm s, float k, out vec2 lo, out vec2 hi) {
     return true;
 }
 
+// One function for the whole kernel (about 170 lines), by choice: its per-lobe arrays (centres,
+// shapes, boxes) stay in registers on lavapipe only while every index is a constant after
+// unrolling, which arrays passed between functions do not guarantee (docs/design.md section 8).
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (kClipped) {
