@@ -17,13 +17,7 @@ private:
     rvec4 spotWalkPlane(uint tet, uint f) const { return m_planes[4u * tet + f]; }
 
 public:
-#define SPOT_FN
-#define SPOT_CONST static constexpr
-#define SPOT_OUT(T) T&
-#define SPOT_INOUT(T) T&
+#include "shaders/spot_member_begin.h"
 #include "shaders/spot_tet_walk.h"
-#undef SPOT_FN
-#undef SPOT_CONST
-#undef SPOT_OUT
-#undef SPOT_INOUT
+#include "shaders/spot_member_end.h"
 };

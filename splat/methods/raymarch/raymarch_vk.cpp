@@ -87,15 +87,9 @@ private:
     }
 
 public:
-#define SPOT_FN
-#define SPOT_CONST static constexpr
-#define SPOT_OUT(T) T&
-#define SPOT_INOUT(T) T&
+#include "shaders/spot_member_begin.h"
 #include "shaders/raymarch_shared.glsl"
-#undef SPOT_FN
-#undef SPOT_CONST
-#undef SPOT_OUT
-#undef SPOT_INOUT
+#include "shaders/spot_member_end.h"
 };
 
 } // namespace spot::shared::f32
