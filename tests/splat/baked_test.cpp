@@ -79,8 +79,11 @@ BakedScene loadBakedScene(const std::string& name, int size, float voxel, int le
                                                             options);
     s.bake = (tmpDir() / ("bunny-" + std::to_string(voxel) + "-" + std::to_string(levels) + ".vdb"))
                  .string();
-    if (!fs::exists(s.bake))
-        noise::writeBakedGrids(s.bake, noise::bakeNoise(*s.generator, bakeOptions(voxel, levels)));
+    if (!fs::exists(s.bake)) {
+        noise::BakeOptions o = bakeOptions(voxel, levels);
+        o.meshHash = noise::shellHash(noise::meshHash(s.mesh), s.generator->cellSize());
+        noise::writeBakedGrids(s.bake, noise::bakeNoise(*s.generator, o));
+    }
     return s;
 }
 
