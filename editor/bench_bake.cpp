@@ -77,6 +77,7 @@ BenchBake benchBake(const fs::path& cacheDir, const noise::ImpulseGenerator& gen
     options.levels = inputs.levels;
     options.presetName = presetName;
     options.presetHash = noise::fnv1a64(inputs.preset);
+    options.meshHash = noise::shellHash(noise::meshHash(generator.mesh()), generator.cellSize());
     noise::BakeStats stats;
     const noise::BakedVolume volume = noise::bakeNoise(generator, options, {}, &stats);
     noise::writeBakedGrids(b.file, volume);

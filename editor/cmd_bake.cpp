@@ -68,6 +68,7 @@ int bake(int argc, char** argv) {
     options.levels = int(args.integer("levels", 1, 1, noise::kMaxBakeLevels));
     options.presetName = job.preset.name;
     options.presetHash = noise::fnv1a64(readFileCapped(job.scene.preset, kMaxPresetBytes));
+    options.meshHash = noise::shellHash(noise::meshHash(job.mesh), job.generator->cellSize());
     if (args.has("resolution")) {
         const auto n = args.integer("resolution", 0, 1, 1 << 24);
         try {

@@ -27,6 +27,12 @@ int info(int argc, char** argv) {
         std::printf("bake %s\n", args.str("bake").c_str());
         std::printf("  preset     %s (hash %016llx)\n", bake.presetName().c_str(),
                     static_cast<unsigned long long>(bake.presetHash()));
+        if (bake.meshHash())
+            std::printf("  mesh hash  %016llx (the rest mesh and the cell size)\n",
+                        static_cast<unsigned long long>(*bake.meshHash()));
+        else
+            std::printf("  mesh hash  none recorded (an older bake: not checked against "
+                        "the scene)\n");
         std::printf("  version    %s\n", bake.version().c_str());
         for (int l = 0; l < bake.levels(); ++l)
             std::printf("  level %d    voxel %g, %llu voxels\n", l, double(bake.voxelSize(l)),

@@ -5,13 +5,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
 #include <mutex>
 #include <system_error>
 
 #include <unistd.h>
 
+#include <openvdb/io/Archive.h>
 #include <openvdb/io/File.h>
+#include <openvdb/io/GridDescriptor.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Morphology.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -22,6 +25,7 @@
 #include "noise/error.h"
 #include "noise/impulses.h"
 #include "noise/kernel.h"
+#include "noise/mesh.h"
 #include "noise/system.h"
 #include "shaders/spot_shared.hpp"
 
@@ -219,13 +223,31 @@ void checkOptions(const BakeOptions& options) {
 
 } // namespace
 
-std::uint64_t fnv1a64(std::string_view text) {
-    std::uint64_t h = 0xcbf29ce484222325ull;
+std::uint64_t fnv1a64(std::string_view text, std::uint64_t hash) {
+    std::uint64_t h = hash;
     for (const char c : text) {
         h ^= std::uint64_t(static_cast<unsigned char>(c));
         h *= 0x100000001b3ull;
     }
     return h;
+}
+
+namespace {
+template <typename T> std::uint64_t hashBytes(const T* data, std::size_t count, std::uint64_t h) {
+    return fnv1a64(std::string_view(reinterpret_cast<const char*>(data), count * sizeof(T)), h);
+}
+} // namespace
+
+std::uint64_t meshHash(const Mesh& mesh) {
+    static_assert(sizeof(glm::vec3) == 12 && sizeof(glm::uvec3) == 12);
+    const std::uint64_t counts[2] = {mesh.positions.size(), mesh.triangles.size()};
+    std::uint64_t h = hashBytes(counts, 2, kFnv1a64Basis);
+    h = hashBytes(mesh.positions.data(), mesh.positions.size(), h);
+    return hashBytes(mesh.triangles.data(), mesh.triangles.size(), h);
+}
+
+std::uint64_t shellHash(std::uint64_t meshHash, float cellSize) {
+    return hashBytes(&cellSize, 1, meshHash);
 }
 
 std::string bakedDensityName(int level) {
@@ -242,6 +264,7 @@ struct BakedVolume::Impl {
     FloatGrid::Ptr distance;
     std::uint64_t presetHash = 0;
     std::string presetName;
+    std::optional<std::uint64_t> meshHash;
     std::string version = SPOT_VERSION;
 
     int levels() const { return int(density.size()); }
@@ -305,6 +328,9 @@ std::uint64_t BakedVolume::presetHash() const {
 }
 const std::string& BakedVolume::presetName() const {
     return m_impl->presetName;
+}
+std::optional<std::uint64_t> BakedVolume::meshHash() const {
+    return m_impl->meshHash;
 }
 const std::string& BakedVolume::version() const {
     return m_impl->version;
@@ -591,6 +617,7 @@ std::unique_ptr<BakedVolume::Impl> buildGrids(std::vector<std::vector<BakedVoxel
     impl->voxel0 = v;
     impl->presetHash = options.presetHash;
     impl->presetName = options.presetName;
+    impl->meshHash = options.meshHash;
     FloatGrid::Ptr density0 = FloatGrid::create(0.0f);
     Vec3Grid::Ptr color0 = Vec3Grid::create(openvdb::Vec3s(0.0f));
     {
@@ -626,6 +653,14 @@ std::unique_ptr<BakedVolume::Impl> buildGrids(std::vector<std::vector<BakedVoxel
     }
     tagGrid(*impl->distance, kBakedDistanceName, 0, levels, v, impl->presetHash, impl->presetName,
             impl->version);
+    if (impl->meshHash) {
+        const openvdb::StringMetadata hash(hex16(*impl->meshHash));
+        for (int level = 0; level < levels; ++level) {
+            impl->density[std::size_t(level)]->insertMeta("spotshell_mesh_hash", hash);
+            impl->color[std::size_t(level)]->insertMeta("spotshell_mesh_hash", hash);
+        }
+        impl->distance->insertMeta("spotshell_mesh_hash", hash);
+    }
     impl->distance->insertMeta(
         "spotshell_distance_units",
         openvdb::StringMetadata(cat("Chebyshev (L-infinity) distance to the nearest non-empty "
@@ -736,6 +771,8 @@ void writeBakedGrids(const std::filesystem::path& file, const BakedVolume& volum
     meta.insertMeta("spotshell_preset_hash", openvdb::StringMetadata(hex16(m.presetHash)));
     meta.insertMeta("spotshell_preset", openvdb::StringMetadata(m.presetName));
     meta.insertMeta("spotshell_version", openvdb::StringMetadata(m.version));
+    if (m.meshHash)
+        meta.insertMeta("spotshell_mesh_hash", openvdb::StringMetadata(hex16(*m.meshHash)));
 
     static std::atomic<unsigned> counter{0};
     const std::filesystem::path tmp = file.parent_path() / cat(".", file.filename().string(),
@@ -832,6 +869,71 @@ T fileMeta(const openvdb::MetaMap& meta, const std::string& key,
 
 } // namespace
 
+namespace {
+
+/// The header and grid descriptors of a .vdb file, read as openvdb::io::File::open reads them
+/// (the header through Archive's own reader, which is protected), without any grid's data.
+class VdbDescriptors : public openvdb::io::Archive {
+public:
+    struct Range {
+        std::string name;
+        std::int64_t grid = 0, blocks = 0, end = 0;
+    };
+    std::vector<Range> read(std::istream& is) {
+        readHeader(is);
+        openvdb::io::setVersion(is, libraryVersion(), fileVersion());
+        setDataCompression(is);
+        openvdb::MetaMap meta;
+        meta.readMeta(is);
+        std::vector<Range> out;
+        if (!inputHasGridOffsets() || !is)
+            return out; // an old layout (grids read in sequence) or a cut header: File decides
+        openvdb::Int32 count = 0;
+        is.read(reinterpret_cast<char*>(&count), sizeof(count));
+        for (openvdb::Int32 i = 0; is && i < count; ++i) {
+            if (is.peek() == std::char_traits<char>::eof())
+                break; // the file ends where this descriptor should start
+            openvdb::io::GridDescriptor gd;
+            gd.read(is);
+            if (!is)
+                break;
+            out.push_back({gd.gridName(), gd.getGridPos(), gd.getBlockPos(), gd.getEndPos()});
+            if (gd.getEndPos() < 0 || !is.seekg(gd.getEndPos(), std::ios_base::beg))
+                break;
+        }
+        if (!is || std::int64_t(out.size()) != std::int64_t(count))
+            out.push_back({cat("#", out.size() + 1), -1, -1, -1}); // its descriptor is cut off
+        return out;
+    }
+};
+
+} // namespace
+
+void requireVdbGridsInFile(const std::filesystem::path& file) {
+    initializeOpenVdb();
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(file, ec);
+    if (ec)
+        throw InputError(cat(file.string(), ": cannot read (", ec.message(), ")"));
+    std::ifstream is(file, std::ios_base::binary);
+    if (!is)
+        throw InputError(cat(file.string(), ": cannot open"));
+    std::int64_t previous = 0;
+    for (const VdbDescriptors::Range& r : VdbDescriptors().read(is)) {
+        if (r.grid == -1)
+            throw InputError(cat(file.string(),
+                                 ": cannot read, truncated or corrupt: the file ends "
+                                 "before the description of grid ",
+                                 r.name, " (of ", size, " bytes)"));
+        if (r.grid < previous || r.grid > r.blocks || r.blocks > r.end ||
+            std::uintmax_t(r.end) > size)
+            throw InputError(cat(file.string(), ": cannot read, truncated or corrupt: grid \"",
+                                 r.name, "\" spans bytes ", r.grid, " to ", r.end, " of a file of ",
+                                 size, " bytes"));
+        previous = r.end;
+    }
+}
+
 BakedVolume readBakedGrids(const std::filesystem::path& file) {
     initializeOpenVdb();
     std::error_code ec;
@@ -839,6 +941,7 @@ BakedVolume readBakedGrids(const std::filesystem::path& file) {
         throw InputError(cat(file.string(), ": no such bake file"));
     auto impl = std::make_unique<BakedVolume::Impl>();
     try {
+        requireVdbGridsInFile(file);
         openvdb::io::File in(file.string());
         in.open(false); // everything read now: no memory map left on a file that may change
         std::vector<std::string> names;
@@ -860,6 +963,15 @@ BakedVolume readBakedGrids(const std::filesystem::path& file) {
         impl->presetHash = std::strtoull(hash.c_str(), nullptr, 16);
         impl->presetName = fileMeta<std::string>(*meta, "spotshell_preset", file);
         impl->version = fileMeta<std::string>(*meta, "spotshell_version", file);
+        if (const auto mesh = meta->getMetadata<openvdb::StringMetadata>("spotshell_mesh_hash")) {
+            char* end = nullptr;
+            const std::string& text = mesh->value();
+            const std::uint64_t value = std::strtoull(text.c_str(), &end, 16);
+            if (text.size() != 16 || end != text.c_str() + text.size())
+                throw InputError(
+                    cat(file.string(), ": spotshell_mesh_hash '", text, "' is not 16 hex digits"));
+            impl->meshHash = value;
+        }
         // Refuse a file whose grids would not fit before reading their trees.
         std::uint64_t bytes = 0;
         for (const std::string& name : names)

@@ -27,6 +27,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -37,6 +38,7 @@ namespace spot::noise {
 
 struct Impulse;
 struct Kernel;
+struct Mesh;
 struct SurfaceCells;
 class ImpulseGenerator;
 
@@ -48,14 +50,29 @@ inline constexpr float kBakeDistanceCap = 4.0f;
 /// 32-bit; far beyond any practical bake).
 inline constexpr double kMaxBakeVoxelsPerAxis = double(1 << 24);
 
-/// FNV-1a, 64 bits, of `text`: the preset hash a bake records (of the preset file's JSON text).
-std::uint64_t fnv1a64(std::string_view text);
+/// FNV-1a's 64-bit offset basis: the hash of nothing.
+inline constexpr std::uint64_t kFnv1a64Basis = 0xcbf29ce484222325ull;
+/// FNV-1a, 64 bits, of `text` continued from `hash` (the hash of what came before): the preset
+/// hash a bake records (of the preset file's JSON text).
+std::uint64_t fnv1a64(std::string_view text, std::uint64_t hash = kFnv1a64Basis);
+
+/// The hash of `mesh` as loaded (its rest pose): FNV-1a over the position and triangle counts
+/// (64 bits each), the positions (3 floats each) and the triangles (3 uint32 each), as stored in
+/// memory (little-endian). Normals, uvs and attributes do not enter: the shell does not read them.
+std::uint64_t meshHash(const Mesh& mesh);
+/// The shell hash a bake records and `baked` checks (spotshell_mesh_hash): `meshHash` continued
+/// with the cell size's 4 bytes. The bake's voxels are the noise in the rest pose of this mesh's
+/// shell, whose thickness is the cell size (the surface cells and their neighbours); a bake
+/// rendered on another mesh (or cell size) maps its voxels onto the wrong places.
+std::uint64_t shellHash(std::uint64_t meshHash, float cellSize);
 
 struct BakeOptions {
     float voxelSize = 0.0f;       ///< level 0's voxel edge, world units, > 0
     int levels = 1;               ///< [1, kMaxBakeLevels]
     std::uint64_t presetHash = 0; ///< recorded in the file (fnv1a64 of the preset's JSON text)
     std::string presetName;       ///< recorded in the file
+    /// Recorded in the file when set (shellHash of the rest mesh and the cell size).
+    std::optional<std::uint64_t> meshHash;
 };
 
 /// What a bake will need, known before anything large is allocated.
@@ -112,6 +129,8 @@ public:
     void activeBounds(int level, glm::ivec3& lo, glm::ivec3& hi) const;
     std::uint64_t presetHash() const;
     const std::string& presetName() const;
+    /// The shell hash recorded (shellHash); none in a bake written before it was recorded.
+    std::optional<std::uint64_t> meshHash() const;
     /// The spotshell version that wrote the bake.
     const std::string& version() const;
     /// Memory held by the OpenVDB trees.
@@ -171,7 +190,17 @@ void writeBakedGrids(const std::filesystem::path& file, const BakedVolume& volum
 /// Read a bake file. Throws InputError with one line naming the file (and the grid) for: a
 /// missing, unreadable, corrupt or truncated file; a missing grid (the names present are
 /// listed); a grid of the wrong value type; a level count outside [1, kMaxBakeLevels]; a
-/// transform or voxel size that does not match the level; NaN or infinite values.
+/// transform or voxel size that does not match the level; NaN or infinite values. Each grid's
+/// byte range (its descriptor's offsets) is checked against the file's size before OpenVDB
+/// reads it (requireVdbGridsInFile). A file without spotshell_mesh_hash (older) reads without
+/// one (meshHash() empty).
 BakedVolume readBakedGrids(const std::filesystem::path& file);
+
+/// Reads the grid descriptors of the .vdb `file` (as openvdb::io::File::open does) and throws
+/// InputError, one line naming the file and the grid, when a grid's byte range (start, data
+/// blocks, end) is out of order or reaches past the end of the file: OpenVDB itself would read
+/// sizes from past the end of a truncated file (a compressed size of terabytes) and allocate
+/// them. Errors of OpenVDB's own (a bad header) propagate as its exceptions.
+void requireVdbGridsInFile(const std::filesystem::path& file);
 
 } // namespace spot::noise

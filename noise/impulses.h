@@ -71,6 +71,8 @@ public:
     const Kernel& kernel() const { return m_kernel; }
     const PresetDesc& preset() const { return m_preset; }
     float cellSize() const { return m_cells.cellSize; }
+    /// The mesh the impulses are generated on (its rest pose, as loaded).
+    const Mesh& mesh() const { return m_mesh; }
     /// Smallest valid cell size for this preset: the kernel's world support radius plus the
     /// largest height offset.
     float minimumCellSize() const { return m_minCellSize; }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "noise/bake.h"
 #include "noise/error.h"
 #include "noise/mesh.h"
 
@@ -45,8 +46,8 @@ double PassTimer::totalMilliseconds() const {
 }
 
 SceneGpu::SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
-    : m_ctx(&ctx), m_kernel(kernel), m_meshPass(ctx, mesh, "scene"),
-      m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}
+    : m_ctx(&ctx), m_meshHash(noise::meshHash(mesh)), m_kernel(kernel),
+      m_meshPass(ctx, mesh, "scene"), m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}
 
 // The registry: each method's module makes its entry (its folder under splat/methods/). Adding a
 // method is its folder, its declaration below and its place in the list.

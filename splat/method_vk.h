@@ -102,9 +102,12 @@ public:
     const noise::Kernel& kernel() const { return m_kernel; }
     std::uint32_t lobeCount() const { return std::uint32_t(m_kernel.lobes.size()); }
     float support() const { return m_kernel.supportSigma; }
+    /// noise::meshHash of the mesh as handed in (a bake is checked against it).
+    std::uint64_t meshHash() const { return m_meshHash; }
 
 private:
     Context* m_ctx;
+    std::uint64_t m_meshHash = 0;
     noise::Kernel m_kernel;
     MeshPass m_meshPass;
     Buffer m_lobes;

@@ -180,6 +180,11 @@ const Setting peelPasses =
     numeric(describe("peel-passes", T::Integer, "N", "depth-peeling layers of tetrahedra", 1.0,
                      double(kBakedMaxPeelPasses), 16.0),
             &RenderSettings::peelPasses);
+const Setting allowMismatch = numeric(
+    describe("allow-mismatch", T::Flag, "",
+             "render a bake made for another mesh or cell size (its recorded mesh hash is not "
+             "the scene's); the image is then meaningless"),
+    &RenderSettings::allowMismatch);
 const Setting spp = [] {
     Setting s = numeric(describe("spp", T::Integer, "N", "samples per pixel", 1.0, 65536.0),
                         &RenderSettings::spp);

@@ -75,6 +75,8 @@ struct RenderSettings {
     /// and renderer that is handed it; a frame reads no file.
     std::shared_ptr<const BakeData> bake;
     int peelPasses = 4; ///< depth-peeling layers of tetrahedra, [1, kBakedMaxPeelPasses]
+    /// Render a bake whose recorded mesh hash is not the scene's (else InputError).
+    bool allowMismatch = false;
 
     // The CPU reference (noise/reference.h).
     int spp = 0;            ///< samples per pixel; 0: the scene's (SceneDesc::referenceSpp)
@@ -126,7 +128,7 @@ struct Setting {
 /// The settings, one each; the registry's methods point at these.
 namespace settings {
 extern const Setting kernelSamples, ewa, weight, closest, smallPixels, countFragments, lod, steps,
-    supersample, bake, peelPasses, spp, stepScale;
+    supersample, bake, peelPasses, allowMismatch, spp, stepScale;
 }
 
 } // namespace spot::splat

@@ -11,8 +11,10 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <tuple>
 #include <unistd.h>
@@ -510,6 +512,107 @@ TEST(Bake, BadFilesGiveOneClearError) {
     grid.set({1, 2, 3}, glm::vec3(0.5f));
     writePaintedGrids(painted, {&grid});
     expectBadFile(painted, "not a spotshell bake (no spotshell_levels metadata)");
+}
+
+// A bake records the shell it was baked on (noise::shellHash of the rest mesh and the cell
+// size) and reads it back; a file written without one (older bakes) reads without one. The hash
+// changes with any vertex, any triangle and the cell size.
+TEST(Bake, RecordsTheMeshHashAndReadsOlderFilesWithoutOne) {
+    OneCell one(test::uniformPreset(4000.0f, 0.01f));
+    const std::uint64_t shell = shellHash(meshHash(one.mesh), one.generator->cellSize());
+    BakeOptions with = options(0.004f, 2);
+    with.meshHash = shell;
+    const fs::path dir = tmpDir();
+    writeBakedGrids(dir / "with-hash.vdb",
+                    bakeImpulses(one.generator->cells(), one.generator->kernel(),
+                                 one.generator->generate(), with));
+    EXPECT_EQ(readBakedGrids(dir / "with-hash.vdb").meshHash(), std::optional(shell));
+    writeBakedGrids(dir / "without-hash.vdb",
+                    bakeImpulses(one.generator->cells(), one.generator->kernel(),
+                                 one.generator->generate(), options(0.004f, 2)));
+    EXPECT_FALSE(readBakedGrids(dir / "without-hash.vdb").meshHash().has_value());
+
+    Mesh moved = one.mesh;
+    moved.positions[1].x += 1e-6f;
+    Mesh turned = one.mesh;
+    std::swap(turned.triangles[0].y, turned.triangles[0].z);
+    EXPECT_EQ(meshHash(one.mesh), meshHash(Mesh(one.mesh)));
+    EXPECT_NE(meshHash(moved), meshHash(one.mesh));
+    EXPECT_NE(meshHash(turned), meshHash(one.mesh));
+    EXPECT_NE(shellHash(meshHash(one.mesh), 0.02f), shellHash(meshHash(one.mesh), 0.0200001f));
+    // FNV-1a continued is FNV-1a of the concatenation.
+    EXPECT_EQ(fnv1a64("def", fnv1a64("abc")), fnv1a64("abcdef"));
+}
+
+// A .vdb cut anywhere is refused with one line naming the file before OpenVDB reads a grid: each
+// grid's byte range (its descriptor's offsets) is checked against the file's size, so no size is
+// read from past the end (under AddressSanitizer OpenVDB asked for about 94 TB). Checked in a
+// child whose address space is capped at 1 GiB above what it holds: a read that allocated a
+// size from past the end would fail there with bad_alloc, not with the range check's line.
+TEST(Bake, TruncatedFilesAreRefusedByTheirGridRanges) {
+    OneCell one(test::uniformPreset(4000.0f, 0.01f));
+    const fs::path dir = tmpDir();
+    const fs::path good = dir / "cut-good.vdb";
+    writeBakedGrids(good, bakeImpulses(one.generator->cells(), one.generator->kernel(),
+                                       one.generator->generate(), options(0.004f, 3)));
+    std::ifstream in(good, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    ASSERT_GT(bytes.size(), 1000u);
+    std::vector<std::size_t> cuts = {bytes.size() - 1, bytes.size() - 100};
+    for (int i = 1; i < 40; ++i)
+        cuts.push_back(bytes.size() * std::size_t(i) / 40);
+    std::vector<fs::path> files;
+    for (const std::size_t cut : cuts) {
+        files.push_back(dir / ("cut-" + std::to_string(cut) + ".vdb"));
+        std::ofstream(files.back(), std::ios::binary).write(bytes.data(), std::streamsize(cut));
+    }
+    // Every cut after the header and the file's metadata falls in a grid's range or its
+    // descriptor: the range check refuses it (a cut in the header is OpenVDB's "not a VDB file").
+    int rangeChecked = 0;
+    for (const fs::path& f : files) {
+        try {
+            (void)readBakedGrids(f);
+            ADD_FAILURE() << f << ": read without an error";
+        } catch (const InputError& e) {
+            const std::string m = e.what();
+            EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+            EXPECT_NE(m.find(f.string()), std::string::npos) << m;
+            EXPECT_NE(m.find("cannot read"), std::string::npos) << m;
+            EXPECT_EQ(m.find("bad_alloc"), std::string::npos) << m;
+            rangeChecked += m.find("truncated or corrupt:") != std::string::npos;
+        }
+    }
+    EXPECT_GE(rangeChecked, int(files.size()) - 4);
+
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        std::ifstream status("/proc/self/status");
+        std::string line;
+        rlim_t held = 0;
+        while (std::getline(status, line))
+            if (line.rfind("VmSize:", 0) == 0)
+                held = rlim_t(std::stoull(line.substr(7))) * 1024;
+        const rlimit cap{held + (rlim_t(1) << 30), held + (rlim_t(1) << 30)};
+        if (held == 0 || setrlimit(RLIMIT_AS, &cap) != 0)
+            _exit(3);
+        for (const fs::path& f : files) {
+            try {
+                (void)readBakedGrids(f);
+                _exit(4);
+            } catch (const InputError& e) {
+                if (std::string(e.what()).find("bad_alloc") != std::string::npos)
+                    _exit(5);
+            } catch (...) {
+                _exit(6);
+            }
+        }
+        _exit(0);
+    }
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
 TEST(Bake, NegativeDensityIsRefusedOnEveryLevel) {

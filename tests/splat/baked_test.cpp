@@ -19,8 +19,10 @@
 #include "noise/bake.h"
 #include "noise/error.h"
 #include "noise/image.h"
+#include "noise/impulses.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
+#include "noise/scene.h"
 #include "splat/image_compare.h"
 #include "splat/methods/baked/baked_vk.h"
 #include "splat_test_support.h"
@@ -77,8 +79,11 @@ BakedScene loadBakedScene(const std::string& name, int size, float voxel, int le
                                                             options);
     s.bake = (tmpDir() / ("bunny-" + std::to_string(voxel) + "-" + std::to_string(levels) + ".vdb"))
                  .string();
-    if (!fs::exists(s.bake))
-        noise::writeBakedGrids(s.bake, noise::bakeNoise(*s.generator, bakeOptions(voxel, levels)));
+    if (!fs::exists(s.bake)) {
+        noise::BakeOptions o = bakeOptions(voxel, levels);
+        o.meshHash = noise::shellHash(noise::meshHash(s.mesh), s.generator->cellSize());
+        noise::writeBakedGrids(s.bake, noise::bakeNoise(*s.generator, o));
+    }
     return s;
 }
 
@@ -617,6 +622,67 @@ TEST(BakedCli, BadOrMissingBakeExitsTwoWithOneLine) {
     expectExit2(render, "--bake FILE.vdb");
     expectExit2(render + " --bake " + garbage + " --peel-passes 0", "--peel-passes");
     EXPECT_FALSE(fs::exists(dir / "never.png"));
+}
+
+/// The shell hash (noise::shellHash) of shipped scene `name`, as `render` computes it, in hex.
+std::string sceneShellHash(const std::string& name) {
+    const noise::SceneDesc scene =
+        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    const noise::Mesh mesh = noise::loadMeshOrGenerated(scene.mesh);
+    noise::GeneratorOptions options;
+    options.seed = scene.seed;
+    const noise::ImpulseGenerator generator(mesh, noise::loadPreset(scene.preset), options);
+    char text[17];
+    std::snprintf(text, sizeof text, "%016llx",
+                  static_cast<unsigned long long>(
+                      noise::shellHash(noise::meshHash(mesh), generator.cellSize())));
+    return text;
+}
+
+// A bake is checked against the scene it is rendered with: the bunny's bake on the sphere
+// (generated:sphere) exits 2 with one line naming both shell hashes; --allow-mismatch renders it
+// anyway; the bunny renders with its own bake; `info --bake` prints the recorded hash.
+TEST(BakedCli, ABakeOfAnotherMeshExitsTwoUnlessAllowed) {
+    const fs::path dir = tmpDir();
+    const std::string scenes = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/";
+    const std::string bake = (dir / "cli-bunny.vdb").string();
+    ASSERT_EQ(
+        spotshell("bake --scene " + scenes + "fur-bunny.json --resolution 24 --out " + bake).code,
+        0);
+    const std::string bunny = sceneShellHash("fur-bunny"), sphere = sceneShellHash("ring-sphere");
+    ASSERT_NE(bunny, sphere);
+    const std::string onSphere = "render --scene " + scenes +
+                                 "ring-sphere.json --size 32x32 --method baked --bake " + bake +
+                                 " --out ";
+    const fs::path refused = dir / "mismatch.png";
+    const CliRun r = spotshell(onSphere + refused.string());
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(bunny), std::string::npos) << bunny << " in: " << r.err;
+    EXPECT_NE(r.err.find(sphere), std::string::npos) << sphere << " in: " << r.err;
+    EXPECT_NE(r.err.find("--allow-mismatch"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(refused));
+
+    const fs::path allowed = dir / "allowed.png";
+    EXPECT_EQ(spotshell(onSphere + allowed.string() + " --allow-mismatch").code, 0);
+    EXPECT_TRUE(fs::exists(allowed));
+    const fs::path matching = dir / "matching.png";
+    EXPECT_EQ(spotshell("render --scene " + scenes +
+                        "fur-bunny.json --size 32x32 --method baked "
+                        "--bake " +
+                        bake + " --out " + matching.string())
+                  .code,
+              0);
+    EXPECT_TRUE(fs::exists(matching));
+
+    const fs::path info = dir / "info.txt";
+    ASSERT_EQ(std::system((std::string(SPOT_SPOTSHELL) + " info --bake " + bake + " > '" +
+                           info.string() + "'")
+                              .c_str()),
+              0);
+    std::ifstream in(info);
+    const std::string printed((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_NE(printed.find("mesh hash  " + bunny), std::string::npos) << printed;
 }
 
 } // namespace

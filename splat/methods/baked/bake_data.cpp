@@ -211,6 +211,7 @@ std::shared_ptr<const BakeData> BakeData::load(const std::string& file) {
     out->file = file;
     out->levels = volume.levels();
     out->voxelSize = volume.voxelSize(0);
+    out->meshHash = volume.meshHash();
     // Each section's leaves in brick order: the levels' bricks, then the distance grid's.
     std::vector<std::vector<glm::ivec3>> sections(std::size_t(out->levels) + 1);
     packDensity(volume, *out, sections);

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,8 @@ public:
     int levels = 0;         ///< mip levels
     float voxelSize = 0.0f; ///< level 0's, world units
     float unit = 1.0f;      ///< what a stored 1 in the density bricks is (brickUnit)
+    /// The shell hash the bake records (noise::shellHash); none in an older bake.
+    std::optional<std::uint64_t> meshHash;
     /// Per level, its bricks (packApronBricks' voxels), in brick order; level l's are bricks
     /// [firstBrick[l], + packed[l].size() / kBakedBrickVoxels) of the whole.
     std::vector<std::vector<glm::uvec2>> packed;

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <span>
 #include <system_error>
 #include <unordered_map>
@@ -294,7 +296,26 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                              kBakedMaxPeelPasses, " are accepted"));
     if (!impulses.cells)
         throw InputError("baked: the shell's thickness needs the impulses' cells");
+    // The bake's voxels are the noise in the rest pose of the shell it was baked on (the mesh and
+    // the cell size, the shell's thickness): on another shell they land in the wrong places.
+    const std::uint64_t shell = noise::shellHash(m_scene.meshHash(), impulses.cells->cellSize);
+    const std::optional<std::uint64_t> recorded = settings.bake->meshHash;
+    const auto hex = [](std::uint64_t v) {
+        char text[17];
+        std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(v));
+        return std::string(text);
+    };
+    if (recorded && *recorded != shell && !settings.allowMismatch)
+        throw InputError(cat("baked: ", settings.bake->file, " was baked for mesh hash ",
+                             hex(*recorded), ", this scene's is ", hex(shell),
+                             " (another mesh or cell size): bake this scene, or pass "
+                             "--allow-mismatch to render it anyway"));
     if (settings.bake != m_bake) { // a new bake: uploaded once, kept while it is handed again
+        if (!recorded)
+            std::fprintf(stderr,
+                         "warning: %s records no mesh hash (an older bake): not checked "
+                         "against the scene\n",
+                         settings.bake->file.c_str());
         m_bake.reset();
         uploadBake(*settings.bake);
         m_bake = settings.bake;
@@ -591,7 +612,7 @@ MethodInfo bakedMethod() {
     m.name = "baked";
     m.summary = "a bake (render --bake FILE.vdb) marched through the shell's tetrahedra, "
                 "composited by depth peeling";
-    m.settings = {&settings::bake, &settings::peelPasses};
+    m.settings = {&settings::bake, &settings::peelPasses, &settings::allowMismatch};
     m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<BakedRenderer>(scene);
     };
