@@ -14,6 +14,7 @@
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 
+#include "noise/bake.h"
 #include "noise/error.h"
 #include "noise/generator_shared.h"
 #include "noise/system.h"
@@ -417,6 +418,7 @@ PaintedGrid readPaintedGrid(const std::filesystem::path& file, const std::string
 
     openvdb::GridBase::Ptr base;
     try {
+        requireVdbGridsInFile(file); // a truncated file stops here, not in OpenVDB's reader
         openvdb::io::File in(file.string());
         in.open(false); // read everything now: no memory map left on a file that may change
         std::vector<std::string> names;

@@ -267,6 +267,17 @@ TEST(PaintedGrid, BadFilesGiveOneClearInputError) {
     write(dir / "truncated.vdb", bytes.substr(0, bytes.size() / 2));
     expectError(inputError([&] { readPaintedGrid(dir / "truncated.vdb", "density", 1); }),
                 {"truncated.vdb", "\"density\""});
+    // Cut anywhere past the header: every cut is one clear line, stopped by the grids' byte
+    // ranges before OpenVDB reads a size from past the end of the file.
+    for (int k = 1; k < 16; ++k) {
+        const std::size_t cut = bytes.size() * std::size_t(k) / 16;
+        write(dir / "cut.vdb", bytes.substr(0, cut));
+        const std::string message =
+            inputError([&] { readPaintedGrid(dir / "cut.vdb", "color", 3); });
+        EXPECT_NE(message.find("cut.vdb"), std::string::npos) << cut << ": " << message;
+        EXPECT_EQ(message.find("bad_alloc"), std::string::npos) << cut << ": " << message;
+        EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 0) << message;
+    }
     write(dir / "short.vdb", bytes.substr(0, 10));
     expectError(inputError([&] { readPaintedGrid(dir / "short.vdb", "density", 1); }),
                 {"short.vdb", "cannot read"});
