@@ -286,19 +286,10 @@ void requireBakedView(const View& view) {
                          "unlit shading");
 }
 
-void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
-                            const RenderSettings& settings) {
-    if (!settings.bake)
-        throw InputError("baked: no bake file (render --bake FILE.vdb; spotshell bake makes one)");
-    requireBakedView(view);
-    if (settings.peelPasses < 1 || settings.peelPasses > kBakedMaxPeelPasses)
-        throw InputError(cat("baked: ", settings.peelPasses, " peel passes; 1 to ",
-                             kBakedMaxPeelPasses, " are accepted"));
-    if (!impulses.cells)
-        throw InputError("baked: the shell's thickness needs the impulses' cells");
+void BakedRenderer::useBake(const RenderSettings& settings, float cellSize) {
     // The bake's voxels are the noise in the rest pose of the shell it was baked on (the mesh and
     // the cell size, the shell's thickness): on another shell they land in the wrong places.
-    const std::uint64_t shell = noise::shellHash(m_scene.meshHash(), impulses.cells->cellSize);
+    const std::uint64_t shell = noise::shellHash(m_scene.meshHash(), cellSize);
     const std::optional<std::uint64_t> recorded = settings.bake->meshHash;
     const auto hex = [](std::uint64_t v) {
         char text[17];
@@ -320,11 +311,11 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         uploadBake(*settings.bake);
         m_bake = settings.bake;
     }
+}
 
+void BakedRenderer::ensureShell(std::uint32_t triangles) {
     // The tetrahedra (rebuilt per frame on the GPU), and per mesh their neighbours and the
     // boundary faces a ray can enter through (topology only, from the triangles).
-    const float thickness = impulses.cells->cellSize;
-    const std::uint32_t triangles = m_scene.meshPass().indexCount() / 3;
     const std::uint64_t tetBytes = std::max<std::uint64_t>(triangles, 1) * 3 * sizeof(SpotBakedTet);
     if (m_tets.size() < tetBytes) {
         const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
@@ -377,6 +368,22 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             kDevice, "baked peel draw");
     }
+}
+
+void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
+                            const RenderSettings& settings) {
+    if (!settings.bake)
+        throw InputError("baked: no bake file (render --bake FILE.vdb; spotshell bake makes one)");
+    requireBakedView(view);
+    if (settings.peelPasses < 1 || settings.peelPasses > kBakedMaxPeelPasses)
+        throw InputError(cat("baked: ", settings.peelPasses, " peel passes; 1 to ",
+                             kBakedMaxPeelPasses, " are accepted"));
+    if (!impulses.cells)
+        throw InputError("baked: the shell's thickness needs the impulses' cells");
+    useBake(settings, impulses.cells->cellSize);
+    const float thickness = impulses.cells->cellSize;
+    const std::uint32_t triangles = m_scene.meshPass().indexCount() / 3;
+    ensureShell(triangles);
     m_bakeStats.thickness = thickness;
     m_bakeStats.tetrahedra = 3 * triangles;
     m_bakeStats.entryFaces = m_entryFaceCount;

@@ -134,6 +134,12 @@ private:
     void checkBakeFits(const BakeData& bake, std::uint64_t perBuffer) const;
     /// Replace the bake on the GPU by `bake`.
     void uploadBake(const BakeData& bake);
+    /// Checks the bake handed in `settings` against the scene's shell (the mesh's hash with
+    /// `cellSize`, its thickness) and uploads it when it is not the one uploaded last.
+    void useBake(const RenderSettings& settings, float cellSize);
+    /// The tetrahedra's buffer for `triangles` prisms, and per mesh their neighbours, entry
+    /// faces and the peel's indirect draw.
+    void ensureShell(std::uint32_t triangles);
     void ensureTargets(std::uint32_t width, std::uint32_t height);
     // The passes record() records, in order (the file comment's steps).
     /// 1. The frame's clears, then the shell's tetrahedra and the eye's.
