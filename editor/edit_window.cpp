@@ -454,7 +454,7 @@ public:
         const noise::Kernel& k = session.generator().kernel();
         m_renderer.reset();
         m_scene = std::make_unique<splat::SceneGpu>(ctx, m_plane, k);
-        m_renderer = std::make_unique<splat::SplatRenderer>(*m_scene, splat::Method::Instanced);
+        m_renderer = splat::makeSplattingRenderer(*m_scene, splat::Method::Instanced);
         // The kernel's extent in kernel units (3 sigma around each lobe).
         float top = 1e-3f, side = 1e-3f;
         for (const noise::LobeDesc& l : session.preset().kernel.lobes) {
@@ -498,7 +498,7 @@ private:
     noise::Mesh m_plane = noise::loadMeshOrGenerated("generated:plane");
     nlohmann::json m_kernel;
     std::unique_ptr<splat::SceneGpu> m_scene;
-    std::unique_ptr<splat::SplatRenderer> m_renderer;
+    std::unique_ptr<splat::SplattingRenderer> m_renderer;
     splat::Buffer m_impulses;
     UploadedImage m_uploaded;
 };

@@ -81,7 +81,6 @@ SPOT_CONST uint kBakedBindListPixels = 24u; /* uint[width x height]: the listed 
 
 /* Specialization ids. */
 SPOT_CONST uint kBakedSpecCount = 64u;      /* bool: count loop iterations (ids below are splat_common.glsl's) */
-SPOT_CONST uint kBakedSpecSplitBricks = 66u; /* bool: the density bricks span several buffers */
 SPOT_CONST uint kBakedSpecFirstLayer = 65u; /* bool: the first layer (its peel has no previous exit;
                                                 its march starts from nothing accumulated, or at
                                                 the eye's tetrahedron if any) */

@@ -37,7 +37,11 @@ layout(local_size_x = kBakedMarchGroupSize) in;
 
 layout(constant_id = kBakedSpecCount) const bool kCountLoops = false;
 layout(constant_id = kBakedSpecFirstLayer) const bool kFirstLayer = false;
-layout(constant_id = kBakedSpecSplitBricks) const bool kSplitBricks = false;
+// The storage buffers the density bricks span (1 to kBakedBrickBuffers): one module per count
+// (shaders/CMakeLists.txt), each declaring only the buffers it reads.
+#ifndef BAKED_BRICK_BUFFERS
+#define BAKED_BRICK_BUFFERS 1
+#endif
 
 layout(std430, binding = kBakedBindParams) readonly buffer Params { SpotBakedParams params; };
 layout(std430, binding = kBakedBindTets) readonly buffer Tets { SpotBakedTet tets[]; };
@@ -45,9 +49,15 @@ layout(std430, binding = kBakedBindNeighbours) readonly buffer Neighbours { ivec
 layout(std430, binding = kBakedBindEyeTet) readonly buffer EyeTet { uint eyeTet; };
 layout(std430, binding = kBakedBindTable) readonly buffer Table { int table[]; };
 layout(std430, binding = kBakedBindBricks) readonly buffer Bricks0 { uvec2 bricks0[]; };
+#if BAKED_BRICK_BUFFERS > 1
 layout(std430, binding = kBakedBindBricks1) readonly buffer Bricks1 { uvec2 bricks1[]; };
+#endif
+#if BAKED_BRICK_BUFFERS > 2
 layout(std430, binding = kBakedBindBricks2) readonly buffer Bricks2 { uvec2 bricks2[]; };
+#endif
+#if BAKED_BRICK_BUFFERS > 3
 layout(std430, binding = kBakedBindBricks3) readonly buffer Bricks3 { uvec2 bricks3[]; };
+#endif
 layout(std430, binding = kBakedBindLayerEntry) buffer LayerEntry { uvec2 layerEntry[]; };
 layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDistance;
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
@@ -82,18 +92,28 @@ vec4 unpackVoxel(uvec2 v) { return vec4(unpackHalf2x16(v.x), unpackHalf2x16(v.y)
 
 // Voxel `offset` of density brick b (in stored units), from the brick buffer that holds it.
 vec4 brickVoxel(uint b, uint offset) {
-    if (!kSplitBricks)
-        return unpackVoxel(bricks0[b * kBakedBrickVoxels + offset]); // one buffer: no selection (it costs)
+#if BAKED_BRICK_BUFFERS == 1
+    return unpackVoxel(bricks0[b * kBakedBrickVoxels + offset]); // one buffer: no selection (it costs)
+#else
     uint per = params.counts.w;
     uint which = b / per;
     uint i = (b - which * per) * kBakedBrickVoxels + offset;
     if (which == 0u)
         return unpackVoxel(bricks0[i]);
+#if BAKED_BRICK_BUFFERS > 2
     if (which == 1u)
         return unpackVoxel(bricks1[i]);
+#if BAKED_BRICK_BUFFERS > 3
     if (which == 2u)
         return unpackVoxel(bricks2[i]);
     return unpackVoxel(bricks3[i]);
+#else
+    return unpackVoxel(bricks2[i]);
+#endif
+#else
+    return unpackVoxel(bricks1[i]);
+#endif
+#endif
 }
 
 // Trilinear between the voxel centres (ijk + 1/2) x voxel size of `level`: the 8 corners

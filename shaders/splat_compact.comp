@@ -8,7 +8,8 @@
 // whose box holds at most kSplatMaxSmallPixels. One workgroup: each thread counts a contiguous
 // chunk, a shared-memory scan gives the chunk's output offset, then each thread writes its chunk
 // in order. No atomics, so the draw order (and with it the blended result) is the same on every
-// run. Loop iterations per thread: 2 x chunk + 16, with chunk = ceil(count / 256) <= 3,641 for
+// run. The compute path's list exists in the module compiled with SPLAT_SMALL_LIST alone
+// (splat_compact_small.comp: the methods that have that path). Loop iterations per thread: 2 x chunk + 16, with chunk = ceil(count / 256) <= 3,641 for
 // the most impulses a 128 MiB buffer holds.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
@@ -19,7 +20,9 @@ layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBo
 layout(std430, binding = kSplatBindVisible) writeonly buffer Visible { uint visible[]; };
 layout(std430, binding = kSplatBindDraw) writeonly buffer Indirect { uint draw[kSplatDrawWords]; }; // kSplatBindDraw
 layout(std430, binding = kSplatBindCount) readonly buffer Count { uint impulseCount; };
+#ifdef SPLAT_SMALL_LIST
 layout(std430, binding = kSplatBindSmall) writeonly buffer Small { uint small[]; };
+#endif
 
 shared uint sums[kSplatCompactThreads];
 shared uvec4 smallSums[kSplatCompactThreads];
@@ -86,11 +89,14 @@ void main() {
         uint k = kind(i);
         if (k == 1u) {
             visible[out_++] = i;
-        } else if (k >= 2u) {
+        }
+#ifdef SPLAT_SMALL_LIST
+        else if (k >= 2u) {
             uint c = k - 2u;
             small[outSmall[c]] = i;
             outSmall[c] += 1u;
         }
+#endif
     }
     if (t == kSplatCompactThreads - 1u) {
         draw[0] = kSplatQuadIndices * sums[t]; // VkDrawIndexedIndirectCommand

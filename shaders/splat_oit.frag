@@ -4,8 +4,9 @@
 // prod (1 - alpha) is kept as its logarithm, the sum of the kernels' optical depths
 // (-ln(1 - alpha) = tau), with the same additive blend: the same value, one blend state for both
 // targets (the context does not enable independentBlend), no precision lost for opaque kernels,
-// and the hybrid's resolve can take one kernel out exactly. Hybrid (eq. 13, kHybridAtomic): the
-// kernel also competes for the pixel's closest kernel with a 64-bit atomicMin of
+// and the hybrid's resolve can take one kernel out exactly. Hybrid (eq. 13; the module compiled
+// with SPLAT_CLOSEST_ATOMIC, splat_oit_closest.frag, which alone declares the buffer): the kernel
+// also competes for the pixel's closest kernel with a 64-bit atomicMin of
 // (depth bits << 32 | kernel index); depth is >= 0, so its float bits order as the floats do,
 // and the kernel index breaks ties the same way every run.
 #extension GL_GOOGLE_include_directive : require
@@ -20,7 +21,9 @@
 layout(early_fragment_tests) in;
 
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
+#ifdef SPLAT_CLOSEST_ATOMIC
 layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };
+#endif
 
 layout(location = 0) flat in uint vKernel;
 
@@ -36,10 +39,12 @@ void main() {
     splatCountCovered(s.alpha);
     if (!(s.alpha > 0.0))
         discard;
-    if (kHybridAtomic && s.alpha > kSplatHybridMinAlpha) {
+#ifdef SPLAT_CLOSEST_ATOMIC
+    if (s.alpha > kSplatHybridMinAlpha) {
         uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(vKernel);
         atomicMin(closest[splatPixelIndex(pixel)], key);
     }
+#endif
     outAccum = vec4(s.premul, s.alpha) * splatOitWeight(s);
     outOpticalDepth = s.tau;
 }

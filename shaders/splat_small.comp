@@ -11,6 +11,9 @@
 //    so the sums do not depend on the order the invocations run in); the resolve adds them to
 //    the raster targets' values. Hybrid also competes for the closest kernel (atomicMin);
 //  - instanced: the atomicMin where alpha reaches kSplatInstancedMinAlpha.
+// One module per method (shaders/CMakeLists.txt), each declaring the buffers it writes:
+// SPLAT_SMALL_OIT (the fixed-point sums), SPLAT_SMALL_CLOSEST (hybrid's atomicMin),
+// SPLAT_SMALL_INSTANCED (instanced's).
 // Each evaluation counts as a fragment shaded (splatCount). Loop iterations: kSmallPixels <=
 // kSplatMaxSmallPixels pixels, each the analytic kernel's few hundred at most.
 #extension GL_GOOGLE_include_directive : require
@@ -20,6 +23,9 @@
 #define SPLAT_COUNTS
 #define SPLAT_CACHED_LOBES
 #include "splat_common.glsl"
+#if !defined(SPLAT_SMALL_OIT) && !defined(SPLAT_SMALL_INSTANCED)
+#error "define what this module writes (SPLAT_SMALL_OIT, ...)"
+#endif
 
 layout(local_size_x = kSplatSmallThreads) in;
 
@@ -27,20 +33,26 @@ layout(std430, binding = kSplatBindBounds) readonly buffer Bounds { SpotKernelBo
 layout(std430, binding = kSplatBindSmall) readonly buffer Small { uint small[]; };
 layout(std430, binding = kSplatBindDraw) readonly buffer Indirect { uint draw[kSplatDrawWords]; };
 layout(binding = kSplatBindMeshDistance, r32f) uniform readonly image2D meshDistance;
+#if defined(SPLAT_SMALL_CLOSEST) || defined(SPLAT_SMALL_INSTANCED)
 layout(std430, binding = kSplatBindClosest) buffer Closest { uint64_t closest[]; };
+#endif
+#ifdef SPLAT_SMALL_OIT
 layout(std430, binding = kSplatBindOitFixed) buffer OitFixed { uint64_t oitFixed[]; };
 layout(std430, binding = kSplatBindOitTiles) buffer OitTiles { uint oitTiles[]; };
+#endif
 
 // One contribution in fixed point (spot_splat.h: clamped to [0, kSplatFixedMax]; NaN adds 0).
 uint64_t splatFixed(float value) {
     return value > 0.0 ? uint64_t(min(value, kSplatFixedMax) * kSplatFixedScale) : uint64_t(0);
 }
 
+#ifdef SPLAT_SMALL_OIT
 void splatAdd(uint slot, float value) {
     uint64_t add = splatFixed(value);
     if (add != uint64_t(0))
         atomicAdd(oitFixed[slot], add);
 }
+#endif
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
@@ -78,13 +90,15 @@ void main() {
                 continue;
             uint index = uint(y) * width + uint(x);
             uint64_t key = (uint64_t(floatBitsToUint(max(s.depth, 0.0))) << 32) | uint64_t(kernel);
-            if (kResolve == kSplatResolveInstanced) {
-                if (splatInstancedCovers(s, p, tMesh))
-                    atomicMin(closest[index], key);
-                continue;
-            }
-            if (kHybridAtomic && s.alpha > kSplatHybridMinAlpha)
+#ifdef SPLAT_SMALL_INSTANCED
+            if (splatInstancedCovers(s, p, tMesh))
                 atomicMin(closest[index], key);
+#endif
+#ifdef SPLAT_SMALL_CLOSEST
+            if (s.alpha > kSplatHybridMinAlpha)
+                atomicMin(closest[index], key);
+#endif
+#ifdef SPLAT_SMALL_OIT
             vec4 accum = vec4(s.premul, s.alpha) * splatOitWeight(s);
             uint tilesX = (width + kSplatResolveTile - 1u) / kSplatResolveTile;
             atomicOr(oitTiles[uint(y) / kSplatResolveTile * tilesX + uint(x) / kSplatResolveTile], 1u);
@@ -94,6 +108,7 @@ void main() {
             splatAdd(base + 2u, accum.b);
             splatAdd(base + 3u, accum.a);
             splatAdd(base + 4u, s.tau);
+#endif
         }
     }
 }

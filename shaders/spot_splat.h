@@ -137,16 +137,17 @@ struct SpotSplatCounters {
                         kernel's alpha >= 1/255 (low, high) */
 };
 
-/* Specialization constant ids: each pipeline is compiled for one setting, not every path. */
+/* Specialization constant ids: each pipeline is compiled for one setting, not every path. What
+   changes the bindings a pass declares (the hybrid's closest kernel, what a resolve reads) is a
+   module of its own instead (shaders/CMakeLists.txt, SPOT_SHADER_VARIANTS); ids 6 and 8 were
+   those and are free. */
 SPOT_CONST uint kSplatSpecLobes = 0u;        /* uint: lobes per kernel, 1..8 */
 SPOT_CONST uint kSplatSpecSamples = 1u;      /* uint: kernel samples N, 0 = analytic */
 SPOT_CONST uint kSplatSpecLambert = 2u;      /* bool: Lambert shading */
 SPOT_CONST uint kSplatSpecOrthographic = 3u; /* bool: orthographic camera */
 SPOT_CONST uint kSplatSpecEwa = 4u;          /* bool: EWA widening (prepare) */
 SPOT_CONST uint kSplatSpecWeight = 5u;       /* uint: kSpotWeight* (oit, hybrid, resolve) */
-SPOT_CONST uint kSplatSpecHybridAtomic = 6u; /* bool: OIT pass finds the closest kernel by atomicMin */
 SPOT_CONST uint kSplatSpecCount = 7u;        /* bool: count fragments and covered pixels */
-SPOT_CONST uint kSplatSpecResolve = 8u;      /* uint: kSplatResolve* (resolve) */
 SPOT_CONST uint kSplatSpecScreen = 9u;       /* bool: prepare writes screen lobes and bounds too
                                                 (the ray-march reads world lobes only) */
 SPOT_CONST uint kSplatSpecResolveList = 11u; /* bool: the resolve's second dispatch, over the
@@ -164,15 +165,6 @@ SPOT_CONST uint kSplatSpecLobeColor = 16u;   /* float x 24: the kernel lobes' co
                                                 r, g, b at ids 16 + 3 l + 0, 1, 2 (constants in
                                                 the fragment shaders: llvmpipe pays dearly for
                                                 every buffer load or flat input there) */
-
-/* What the resolve makes of its inputs. */
-SPOT_CONST uint kSplatResolveCopy = 0u;      /* the base colour image is the result (sorted:
-                                                kernels were drawn onto it) */
-SPOT_CONST uint kSplatResolveOit = 1u;       /* eq. 12 */
-SPOT_CONST uint kSplatResolveHybrid = 2u;    /* eq. 13, closest kernel from the atomicMin buffer */
-SPOT_CONST uint kSplatResolveHybridPass = 3u; /* eq. 13, closest kernel from the depth pass */
-SPOT_CONST uint kSplatResolveInstanced = 4u; /* the nearest opaque kernel (atomicMin buffer)
-                                                 painted over the base colour */
 
 /* SpotSplatFrame.counts.w bits (what stays a run-time flag). */
 SPOT_CONST uint kSplatFlagLambert = 2u;     /* Lambert + ambient shading, else unlit */

@@ -1,39 +1,32 @@
 /// @file splatting_vk.h
-/// @brief The splatting renderers of docs/design.md section 4 (paper sec. 4, fig. 4):
-/// `instanced`, `oit`, `hybrid` and `sorted`, over an opaque base mesh, behind the Renderer
-/// interface of method_vk.h.
+/// @brief What the four splatting methods (docs/design.md section 4; paper sec. 4, fig. 4) share:
+/// `SplattingRenderer`, the base each method's renderer (splat/methods/<name>/) derives from. It
+/// owns the targets and buffers every splatting frame has and records the passes they all run;
+/// a method declares its own targets on the same FrameResources, builds its own pipelines and
+/// records its own frame from these passes.
 ///
-/// One frame, whatever the method:
+/// The passes, in a frame's order:
 ///  1. prepare (compute, splat_prepare.comp): per impulse, its kernel's lobes placed in the world
 ///     (optionally EWA-widened by the pixel footprint, sigma = footprint / sqrt(12): the variance
 ///     of the box pixel filter the reference integrates), each lobe's screen form
 ///     (SpotScreenLobe: what a pixel needs, affine in the pixel, so no pixel pays for a matrix
 ///     product) and the kernel's oriented screen quad (the exact projected ellipses of its lobes,
 ///     bounded along their principal axis). A deterministic compaction lists the kernels whose
-///     quad is not empty, in impulse order, and writes the indirect draw. `sorted` then sorts the
-///     kept kernels back to front by the view depth of their centre of mass
-///     (splat_sorted_keys.comp, then the radix sort of passes/radix_sort_vk.h).
+///     quad is not empty, in impulse order, and writes the indirect draw; for the methods with a
+///     compute path (instanced, oit, hybrid) it lists the small kernels apart.
 ///  2. mesh (raster): base colour (or the background), ray distance t to the mesh (R32F) and a
 ///     reversed float depth.
-///  3. splat (raster, and compute for small kernels): one quad per kept kernel; per pixel the
-///  kernel's colour and alpha along the
-///     pixel's ray, through its lobes, up to the mesh (analytic optical depths, or N samples:
-///     paper eq. 10). `instanced` draws the kernel opaque where alpha >= 0.5 with the depth test;
-///     `oit` blends w x (premultiplied colour, alpha) additively and the optical depth into a
-///     second target (McGuire and Bavoil 2013; paper eq. 11-12); `hybrid` also finds each pixel's
-///     closest kernel with a 64-bit atomicMin (or, with ClosestKernel::DepthPass, in a pass of its
-///     own over the same quads with a depth test before it); `sorted` blends each kernel, back to
-///     front, over the base colour with premultiplied "over" (C = C_k + (1 - alpha_k) C): exact
-///     compositing wherever kernels do not interpenetrate along a ray (the accuracy ceiling of
-///     splatting, to show what OIT gives up). `oit`, `hybrid` (atomic) and `instanced` evaluate
-///     the kernels whose quad covers at most RenderSettings::smallPixels pixel centres in a
-///     compute pass instead (splat_small.comp): one invocation per kernel over its pixels, OIT
-///     sums in 64-bit fixed point by integer atomics, added by the resolve.
-///  4. resolve (compute): the final image (paper eq. 12 or 13) into result().
+///  3. splat (raster, the method's): one quad per kept kernel, at its kernel's nearest depth,
+///     tested against the mesh's; per pixel the kernel's colour and alpha along the pixel's ray,
+///     through its lobes, up to the mesh (analytic optical depths, or N samples: paper eq. 10).
+///     The small kernels' compute pass (splat_small.comp) evaluates those the compaction listed:
+///     one invocation per kernel over its pixels.
+///  4. resolve (compute, the method's): the final image into result().
 ///
 /// Every pipeline is specialized for its setting (lobes per kernel, analytic or N samples,
-/// Lambert, projection, EWA, OIT weight, hybrid, counting, the small kernels' threshold): lavapipe
+/// Lambert, projection, EWA, OIT weight, counting, the small kernels' threshold): lavapipe
 /// compiles each at its first use, and a shader carrying every path pays for the branches of all.
+/// What changes the bindings a pass declares is a module of its own (shaders/CMakeLists.txt).
 ///
 /// Results are deterministic: blending in a fixed primitive order, integer atomics only, a sort
 /// without atomics.
@@ -49,7 +42,7 @@
 #include "splat/context_vk.h"
 #include "splat/method_vk.h"
 #include "splat/pass_vk.h"
-#include "splat/passes/radix_sort_vk.h"
+#include "splat/passes/resources_vk.h"
 
 namespace spot::splat {
 
@@ -58,21 +51,17 @@ enum class Method { Instanced, Oit, Hybrid, Sorted };
 /// "instanced", "oit", "hybrid", "sorted".
 const char* methodName(Method method);
 
-/// The registry entry of a splatting method (its module under splat/methods/ gives the summary
-/// and the settings it takes).
-MethodInfo splattingMethod(Method method, std::string summary,
-                           std::vector<const Setting*> settings);
+class SplattingRenderer;
+/// The renderer of a splatting method (each is made in its module, splat/methods/<name>/).
+/// `scene` must outlive it.
+std::unique_ptr<SplattingRenderer> makeSplattingRenderer(const SceneGpu& scene, Method method);
 
-class SplatRenderer final : public Renderer {
+class SplattingRenderer : public Renderer {
 public:
-    /// `scene` must outlive the renderer.
-    SplatRenderer(const SceneGpu& scene, Method method);
-
     void prepare(const View& view, const ImpulseSet& impulses,
-                 const RenderSettings& settings) override;
-    void record(VkCommandBuffer cmd, PassTimer& timer) override;
-    const Image& result() const override { return m_result; }
-    FrameCounters counters() const override;
+                 const RenderSettings& settings) final;
+    const Image& result() const final { return m_result; }
+    FrameCounters counters() const final;
 
     Method method() const { return m_method; }
     /// Device memory the targets and buffers of a width x height frame of `capacity` impulses
@@ -80,106 +69,108 @@ public:
     std::uint64_t frameBytes(int width, int height, std::uint32_t capacity,
                              const RenderSettings& settings) const;
 
-private:
+protected:
     /// What a pipeline is specialized for.
     struct Spec {
         std::uint32_t samples = 0;
-        bool lambert = false, orthographic = false, ewa = true, hybridAtomic = false, count = false,
-             closestPass = false;
-        std::uint32_t weight = 0, resolve = 0;
+        bool lambert = false, orthographic = false, ewa = true, count = false;
+        std::uint32_t weight = 0;
         std::uint32_t smallPixels = 0; ///< the compute path's threshold (0: off)
         auto tie() const {
-            return std::tie(samples, lambert, orthographic, ewa, hybridAtomic, count, closestPass,
-                            weight, resolve, smallPixels);
+            return std::tie(samples, lambert, orthographic, ewa, count, weight, smallPixels);
         }
         bool operator<(const Spec& o) const { return tie() < o.tie(); }
     };
-    struct Pipelines {
-        Pipeline prepare, compact, splat, small, closest, sortKeys, resolve;
-        Pipeline prepareClipped; ///< prepare's second dispatch (the kernels the first listed)
-        Pipeline
-            resolveList; ///< hybrid, instanced: the resolve's second dispatch (the listed pixels)
-    };
-    const Pipelines& pipelines(const Spec& spec, bool roofline);
-    /// Whether a width x height frame's fixed-point sums fit one storage buffer binding (else
-    /// `oit` and `hybrid` draw every kernel).
-    bool fixedFits(std::uint64_t width, std::uint64_t height) const;
-    /// Which targets a width x height frame with these settings needs beside the common ones.
-    struct Targets {
-        bool oit = false;    ///< the OIT accumulation and optical-depth images
-        bool atomic = false; ///< the closest kernel by atomicMin (hybrid atomic, instanced)
-        bool pass = false;   ///< the closest kernel by a depth pass (hybrid depth-pass)
-        bool fixed = false;  ///< the compute path's fixed-point sums and tile flags
-        bool list = false;   ///< the list of pixels with a closest kernel
-    };
-    Targets targets(std::uint64_t width, std::uint64_t height,
-                    const RenderSettings& settings) const;
-    /// GPU bytes of a width x height frame's targets with these settings (images, the closest
-    /// kernels and their list, the fixed-point sums): what ensureTargets makes and frameBytes
-    /// counts.
-    std::uint64_t targetBytes(std::uint64_t width, std::uint64_t height,
-                              const RenderSettings& settings) const;
-    void ensureTargets(std::uint32_t width, std::uint32_t height, const RenderSettings& settings);
-    void ensureBuffers(std::uint32_t capacity, const RenderSettings& settings);
-    /// GPU bytes of the buffers sized per kernel (ensureBuffers), for one kernel: what
-    /// ensureBuffers checks against the budget and frameBytes counts.
-    std::uint64_t kernelBytes() const;
+    /// `smallPath`: the method has the small kernels' compute path (the compaction lists them).
+    SplattingRenderer(const SceneGpu& scene, Method method, bool smallPath);
 
-    // The passes record() records, in order (the class comment's steps).
-    /// 1. Prepare and compaction, and the clears the frame's atomics need.
+    // ---- What a method adds --------------------------------------------------------------
+    /// The compute path's threshold for a frame (0: every kernel drawn).
+    virtual std::uint32_t smallPixels(const RenderSettings& settings, Extent size) const = 0;
+    /// Host side of its passes, once the common part of the frame (m_frame) is prepared: its
+    /// pipelines (built or found in its cache) and what the frame's settings choose.
+    virtual void preparePasses() = 0;
+    /// Clears its buffers need before the splat pass (recorded before prepare's last barrier).
+    virtual void recordClears(VkCommandBuffer) {}
+    /// Called when the targets were made anew (a new size or set).
+    virtual void targetsMade() {}
+
+    // ---- Pipelines -------------------------------------------------------------------------
+    Specialization specialization(const Spec& spec) const;
+    /// The quads (splat_quad.vert): the bounds, the kept list, the mesh distance and the lobes.
+    GraphicsPipelineDesc quadPipeline(const Spec& spec) const;
+    /// A splat pass: the quads at their kernel's nearest depth, tested against the mesh's depth
+    /// (not written), so that pixels where the mesh hides the whole kernel are never shaded; with
+    /// the fragment counters.
+    GraphicsPipelineDesc splatPipeline(const Spec& spec, std::span<const std::uint32_t> fragment) const;
+    /// The small kernels' compute pass (`module`: the method's splat_small variant) with `extra`
+    /// bindings beside the lobes, bounds, lists and mesh distance.
+    Pipeline smallPipeline(const Spec& spec, std::span<const std::uint32_t> module,
+                           const Bindings& extra) const;
+    /// A resolve (`module`: the method's splat_resolve variant) reading `bindings` (the result
+    /// is added); `listed` for its second dispatch.
+    Pipeline resolvePipeline(const Spec& spec, std::span<const std::uint32_t> module,
+                             Bindings bindings, bool listed) const;
+
+    // ---- The passes ------------------------------------------------------------------------
+    /// 1. Prepare and compaction, the clears the frame's atomics need (recordClears).
     void recordPrepareAndCompact(VkCommandBuffer cmd);
-    /// 1b. `sorted`: the kept kernels back to front.
-    void recordSort(VkCommandBuffer cmd);
-    /// 2. The base mesh.
+    /// 2. The base mesh (base colour and depth stay attachments for a pass drawing over them).
     void recordMesh(VkCommandBuffer cmd);
-    /// 3a. `hybrid` with a depth pass: each pixel's closest kernel.
-    void recordClosestPass(VkCommandBuffer cmd);
-    /// 3. The kernels' quads, and the small kernels' compute pass.
-    void recordSplat(VkCommandBuffer cmd);
-    /// 4. The resolve into result().
-    void recordResolve(VkCommandBuffer cmd);
-    /// The colour targets the mesh pass clears and the splat pass draws into.
-    std::vector<const Image*> attachments() const;
-    void pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline, bool closest,
-                             bool counters);
+    /// Pushes the quads' bindings plus `extra` for `pipeline` (from quadPipeline).
+    void pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline, Descriptors& extra);
+    /// One quad per kept kernel: the compaction's indexed indirect draw.
     void drawQuads(VkCommandBuffer cmd);
+    /// The small kernels' dispatch with `extra` descriptors (after the quads' writes).
+    void recordSmall(VkCommandBuffer cmd, const Pipeline& pipeline, Descriptors& extra);
+    /// After the splat pass: `drawn` attachments to the general layout, and the pass's writes
+    /// visible to the resolve.
+    void finishSplat(VkCommandBuffer cmd, std::initializer_list<const Image*> drawn);
+    /// 4. The resolve into result() over the image, reading `bindings`' images in the general
+    /// layout; with `listed` (and its list) a second, indirect dispatch over the listed pixels.
+    void recordResolve(VkCommandBuffer cmd, const Pipeline& resolve, Descriptors& bindings,
+                       const Pipeline* listed = nullptr, const Buffer* list = nullptr);
 
     const SceneGpu& m_scene;
     Context& m_ctx;
-    Method m_method;
-    std::map<std::pair<Spec, bool>, Pipelines> m_pipelines;
-    std::unique_ptr<RadixSort> m_sort; ///< sorted only (made on first use)
+    const Method m_method;
+    /// Per image size: the common targets below and the method's.
+    FrameResources m_targets;
+    /// Per impulse capacity: the buffers sized per kernel (the common ones and the method's).
+    FrameResources m_kernels;
 
-    // Per image size.
-    std::uint32_t m_width = 0, m_height = 0;
-    Image m_base, m_distance, m_depth, m_accum, m_opticalDepth, m_closestKernel, m_closestDepth,
-        m_result;
-    Buffer m_closest;     ///< hybrid (atomic): uint64 per pixel
-    Buffer m_closestList; ///< hybrid, instanced: SpotSplatList and a uint per pixel
-    /// oit, hybrid with the compute path: the small kernels' fixed-point OIT sums
-    /// (kSplatFixedChannels uint64 per pixel), zero between frames (the resolve clears what it
-    /// reads); cleared once after it is made. The tiles' flags are cleared every frame.
-    Buffer m_oitFixed;
-    Buffer m_oitTiles; ///< with m_oitFixed: a uint per kSplatResolveTile^2 tile, non-zero where set
-    bool m_oitFixedCleared = false;
-    // Per impulse capacity.
-    std::uint32_t m_capacity = 0;
-    Buffer m_quadIndices;
-    Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_small, m_draw, m_counters,
-        m_sortKeys;
-    Buffer m_clipList; ///< SpotSplatList and a uint per kernel: prepare's second dispatch
-    RadixSortScratch m_sortScratch;
+    Image m_base, m_distance, m_depth, m_result;
+    Buffer m_worldLobes, m_screenLobes, m_bounds, m_visible, m_clipList, m_quadIndices;
+    Buffer m_small; ///< the compute path's list (methods with one)
+    Buffer m_draw;  ///< the quads' indirect draw, the small kernels' dispatch and their count
+    Buffer m_counters;
 
-    // The frame prepared last.
-    struct Prepared {
+    /// The frame prepared last.
+    struct Frame {
         gpu_splat::SpotSplatFrame frame{};
         View view;
         ImpulseSet impulses;
         RenderSettings settings;
-        const Pipelines* pipelines = nullptr;
-        bool sorted = false, instanced = false, closestPass = false, hybridAtomic = false;
-        bool small = false; ///< the small kernels take the compute path
+        Spec spec;
+        std::uint32_t width = 0, height = 0;
+        bool small() const { return spec.smallPixels > 0; } ///< the compute path runs
     } m_frame;
+
+private:
+    struct Common {
+        Pipeline prepare, prepareClipped, compact;
+    };
+    /// Bytes of the buffers sized per kernel for `capacity` kernels, and the fixed ones.
+    std::uint64_t kernelBytes(std::uint32_t capacity) const;
+    void ensureKernels(std::uint32_t capacity);
+    const bool m_smallPath;
+    std::map<Spec, Common> m_common;
+    const Common* m_commonPipelines = nullptr;
 };
+
+/// The registry entry of a splatting method (its module gives the summary and the settings it
+/// takes).
+MethodInfo splattingMethod(Method method, std::string summary,
+                           std::vector<const Setting*> settings);
 
 } // namespace spot::splat

@@ -85,9 +85,12 @@ using uint = std::uint32_t;
 #include "splat_oit.frag.h"
 #include "splat_prepare.comp.h"
 #include "splat_quad.vert.h"
-#include "splat_resolve.comp.h"
+#include "splat_resolve_hybrid_fixed.comp.h"
+#include "splat_resolve_hybrid_pass.comp.h"
+#include "splat_resolve_instanced.comp.h"
 #include "splat_roofline.frag.h"
-#include "splat_small.comp.h"
+#include "splat_small_hybrid.comp.h"
+#include "splat_small_instanced.comp.h"
 #include "splat_sorted.frag.h"
 #include "splat_sorted_keys.comp.h"
 
@@ -289,8 +292,9 @@ TEST(SharedLayout, EveryFieldOffsetTheShadersUseIsTheHosts) {
         SPOT_MODULE(spv_splat_instanced_frag),   SPOT_MODULE(spv_splat_mesh_frag),
         SPOT_MODULE(spv_splat_mesh_vert),        SPOT_MODULE(spv_splat_oit_frag),
         SPOT_MODULE(spv_splat_prepare_comp),     SPOT_MODULE(spv_splat_quad_vert),
-        SPOT_MODULE(spv_splat_resolve_comp),     SPOT_MODULE(spv_splat_roofline_frag),
-        SPOT_MODULE(spv_splat_small_comp),       SPOT_MODULE(spv_splat_sorted_frag),
+        SPOT_MODULE(spv_splat_resolve_hybrid_fixed_comp),
+        SPOT_MODULE(spv_splat_resolve_hybrid_pass_comp), SPOT_MODULE(spv_splat_resolve_instanced_comp),     SPOT_MODULE(spv_splat_roofline_frag),
+        SPOT_MODULE(spv_splat_small_hybrid_comp), SPOT_MODULE(spv_splat_small_instanced_comp),       SPOT_MODULE(spv_splat_sorted_frag),
         SPOT_MODULE(spv_splat_sorted_keys_comp)};
     const auto host = hostOffsets();
     std::map<std::string, int> checked; // fields compared, per struct

@@ -749,9 +749,10 @@ TEST(SplatRenderer, SortedReportsItsSortPass) {
     }
     // Per kernel, sorted adds its sort keys and the sort's scratch to what oit needs.
     const splat::SceneGpu scene(ctx, empty, c.kernel);
-    const splat::SplatRenderer sorted(scene, splat::Method::Sorted), oit(scene, splat::Method::Oit);
-    EXPECT_GT(sorted.frameBytes(64, 64, 1000, {}) - sorted.frameBytes(64, 64, 0, {}),
-              oit.frameBytes(64, 64, 1000, {}) - oit.frameBytes(64, 64, 0, {}));
+    const auto sorted = splat::makeSplattingRenderer(scene, splat::Method::Sorted);
+    const auto oit = splat::makeSplattingRenderer(scene, splat::Method::Oit);
+    EXPECT_GT(sorted->frameBytes(64, 64, 1000, {}) - sorted->frameBytes(64, 64, 0, {}),
+              oit->frameBytes(64, 64, 1000, {}) - oit->frameBytes(64, 64, 0, {}));
     expectNoValidationErrors(ctx);
 }
 
@@ -1209,12 +1210,12 @@ TEST(SplatRenderer, SmallKernelsFixedSumsFitOneBinding) {
     const std::uint64_t range = ctx.properties().limits.maxStorageBufferRange;
     for (const splat::Method method :
          {splat::Method::Oit, splat::Method::Hybrid, splat::Method::Instanced}) {
-        const splat::SplatRenderer r(scene, method);
+        const auto r = splat::makeSplattingRenderer(scene, method);
         // 40 bytes a pixel and a uint per 8x8 tile.
         const std::uint64_t fixed = method == splat::Method::Instanced ? 0 : 64 * 64 * 40 + 64 * 4;
-        EXPECT_EQ(r.frameBytes(64, 64, 0, {}) - r.frameBytes(64, 64, 0, raster), fixed);
+        EXPECT_EQ(r->frameBytes(64, 64, 0, {}) - r->frameBytes(64, 64, 0, raster), fixed);
         const int side = int(std::sqrt(double(range) / 40.0)) + 2; // just past the limit
-        EXPECT_EQ(r.frameBytes(side, side, 0, {}), r.frameBytes(side, side, 0, raster));
+        EXPECT_EQ(r->frameBytes(side, side, 0, {}), r->frameBytes(side, side, 0, raster));
     }
     expectNoValidationErrors(ctx);
 }

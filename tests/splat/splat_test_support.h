@@ -150,7 +150,7 @@ public:
                         splat::FrameStats* stats = nullptr) {
         auto& r = m_renderers[int(settings.method)];
         if (!r)
-            r = std::make_unique<splat::SplatRenderer>(m_scene, settings.method);
+            r = splat::makeSplattingRenderer(m_scene, settings.method);
         return splat::renderImpulses(m_ctx, *r, splat::View{camera, shading, background, baseColor},
                                      impulses, count, settings, stats);
     }
@@ -159,7 +159,7 @@ public:
 private:
     splat::Context& m_ctx;
     splat::SceneGpu m_scene;
-    std::map<int, std::unique_ptr<splat::SplatRenderer>> m_renderers;
+    std::map<int, std::unique_ptr<splat::SplattingRenderer>> m_renderers;
 };
 
 } // namespace spot::test

@@ -19,6 +19,9 @@
 #include "noise/shell.h"
 
 #include "baked_march.comp.h"
+#include "baked_march_2.comp.h"
+#include "baked_march_3.comp.h"
+#include "baked_march_4.comp.h"
 #include "baked_peel.frag.h"
 #include "baked_shell.comp.h"
 #include "baked_tet.vert.h"
@@ -105,27 +108,33 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
 
 BakedRenderer::~BakedRenderer() = default;
 
-const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool split) {
-    if (const auto it = m_march.find({count, first, split}); it != m_march.end())
+const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, std::uint32_t buffers) {
+    SPOT_CHECK(buffers >= 1 && buffers <= kBakedBrickBuffers);
+    if (const auto it = m_march.find({count, first, buffers}); it != m_march.end())
         return it->second;
     Specialization spec;
     spec.set(kBakedSpecCount, count);
     spec.set(kBakedSpecFirstLayer, first);
-    spec.set(kBakedSpecSplitBricks, split);
-    Pipeline p =
-        makeComputePipeline(m_ctx, spirv(spv_baked_march_comp),
-                            {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
-                             storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
-                             storageBuffer(kBakedBindTable), storageBuffer(kBakedBindBricks),
-                             storageBuffer(kBakedBindBricks1), storageBuffer(kBakedBindBricks2),
-                             storageBuffer(kBakedBindBricks3), storageBuffer(kBakedBindDistances),
-                             storageBuffer(kBakedBindLayerEntry),
-                             storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
-                             storageImage(kBakedBindBase), storageImage(kBakedBindBaseKept),
-                             storageImage(kBakedBindExitDepth), storageBuffer(kBakedBindLoops),
-                             storageBuffer(kBakedBindList), storageBuffer(kBakedBindListPixels)},
-                            sizeof(gpu_splat::SpotSplatFrame), spec);
-    return m_march.emplace(std::tuple{count, first, split}, std::move(p)).first->second;
+    // One module per count of brick buffers, each declaring those it reads.
+    const std::span<const std::uint32_t> modules[] = {
+        spirv(spv_baked_march_comp), spirv(spv_baked_march_2_comp), spirv(spv_baked_march_3_comp),
+        spirv(spv_baked_march_4_comp)};
+    static_assert(std::size(modules) == kBakedBrickBuffers);
+    Bindings bindings = {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
+                         storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
+                         storageBuffer(kBakedBindTable), storageBuffer(kBakedBindDistances),
+                         storageBuffer(kBakedBindLayerEntry), storageImage(kBakedBindMeshDistance),
+                         storageImage(kBakedBindAccum), storageImage(kBakedBindBase),
+                         storageImage(kBakedBindBaseKept), storageImage(kBakedBindExitDepth),
+                         storageBuffer(kBakedBindLoops), storageBuffer(kBakedBindList),
+                         storageBuffer(kBakedBindListPixels)};
+    const std::uint32_t brickBindings[] = {kBakedBindBricks, kBakedBindBricks1, kBakedBindBricks2,
+                                           kBakedBindBricks3};
+    for (std::uint32_t i = 0; i < buffers; ++i)
+        bindings.push_back(storageBuffer(brickBindings[i]));
+    Pipeline p = makeComputePipeline(m_ctx, modules[buffers - 1], bindings,
+                                     sizeof(gpu_splat::SpotSplatFrame), spec);
+    return m_march.emplace(std::tuple{count, first, buffers}, std::move(p)).first->second;
 }
 
 void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer) const {
@@ -419,9 +428,9 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
     m_frame.background = view.background;
     m_frame.peelPasses = std::uint32_t(settings.peelPasses);
     m_frame.count = m_countLoops;
-    m_frame.split = m_bakeStats.brickBuffers > 1;
-    marchPipeline(m_frame.count, false, m_frame.split);
-    marchPipeline(m_frame.count, true, m_frame.split);
+    m_frame.brickBuffers = m_bakeStats.brickBuffers;
+    marchPipeline(m_frame.count, false, m_frame.brickBuffers);
+    marchPipeline(m_frame.count, true, m_frame.brickBuffers);
 }
 
 void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
@@ -554,7 +563,7 @@ void BakedRenderer::recordMarch(VkCommandBuffer cmd, std::uint32_t k) {
     using namespace passes;
     const Prepared& f = m_frame;
     const bool first = k == 0;
-    const Pipeline& march = m_march.at({f.count, first, f.split});
+    const Pipeline& march = m_march.at({f.count, first, f.brickBuffers});
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
     pushFrame(cmd, march, f.frame);
     Descriptors d;
@@ -563,10 +572,6 @@ void BakedRenderer::recordMarch(VkCommandBuffer cmd, std::uint32_t k) {
         .buffer(kBakedBindNeighbours, m_neighbours)
         .buffer(kBakedBindEyeTet, m_eyeTet)
         .buffer(kBakedBindTable, m_table)
-        .buffer(kBakedBindBricks, m_bricks[0])
-        .buffer(kBakedBindBricks1, m_bricks[m_bricks[1].handle() ? 1 : 0])
-        .buffer(kBakedBindBricks2, m_bricks[m_bricks[2].handle() ? 2 : 0])
-        .buffer(kBakedBindBricks3, m_bricks[m_bricks[3].handle() ? 3 : 0])
         .buffer(kBakedBindDistances, m_distances)
         .buffer(kBakedBindLayerEntry, m_layerEntry)
         .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
@@ -576,6 +581,10 @@ void BakedRenderer::recordMarch(VkCommandBuffer cmd, std::uint32_t k) {
         .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .buffer(kBakedBindLoops, m_loops)
         .buffer(kBakedBindListPixels, m_listPixels);
+    const std::uint32_t brickBindings[] = {kBakedBindBricks, kBakedBindBricks1, kBakedBindBricks2,
+                                           kBakedBindBricks3};
+    for (std::uint32_t i = 0; i < f.brickBuffers; ++i) // the march module reads these alone
+        d.buffer(brickBindings[i], m_bricks[i]);
     bindList(d, k).push(m_ctx, cmd, march);
     vkCmdDispatchIndirect(cmd, m_lists.handle(), k * m_listStride);
     fullBarrier(cmd);

@@ -151,14 +151,14 @@ private:
     void recordMarch(VkCommandBuffer cmd, std::uint32_t k);
     /// Layer `layer`'s list header, bound at its offset.
     Descriptors& bindList(Descriptors& d, std::uint32_t layer) const;
-    const Pipeline& marchPipeline(bool count, bool first, bool split);
+    const Pipeline& marchPipeline(bool count, bool first, std::uint32_t brickBuffers);
 
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_shell;
     std::array<Pipeline, 2> m_peel; ///< later layers, the first
-    std::map<std::tuple<bool, bool, bool>, Pipeline>
-        m_march; ///< by (count loops, first layer, split bricks)
+    std::map<std::tuple<bool, bool, std::uint32_t>, Pipeline>
+        m_march; ///< by (count loops, first layer, brick buffers)
     bool m_countLoops = false;
 
     // Per bake (RenderSettings::bake): the one on the GPU.
@@ -189,7 +189,7 @@ private:
         glm::vec3 background{0.0f};
         std::uint32_t peelPasses = 1;
         bool count = false;
-        bool split = false; ///< the bricks span several buffers
+        std::uint32_t brickBuffers = 1; ///< the storage buffers the bricks span
     } m_frame;
 };
 
