@@ -52,7 +52,7 @@ SPOT_CONST uint kBakedBindIndices = 3u;     /* uint[3 x triangles] */
 SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
 SPOT_CONST uint kBakedBindTable = 5u;       /* int[]: the leaf tables */
 SPOT_CONST uint kBakedBindBricks = 6u;      /* uvec2[]: density bricks of every level (the first buffer's) */
-SPOT_CONST uint kBakedBindDistances = 7u;   /* float[]: distance bricks */
+/* 7: free (was the distance bricks, which no pass reads) */
 SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
 SPOT_CONST uint kBakedBindLayerEntry = 9u;  /* uvec2 per pixel (row-major): this layer's entry,
                                                x 4 tet + face + 1 (0: none), y its depth's bits

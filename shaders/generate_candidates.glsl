@@ -30,8 +30,14 @@ layout(std430, binding = kGenBindUvs) readonly buffer Uvs { float uvs[]; };
 layout(std430, binding = kGenBindFieldData) readonly buffer FieldData { float fieldData[]; };
 layout(std430, binding = kGenBindScratch) writeonly buffer Scratch { SpotImpulse scratch[]; };
 layout(std430, binding = kGenBindFlags) writeonly buffer Flags { uint flags[]; };
+#if SPOT_GEN_JITTERED
 layout(std430, binding = kGenBindSites) readonly buffer Sites { uint sites[]; };
+#endif
+// A partial generation (the modules compiled with SPOT_GEN_PARTIAL) lists only the changed
+// cells: each one's offset in the whole generation.
+#ifdef SPOT_GEN_PARTIAL
 layout(std430, binding = kGenBindDirty) readonly buffer Dirty { uint dirtyOffsets[]; };
+#endif
 
 const bool kJittered = SPOT_GEN_JITTERED != 0;
 // Set by splat/generate_vk.cpp from the generator's parameters; the defaults are never used.
@@ -117,9 +123,17 @@ void main() {
     SpotImpulse imp;
     // The candidate's place in the whole generation (a partial one lists only some cells).
     uint rank = id - cell.info.z;
-    uint g = push.counts.z != 0u ? dirtyOffsets[lo] + rank : id;
+#ifdef SPOT_GEN_PARTIAL
+    uint g = dirtyOffsets[lo] + rank;
+#else
+    uint g = id;
+#endif
     // Poisson: every candidate is examined; jittered: those the host listed.
-    uint m = kJittered ? sites[g] : rank;
+#if SPOT_GEN_JITTERED
+    uint m = sites[g];
+#else
+    uint m = rank;
+#endif
     bool accepted = spotCandidate(cell, m, imp);
     if (accepted)
         scratch[g] = imp;

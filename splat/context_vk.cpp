@@ -694,6 +694,7 @@ Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
         std::swap(m_layout, o.m_layout);
         std::swap(m_setLayout, o.m_setLayout);
         std::swap(m_bindPoint, o.m_bindPoint);
+        std::swap(m_bindings, o.m_bindings);
     }
     return *this;
 }
@@ -779,12 +780,60 @@ VkSpecializationInfo Specialization::info() const {
     return i;
 }
 
+std::vector<std::uint32_t> declaredBindings(std::span<const std::uint32_t> spirv) {
+    constexpr std::uint32_t kOpDecorate = 71, kDecorationBinding = 33;
+    std::vector<std::uint32_t> out;
+    for (std::size_t i = 5; i < spirv.size();) {
+        const std::uint32_t words = spirv[i] >> 16, op = spirv[i] & 0xffffu;
+        if (words == 0 || i + words > spirv.size())
+            throw std::logic_error("declaredBindings: malformed SPIR-V");
+        if (op == kOpDecorate && words >= 4 && spirv[i + 2] == kDecorationBinding)
+            out.push_back(spirv[i + 3]);
+        i += words;
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+namespace {
+
+std::string bindingList(const std::vector<std::uint32_t>& bindings) {
+    std::string out;
+    for (const std::uint32_t b : bindings)
+        out += (out.empty() ? "" : ", ") + std::to_string(b);
+    return "{" + out + "}";
+}
+
+/// The layout's binding numbers, ascending, checked against those the modules declare.
+std::vector<std::uint32_t>
+checkedBindings(const Bindings& bindings,
+                std::initializer_list<std::span<const std::uint32_t>> modules) {
+    std::vector<std::uint32_t> layout, declared;
+    for (const Binding& b : bindings)
+        layout.push_back(b.binding);
+    std::sort(layout.begin(), layout.end());
+    for (const std::span<const std::uint32_t> m : modules)
+        if (!m.empty())
+            for (const std::uint32_t b : declaredBindings(m))
+                declared.push_back(b);
+    std::sort(declared.begin(), declared.end());
+    declared.erase(std::unique(declared.begin(), declared.end()), declared.end());
+    if (layout != declared)
+        throw std::logic_error(cat("pipeline layout binds ", bindingList(layout),
+                                   " but its shaders declare ", bindingList(declared)));
+    return layout;
+}
+
+} // namespace
+
 Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
                              const Bindings& bindings, std::uint32_t pushBytes,
                              const Specialization& spec) {
     Pipeline p;
     p.m_ctx = &ctx;
     p.m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
+    p.m_bindings = checkedBindings(bindings, {spirv});
     makeLayout(ctx, bindings, pushBytes, VK_SHADER_STAGE_COMPUTE_BIT, p.m_setLayout, p.m_layout);
     VkShaderModule module = makeModule(ctx, spirv);
     VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
@@ -807,6 +856,7 @@ Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc) {
     p.m_bindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
     const VkShaderStageFlags stages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT |
                                       (desc.geometry.empty() ? 0 : VK_SHADER_STAGE_GEOMETRY_BIT);
+    p.m_bindings = checkedBindings(desc.bindings, {desc.vertex, desc.geometry, desc.fragment});
     makeLayout(ctx, desc.bindings, desc.pushBytes, stages, p.m_setLayout, p.m_layout);
 
     std::vector<VkShaderModule> modules;
@@ -911,6 +961,14 @@ Descriptors& Descriptors::image(std::uint32_t binding, const Image& image, VkIma
 }
 
 void Descriptors::push(Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline) {
+    std::vector<std::uint32_t> written;
+    written.reserve(m_writes.size());
+    for (const VkWriteDescriptorSet& w : m_writes)
+        written.push_back(w.dstBinding);
+    std::sort(written.begin(), written.end());
+    if (written != pipeline.bindings())
+        throw std::logic_error(cat("descriptors write ", bindingList(written),
+                                   " for a pipeline binding ", bindingList(pipeline.bindings())));
     ctx.pushDescriptorSet(cmd, pipeline.bindPoint(), pipeline.layout(), 0,
                           std::uint32_t(m_writes.size()), m_writes.data());
 }

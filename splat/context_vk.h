@@ -294,7 +294,16 @@ private:
     std::vector<std::uint32_t> m_data;
 };
 
+/// The binding numbers (set 0) a SPIR-V module declares, ascending: every variable decorated
+/// with a Binding, used or not.
+std::vector<std::uint32_t> declaredBindings(std::span<const std::uint32_t> spirv);
+
 /// A pipeline with its layout and its push-descriptor set layout (set 0).
+///
+/// Its layout holds exactly the bindings its modules declare (checked when it is made), and a
+/// push writes exactly those (checked at each push): no binding is filled with a stand-in for a
+/// resource the pipeline does not read. A module that reads something a setting does not need is
+/// compiled again without it (shaders/CMakeLists.txt, SPOT_SHADER_VARIANTS).
 class Pipeline {
 public:
     Pipeline() = default;
@@ -305,6 +314,8 @@ public:
     VkPipeline handle() const { return m_pipeline; }
     VkPipelineLayout layout() const { return m_layout; }
     VkPipelineBindPoint bindPoint() const { return m_bindPoint; }
+    /// Its binding numbers, ascending.
+    const std::vector<std::uint32_t>& bindings() const { return m_bindings; }
 
 private:
     friend Pipeline makeComputePipeline(Context&, std::span<const std::uint32_t>, const Bindings&,
@@ -317,6 +328,7 @@ private:
     VkPipelineLayout m_layout = VK_NULL_HANDLE;
     VkDescriptorSetLayout m_setLayout = VK_NULL_HANDLE;
     VkPipelineBindPoint m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
+    std::vector<std::uint32_t> m_bindings;
 };
 
 /// Compute pipeline: one SPIR-V module (entry "main"), the given bindings, push constants of

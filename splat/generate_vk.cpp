@@ -6,7 +6,9 @@
 #include <vector>
 
 #include "generate_jittered.comp.h"
+#include "generate_jittered_partial.comp.h"
 #include "generate_poisson.comp.h"
+#include "generate_poisson_partial.comp.h"
 #include "generate_scan.comp.h"
 #include "generate_scatter.comp.h"
 #include "noise/error.h"
@@ -149,8 +151,10 @@ void GpuGenerator::refreshFields() {
     m_params.upload(&params, sizeof(params));
     // The host twin reads the generator's arrays, which may have moved.
     m_shared = shared::f32::SharedGenerator(arraysOf(m_mesh, m_generator));
-    if (m_candidatePipeline.handle() && specializationKey() != m_candidateKey)
+    if (m_candidatePipeline.handle() && specializationKey() != m_candidateKey) {
         m_candidatePipeline = Pipeline();
+        m_partialPipeline = Pipeline();
+    }
     m_valid = false;
     m_dirtyPending = false;
 }
@@ -205,7 +209,7 @@ void GpuGenerator::choosePartial() {
     m_dirtyCellCount = std::uint32_t(cells.size());
     m_dirtyExamined = local;
     if (local > 0)
-        candidatePipeline();
+        partialPipeline();
     m_dirty.clear();
     m_dirtyPending = false;
     m_partial = true;
@@ -225,6 +229,14 @@ const Pipeline& GpuGenerator::candidatePipeline() {
     return m_candidatePipeline;
 }
 
+const Pipeline& GpuGenerator::partialPipeline() {
+    const Pipeline& full = candidatePipeline(); // the key is the full one's
+    static_cast<void>(full);
+    if (!m_partialPipeline.handle())
+        m_partialPipeline = makeCandidatePipeline(m_candidateKey, true);
+    return m_partialPipeline;
+}
+
 void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
                                     std::int32_t components) {
     if (slot >= SPOT_FIELD_COUNT)
@@ -241,7 +253,7 @@ void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
     m_preparedKey = std::move(key);
 }
 
-Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& key) {
+Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& key, bool partial) {
     const gpu::SpotGenParams& params = m_generator.sharedParams();
     Specialization spec;
     spec.set(kGenSpecComb, key[0] != 0)
@@ -250,16 +262,23 @@ Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& ke
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
         spec.set(kGenSpecFieldKind + slot, key[1 + 2 * slot])
             .set(kGenSpecFieldComponents + slot, key[2 + 2 * slot]);
-    const Bindings bindings = {storageBuffer(kGenBindParams),    storageBuffer(kGenBindCells),
-                               storageBuffer(kGenBindPieces),    storageBuffer(kGenBindTriangles),
-                               storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
-                               storageBuffer(kGenBindTangents),  storageBuffer(kGenBindUvs),
-                               storageBuffer(kGenBindFieldData), storageBuffer(kGenBindScratch),
-                               storageBuffer(kGenBindFlags),     storageBuffer(kGenBindSites),
-                               storageBuffer(kGenBindDirty)};
-    return makeComputePipeline(
-        m_ctx, m_jittered ? spirv(spv_generate_jittered_comp) : spirv(spv_generate_poisson_comp),
-        bindings, sizeof(SpotGenPush), spec);
+    Bindings bindings = {storageBuffer(kGenBindParams),    storageBuffer(kGenBindCells),
+                         storageBuffer(kGenBindPieces),    storageBuffer(kGenBindTriangles),
+                         storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
+                         storageBuffer(kGenBindTangents),  storageBuffer(kGenBindUvs),
+                         storageBuffer(kGenBindFieldData), storageBuffer(kGenBindScratch),
+                         storageBuffer(kGenBindFlags)};
+    if (m_jittered)
+        bindings.push_back(storageBuffer(kGenBindSites));
+    if (partial)
+        bindings.push_back(storageBuffer(kGenBindDirty));
+    // A module per sampling and per full or partial generation, each declaring what it reads.
+    const std::span<const std::uint32_t> module =
+        m_jittered ? (partial ? spirv(spv_generate_jittered_partial_comp)
+                              : spirv(spv_generate_jittered_comp))
+                   : (partial ? spirv(spv_generate_poisson_partial_comp)
+                              : spirv(spv_generate_poisson_comp));
+    return makeComputePipeline(m_ctx, module, bindings, sizeof(SpotGenPush), spec);
 }
 
 const GpuGenerator::CellCandidates& GpuGenerator::cellCandidates(std::uint32_t cell) {
@@ -308,8 +327,9 @@ bool GpuGenerator::choose(const std::function<bool(const noise::SurfaceCell&)>& 
     const auto examinedCount = std::uint32_t(examinedTotal);
     reserve(m_ctx, m_cells, withCandidates, sizeof(gpu::SpotCell), kStorage,
             Buffer::Memory::HostVisible, "visible cells");
-    reserve(m_ctx, m_sites, m_jittered ? examinedCount : 0, sizeof(std::uint32_t), kStorage,
-            Buffer::Memory::HostVisible, "lattice sites");
+    if (m_jittered)
+        reserve(m_ctx, m_sites, examinedCount, sizeof(std::uint32_t), kStorage,
+                Buffer::Memory::HostVisible, "lattice sites");
     reserve(m_ctx, m_scratch, examinedCount, sizeof(gpu::SpotImpulse), kStorage,
             Buffer::Memory::DeviceLocal, "impulse candidates");
     reserve(m_ctx, m_flags, examinedCount, sizeof(std::uint32_t), kStorage,
@@ -360,12 +380,15 @@ void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
         m_partial ? SpotGenPush{glm::uvec4(m_dirtyCellCount, m_dirtyExamined, 1u, 0u), m_lod} : push;
     // 1. Every candidate decided.
     if (candidatePush.counts.y > 0) {
-        const Pipeline& candidates = m_candidatePipeline;
+        const Pipeline& candidates = m_partial ? m_partialPipeline : m_candidatePipeline;
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, candidates.handle());
-        Descriptors()
-            .buffer(kGenBindParams, m_params)
+        Descriptors d;
+        if (m_jittered)
+            d.buffer(kGenBindSites, m_sites);
+        if (m_partial)
+            d.buffer(kGenBindDirty, m_dirtyOffsets);
+        d.buffer(kGenBindParams, m_params)
             .buffer(kGenBindCells, m_partial ? m_dirtyCells : m_cells)
-            .buffer(kGenBindDirty, m_partial ? m_dirtyOffsets : m_cells)
             .buffer(kGenBindPieces, m_pieces)
             .buffer(kGenBindTriangles, m_triangles)
             .buffer(kGenBindPositions, m_positions)
@@ -375,7 +398,6 @@ void GpuGenerator::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kGenBindFieldData, m_fieldData)
             .buffer(kGenBindScratch, m_scratch)
             .buffer(kGenBindFlags, m_flags)
-            .buffer(kGenBindSites, m_sites)
             .push(m_ctx, cmd, candidates);
         pushConstants(cmd, candidates, candidatePush);
         dispatch(cmd, candidatePush.counts.y);

@@ -109,8 +109,10 @@ private:
         return m_jittered ? std::uint32_t(c.inside.size()) : c.candidates;
     }
     const Pipeline& candidatePipeline();
-    /// The candidates pipeline for a specializationKey().
-    Pipeline makeCandidatePipeline(const std::vector<std::int32_t>& key);
+    /// The same for a partial generation (made at the first).
+    const Pipeline& partialPipeline();
+    /// The candidates pipeline for a specializationKey(), of a full or a partial generation.
+    Pipeline makeCandidatePipeline(const std::vector<std::int32_t>& key, bool partial = false);
     /// What the candidates pipeline is specialized for: the comb flag, each slot's kind and
     /// component count.
     std::vector<std::int32_t> specializationKey() const;
@@ -123,6 +125,7 @@ private:
     bool m_jittered = false;
     std::vector<CellCandidates> m_cellCandidates; ///< per model cell
     Pipeline m_candidatePipeline;                 ///< specialized for the preset; made on first use
+    Pipeline m_partialPipeline;                   ///< the same for partial generations
     std::vector<std::int32_t> m_candidateKey;     ///< specializationKey() it was made for
     Pipeline m_preparedPipeline;                  ///< prepareFieldKind's, until its key is used
     std::vector<std::int32_t> m_preparedKey;

@@ -49,20 +49,17 @@ SceneGpu::SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& k
     : m_ctx(&ctx), m_meshHash(noise::meshHash(mesh)), m_kernel(kernel),
       m_meshPass(ctx, mesh, "scene"), m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}
 
-// The registry: each method's module makes its entry (its folder under splat/methods/). Adding a
-// method is its folder, its declaration below and its place in the list.
-MethodInfo referenceMethod();
-MethodInfo instancedMethod();
-MethodInfo oitMethod();
-MethodInfo hybridMethod();
-MethodInfo sortedMethod();
-MethodInfo raymarchMethod();
-MethodInfo bakedMethod();
+// The registry: each method's module makes its entry (splat/methods/registry.h lists them).
+#define SPOT_METHOD(name) MethodInfo name##Method();
+#include "splat/methods/registry.h"
+#undef SPOT_METHOD
 
 const std::vector<MethodInfo>& methods() {
     static const std::vector<MethodInfo> all = {
-        referenceMethod(), instancedMethod(), oitMethod(),  hybridMethod(),
-        sortedMethod(),    raymarchMethod(),  bakedMethod()};
+#define SPOT_METHOD(name) name##Method(),
+#include "splat/methods/registry.h"
+#undef SPOT_METHOD
+    };
     return all;
 }
 

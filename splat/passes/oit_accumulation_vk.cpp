@@ -14,10 +14,12 @@ constexpr std::uint64_t kFixedBytesPerPixel = kSplatFixedChannels * sizeof(std::
 } // namespace
 
 OitAccumulation::OitAccumulation(FrameResources& targets, FrameResources::Wanted fixed) {
-    constexpr VkImageUsageFlags kUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
+    constexpr VkImageUsageFlags kUsage =
+        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
     constexpr VkBufferUsageFlags kCleared =
         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    targets.image(m_accum, "splat OIT accumulation", kColorFormat, kUsage, VK_IMAGE_ASPECT_COLOR_BIT);
+    targets.image(m_accum, "splat OIT accumulation", kColorFormat, kUsage,
+                  VK_IMAGE_ASPECT_COLOR_BIT);
     targets.image(m_opticalDepth, "splat OIT optical depth", kScalarFormat, kUsage,
                   VK_IMAGE_ASPECT_COLOR_BIT);
     targets.buffer(

@@ -20,8 +20,8 @@ std::uint64_t texelBytes(VkFormat format) {
     }
 }
 
-void FrameResources::image(Image& image, std::string name, VkFormat format,
-                           VkImageUsageFlags usage, VkImageAspectFlags aspect, Wanted wanted) {
+void FrameResources::image(Image& image, std::string name, VkFormat format, VkImageUsageFlags usage,
+                           VkImageAspectFlags aspect, Wanted wanted) {
     Context* ctx = m_ctx;
     const std::string label = name;
     custom(
@@ -34,8 +34,8 @@ void FrameResources::image(Image& image, std::string name, VkFormat format,
         std::move(wanted));
 }
 
-void FrameResources::buffer(Buffer& buffer, std::string name, Bytes bytes,
-                            VkBufferUsageFlags usage, Buffer::Memory memory, Wanted wanted) {
+void FrameResources::buffer(Buffer& buffer, std::string name, Bytes bytes, VkBufferUsageFlags usage,
+                            Buffer::Memory memory, Wanted wanted) {
     Context* ctx = m_ctx;
     const std::string label = name;
     Bytes size = [bytes](Extent e) { return std::max<std::uint64_t>(bytes(e), 1); };

@@ -52,8 +52,8 @@ std::unique_ptr<SplattingRenderer> makeSplattingRenderer(const SceneGpu& scene, 
     return std::unique_ptr<SplattingRenderer>(splatting);
 }
 
-SplattingRenderer::SplattingRenderer(const SceneGpu& scene, Method method, bool smallPath)
-    : m_scene(scene), m_ctx(scene.context()), m_method(method),
+SplattingRenderer::SplattingRenderer(const SceneGpu& scene, std::string name, bool smallPath)
+    : m_scene(scene), m_ctx(scene.context()), m_name(std::move(name)),
       m_targets(scene.context(), "splat renderer"), m_kernels(scene.context(), "splat renderer"),
       m_smallPath(smallPath) {
     requireFormat(m_ctx, kColorFormat,
@@ -67,8 +67,8 @@ SplattingRenderer::SplattingRenderer(const SceneGpu& scene, Method method, bool 
     constexpr VkImageAspectFlags kColor = VK_IMAGE_ASPECT_COLOR_BIT;
     m_targets.image(m_base, "splat base colour", kColorFormat, kTargetUsage, kColor);
     m_targets.image(m_distance, "splat mesh distance", kScalarFormat, kTargetUsage, kColor);
-    m_targets.image(m_depth, "splat depth", kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                    VK_IMAGE_ASPECT_DEPTH_BIT);
+    m_targets.image(m_depth, "splat depth", kDepthFormat,
+                    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
     m_targets.image(m_result, "splat result", kColorFormat,
                     VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, kColor);
     // The buffers sized per kernel every splatting frame has.
@@ -76,8 +76,8 @@ SplattingRenderer::SplattingRenderer(const SceneGpu& scene, Method method, bool 
     const auto perKernel = [](std::uint64_t bytes) {
         return [bytes](Extent e) { return std::max<std::uint64_t>(e.width, 1) * bytes; };
     };
-    m_kernels.buffer(m_worldLobes, "splat world lobes", perKernel(lobes * sizeof(gpu::SpotWorldLobe)),
-                     kStorage, kDevice);
+    m_kernels.buffer(m_worldLobes, "splat world lobes",
+                     perKernel(lobes * sizeof(gpu::SpotWorldLobe)), kStorage, kDevice);
     m_kernels.buffer(m_screenLobes, "splat screen lobes", perKernel(lobes * sizeof(SpotScreenLobe)),
                      kStorage, kDevice);
     m_kernels.buffer(m_bounds, "splat kernel bounds", perKernel(sizeof(SpotKernelBound)), kStorage,
@@ -87,7 +87,8 @@ SplattingRenderer::SplattingRenderer(const SceneGpu& scene, Method method, bool 
     m_kernels.buffer(
         m_clipList, "splat prepare's clipped kernels",
         [](Extent e) {
-            return sizeof(SpotSplatList) + std::max<std::uint64_t>(e.width, 1) * sizeof(std::uint32_t);
+            return sizeof(SpotSplatList) +
+                   std::max<std::uint64_t>(e.width, 1) * sizeof(std::uint32_t);
         },
         kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice);
     // The quads' indices (spot_splat.h, kSplatQuadIndices), the same every frame: written once.
@@ -101,8 +102,9 @@ SplattingRenderer::SplattingRenderer(const SceneGpu& scene, Method method, bool 
                     kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, Buffer::Memory::HostVisible,
                     "splat indirect draw and dispatch");
     std::memset(m_draw.mapped(), 0, m_draw.size()); // no kernel drawn before the first frame
-    m_counters = Buffer(m_ctx, sizeof(SpotSplatCounters), kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                        Buffer::Memory::HostVisible, "splat fragment counters");
+    m_counters =
+        Buffer(m_ctx, sizeof(SpotSplatCounters), kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+               Buffer::Memory::HostVisible, "splat fragment counters");
 }
 
 Specialization SplattingRenderer::specialization(const Spec& s) const {
@@ -127,19 +129,20 @@ GraphicsPipelineDesc SplattingRenderer::quadPipeline(const Spec& s) const {
     GraphicsPipelineDesc quads;
     quads.vertex = spirv(spv_splat_quad_vert);
     quads.bindings = {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindVisible),
-                      storageImage(kSplatBindMeshDistance), storageBuffer(kSplatBindWorldLobes),
-                      storageBuffer(kSplatBindScreenLobes)};
+                      storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes)};
     quads.pushBytes = sizeof(SpotSplatFrame);
     quads.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
     quads.spec = specialization(s);
     return quads;
 }
 
-GraphicsPipelineDesc SplattingRenderer::splatPipeline(const Spec& s,
-                                                      std::span<const std::uint32_t> fragment) const {
+GraphicsPipelineDesc
+SplattingRenderer::splatPipeline(const Spec& s, std::span<const std::uint32_t> fragment) const {
     GraphicsPipelineDesc splat = quadPipeline(s);
     splat.fragment = fragment;
-    splat.bindings.push_back(storageBuffer(kSplatBindCounters)); // read only when counting
+    splat.bindings.insert(splat.bindings.end(),
+                          {storageImage(kSplatBindMeshDistance),
+                           storageBuffer(kSplatBindCounters)}); // counters: when counting
     splat.depthFormat = kDepthFormat;
     splat.depthTest = true;
     splat.depthWrite = false;
@@ -176,7 +179,8 @@ std::uint64_t SplattingRenderer::frameBytes(int width, int height, std::uint32_t
 }
 
 void SplattingRenderer::ensureKernels(std::uint32_t capacity) {
-    if (capacity <= m_kernels.extent().width && m_kernels.current(m_kernels.extent(), m_frame.settings))
+    if (capacity <= m_kernels.extent().width &&
+        m_kernels.current(m_kernels.extent(), m_frame.settings))
         return;
     // Grow with a margin, so a capacity creeping up does not reallocate every frame.
     const std::uint32_t grown = std::max(
@@ -201,9 +205,8 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
     if (settings.smallPixels < 0 || settings.smallPixels > int(kSplatMaxSmallPixels))
         throw InputError(cat("splat renderer: small kernel pixels ", settings.smallPixels,
                              " outside [0, ", kSplatMaxSmallPixels, "]"));
-    if (settings.roofline && m_method != Method::Oit)
-        throw InputError(cat("splat renderer: the roofline is drawn by oit, not by ",
-                             methodName(m_method)));
+    if (settings.roofline && !drawsRoofline())
+        throw InputError(cat("splat renderer: the roofline is drawn by oit, not by ", m_name));
     if (impulses.capacity > kMaxImpulses)
         throw InputError(cat("splat renderer: ", impulses.capacity, " impulses, more than the ",
                              kMaxImpulses, " one frame can prepare"));
@@ -215,7 +218,8 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
                              std::uint64_t(impulses.capacity) * sizeof(gpu::SpotImpulse)));
     const std::uint32_t width = std::uint32_t(view.camera.width);
     const std::uint32_t height = std::uint32_t(view.camera.height);
-    if (m_targets.ensure(Extent{width, height}, settings, cat("a ", width, "x", height, " frame needs")))
+    if (m_targets.ensure(Extent{width, height}, settings,
+                         cat("a ", width, "x", height, " frame needs")))
         targetsMade();
     Frame& f = m_frame;
     f.settings = settings;
@@ -242,14 +246,16 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
         const bool world = s.lambert || s.samples > 0;
         const std::uint32_t lobes = m_scene.lobeCount();
         c.prepare = makePreparePipeline(m_ctx, lobes, true, s.ewa, s.orthographic, world);
-        c.prepareClipped = makePreparePipeline(m_ctx, lobes, true, s.ewa, s.orthographic, world, true);
+        c.prepareClipped =
+            makePreparePipeline(m_ctx, lobes, true, s.ewa, s.orthographic, world, true);
         Bindings compact = {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindVisible),
                             storageBuffer(kSplatBindDraw), storageBuffer(kSplatBindCount)};
         if (m_smallPath)
             compact.push_back(storageBuffer(kSplatBindSmall));
-        c.compact = makeComputePipeline(
-            m_ctx, m_smallPath ? spirv(spv_splat_compact_small_comp) : spirv(spv_splat_compact_comp),
-            compact, sizeof(SpotSplatFrame), specialization(s));
+        c.compact = makeComputePipeline(m_ctx,
+                                        m_smallPath ? spirv(spv_splat_compact_small_comp)
+                                                    : spirv(spv_splat_compact_comp),
+                                        compact, sizeof(SpotSplatFrame), specialization(s));
         it = m_common.emplace(s, std::move(c)).first;
     }
     m_commonPipelines = &it->second;
@@ -323,9 +329,14 @@ void SplattingRenderer::pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline&
         .buffer(kSplatBindVisible, m_visible)
         .buffer(kSplatBindWorldLobes, m_worldLobes)
         .buffer(kSplatBindScreenLobes, m_screenLobes)
+        .push(m_ctx, cmd, pipeline);
+}
+
+Descriptors& SplattingRenderer::splatInputs(Descriptors& d) const {
+    return d
         .image(kSplatBindMeshDistance, m_distance, passes::kGeneral,
                VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-        .push(m_ctx, cmd, pipeline);
+        .buffer(kSplatBindCounters, m_counters);
 }
 
 void SplattingRenderer::drawQuads(VkCommandBuffer cmd) {
@@ -353,7 +364,8 @@ void SplattingRenderer::recordSmall(VkCommandBuffer cmd, const Pipeline& pipelin
     vkCmdDispatchIndirect(cmd, m_draw.handle(), kSplatDrawDispatch * sizeof(std::uint32_t));
 }
 
-void SplattingRenderer::finishSplat(VkCommandBuffer cmd, std::initializer_list<const Image*> drawn) {
+void SplattingRenderer::finishSplat(VkCommandBuffer cmd,
+                                    std::initializer_list<const Image*> drawn) {
     using namespace passes;
     for (const Image* image : drawn)
         transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
@@ -410,10 +422,10 @@ FrameCounters SplattingRenderer::counters() const {
     return c;
 }
 
-MethodInfo splattingMethod(Method method, std::string summary,
+MethodInfo splattingMethod(std::string name, std::string summary,
                            std::vector<const Setting*> settings) {
     MethodInfo m;
-    m.name = methodName(method);
+    m.name = std::move(name);
     m.summary = std::move(summary);
     m.settings = std::move(settings);
     return m;

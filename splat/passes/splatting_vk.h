@@ -46,13 +46,15 @@
 
 namespace spot::splat {
 
+/// The splatting methods the project ships (a name for tests and tools; the registry,
+/// splat/methods/registry.h, is what lists the methods).
 enum class Method { Instanced, Oit, Hybrid, Sorted };
 
 /// "instanced", "oit", "hybrid", "sorted".
 const char* methodName(Method method);
 
 class SplattingRenderer;
-/// The renderer of a splatting method (each is made in its module, splat/methods/<name>/).
+/// The registry's renderer of a splatting method (made by its module, splat/methods/<name>/).
 /// `scene` must outlive it.
 std::unique_ptr<SplattingRenderer> makeSplattingRenderer(const SceneGpu& scene, Method method);
 
@@ -63,7 +65,8 @@ public:
     const Image& result() const final { return m_result; }
     FrameCounters counters() const final;
 
-    Method method() const { return m_method; }
+    /// The method's name, as in the registry.
+    const std::string& name() const { return m_name; }
     /// Device memory the targets and buffers of a width x height frame of `capacity` impulses
     /// take (bytes), with `settings`.
     std::uint64_t frameBytes(int width, int height, std::uint32_t capacity,
@@ -81,8 +84,9 @@ protected:
         }
         bool operator<(const Spec& o) const { return tie() < o.tie(); }
     };
-    /// `smallPath`: the method has the small kernels' compute path (the compaction lists them).
-    SplattingRenderer(const SceneGpu& scene, Method method, bool smallPath);
+    /// `name`: the method's, as in the registry; `smallPath`: it has the small kernels' compute
+    /// path (the compaction lists them).
+    SplattingRenderer(const SceneGpu& scene, std::string name, bool smallPath);
 
     // ---- What a method adds --------------------------------------------------------------
     /// The compute path's threshold for a frame (0: every kernel drawn).
@@ -94,15 +98,18 @@ protected:
     virtual void recordClears(VkCommandBuffer) {}
     /// Called when the targets were made anew (a new size or set).
     virtual void targetsMade() {}
+    /// Whether it draws RenderSettings::roofline frames (oit does).
+    virtual bool drawsRoofline() const { return false; }
 
     // ---- Pipelines -------------------------------------------------------------------------
     Specialization specialization(const Spec& spec) const;
-    /// The quads (splat_quad.vert): the bounds, the kept list, the mesh distance and the lobes.
+    /// The quads (splat_quad.vert): the bounds, the kept list and the lobes.
     GraphicsPipelineDesc quadPipeline(const Spec& spec) const;
     /// A splat pass: the quads at their kernel's nearest depth, tested against the mesh's depth
-    /// (not written), so that pixels where the mesh hides the whole kernel are never shaded; with
-    /// the fragment counters.
-    GraphicsPipelineDesc splatPipeline(const Spec& spec, std::span<const std::uint32_t> fragment) const;
+    /// (not written), so that pixels where the mesh hides the whole kernel are never shaded; the
+    /// fragment shader reads the mesh distance and the counters (splatInputs).
+    GraphicsPipelineDesc splatPipeline(const Spec& spec,
+                                       std::span<const std::uint32_t> fragment) const;
     /// The small kernels' compute pass (`module`: the method's splat_small variant) with `extra`
     /// bindings beside the lobes, bounds, lists and mesh distance.
     Pipeline smallPipeline(const Spec& spec, std::span<const std::uint32_t> module,
@@ -119,6 +126,9 @@ protected:
     void recordMesh(VkCommandBuffer cmd);
     /// Pushes the quads' bindings plus `extra` for `pipeline` (from quadPipeline).
     void pushQuadDescriptors(VkCommandBuffer cmd, const Pipeline& pipeline, Descriptors& extra);
+    /// Adds what a splat pass's fragment shader reads (splatPipeline): the mesh distance and the
+    /// counters.
+    Descriptors& splatInputs(Descriptors& d) const;
     /// One quad per kept kernel: the compaction's indexed indirect draw.
     void drawQuads(VkCommandBuffer cmd);
     /// The small kernels' dispatch with `extra` descriptors (after the quads' writes).
@@ -133,7 +143,7 @@ protected:
 
     const SceneGpu& m_scene;
     Context& m_ctx;
-    const Method m_method;
+    const std::string m_name;
     /// Per image size: the common targets below and the method's.
     FrameResources m_targets;
     /// Per impulse capacity: the buffers sized per kernel (the common ones and the method's).
@@ -170,7 +180,7 @@ private:
 
 /// The registry entry of a splatting method (its module gives the summary and the settings it
 /// takes).
-MethodInfo splattingMethod(Method method, std::string summary,
+MethodInfo splattingMethod(std::string name, std::string summary,
                            std::vector<const Setting*> settings);
 
 } // namespace spot::splat

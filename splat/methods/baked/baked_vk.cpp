@@ -120,14 +120,13 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, std::uint32
         spirv(spv_baked_march_comp), spirv(spv_baked_march_2_comp), spirv(spv_baked_march_3_comp),
         spirv(spv_baked_march_4_comp)};
     static_assert(std::size(modules) == kBakedBrickBuffers);
-    Bindings bindings = {storageBuffer(kBakedBindParams), storageBuffer(kBakedBindTets),
-                         storageBuffer(kBakedBindNeighbours), storageBuffer(kBakedBindEyeTet),
-                         storageBuffer(kBakedBindTable), storageBuffer(kBakedBindDistances),
-                         storageBuffer(kBakedBindLayerEntry), storageImage(kBakedBindMeshDistance),
-                         storageImage(kBakedBindAccum), storageImage(kBakedBindBase),
-                         storageImage(kBakedBindBaseKept), storageImage(kBakedBindExitDepth),
-                         storageBuffer(kBakedBindLoops), storageBuffer(kBakedBindList),
-                         storageBuffer(kBakedBindListPixels)};
+    Bindings bindings = {storageBuffer(kBakedBindParams),      storageBuffer(kBakedBindTets),
+                         storageBuffer(kBakedBindNeighbours),  storageBuffer(kBakedBindEyeTet),
+                         storageBuffer(kBakedBindTable),       storageBuffer(kBakedBindLayerEntry),
+                         storageImage(kBakedBindMeshDistance), storageImage(kBakedBindAccum),
+                         storageImage(kBakedBindBase),         storageImage(kBakedBindBaseKept),
+                         storageImage(kBakedBindExitDepth),    storageBuffer(kBakedBindLoops),
+                         storageBuffer(kBakedBindList),        storageBuffer(kBakedBindListPixels)};
     const std::uint32_t brickBindings[] = {kBakedBindBricks, kBakedBindBricks1, kBakedBindBricks2,
                                            kBakedBindBricks3};
     for (std::uint32_t i = 0; i < buffers; ++i)
@@ -150,24 +149,19 @@ void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer)
         }
     const std::uint64_t brickBytesEach = std::uint64_t(kBakedBrickVoxels) * sizeof(glm::uvec2);
     const std::uint64_t brickBytes = std::max<std::uint64_t>(bake.brickCount, 1) * brickBytesEach;
-    const std::uint64_t distanceBytes =
-        std::max<std::uint64_t>(bake.distanceBricks, 1) * kBakedLeafVoxels * 4;
     const std::uint64_t tableBytes = bake.table.size() * sizeof(std::int32_t);
     const std::uint64_t bufferCount =
         std::max<std::uint64_t>((bake.brickCount + perBuffer - 1) / perBuffer, 1);
-    if (bufferCount > kBakedBrickBuffers || distanceBytes > range || tableBytes > range)
+    if (bufferCount > kBakedBrickBuffers || tableBytes > range)
         throw InputError(cat("baked: ", bake.file, " holds ", bake.brickCount, " leaves (",
-                             brickBytes >> 20, " MiB of bricks, ", distanceBytes >> 20,
-                             " MiB of distances), more than ", kBakedBrickBuffers,
+                             brickBytes >> 20, " MiB of bricks), more than ", kBakedBrickBuffers,
                              " storage buffers of this device take (", range >> 20,
                              " MiB each); bake it at a larger voxel size"));
-    std::uint64_t held = m_table.reservedBytes() + m_distances.reservedBytes();
+    std::uint64_t held = m_table.reservedBytes();
     for (const Buffer& b : m_bricks)
         held += b.reservedBytes();
-    if (m_ctx.allocatedBytes() - held + brickBytes + distanceBytes + tableBytes >
-        m_ctx.memoryBudget())
-        throw InputError(cat("baked: ", bake.file, " needs ",
-                             (brickBytes + distanceBytes + tableBytes) >> 20,
+    if (m_ctx.allocatedBytes() - held + brickBytes + tableBytes > m_ctx.memoryBudget())
+        throw InputError(cat("baked: ", bake.file, " needs ", (brickBytes + tableBytes) >> 20,
                              " MiB of GPU memory; ", (m_ctx.allocatedBytes() - held) >> 20,
                              " MiB are in use and the budget is ", m_ctx.memoryBudget() >> 20,
                              " MiB; bake it at a larger voxel size"));
@@ -185,13 +179,10 @@ void BakedRenderer::uploadBake(const BakeData& bake) {
     const std::uint64_t bufferCount =
         std::max<std::uint64_t>((brickCount + perBuffer - 1) / perBuffer, 1);
     const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * brickBytesEach;
-    const std::uint64_t distanceBytes =
-        std::max<std::uint64_t>(bake.distanceBricks, 1) * kBakedLeafVoxels * 4;
     const std::uint64_t tableBytes = bake.table.size() * sizeof(std::int32_t);
     m_table = Buffer();
     for (Buffer& b : m_bricks)
         b = Buffer();
-    m_distances = Buffer();
     m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
     m_table.upload(std::span<const std::int32_t>(bake.table));
     for (std::uint64_t i = 0; i < bufferCount; ++i) {
@@ -214,9 +205,6 @@ void BakedRenderer::uploadBake(const BakeData& bake) {
         }
     }
     m_bricksPerBuffer = std::uint32_t(perBuffer);
-    m_distances = Buffer(m_ctx, distanceBytes, kStorage, kHost, "baked distance bricks");
-    if (!bake.distances.empty())
-        m_distances.upload(std::span<const float>(bake.distances));
     m_leafOrigin = bake.leafOrigin;
     m_leafDims = bake.leafDims;
     m_bakeStats = BakedStats{};
@@ -227,7 +215,7 @@ void BakedRenderer::uploadBake(const BakeData& bake) {
     m_bakeStats.brickBuffers = std::uint32_t(bufferCount);
     m_bakeStats.distanceBricks = bake.distanceBricks;
     m_bakeStats.tableEntries = std::uint32_t(bake.table.size());
-    m_bakeStats.gpuBytes = brickBytes + distanceBytes + tableBytes;
+    m_bakeStats.gpuBytes = brickBytes + tableBytes;
 }
 
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
@@ -572,7 +560,6 @@ void BakedRenderer::recordMarch(VkCommandBuffer cmd, std::uint32_t k) {
         .buffer(kBakedBindNeighbours, m_neighbours)
         .buffer(kBakedBindEyeTet, m_eyeTet)
         .buffer(kBakedBindTable, m_table)
-        .buffer(kBakedBindDistances, m_distances)
         .buffer(kBakedBindLayerEntry, m_layerEntry)
         .image(kBakedBindMeshDistance, m_distance, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .image(kBakedBindAccum, m_accum, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)

@@ -164,7 +164,7 @@ private:
     // Per bake (RenderSettings::bake): the one on the GPU.
     std::shared_ptr<const BakeData> m_bake;
     BakedStats m_bakeStats;
-    Buffer m_table, m_distances;
+    Buffer m_table;
     std::array<Buffer, gpu_baked::kBakedBrickBuffers> m_bricks; ///< the density bricks' buffers
     std::uint32_t m_bricksPerBuffer = 0, m_brickSplit = 0;
     float m_brickUnit = 1.0f; ///< what a stored 1 in the density bricks is (SpotBakedParams::unit)

@@ -28,15 +28,16 @@ using namespace gpu_splat;
 
 constexpr VkFormat kKernelIndexFormat = VK_FORMAT_R32_UINT;
 
-bool atomic(const RenderSettings& s) { return s.closest == ClosestKernel::Atomic; }
+bool atomic(const RenderSettings& s) {
+    return s.closest == ClosestKernel::Atomic;
+}
 
 class HybridRenderer final : public SplattingRenderer {
 public:
     explicit HybridRenderer(const SceneGpu& scene)
-        : SplattingRenderer(scene, Method::Hybrid, true),
-          m_oit(m_targets, [this](const RenderSettings& s, Extent size) {
-              return smallPixels(s, size) > 0;
-          }) {
+        : SplattingRenderer(scene, "hybrid", true),
+          m_oit(m_targets,
+                [this](const RenderSettings& s, Extent size) { return smallPixels(s, size) > 0; }) {
         requireFormat(m_ctx, kKernelIndexFormat,
                       VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
                       "stored R32_UINT kernel index targets");
@@ -56,7 +57,9 @@ public:
                         byPass);
         m_targets.buffer(
             m_closestList, "splat resolve's listed pixels",
-            [](Extent e) { return sizeof(SpotSplatList) + e.width * e.height * sizeof(std::uint32_t); },
+            [](Extent e) {
+                return sizeof(SpotSplatList) + e.width * e.height * sizeof(std::uint32_t);
+            },
             kCleared | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, Buffer::Memory::DeviceLocal);
     }
 
@@ -72,7 +75,7 @@ public:
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipelines->splat.handle());
         pushFrame(cmd, m_pipelines->splat, m_frame.frame);
         Descriptors splat;
-        splat.buffer(kSplatBindCounters, m_counters);
+        splatInputs(splat);
         if (atomics)
             splat.buffer(kSplatBindClosest, m_closest);
         pushQuadDescriptors(cmd, m_pipelines->splat, splat);
@@ -139,6 +142,7 @@ private:
             // The closest kernel by a depth pass: nearest wins, the first on a tie.
             GraphicsPipelineDesc closest = quadPipeline(s);
             closest.fragment = spirv(spv_splat_closest_frag);
+            closest.bindings.push_back(storageImage(kSplatBindMeshDistance));
             closest.colorFormats = {kKernelIndexFormat};
             closest.blends = {opaqueBlend()};
             closest.depthFormat = kDepthFormat;
@@ -147,8 +151,8 @@ private:
             closest.depthCompare = VK_COMPARE_OP_LESS;
             p.closest = makeGraphicsPipeline(m_ctx, closest);
         }
-        GraphicsPipelineDesc splat = splatPipeline(
-            s, atomics ? spirv(spv_splat_oit_closest_frag) : spirv(spv_splat_oit_frag));
+        GraphicsPipelineDesc splat = splatPipeline(s, atomics ? spirv(spv_splat_oit_closest_frag)
+                                                              : spirv(spv_splat_oit_frag));
         if (atomics)
             splat.bindings.push_back(storageBuffer(kSplatBindClosest));
         splat.colorFormats = {kColorFormat, kScalarFormat};
@@ -161,12 +165,12 @@ private:
             p.small = smallPipeline(s, spirv(spv_splat_small_hybrid_comp), extra);
         }
         Bindings resolve = OitAccumulation::resolveBindings(small);
-        resolve.insert(resolve.end(),
-                       {storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes),
-                        storageBuffer(kSplatBindBounds), storageImage(kSplatBindBase),
-                        storageImage(kSplatBindMeshDistance), storageBuffer(kSplatBindClosestList),
-                        atomics ? storageBuffer(kSplatBindClosest)
-                                : storageImage(kSplatBindClosestKernel)});
+        resolve.insert(
+            resolve.end(),
+            {storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes),
+             storageBuffer(kSplatBindBounds), storageImage(kSplatBindBase),
+             storageImage(kSplatBindMeshDistance), storageBuffer(kSplatBindClosestList),
+             atomics ? storageBuffer(kSplatBindClosest) : storageImage(kSplatBindClosestKernel)});
         const std::span<const std::uint32_t> module =
             !atomics ? spirv(spv_splat_resolve_hybrid_pass_comp)
             : small  ? spirv(spv_splat_resolve_hybrid_fixed_comp)
@@ -184,16 +188,20 @@ private:
         transitionImage(cmd, m_closestDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT,
                         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                         VK_PIPELINE_STAGE_2_NONE, 0, kTests, kDepthRW);
-        VkRenderingAttachmentInfo index = colorAttachment(m_closestKernel, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo index =
+            colorAttachment(m_closestKernel, VK_ATTACHMENT_LOAD_OP_CLEAR);
         index.clearValue.color.uint32[0] = 0xffffffffu; // no kernel
-        VkRenderingAttachmentInfo nearest = depthAttachment(m_closestDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
+        VkRenderingAttachmentInfo nearest =
+            depthAttachment(m_closestDepth, VK_ATTACHMENT_LOAD_OP_CLEAR);
         nearest.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
         nearest.clearValue.depthStencil = {1.0f, 0};
         beginRendering(cmd, m_frame.width, m_frame.height, {index}, &nearest);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipelines->closest.handle());
         pushFrame(cmd, m_pipelines->closest, m_frame.frame);
-        Descriptors none;
-        pushQuadDescriptors(cmd, m_pipelines->closest, none);
+        Descriptors distance;
+        distance.image(kSplatBindMeshDistance, m_distance, kGeneral,
+                       VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
+        pushQuadDescriptors(cmd, m_pipelines->closest, distance);
         drawQuads(cmd);
         vkCmdEndRendering(cmd);
         transitionImage(cmd, m_closestKernel.handle(), kColorAspect, kAttachment, kGeneral,
@@ -201,10 +209,10 @@ private:
     }
 
     OitAccumulation m_oit;
-    Buffer m_closest;             ///< atomic: uint64 per pixel, the closest kernel's key
-    Image m_closestKernel;        ///< depth pass: the closest kernel's index per pixel
-    Image m_closestDepth;         ///< depth pass: its depth test
-    Buffer m_closestList;         ///< SpotSplatList and a uint per pixel: the listed pixels
+    Buffer m_closest;      ///< atomic: uint64 per pixel, the closest kernel's key
+    Image m_closestKernel; ///< depth pass: the closest kernel's index per pixel
+    Image m_closestDepth;  ///< depth pass: its depth test
+    Buffer m_closestList;  ///< SpotSplatList and a uint per pixel: the listed pixels
     std::map<std::pair<Spec, bool>, Pipelines> m_cache; ///< by (spec, atomic)
     const Pipelines* m_pipelines = nullptr;
 };
@@ -213,10 +221,10 @@ private:
 
 MethodInfo hybridMethod() {
     namespace s = settings;
-    MethodInfo m = splattingMethod(Method::Hybrid,
-                                   "oit plus the closest kernel composited over it (paper eq. 13)",
-                                   {&s::kernelSamples, &s::ewa, &s::weight, &s::closest,
-                                    &s::smallPixels, &s::lod, &s::countFragments});
+    MethodInfo m =
+        splattingMethod("hybrid", "oit plus the closest kernel composited over it (paper eq. 13)",
+                        {&s::kernelSamples, &s::ewa, &s::weight, &s::closest, &s::smallPixels,
+                         &s::lod, &s::countFragments});
     m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<HybridRenderer>(scene);
     };

@@ -21,7 +21,7 @@ using namespace gpu_splat;
 class InstancedRenderer final : public SplattingRenderer {
 public:
     explicit InstancedRenderer(const SceneGpu& scene)
-        : SplattingRenderer(scene, Method::Instanced, true) {
+        : SplattingRenderer(scene, "instanced", true) {
         constexpr VkBufferUsageFlags kCleared =
             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
         m_targets.buffer(
@@ -30,7 +30,9 @@ public:
             Buffer::Memory::DeviceLocal);
         m_targets.buffer(
             m_closestList, "splat resolve's listed pixels",
-            [](Extent e) { return sizeof(SpotSplatList) + e.width * e.height * sizeof(std::uint32_t); },
+            [](Extent e) {
+                return sizeof(SpotSplatList) + e.width * e.height * sizeof(std::uint32_t);
+            },
             kCleared | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, Buffer::Memory::DeviceLocal);
     }
 
@@ -40,18 +42,19 @@ public:
         recordMesh(cmd);
         timer.mark(cmd, "mesh");
         // Nothing but the atomics, behind the mesh's depth test.
-        const VkRenderingAttachmentInfo tested = depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
+        const VkRenderingAttachmentInfo tested =
+            depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
         beginRendering(cmd, m_frame.width, m_frame.height, {}, &tested);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipelines->splat.handle());
         pushFrame(cmd, m_pipelines->splat, m_frame.frame);
+        Descriptors splat;
         pushQuadDescriptors(cmd, m_pipelines->splat,
-                            Descriptors()
-                                .buffer(kSplatBindClosest, m_closest)
-                                .buffer(kSplatBindCounters, m_counters));
+                            splatInputs(splat).buffer(kSplatBindClosest, m_closest));
         drawQuads(cmd);
         vkCmdEndRendering(cmd);
         if (m_frame.small())
-            recordSmall(cmd, m_pipelines->small, Descriptors().buffer(kSplatBindClosest, m_closest));
+            recordSmall(cmd, m_pipelines->small,
+                        Descriptors().buffer(kSplatBindClosest, m_closest));
         finishSplat(cmd, {&m_base});
         timer.mark(cmd, "splat");
         // The pixels with a kernel are listed by the first dispatch and painted by the second.
@@ -96,8 +99,8 @@ private:
             p.small = smallPipeline(s, spirv(spv_splat_small_instanced_comp),
                                     {storageBuffer(kSplatBindClosest)});
         const Bindings resolve = {
-            storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes),
-            storageBuffer(kSplatBindBounds),     storageImage(kSplatBindBase),
+            storageBuffer(kSplatBindWorldLobes),  storageBuffer(kSplatBindScreenLobes),
+            storageBuffer(kSplatBindBounds),      storageImage(kSplatBindBase),
             storageImage(kSplatBindMeshDistance), storageBuffer(kSplatBindClosest),
             storageBuffer(kSplatBindClosestList)};
         p.resolve = resolvePipeline(s, spirv(spv_splat_resolve_instanced_comp), resolve, false);
@@ -115,9 +118,9 @@ private:
 
 MethodInfo instancedMethod() {
     namespace s = settings;
-    MethodInfo m = splattingMethod(
-        Method::Instanced, "opaque kernels with the depth test (paper fig. 4 left)",
-        {&s::kernelSamples, &s::ewa, &s::smallPixels, &s::lod, &s::countFragments});
+    MethodInfo m =
+        splattingMethod("instanced", "opaque kernels with the depth test (paper fig. 4 left)",
+                        {&s::kernelSamples, &s::ewa, &s::smallPixels, &s::lod, &s::countFragments});
     m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<InstancedRenderer>(scene);
     };

@@ -25,7 +25,7 @@ using namespace gpu_splat;
 class OitRenderer final : public SplattingRenderer {
 public:
     explicit OitRenderer(const SceneGpu& scene)
-        : SplattingRenderer(scene, Method::Oit, true),
+        : SplattingRenderer(scene, "oit", true),
           m_oit(m_targets, [this](const RenderSettings& s, Extent size) {
               RenderSettings drawn = s; // the roofline's frames keep the sums
               drawn.roofline = false;
@@ -40,7 +40,9 @@ public:
         m_oit.beginSplat(cmd, m_frame.width, m_frame.height, m_depth);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipelines->splat.handle());
         pushFrame(cmd, m_pipelines->splat, m_frame.frame);
-        pushQuadDescriptors(cmd, m_pipelines->splat, Descriptors().buffer(kSplatBindCounters, m_counters));
+        Descriptors splat; // the roofline's shaders read nothing but the quads
+        pushQuadDescriptors(cmd, m_pipelines->splat,
+                            m_frame.settings.roofline ? splat : splatInputs(splat));
         drawQuads(cmd);
         vkCmdEndRendering(cmd);
         if (m_frame.small()) {
@@ -71,6 +73,7 @@ private:
     }
 
     void targetsMade() override { m_oit.targetsMade(); }
+    bool drawsRoofline() const override { return true; }
     void recordClears(VkCommandBuffer cmd) override { m_oit.recordClears(cmd, m_frame.small()); }
 
     void preparePasses() override {
@@ -82,14 +85,17 @@ private:
             return;
         }
         Pipelines p;
-        GraphicsPipelineDesc splat = splatPipeline(
-            s, roofline ? spirv(spv_splat_roofline_frag) : spirv(spv_splat_oit_frag));
+        GraphicsPipelineDesc splat =
+            splatPipeline(s, roofline ? spirv(spv_splat_roofline_frag) : spirv(spv_splat_oit_frag));
+        if (roofline)
+            splat.bindings = quadPipeline(s).bindings;
         splat.colorFormats = {kColorFormat, kScalarFormat};
         splat.blends = {additiveBlend(), additiveBlend()};
         p.splat = makeGraphicsPipeline(m_ctx, splat);
         const bool small = s.smallPixels > 0;
         if (small)
-            p.small = smallPipeline(s, spirv(spv_splat_small_oit_comp), OitAccumulation::smallBindings());
+            p.small =
+                smallPipeline(s, spirv(spv_splat_small_oit_comp), OitAccumulation::smallBindings());
         Bindings resolve = OitAccumulation::resolveBindings(small);
         resolve.push_back(storageImage(kSplatBindBase));
         p.resolve = resolvePipeline(
@@ -108,7 +114,7 @@ private:
 MethodInfo oitMethod() {
     namespace s = settings;
     MethodInfo m = splattingMethod(
-        Method::Oit, "weighted blended OIT EWA splatting (paper eq. 10-12)",
+        "oit", "weighted blended OIT EWA splatting (paper eq. 10-12)",
         {&s::kernelSamples, &s::ewa, &s::weight, &s::smallPixels, &s::lod, &s::countFragments});
     m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<OitRenderer>(scene);

@@ -21,8 +21,7 @@ using namespace gpu_splat;
 
 class SortedRenderer final : public SplattingRenderer {
 public:
-    explicit SortedRenderer(const SceneGpu& scene)
-        : SplattingRenderer(scene, Method::Sorted, false) {
+    explicit SortedRenderer(const SceneGpu& scene) : SplattingRenderer(scene, "sorted", false) {
         m_kernels.buffer(
             m_keys, "splat sort keys",
             [](Extent e) { return std::max<std::uint64_t>(e.width, 1) * sizeof(std::uint32_t); },
@@ -43,12 +42,14 @@ public:
         recordMesh(cmd);
         timer.mark(cmd, "mesh");
         // The kernels' quads, back to front, blended over the base colour.
-        const VkRenderingAttachmentInfo tested = depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
+        const VkRenderingAttachmentInfo tested =
+            depthAttachment(m_depth, VK_ATTACHMENT_LOAD_OP_LOAD);
         beginRendering(cmd, m_frame.width, m_frame.height,
                        {colorAttachment(m_base, VK_ATTACHMENT_LOAD_OP_LOAD)}, &tested);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, m_pipelines->splat.handle());
         pushFrame(cmd, m_pipelines->splat, m_frame.frame);
-        pushQuadDescriptors(cmd, m_pipelines->splat, Descriptors().buffer(kSplatBindCounters, m_counters));
+        Descriptors splat;
+        pushQuadDescriptors(cmd, m_pipelines->splat, splatInputs(splat));
         drawQuads(cmd);
         vkCmdEndRendering(cmd);
         finishSplat(cmd, {&m_base});
@@ -76,11 +77,11 @@ private:
             return;
         }
         Pipelines p;
-        p.sortKeys = makeComputePipeline(
-            m_ctx, spirv(spv_splat_sorted_keys_comp),
-            {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindVisible),
-             storageBuffer(kSplatBindDraw), storageBuffer(kSplatBindKeys)},
-            sizeof(SpotSplatFrame), specialization(s));
+        p.sortKeys =
+            makeComputePipeline(m_ctx, spirv(spv_splat_sorted_keys_comp),
+                                {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindVisible),
+                                 storageBuffer(kSplatBindDraw), storageBuffer(kSplatBindKeys)},
+                                sizeof(SpotSplatFrame), specialization(s));
         GraphicsPipelineDesc splat = splatPipeline(s, spirv(spv_splat_sorted_frag));
         splat.colorFormats = {kColorFormat};
         splat.blends = {overBlend()};
@@ -120,7 +121,7 @@ private:
 
 MethodInfo sortedMethod() {
     namespace s = settings;
-    MethodInfo m = splattingMethod(Method::Sorted, "kernels sorted by depth, composited back to front",
+    MethodInfo m = splattingMethod("sorted", "kernels sorted by depth, composited back to front",
                                    {&s::kernelSamples, &s::ewa, &s::lod, &s::countFragments});
     m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<SortedRenderer>(scene);
