@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <bit>
-#include <cstring>
-#include <iterator>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <iterator>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,6 +18,7 @@
 
 #include "noise/error.h"
 #include "noise/generator_shared.h"
+#include "noise/image.h"
 #include "noise/mesh.h"
 #include "noise/painted.h"
 #include "noise/system.h"
@@ -350,6 +354,59 @@ std::unique_ptr<Field> makePaintedField(const FieldDesc& desc, const std::filesy
     return std::make_unique<PaintedField>(std::move(grid));
 }
 
+/// How an image's texels are encoded, decided from the preset's key and the file's header.
+struct TexelEncoding {
+    enum class Kind { Linear, Srgb, Gamma } kind = Kind::Linear;
+    float gamma = 1.0f; ///< Gamma: linear = stored ^ gamma
+};
+
+/// The encoding OpenImageIO's `oiio:ColorSpace` names (OIIO 2.4 says "sRGB", "Linear",
+/// "GammaX.Y"; OIIO 2.5+ adds the colour-interop names "srgb_rec709_scene",
+/// "lin_rec709_scene", "g22_rec709_scene"), or nothing for a name it does not say.
+std::optional<TexelEncoding> encodingNamed(std::string name, float gammaAttribute) {
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (name.empty())
+        return std::nullopt;
+    if (name == "srgb" || name.starts_with("srgb_"))
+        return TexelEncoding{TexelEncoding::Kind::Srgb, 1.0f};
+    if (name == "linear" || name.starts_with("lin_") || name == "scene_linear" || name == "raw" ||
+        name == "acescg" || name == "aces2065-1")
+        return TexelEncoding{TexelEncoding::Kind::Linear, 1.0f};
+    float gamma = 0.0f;
+    if (name.starts_with("gamma"))
+        gamma = std::strtof(name.c_str() + 5, nullptr);
+    else if (name.size() > 4 && name[0] == 'g' && name[3] == '_' &&
+             std::isdigit(static_cast<unsigned char>(name[1])) &&
+             std::isdigit(static_cast<unsigned char>(name[2])))
+        gamma = static_cast<float>(name[1] - '0') + 0.1f * static_cast<float>(name[2] - '0');
+    if (!(gamma > 0.0f) && gammaAttribute > 0.0f && name == "gammacorrected")
+        gamma = gammaAttribute;
+    if (gamma > 0.0f && gamma < 10.0f)
+        return TexelEncoding{TexelEncoding::Kind::Gamma, gamma};
+    return std::nullopt;
+}
+
+TexelEncoding texelEncoding(FieldDesc::ColorSpace space, const OIIO::ImageSpec& spec) {
+    switch (space) {
+    case FieldDesc::ColorSpace::Srgb:
+        return {TexelEncoding::Kind::Srgb, 1.0f};
+    case FieldDesc::ColorSpace::Linear:
+        return {TexelEncoding::Kind::Linear, 1.0f};
+    case FieldDesc::ColorSpace::Auto:
+        break;
+    }
+    if (const std::optional<TexelEncoding> named =
+            encodingNamed(spec.get_string_attribute("oiio:ColorSpace"),
+                          spec.get_float_attribute("oiio:Gamma", 0.0f)))
+        return *named;
+    // No colour space, or one we cannot name: 8-bit images are painted and photographed in
+    // sRGB, deeper and float ones hold linear data.
+    if (spec.format.size() == 1 && !spec.format.is_floating_point())
+        return {TexelEncoding::Kind::Srgb, 1.0f};
+    return {TexelEncoding::Kind::Linear, 1.0f};
+}
+
 std::unique_ptr<Field> makeImageField(const FieldDesc& desc, const Mesh& mesh,
                                       const std::filesystem::path& baseDir,
                                       const std::string& context) {
@@ -411,9 +468,20 @@ std::unique_ptr<Field> makeImageField(const FieldDesc& desc, const Mesh& mesh,
         throw InputError(cat(where, ": cannot decode (", oneLine(in->geterror()), ")"));
     in->close();
 
-    // The field maps [0,1] to [lo, hi]; float images may hold anything, NaN included.
-    for (float& t : texels)
+    // The field maps [0,1] to [lo, hi]; float images may hold anything, NaN included. Texels
+    // are decoded to linear here, once, so the CPU and the GPU read the same values.
+    const TexelEncoding encoding = texelEncoding(desc.colorSpace, spec);
+    const std::size_t n = static_cast<std::size_t>(desc.components);
+    for (std::size_t i = 0; i < texels.size(); ++i) {
+        float& t = texels[i];
         t = std::isnan(t) ? 0.0f : std::clamp(t, 0.0f, 1.0f);
+        if (desc.channel + static_cast<int>(i % n) == spec.alpha_channel)
+            continue; // coverage, never colour-encoded
+        if (encoding.kind == TexelEncoding::Kind::Srgb)
+            t = srgbDecode(t);
+        else if (encoding.kind == TexelEncoding::Kind::Gamma)
+            t = std::pow(t, encoding.gamma);
+    }
     return std::make_unique<ImageField>(spec.width, spec.height, desc.components, std::move(texels),
                                         desc.repeat,
                                         LinearMap(keepComponents(desc.lo, desc.components),

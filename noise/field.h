@@ -77,6 +77,12 @@ struct FieldDesc {
     std::string file;     ///< Image, Painted: path, relative paths resolved against the preset's folder
     int channel = 0;      ///< Image: first channel read
     bool repeat = true;   ///< Image: wrap mode for uv outside [0,1] (else clamp)
+    /// Image: how texels are encoded; they are decoded to linear values when the image is
+    /// loaded. Auto takes the file's own colour space (OpenImageIO's `oiio:ColorSpace`: sRGB,
+    /// linear or a gamma), else sRGB for 8-bit images and linear for deeper ones. An alpha
+    /// channel is never decoded.
+    enum class ColorSpace { Auto, Srgb, Linear };
+    ColorSpace colorSpace = ColorSpace::Auto;
 
     std::string grid;     ///< Painted: the grid's name in the .vdb file
     /// Painted: when set, the grid in memory (the editor's live grid) instead of the file. The

@@ -135,7 +135,7 @@ public:
                     desc.attributes.push_back(string(a[i], index(aPath, i), false));
             }
         } else if (type == "image") {
-            requireObject(j, path, {"type", "file", "channel", "wrap", "range"});
+            requireObject(j, path, {"type", "file", "channel", "wrap", "colorspace", "range"});
             desc.kind = FieldDesc::Kind::Image;
             desc.file = string(require(j, path, "file"), join(path, "file"), false);
             if (const Json* c = find(j, "channel"))
@@ -146,6 +146,18 @@ public:
                     fail(cat(join(path, "wrap"), " = \"", printable(wrap),
                              "\" is not one of \"repeat\", \"clamp\""));
                 desc.repeat = wrap == "repeat";
+            }
+            if (const Json* c = find(j, "colorspace")) {
+                const std::string space = string(*c, join(path, "colorspace"), false);
+                if (space == "auto")
+                    desc.colorSpace = FieldDesc::ColorSpace::Auto;
+                else if (space == "srgb")
+                    desc.colorSpace = FieldDesc::ColorSpace::Srgb;
+                else if (space == "linear")
+                    desc.colorSpace = FieldDesc::ColorSpace::Linear;
+                else
+                    fail(cat(join(path, "colorspace"), " = \"", printable(space),
+                             "\" is not one of \"auto\", \"srgb\", \"linear\""));
             }
             fieldRange(require(j, path, "range"), join(path, "range"), components, r, desc);
         } else if (type == "painted") {

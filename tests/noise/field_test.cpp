@@ -524,6 +524,101 @@ TEST_F(FieldImage, OversizedImageIsRefusedFromItsHeader) {
     expectImageRefused(file, "too large");
 }
 
+FieldDesc imageIn(const std::filesystem::path& file, int components, FieldDesc::ColorSpace space) {
+    FieldDesc d = image(file, components, 0, true);
+    d.colorSpace = space;
+    return d;
+}
+
+/// A 2x2 image of one value in every channel, written in `format` with `colorSpace` (when set).
+std::filesystem::path flatImage(const std::string& name, int channels, float value,
+                                OIIO::TypeDesc format, const std::string& colorSpace = "") {
+    const std::filesystem::path file = kTmp / (std::to_string(::getpid()) + "-" + name);
+    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(file.string());
+    EXPECT_TRUE(out) << OIIO::geterror();
+    OIIO::ImageSpec spec(2, 2, channels, format);
+    if (channels == 4) {
+        spec.alpha_channel = 3;
+        spec.attribute("oiio:UnassociatedAlpha", 1); // write the values as given
+    }
+    if (!colorSpace.empty())
+        spec.attribute("oiio:ColorSpace", colorSpace);
+    const std::vector<float> pixels(static_cast<std::size_t>(4 * channels), value);
+    EXPECT_TRUE(out->open(file.string(), spec)) << out->geterror();
+    EXPECT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data())) << out->geterror();
+    EXPECT_TRUE(out->close());
+    return file;
+}
+
+// 8-bit textures are painted in sRGB: mid-grey 128 is 0.2158 linear (IEC 61966-2-1), read as
+// such by default and with "srgb", and as 128/255 only when the preset says "linear".
+TEST_F(FieldImage, EightBitPngIsDecodedFromSrgbUnlessTheKeySaysLinear) {
+    using Space = FieldDesc::ColorSpace;
+    const std::filesystem::path png =
+        flatImage("grey.png", 3, 128.0f / 255.0f, OIIO::TypeDesc::UINT8);
+    const SurfacePoint p = atUv(0.5f, 0.5f);
+    const float srgb128 = std::pow((128.0f / 255.0f + 0.055f) / 1.055f, 2.4f);
+    EXPECT_NEAR(srgb128, 0.2158f, 1e-4);
+    for (Space space : {Space::Auto, Space::Srgb}) {
+        const glm::vec3 v = makeField(imageIn(png, 3, space), m_mesh, {}, "img")->eval(p);
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(v[c], srgb128, 1e-5) << "space " << int(space) << ", component " << c;
+    }
+    const glm::vec3 raw = makeField(imageIn(png, 3, Space::Linear), m_mesh, {}, "img")->eval(p);
+    EXPECT_NEAR(raw.x, 128.0f / 255.0f, 1e-6);
+    EXPECT_NEAR(raw.x, 0.502f, 1e-3);
+    // The range the generator bounds densities with is the decoded one.
+    const auto f = makeField(imageIn(png, 1, Space::Auto), m_mesh, {}, "img");
+    EXPECT_NEAR(f->range().hi.x, srgb128, 1e-5);
+}
+
+// Float images hold linear values: an EXR is read unchanged by default (its header says
+// "Linear"); "srgb" on it is the user's explicit choice and decodes.
+TEST_F(FieldImage, FloatExrIsUnchanged) {
+    using Space = FieldDesc::ColorSpace;
+    const std::filesystem::path exr = flatImage("grey.exr", 3, 0.5f, OIIO::TypeDesc::FLOAT);
+    const SurfacePoint p = atUv(0.5f, 0.5f);
+    for (Space space : {Space::Auto, Space::Linear})
+        EXPECT_EQ(makeField(imageIn(exr, 1, space), m_mesh, {}, "img")->eval(p).x, 0.5f);
+    EXPECT_NEAR(makeField(imageIn(exr, 1, Space::Srgb), m_mesh, {}, "img")->eval(p).x,
+                std::pow((0.5f + 0.055f) / 1.055f, 2.4f), 1e-6);
+}
+
+// Auto follows the file's own colour space: a PNG that declares gamma 2.2, an 8-bit TIFF that
+// declares nothing (sRGB, as 8-bit images are painted), a float TIFF that declares nothing
+// (linear), an 8-bit PNG that declares gamma 1 (OIIO reads it as "Linear": used as stored).
+TEST_F(FieldImage, AutoFollowsTheFilesColourSpace) {
+    using Space = FieldDesc::ColorSpace;
+    const float e = 128.0f / 255.0f;
+    const SurfacePoint p = atUv(0.5f, 0.5f);
+    const auto read = [&](const std::filesystem::path& file) {
+        return makeField(imageIn(file, 1, Space::Auto), m_mesh, {}, "img")->eval(p).x;
+    };
+    EXPECT_NEAR(read(flatImage("g22.png", 1, e, OIIO::TypeDesc::UINT8, "Gamma2.2")),
+                std::pow(e, 2.2f), 1e-5);
+    EXPECT_NEAR(read(flatImage("plain.tif", 1, e, OIIO::TypeDesc::UINT8)),
+                std::pow((e + 0.055f) / 1.055f, 2.4f), 1e-5);
+    EXPECT_EQ(read(flatImage("float.tif", 1, 0.5f, OIIO::TypeDesc::FLOAT)), 0.5f);
+    EXPECT_NEAR(read(flatImage("linear.png", 1, e, OIIO::TypeDesc::UINT8, "Linear")), e, 1e-6);
+}
+
+// Alpha is coverage, not colour: a density read from an RGBA PNG's alpha is never decoded, its
+// colour channels are.
+TEST_F(FieldImage, AlphaChannelIsNeverDecoded) {
+    const float e = 128.0f / 255.0f;
+    const std::filesystem::path png = flatImage("rgba.png", 4, e, OIIO::TypeDesc::UINT8);
+    const SurfacePoint p = atUv(0.5f, 0.5f);
+    for (FieldDesc::ColorSpace space : {FieldDesc::ColorSpace::Auto, FieldDesc::ColorSpace::Srgb}) {
+        FieldDesc alpha = imageIn(png, 1, space);
+        alpha.channel = 3;
+        EXPECT_NEAR(makeField(alpha, m_mesh, {}, "img")->eval(p).x, e, 1e-6);
+        FieldDesc blue = imageIn(png, 1, space);
+        blue.channel = 2;
+        EXPECT_NEAR(makeField(blue, m_mesh, {}, "img")->eval(p).x,
+                    std::pow((e + 0.055f) / 1.055f, 2.4f), 1e-5);
+    }
+}
+
 TEST_F(FieldImage, MemoryBudgetIsCheckedBeforeReading) {
     // 1024 x 1024 x 3 float = 12 MiB, over a 4 MiB budget.
     const std::filesystem::path file = kTmp / "budget.png";

@@ -222,6 +222,7 @@ TEST(Preset, FieldForms) {
     EXPECT_EQ(p.density.file, "textures/d.png");
     EXPECT_EQ(p.density.channel, 3);
     EXPECT_FALSE(p.density.repeat);
+    EXPECT_EQ(p.density.colorSpace, FieldDesc::ColorSpace::Auto);
     EXPECT_EQ(p.density.lo.x, 0.25f);
     EXPECT_EQ(p.density.hi.x, 0.75f);
 
@@ -364,6 +365,14 @@ TEST(Preset, MalformedInputsNameFileAndKey) {
          withFields(
              R"({"density": {"type": "image", "file": "x.png", "wrap": "mirror", "range": [0, 1]}})"),
          {"fields.density.wrap = \"mirror\" is not one of"}},
+        {"image colour space",
+         withFields(
+             R"({"density": {"type": "image", "file": "x.png", "colorspace": "rec709", "range": [0, 1]}})"),
+         {"fields.density.colorspace = \"rec709\" is not one of \"auto\", \"srgb\", \"linear\""}},
+        {"image colour space not a string",
+         withFields(
+             R"({"density": {"type": "image", "file": "x.png", "colorspace": 1, "range": [0, 1]}})"),
+         {"fields.density.colorspace must be a string, got number"}},
         {"image without file",
          withFields(R"({"density": {"type": "image", "range": [0, 1]}})"),
          {"missing required key \"fields.density.file\""}},
@@ -467,30 +476,40 @@ TEST(Preset, ReadmeExampleParses) {
 }
 
 // The committed 64x64 density map (scripts/make_density_texture.py) read through an image field
-// declared in a preset: every texel centre returns the scripted value mapped into the range.
+// declared in a preset: every texel centre returns the scripted value, decoded as the key says
+// (an 8-bit PNG is sRGB unless "colorspace" says otherwise), mapped into the range.
 TEST(Preset, ImageFieldReadsTheShippedTexture) {
-    PresetDesc p = parsePreset(
-        withFields(R"({"density": {"type": "image", "file": "textures/density_spots.png",
-                                    "wrap": "repeat", "range": [0.2, 1.0]}})"),
-        "image.json");
-    p.baseDir = kPresetDir;
-    const Mesh mesh = smallMesh();
-    const std::unique_ptr<Field> f =
-        makeField(p.density, mesh, p.baseDir, "image.json, fields.density");
-    const auto expected = [](int col, int row) {
-        const double v = std::nearbyint(255.0 * (0.5 + 0.5 * std::sin(2.0 * M_PI * col / 32.0) *
-                                                           std::cos(2.0 * M_PI * row / 16.0)));
-        return 0.2 + 0.8 * v / 255.0;
+    const auto srgbToLinear = [](double e) {
+        return e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
     };
-    for (int row = 0; row < 64; row += 7) {
-        for (int col = 0; col < 64; col += 5) {
-            SurfacePoint sp;
-            sp.uv = {(col + 0.5f) / 64.0f, 1.0f - (row + 0.5f) / 64.0f};
-            EXPECT_NEAR(f->eval(sp).x, expected(col, row), 1e-5) << col << "," << row;
+    for (const char* space : {"", "auto", "srgb", "linear"}) {
+        SCOPED_TRACE(space);
+        const std::string key =
+            *space ? std::string(R"("colorspace": ")") + space + "\", " : std::string();
+        PresetDesc p = parsePreset(
+            withFields(R"({"density": {"type": "image", "file": "textures/density_spots.png", )" +
+                       key + R"("wrap": "repeat", "range": [0.2, 1.0]}})"),
+            "image.json");
+        p.baseDir = kPresetDir;
+        const bool linear = std::string(space) == "linear";
+        const Mesh mesh = smallMesh();
+        const std::unique_ptr<Field> f =
+            makeField(p.density, mesh, p.baseDir, "image.json, fields.density");
+        const auto expected = [&](int col, int row) {
+            const double v = std::nearbyint(255.0 * (0.5 + 0.5 * std::sin(2.0 * M_PI * col / 32.0) *
+                                                               std::cos(2.0 * M_PI * row / 16.0)));
+            return 0.2 + 0.8 * (linear ? v / 255.0 : srgbToLinear(v / 255.0));
+        };
+        for (int row = 0; row < 64; row += 7) {
+            for (int col = 0; col < 64; col += 5) {
+                SurfacePoint sp;
+                sp.uv = {(col + 0.5f) / 64.0f, 1.0f - (row + 0.5f) / 64.0f};
+                EXPECT_NEAR(f->eval(sp).x, expected(col, row), 1e-5) << col << "," << row;
+            }
         }
+        EXPECT_NEAR(f->range().lo.x, 0.2, 1e-6);
+        EXPECT_NEAR(f->range().hi.x, 1.0, 1e-6);
     }
-    EXPECT_NEAR(f->range().lo.x, 0.2, 1e-6);
-    EXPECT_NEAR(f->range().hi.x, 1.0, 1e-6);
 }
 
 // Paint layers: {"base": FIELD, "paint": {"file", "grid"}}; an absent base is the slot's default
