@@ -234,9 +234,9 @@ int edit(int argc, char** argv) {
                    "Paint density, comb, tilt, length and colour on the surface and edit the "
                    "kernel, in a window: the GPU methods live, with Blender-like navigation "
                    "(middle drag orbits, shift+middle pans, the wheel zooms, alt+left orbits, F "
-                   "or Home frames the mesh), the left button paints, F12 exports the view. "
-                   "Needs a display (DISPLAY), or xvfb-run. --script replays a session without a "
-                   "window.",
+                   "or Home frames the mesh), the left button paints, F12 exports the view; the "
+                   "panels sit in a column right of the scene (N shows or hides it). Needs a "
+                   "display (DISPLAY), or xvfb-run. --script replays a session without a window.",
                    editOptions(), argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);

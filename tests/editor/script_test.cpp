@@ -266,7 +266,7 @@ TEST(EditScript, WindowOptionsNeedTheWindow) {
     test::writeText(script, "frames 1\n");
     for (const std::string option :
          {"--frames 3", "--orbit 5", "--resize 100x100", "--cycle-methods",
-          "--window-screenshot w.png", "--render-scale 2", "--refine 4"}) {
+          "--window-screenshot w.png", "--render-scale 2", "--refine 4", "--panels all"}) {
         std::string err;
         EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --script " +
                                       script.string() + " " + option,

@@ -310,6 +310,13 @@ TEST(EditWindow, UnknownMethodIsAnInputError) {
     EXPECT_NE(e.err.find("instanced"), std::string::npos) << e.err;
 }
 
+TEST(EditWindow, UnknownPanelIsAnInputError) {
+    const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --panels render,nope");
+    EXPECT_EQ(e.code, 2) << e.err;
+    EXPECT_NE(e.err.find("--panels: 'nope' is not a section"), std::string::npos) << e.err;
+    EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
+}
+
 // --- the window on the session --------------------------------------------------------------
 
 spot::noise::Camera startCameraForJitter() {
@@ -601,6 +608,50 @@ TEST(EditWindowInput, XEventsDoWhatTheScriptDoes) {
     EXPECT_GT(fractionDiffering(shown[0], shown[1], 4), 0.01) << "the erase changed nothing";
     EXPECT_EQ(maxLevelDifference(shown[0], shown[2]), 0) << "undo did not restore the start";
     EXPECT_GT(fractionDiffering(shown[0], shown[3], 4), 0.1) << "the orbit changed nothing";
+}
+
+// N hides the panels' column and shows it again, as a user presses it (X events): the view F12
+// exports is the viewport's size, the window's whole width without the column.
+TEST(EditWindowInput, NTogglesThePanelsColumn) {
+    ASSERT_EQ(std::system("command -v xdotool >/dev/null 2>&1"), 0)
+        << "xdotool is not installed (scripts/install-deps.sh installs it)";
+    const std::string dir = tmp("ntoggle");
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    const std::string exported = spot::noise::loadScene(scene()).name + "-view.png";
+    const std::string driver =
+        "set -u\ncd '" + dir + "'\n'" + std::string(SPOT_SPOTSHELL) + "' edit --scene '" + scene() +
+        "' --size 800x600 --method instanced --refine 0 >edit.log 2>&1 &\n"
+        "pid=$!\ntrap 'kill $pid 2>/dev/null' EXIT\n"
+        "win=$(timeout 120 xdotool search --sync --onlyvisible --name 'spotshell edit' | "
+        "head -n1)\n"
+        "[ -n \"$win\" ] || { echo 'no window'; cat edit.log; exit 3; }\n"
+        "xdotool windowfocus --sync $win\nxdotool mousemove --window $win 250 300\n"
+        "capture() {\n"
+        "  xdotool key F12\n"
+        "  for i in $(seq 1 1200); do [ -f '" +
+        exported +
+        "' ] && break; kill -0 $pid || break; sleep 0.1; done\n"
+        "  mv '" +
+        exported +
+        "' \"$1.png\" || { echo \"no $1\"; cat edit.log; exit 4; }\n"
+        "}\n"
+        "capture shown\nxdotool key n\ncapture hidden\nxdotool key n\ncapture again\n"
+        "kill $pid\nwait $pid\n";
+    std::ofstream(dir + "/drive.sh") << driver;
+    std::string log;
+    FILE* pipe = popen(
+        ("xvfb-run -a -s '-screen 0 1024x768x24' bash '" + dir + "/drive.sh' 2>&1").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), int(buf.size()), pipe))
+        log += buf.data();
+    pclose(pipe);
+    for (const char* step : {"shown", "hidden", "again"})
+        ASSERT_TRUE(std::filesystem::exists(dir + "/" + step + ".png")) << step << "\n" << log;
+    EXPECT_EQ(spot::noise::readImage(dir + "/shown.png").width, 500) << log;
+    EXPECT_EQ(spot::noise::readImage(dir + "/hidden.png").width, 800) << log;
+    EXPECT_EQ(spot::noise::readImage(dir + "/again.png").width, 500) << log;
 }
 
 TEST(EditWindowSession, BadScriptLineInTheWindowIsAnInputError) {
