@@ -388,14 +388,15 @@ void statsPanel(const FrameReport& r, const SessionPanels& sections) {
         ImGui::TextColored(ImVec4(1, 0.5f, 0.2f, 1), "no sRGB swapchain: shown linear (dark)");
 }
 
-/// The status at the foot of the column, always shown: the method chosen and its frame rate,
-/// then what the viewport shows: that method's frame (its size, scaled up or not) or the idle
-/// refinement's average of jittered `sorted` frames, with its progress.
+/// The status at the foot of the column, always shown: the method chosen and the last frame's
+/// time (a refinement step's, when that was the last), then what the viewport shows: that method's
+/// frame (its size, scaled up or not) or the idle refinement's average of jittered `sorted` frames,
+/// with its progress.
 std::string statusText(const FrameReport& r) {
     char rate[48];
     std::snprintf(rate, sizeof rate, "%.0f ms (%.1f fps)", r.frameMs,
                   r.frameMs > 0 ? 1000.0 / r.frameMs : 0.0);
-    std::string text = cat("method ", r.method, "  ", rate, "\nshown: ");
+    std::string text = cat("method ", r.method, "  last frame ", rate, "\nshown: ");
     if (r.refined > 0)
         text += cat(r.refined < r.refineTarget ? "refining " : "refined ", r.refined, "/",
                     r.refineTarget, ", an average of jittered sorted frames");
@@ -834,7 +835,12 @@ private:
         r.frameMs = m_lastFrameMs;
         r.presentMs = m_lastPresentMs;
         r.scaledUp = f.lowRes && std::max(m_panel.navigationScale, m_movingScale) > m_panel.scale;
-        r.refined = m_panel.refineFrames > 0 ? m_refine.count : 0;
+        // The panels are built before the frame renders: what this frame will show (one more
+        // refinement step, unless a change since resets it; the status is then current).
+        const bool change = sceneChanges(f);
+        r.refined = m_panel.refineFrames == 0 || change ? 0
+                    : refinesNext(f, change)            ? m_refine.count + 1
+                                                        : m_refine.count;
         r.refineTarget = m_panel.refineFrames;
         r.srgb = m_swapchain.srgb;
         return r;
@@ -874,20 +880,30 @@ private:
         }
     }
 
+    /// Whether this frame renders the scene anew: something changed, or navigation or a stroke
+    /// ended (back to the resolution chosen).
+    bool sceneChanges(const FrameState& f) const {
+        const bool resolution = !f.lowRes && m_scene && m_refine.count == 0 &&
+                                (m_renderW != std::max(1, f.fullW / kScales[m_panel.scale]) ||
+                                 m_renderH != std::max(1, f.fullH / kScales[m_panel.scale]));
+        return m_input.sceneDirty || !m_scene || resolution;
+    }
+
+    /// Whether this frame is one more refinement step: nothing changed, not moving or painting,
+    /// steps left, the wind off.
+    bool refinesNext(const FrameState& f, bool change) const {
+        return !change && !f.lowRes && m_panel.refineFrames > 0 &&
+               m_refine.count < m_panel.refineFrames && !m_session.wind();
+    }
+
     /// The scene for this frame: one more refinement step when idle, a render when something
     /// changed (or every frame when asked), else the last image. False when the method refused
     /// the settings interactively (the frame is dropped; the panel shows why).
     bool renderScene(FrameState& f) {
-        // Navigation or a stroke ended: back to the resolution chosen.
-        if (!f.lowRes && m_scene && m_refine.count == 0 &&
-            (m_renderW != std::max(1, f.fullW / kScales[m_panel.scale]) ||
-             m_renderH != std::max(1, f.fullH / kScales[m_panel.scale])))
-            m_input.sceneDirty = true;
-        const bool change = m_input.sceneDirty || !m_scene;
+        const bool change = sceneChanges(f);
         if (change)
             m_refine.count = 0;
-        const bool refineNow = !change && !f.lowRes && m_panel.refineFrames > 0 &&
-                               m_refine.count < m_panel.refineFrames && !m_session.wind();
+        const bool refineNow = refinesNext(f, change);
         f.last = m_options.frames > 0 && scriptDone() && m_report.frames + 1 >= m_options.frames &&
                  refinementDone(m_refine.count + (refineNow ? 1 : 0));
         f.shown = m_refine.count > 0 ? &m_refine.image() : m_scene;

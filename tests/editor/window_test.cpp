@@ -526,7 +526,7 @@ TEST(EditWindowInput, XEventsDoWhatTheScriptDoes) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     const int width = 320, height = 240;
-    // Over the bunny's body, clear of the folded panels (top left) and the status line.
+    // Over the bunny's body (a window this narrow starts with the panels' column hidden).
     const Gesture erase = horizontal(120, 220, 10, 130);
     const Gesture orbit = horizontal(160, 250, 15, 120);
     const spot::noise::SceneDesc desc = spot::noise::loadScene(scene());
