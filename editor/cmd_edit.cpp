@@ -26,6 +26,9 @@ namespace spot::cmd {
 
 namespace {
 
+/// The window's size without --size.
+constexpr int kWindowWidth = 1280, kWindowHeight = 720;
+
 void writeReport(const std::string& file, const nlohmann::json& j) {
     writeFileAtomic(file, [&](std::ostream& o) { o << j.dump(2) << "\n"; });
 }
@@ -35,7 +38,11 @@ std::vector<cli::OptionSpec> editOptions() {
         {"scene", "FILE", "scene JSON to edit (presets/scenes/*.json)", true},
         {"preset", "FILE", "edit this preset instead of the scene's (e.g. one saved by the editor)",
          false},
-        {"size", "WxH", "window size in pixels (default: the scene's image size)", false},
+        {"size", "WxH",
+         "the window's size in pixels (default 1280x720; the scene is the part left of the "
+         "panels' column); with --script and no window, the image's (default: the scene's image "
+         "size)",
+         false},
         {"voxel-scale", "X", "painted voxel size as a fraction of the cell size (default 0.25)",
          false},
         {"script", "FILE",
@@ -61,7 +68,7 @@ bool inWindow(const cli::Args& args) {
         throw InputError("--window replays a script: give --script FILE too");
     if (!window)
         for (const char* option : {"frames", "orbit", "resize", "cycle-methods",
-                                   "window-screenshot", "render-scale", "refine"})
+                                   "window-screenshot", "render-scale", "refine", "panels"})
             if (args.has(option))
                 throw InputError(cat("--", option,
                                      " needs the window: give --window too (a --script without "
@@ -127,6 +134,11 @@ void printWindowReport(const editor::EditWindowReport& r, const std::string& sce
     std::printf("edit: %d frames (%d rendered) of %s; %s%s%s\n", r.frames, r.rendered,
                 sceneName.c_str(), timing.c_str(), screenshot.empty() ? "" : "; wrote ",
                 screenshot.string().c_str());
+    std::printf("edit: a %dx%d window, the scene in a %dx%d viewport%s; the last frame rendered "
+                "at %dx%d\n",
+                r.windowWidth, r.windowHeight, r.viewportWidth, r.viewportHeight,
+                r.viewportWidth < r.windowWidth ? " left of the panels" : " (the panels hidden)",
+                r.renderWidth, r.renderHeight);
     if (!r.strokeToFrameMs.empty()) {
         std::vector<double> s = r.strokeToFrameMs;
         std::sort(s.begin(), s.end());
@@ -139,7 +151,8 @@ void printWindowReport(const editor::EditWindowReport& r, const std::string& sce
                     "its upload %.1f ms)\n",
                     r.refined, r.refineMs, r.refineAverageMs);
     if (r.previewMs > 0.0)
-        std::printf("edit: kernel preview: %.1f ms (the last render)\n", r.previewMs);
+        std::printf("edit: kernel preview: %.1f ms (the last render), drawn at (%d, %d)\n",
+                    r.previewMs, r.previewX, r.previewY);
     if (r.validation)
         std::printf("edit: validation on: no errors, %u warnings\n", r.validationWarnings);
 }
@@ -147,8 +160,8 @@ void printWindowReport(const editor::EditWindowReport& r, const std::string& sce
 /// The session in the window (the script, if any, replayed there).
 int editInWindow(const cli::Args& args, const EditJob& job) {
     const noise::SceneDesc desc = noise::loadScene(args.str("scene"));
-    const int width = job.options.width > 0 ? job.options.width : desc.camera.width;
-    const int height = job.options.height > 0 ? job.options.height : desc.camera.height;
+    const int width = job.options.width > 0 ? job.options.width : kWindowWidth;
+    const int height = job.options.height > 0 ? job.options.height : kWindowHeight;
     editor::EditWindowOptions window = editor::editWindowOptions(args, width, height, desc.name);
     window.script = job.actions;
     window.scriptName = job.scriptFile;
@@ -176,7 +189,9 @@ int editInWindow(const cli::Args& args, const EditJob& job) {
                                          {"refine_average_ms", r.refineAverageMs},
                                          {"stroke_to_frame_ms", r.strokeToFrameMs},
                                          {"stroke_frame_ms", r.strokeFrameMs},
-                                         {"low_scale", r.lowScale}});
+                                         {"low_scale", r.lowScale},
+                                         {"viewport", {r.viewportWidth, r.viewportHeight}},
+                                         {"render_size", {r.renderWidth, r.renderHeight}}});
     return 0;
 }
 
@@ -219,9 +234,9 @@ int edit(int argc, char** argv) {
                    "Paint density, comb, tilt, length and colour on the surface and edit the "
                    "kernel, in a window: the GPU methods live, with Blender-like navigation "
                    "(middle drag orbits, shift+middle pans, the wheel zooms, alt+left orbits, F "
-                   "or Home frames the mesh), the left button paints, F12 exports the view. "
-                   "Needs a display (DISPLAY), or xvfb-run. --script replays a session without a "
-                   "window.",
+                   "or Home frames the mesh), the left button paints, F12 exports the view; the "
+                   "panels sit in a column right of the scene (N shows or hides it). Needs a "
+                   "display (DISPLAY), or xvfb-run. --script replays a session without a window.",
                    editOptions(), argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);

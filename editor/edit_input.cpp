@@ -90,6 +90,8 @@ InputAction mapKey(const InputEvent& e, const InputContext& c) {
         a.type = Type::MirrorX;
     } else if (key == GLFW_KEY_F12 && e.action == GLFW_PRESS) {
         a.type = Type::Export;
+    } else if (key == GLFW_KEY_N && e.action == GLFW_PRESS) {
+        a.type = Type::TogglePanels;
     }
     return a;
 }

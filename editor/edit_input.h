@@ -18,6 +18,7 @@
 ///                          smooth)
 ///     X                    mirror the brush about x = 0
 ///     F12                  export the view (the File panel's Export)
+///     N                    show or hide the panels' column
 #pragma once
 
 namespace spot::editor {
@@ -68,7 +69,8 @@ struct InputAction {
         BrushStrength, ///< change the strength one step: `step` +1 up, -1 down
         BrushKind,     ///< choose brush kind `kind` (edit::BrushKind's order)
         MirrorX,       ///< toggle the brush's mirror about x = 0
-        Export         ///< write the view as the File panel's Export does
+        Export,        ///< write the view as the File panel's Export does
+        TogglePanels   ///< show or hide the panels' column
     };
     Type type = Type::None;
     Drag drag = Drag::None; ///< the drag after the event

@@ -1,6 +1,7 @@
 #include "edit_panels.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -63,22 +64,17 @@ template <typename F> bool attempt(SessionPanels& st, F edit) {
     }
 }
 
-/// The left column (Render, then Brush, Distribution, Wind, File) starts below the Render panel,
-/// which is unfolded in windows at least 700 pixels high (edit_window.cpp); the right column
-/// holds the Kernel panel, with the kernel's preview to its left.
-float leftColumnTop() {
-    return ImGui::GetIO().DisplaySize.y >= 700.0f ? 310.0f : 40.0f;
-}
+/// Item widths leave this much of the column to the labels (pixels).
+constexpr float kLabelWidth = -125.0f;
 
 /// Choosing a kind or a smooth target arms its slot (Session::armBrush); returns true then (the
 /// view is rendered again).
 bool brushPanel(edit::Session& session, SessionPanels& st) {
     edit::BrushSettings& b = session.brush();
     bool armed = false;
-    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop()), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
-    ImGui::Begin("Brush", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-    ImGui::PushItemWidth(150);
+    if (!beginSection("Brush", st))
+        return false;
+    ImGui::PushItemWidth(kLabelWidth);
     int kind = int(b.kind);
     if (ImGui::BeginCombo("kind", edit::brushKindName(b.kind))) {
         for (int k = 0; k <= int(edit::BrushKind::Smooth); ++k)
@@ -101,9 +97,8 @@ bool brushPanel(edit::Session& session, SessionPanels& st) {
         armed |= attempt(st, [&] { session.armBrush(); });
     }
     ImGui::PopItemWidth();
-    ImGui::TextDisabled("paint: left drag (shift/ctrl: erase, shrink)\n1-7 kind, [ ] radius,\n"
-                        "shift+[ ] strength, x mirror\nctrl+z undo, ctrl+shift+z / ctrl+y redo");
-    ImGui::End();
+    hint("paint: left drag (shift/ctrl: erase, shrink)\n1-7 kind, [ ] radius,\n"
+         "shift+[ ] strength, x mirror\nctrl+z undo, ctrl+shift+z / ctrl+y redo");
     return armed;
 }
 
@@ -111,7 +106,8 @@ bool brushPanel(edit::Session& session, SessionPanels& st) {
 /// its offset, in its colour (brightened to be seen). A schematic, not a render: rotations and
 /// extinction are not drawn.
 void kernelSchematic(const nlohmann::json& lobes) {
-    const ImVec2 size(180, 180);
+    const float side = std::min(180.0f, ImGui::GetContentRegionAvail().x);
+    const ImVec2 size(side, side);
     const ImVec2 origin = ImGui::GetCursorScreenPos();
     ImDrawList* draw = ImGui::GetWindowDrawList();
     draw->AddRectFilled(origin, ImVec2(origin.x + size.x, origin.y + size.y),
@@ -146,19 +142,27 @@ void kernelSchematic(const nlohmann::json& lobes) {
 
 bool kernelPanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
-    ImGui::SetNextWindowPos(ImVec2(std::max(8.0f, ImGui::GetIO().DisplaySize.x - 330), 8),
-                            ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(320, 0), ImGuiCond_FirstUseEver);
-    // Unfolded where there is room for it and the preview beside the scene.
-    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.y < 900.0f, ImGuiCond_FirstUseEver);
-    st.kernelOpen = ImGui::Begin("Kernel");
-    if (st.kernelOpen)
-        ImGui::TextDisabled("rendered preview: left of this panel");
+    st.previewShown = false;
+    if (!beginSection("Kernel", st))
+        return false;
+    // Room for the rendered preview, which the window draws there when all of it is in view
+    // (the column's section list scrolls).
+    const float size = float(SessionPanels::kPreviewSize);
+    st.previewAt = ImGui::GetCursorScreenPos();
+    ImGui::Dummy(ImVec2(size, size));
+    ImGui::GetWindowDrawList()->AddRect(
+        ImVec2(st.previewAt.x - 1.0f, st.previewAt.y - 1.0f),
+        ImVec2(st.previewAt.x + size + 1.0f, st.previewAt.y + size + 1.0f),
+        IM_COL32(120, 120, 140, 255));
+    const ImVec2 lo = ImGui::GetWindowPos(), extent = ImGui::GetWindowSize();
+    st.previewShown = st.previewAt.y >= lo.y && st.previewAt.y + size <= lo.y + extent.y &&
+                      st.previewAt.x + size <= lo.x + extent.x;
+    hint("rendered: one kernel on a plane, from the side");
     const nlohmann::json lobes = session.get("kernel.lobes");
     kernelSchematic(lobes);
-    ImGui::TextDisabled("side view: 2 sigma around each offset");
+    hint("schematic: 2 sigma around each offset, from the side");
     const int count = int(lobes.size());
-    ImGui::PushItemWidth(190);
+    ImGui::PushItemWidth(-100.0f);
     for (int i = 0; i < count; ++i) {
         const nlohmann::json& lobe = lobes[std::size_t(i)];
         ImGui::PushID(i);
@@ -182,8 +186,6 @@ bool kernelPanel(edit::Session& session, SessionPanels& st) {
                         else
                             ImGui::DragFloat(l, d, p.speed, p.lo, p.hi, "%.1f");
                     });
-                ImGui::SameLine();
-                ImGui::TextUnformatted(p.key);
                 if (commit)
                     changed |= attempt(st, [&] { session.setLobe(i, p.key, toJson(v)); });
             }
@@ -207,16 +209,14 @@ bool kernelPanel(edit::Session& session, SessionPanels& st) {
             break;
     }
     ImGui::PopItemWidth();
-    ImGui::End();
     return changed;
 }
 
 bool distributionPanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
-    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop() + 280), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
-    ImGui::Begin("Distribution", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-    ImGui::PushItemWidth(150);
+    if (!beginSection("Distribution", st))
+        return false;
+    ImGui::PushItemWidth(kLabelWidth);
     const nlohmann::json d = session.get("distribution");
     int type = d.value("type", std::string("poisson")) == "jittered" ? 1 : 0;
     if (ImGui::Combo("type", &type, "poisson\0jittered\0"))
@@ -248,16 +248,14 @@ bool distributionPanel(edit::Session& session, SessionPanels& st) {
     if (ImGui::IsItemDeactivatedAfterEdit() && seed >= 0)
         changed |= attempt(st, [&] { session.setSeed(std::uint32_t(seed)); });
     ImGui::PopItemWidth();
-    ImGui::End();
     return changed;
 }
 
 bool windPanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
-    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop() + 312), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
-    ImGui::Begin("Wind", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-    ImGui::PushItemWidth(150);
+    if (!beginSection("Wind", st))
+        return false;
+    ImGui::PushItemWidth(kLabelWidth);
     bool on = session.wind();
     bool edited = ImGui::Checkbox("wind (animates)", &on);
     edited |= ImGui::SliderFloat("amplitude deg", &st.windAmplitudeDeg, 0.0f, 80.0f, "%.0f");
@@ -268,20 +266,18 @@ bool windPanel(edit::Session& session, SessionPanels& st) {
     }
     ImGui::Text("time %.2f s", session.time());
     ImGui::PopItemWidth();
-    ImGui::End();
     return changed;
 }
 
 bool filePanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
-    ImGui::SetNextWindowPos(ImVec2(8, leftColumnTop() + 344), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f, ImGuiCond_FirstUseEver);
-    ImGui::Begin("File", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+    if (!beginSection("File", st))
+        return false;
     ImGui::Text("%s", session.dirty() ? "* unsaved changes" : "saved (no changes)");
     char save[512], image[512];
     std::snprintf(save, sizeof save, "%s", st.savePath.c_str());
     std::snprintf(image, sizeof image, "%s", st.exportPath.c_str());
-    ImGui::PushItemWidth(220);
+    ImGui::PushItemWidth(-80.0f);
     if (ImGui::InputText("##save", save, sizeof save))
         st.savePath = save;
     ImGui::SameLine();
@@ -306,15 +302,39 @@ bool filePanel(edit::Session& session, SessionPanels& st) {
     if (ImGui::Button(cat("Redo (", session.redoSteps(), ")").c_str()))
         changed |= session.redo();
     ImGui::EndDisabled();
-    if (!st.message.empty())
-        ImGui::TextColored(st.messageIsError ? ImVec4(1.0f, 0.3f, 0.2f, 1.0f)
-                                             : ImVec4(0.6f, 0.9f, 0.6f, 1.0f),
-                           "%s", st.message.c_str());
-    ImGui::End();
+    if (!st.message.empty()) {
+        // Wrapped: a message is often wider than the column.
+        ImGui::PushStyleColor(ImGuiCol_Text, st.messageIsError ? ImVec4(1.0f, 0.3f, 0.2f, 1.0f)
+                                                               : ImVec4(0.6f, 0.9f, 0.6f, 1.0f));
+        ImGui::TextWrapped("%s", st.message.c_str());
+        ImGui::PopStyleColor();
+    }
     return changed;
 }
 
 } // namespace
+
+const std::vector<std::string>& sectionNames() {
+    static const std::vector<std::string> names = {"render", "brush", "kernel", "distribution",
+                                                   "wind",   "file",  "stats"};
+    return names;
+}
+
+void hint(const char* text) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+    ImGui::TextWrapped("%s", text);
+    ImGui::PopStyleColor();
+}
+
+bool beginSection(const char* title, const SessionPanels& state) {
+    std::string name = title;
+    for (char& c : name)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    const bool open = std::find(state.openAtStart.begin(), state.openAtStart.end(), name) !=
+                      state.openAtStart.end();
+    ImGui::SetNextItemOpen(open, ImGuiCond_Once);
+    return ImGui::CollapsingHeader(title);
+}
 
 bool saveSession(edit::Session& session, SessionPanels& st) {
     return attempt(st, [&] {

@@ -313,8 +313,8 @@ noise::Image WindowGrab::read(bool srgb) const {
 }
 
 bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
-             const splat::Image& scene, WindowGrab* grab, const splat::Image* inset,
-             VkOffset2D insetAt) {
+             const splat::Image& scene, VkExtent2D viewport, VkClearColorValue background,
+             WindowGrab* grab, const splat::Image* inset, VkOffset2D insetAt) {
     std::uint32_t index = 0;
     const VkResult acquired =
         vkAcquireNextImageKHR(ctx.device(), swapchain.handle.get(), UINT64_MAX, sync.acquired.get(),
@@ -335,14 +335,23 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
                            VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                            VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE,
                            VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    viewport.width = std::min(viewport.width, swapchain.extent.width);
+    viewport.height = std::min(viewport.height, swapchain.extent.height);
+    if (viewport.width < swapchain.extent.width || viewport.height < swapchain.extent.height) {
+        // The panels' column (drawn without a background): its colour, then the blits over it.
+        const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+        vkCmdClearColorImage(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &background, 1,
+                             &all);
+        splat::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                             VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_BLIT_BIT,
+                             VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    }
     VkImageBlit blit{};
     blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     blit.srcOffsets[1] = {std::int32_t(scene.width()), std::int32_t(scene.height()), 1};
     blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    blit.dstOffsets[1] = {std::int32_t(swapchain.extent.width),
-                          std::int32_t(swapchain.extent.height), 1};
-    const bool scaled =
-        scene.width() != swapchain.extent.width || scene.height() != swapchain.extent.height;
+    blit.dstOffsets[1] = {std::int32_t(viewport.width), std::int32_t(viewport.height), 1};
+    const bool scaled = scene.width() != viewport.width || scene.height() != viewport.height;
     VkFormatProperties fp;
     vkGetPhysicalDeviceFormatProperties(ctx.physicalDevice(), scene.format(), &fp);
     const bool linear =
@@ -356,7 +365,7 @@ bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
                            VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                            VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
     if (inset) {
-        // The kernel preview over a corner of the scene, at its own size.
+        // The kernel preview in the column, at its own size.
         splat::transitionImage(cmd, inset->handle(), VK_IMAGE_ASPECT_COLOR_BIT,
                                VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                                VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,

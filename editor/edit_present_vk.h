@@ -119,12 +119,15 @@ struct WindowGrab {
     noise::Image read(bool srgb) const;
 };
 
-/// Blit the scene into the swapchain image (and `inset` at `insetAt`, at its own size), draw
-/// ImGui's draw data over it, present; with `grab`, also copy the presented image back. Returns
-/// false when the swapchain is out of date (then recreated by the caller).
+/// Clear the swapchain image to `background` where the viewport does not cover it, blit the
+/// scene into the viewport (the image's top-left `viewport`, scaled when their sizes differ) and
+/// `inset` at `insetAt` (at its own size), draw ImGui's draw data over it, present; with `grab`,
+/// also copy the presented image back. Returns false when the swapchain is out of date (then
+/// recreated by the caller).
 bool present(splat::Context& ctx, Swapchain& swapchain, PresentSync& sync,
-             const splat::Image& scene, WindowGrab* grab = nullptr,
-             const splat::Image* inset = nullptr, VkOffset2D insetAt = {0, 0});
+             const splat::Image& scene, VkExtent2D viewport, VkClearColorValue background,
+             WindowGrab* grab = nullptr, const splat::Image* inset = nullptr,
+             VkOffset2D insetAt = {0, 0});
 
 /// A host image uploaded into an RGBA32F image in the general layout (as the renderers leave
 /// their results), for present() to blit.

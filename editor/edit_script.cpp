@@ -24,11 +24,11 @@ double msSince(Clock::time_point start) {
 /// The tokens of one line, with the failure message's prefix.
 class Line {
 public:
-    Line(std::vector<std::string> tokens, std::string where)
-        : m_tokens(std::move(tokens)), m_where(std::move(where)) {}
+    Line(std::vector<std::string> tokens, std::string where, std::string text)
+        : m_tokens(std::move(tokens)), m_where(std::move(where)), m_text(std::move(text)) {}
 
     [[noreturn]] void fail(const std::string& message) const {
-        throw InputError(cat(m_where, ": ", message));
+        throw InputError(cat(m_where, ": ", message, " (the line: ", m_text, ")"));
     }
     bool done() const { return m_next >= m_tokens.size(); }
     const std::string& peek() const { return m_tokens[m_next]; }
@@ -76,16 +76,17 @@ private:
         return m_tokens[m_next];
     }
     std::vector<std::string> m_tokens;
-    std::string m_where;
+    std::string m_where, m_text;
     std::size_t m_next = 0;
 };
 
 constexpr double kBig = 1e9;
 
 /// `method NAME [KEY VALUE]...`: the settings from their descriptors (splat/settings.h), each
-/// written as on the command line (flags as on|off); a setting the method does not take is
-/// refused, naming the methods that take it.
-splat::RenderSettings methodSettings(Line& line, const std::string& method) {
+/// written as on the command line (flags as on|off), on the defaults, and which were given; a
+/// setting the method does not take is refused, naming the methods that take it.
+splat::RenderSettings parseMethodSettings(Line& line, const std::string& method,
+                                          std::vector<const splat::Setting*>& givenSettings) {
     const splat::MethodInfo& info = splat::method(method);
     std::vector<std::pair<const splat::Setting*, std::string>> given;
     while (!line.done()) {
@@ -101,6 +102,7 @@ splat::RenderSettings methodSettings(Line& line, const std::string& method) {
             line.fail(
                 cat(key, " is a setting of ", splat::methodsTaking(*setting), ", not of ", method));
         given.emplace_back(setting, value);
+        givenSettings.push_back(setting);
     }
     splat::RenderSettings settings;
     try {
@@ -202,7 +204,7 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         a.name = line.word("method name");
         if (!splat::findGpuMethod(a.name))
             line.fail(cat("unknown method '", a.name, "' (", splat::gpuMethodNames(), ")"));
-        a.settings = methodSettings(line, a.name);
+        a.settings = parseMethodSettings(line, a.name, a.given);
     } else if (verb == "brush") {
         a.type = T::Brush;
         parseBrush(line, a.brush);
@@ -305,6 +307,28 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
 
 } // namespace
 
+std::string scriptLineError(const std::string& name, const ScriptAction& action,
+                            const std::string& message) {
+    return cat("script ", name, ":", action.line, ": ", message, " (the line: ", action.text, ")");
+}
+
+splat::RenderSettings methodSettings(const ScriptAction& action,
+                                     const splat::RenderSettings& current) {
+    splat::RenderSettings s = current;
+    for (const splat::Setting* setting : action.given) {
+        if (setting->type == splat::SettingType::File) {
+            // The resource the line read (the bake) is shared, not read again.
+            if (setting == &splat::settings::bake)
+                s.bake = action.settings.bake;
+            else
+                setting->setText(s, setting->getText(action.settings));
+        } else {
+            setting->set(s, setting->get(action.settings));
+        }
+    }
+    return s;
+}
+
 std::vector<ScriptAction> parseScript(std::string_view text, const std::string& name) {
     std::vector<ScriptAction> actions;
     std::istringstream in{std::string(text)};
@@ -321,13 +345,14 @@ std::vector<ScriptAction> parseScript(std::string_view text, const std::string& 
             tokens.push_back(w);
         if (tokens.empty())
             continue;
-        Line line(tokens, cat("script ", name, ":", number));
+        const std::size_t first = content.find_first_not_of(" \t");
+        const std::size_t last = content.find_last_not_of(" \t");
+        const std::string text = content.substr(first, last - first + 1);
+        Line line(tokens, cat("script ", name, ":", number), text);
         const std::string verb = line.word("action");
         ScriptAction a = parseLine(line, verb);
         a.line = number;
-        const std::size_t first = content.find_first_not_of(" \t");
-        const std::size_t last = content.find_last_not_of(" \t");
-        a.text = content.substr(first, last - first + 1);
+        a.text = text;
         actions.push_back(std::move(a));
     }
     return actions;
@@ -363,9 +388,14 @@ void runScriptAction(Session& session, const ScriptAction& a, const std::string&
                 session.setCamera(c);
                 break;
             }
-            case T::Method:
-                session.setMethod(a.name, a.settings);
+            case T::Method: {
+                // One frame now, so that settings the method refuses (baked without a bake)
+                // are blamed on this line, not on the next one that renders.
+                session.setMethod(a.name, methodSettings(a, session.settings()));
+                const double frameMs = session.render().wallMs;
+                note = cat("a first frame in ", frameMs, " ms (checks the settings)");
                 break;
+            }
             case T::Brush: {
                 // Arming a constant field's slot rebuilds the frame; the window's next frame
                 // would absorb the rest (the renderer made again, every impulse generated), so
@@ -463,11 +493,12 @@ void runScriptAction(Session& session, const ScriptAction& a, const std::string&
                 break;
             }
         } catch (const InputError& e) {
-            throw InputError(cat("script ", name, ":", a.line, ": ", e.what()));
+            throw InputError(scriptLineError(name, a, e.what()));
         }
+        // The whole line: a long one pushes the note to the right rather than being cut.
         if (log)
-            std::fprintf(log, "%4d  %-40s %s%s%.1f ms\n", a.line, a.text.substr(0, 40).c_str(),
-                         note.c_str(), note.empty() ? "" : "; ", msSince(start));
+            std::fprintf(log, "%4d  %-40s %s%s%.1f ms\n", a.line, a.text.c_str(), note.c_str(),
+                         note.empty() ? "" : "; ", msSince(start));
     }
 }
 

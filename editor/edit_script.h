@@ -3,7 +3,9 @@
 /// a window (`spotshell edit --script FILE`). Window coordinates are pixels from the top left.
 ///
 ///     camera eye X Y Z target X Y Z [fov DEG]
-///     method NAME [key value ...]        # keys of `render`: steps, supersample, ewa, lod, ...
+///     method NAME [key value ...]        # keys of `render`: steps, supersample, ewa, lod, ...;
+///                                        # the settings not given stay as they were (the
+///                                        # command line's: `method baked` keeps --bake)
 ///     brush KIND [radius PX] [strength S] [falloff smooth|linear|constant] [mirror x]
 ///                [color R G B] [raise] [backfaces] [target SLOT]
 ///                # target (smooth): density, comb, tilt, length or color; raise (density-add):
@@ -22,7 +24,8 @@
 ///     screenshot FILE.png|FILE.exr
 ///
 /// `#` starts a comment. The whole script is parsed first; a bad line throws InputError
-/// "script FILE:LINE: message" before anything runs or is written.
+/// "script FILE:LINE: message (the line: TEXT)" before anything runs or is written. An error
+/// while the script runs names its line the same way.
 #pragma once
 
 #include <cstdint>
@@ -66,7 +69,10 @@ struct ScriptAction {
     glm::dvec3 eye{0.0}, target{0.0}; ///< Camera
     std::optional<double> fovDeg;     ///< Camera
     std::string name;               ///< Method: method; Lobe: property or add/remove; Set: key path
-    splat::RenderSettings settings; ///< Method
+    /// Method: the settings the line gives (on the defaults), and which they are: only these
+    /// change the session's settings.
+    splat::RenderSettings settings;
+    std::vector<const splat::Setting*> given;
     BrushSettings brush;            ///< Brush
     std::vector<glm::vec2> points;  ///< Stroke
     int index = 0;                  ///< Lobe
@@ -77,6 +83,14 @@ struct ScriptAction {
     float amplitudeDeg = 20.0f, frequencyHz = 0.5f; ///< Wind
     std::filesystem::path file;                     ///< Save, Screenshot
 };
+
+/// "script NAME:LINE: message (the line: TEXT)": an error caused by `action`'s line.
+std::string scriptLineError(const std::string& name, const ScriptAction& action,
+                            const std::string& message);
+/// The settings a `method` action leaves on a session whose settings are `current`: the
+/// current ones with those the line gives.
+splat::RenderSettings methodSettings(const ScriptAction& action,
+                                     const splat::RenderSettings& current);
 
 /// Parse a script's text; `name` (the file) is used in messages. Throws InputError
 /// "script NAME:LINE: message" for the first bad line.
@@ -98,8 +112,8 @@ struct ScriptReport {
     std::vector<double> armMs, armFrameMs;
 };
 
-/// Run the actions on `session`, printing one line per action to `log` (null: silent). Errors
-/// carry the line: "script NAME:LINE: message".
+/// Run the actions on `session`, printing one line per action to `log` (null: silent; the
+/// action's whole line, then what it did). Errors carry the line, as scriptLineError writes it.
 ScriptReport runScript(Session& session, const std::vector<ScriptAction>& actions,
                        const std::string& name, std::FILE* log);
 /// One action of a script (what runScript does per line), adding to `report`. The window

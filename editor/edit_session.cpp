@@ -729,7 +729,12 @@ EditCost Session::set(const std::vector<std::pair<std::string, nlohmann::json>>&
     } catch (const std::exception& e) {
         m_presetJson = saved;
         rebuild();
-        throw InputError(cat("set ", changes.front().first, ": ", e.what()));
+        // The preset's reader names its file; the value refused is the edit's, not the file's.
+        std::string message = e.what();
+        const std::string file = m_presetFile.string() + ": ";
+        if (message.rfind(file, 0) == 0)
+            message.erase(0, file.size());
+        throw InputError(cat("set ", changes.front().first, ": ", message));
     }
     push(std::move(edit));
     EditCost cost;

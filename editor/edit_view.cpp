@@ -24,6 +24,19 @@ glm::dvec3 rotate(glm::dvec3 v, glm::dvec3 axis, double angle) {
 
 } // namespace
 
+WindowLayout windowLayout(int width, int height, bool column) {
+    WindowLayout l;
+    l.width = std::max(width, 0);
+    l.height = std::max(height, 0);
+    if (column) {
+        const int wanted = std::clamp(int(std::lround(0.3 * l.width)), 300, 400);
+        const int fits = std::min(wanted, l.width - 160);
+        l.columnWidth = fits >= 200 ? fits : 0;
+    }
+    l.viewportWidth = l.width - l.columnWidth;
+    return l;
+}
+
 BoundingSphere boundingSphere(const noise::Mesh& mesh) {
     BoundingSphere s;
     if (mesh.positions.empty())

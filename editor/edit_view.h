@@ -1,8 +1,10 @@
 /// @file edit_view.h
-/// @brief The editor window's navigation, Blender-like: orbit around a target (turntable about
-/// the scene's up vector), pan in the view plane, dolly towards the target, and framing a
-/// bounding sphere. Pure camera math, no window system: the window feeds it pointer motion in
-/// window pixels and reads the camera back.
+/// @brief The editor window's layout and navigation. The layout: the viewport (the scene) at the
+/// top left and the panels in a column along the right edge, never over the scene. The
+/// navigation, Blender-like: orbit around a target (turntable about the scene's up vector), pan
+/// in the view plane, dolly towards the target, and framing a bounding sphere. Pure math, no
+/// window system: the window feeds it its size and pointer motion in window pixels and reads the
+/// viewport and the camera back.
 #pragma once
 
 #include <glm/glm.hpp>
@@ -14,6 +16,30 @@ struct Mesh;
 }
 
 namespace spot::editor {
+
+/// Where the scene and the panels go in a window (pixels from the top left): the viewport at
+/// (0, 0), viewportWidth x height; the panels' column right of it, columnWidth x height (0:
+/// hidden). Together they fill the window and never overlap.
+struct WindowLayout {
+    int width = 0, height = 0; ///< the window's framebuffer
+    int viewportWidth = 0;     ///< the scene's width (its height is the window's)
+    int columnWidth = 0;       ///< the panels' column, at x = viewportWidth (0: hidden)
+
+    int viewportHeight() const { return height; }
+    bool columnShown() const { return columnWidth > 0; }
+    /// The point (window pixels) is over the scene, not the column or outside the window.
+    bool inViewport(double x, double y) const {
+        return x >= 0.0 && y >= 0.0 && x < viewportWidth && y < height;
+    }
+};
+
+/// Windows narrower than this start with the column hidden (the scene alone; N shows it).
+constexpr int kColumnMinWindowWidth = 560;
+
+/// The layout of a width x height window with the column shown or not: 30% of the width, between
+/// 300 and 400 pixels, and always leaving the scene at least 160 pixels (hidden when it would be
+/// narrower than 200).
+WindowLayout windowLayout(int width, int height, bool column);
 
 /// A sphere around every vertex of a mesh (world units): the centre of the bounding box and the
 /// largest distance from it.

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -117,15 +118,19 @@ struct InputState {
     bool sceneDirty = true;       ///< render the scene again
     bool resized = true;          ///< recreate the swapchain
     bool closeRequested = false;  ///< the close button, with unsaved changes (the modal asks)
+    bool togglePanels = false;    ///< N: show or hide the panels' column
+    /// Where the scene is in the window (the viewport) and where the panels' column is.
+    WindowLayout layout;
     Clock::time_point lastMotion; ///< of the camera (for the lower resolution while navigating)
     /// The first brush event not yet shown (stroke-to-frame is measured from it).
     std::optional<Clock::time_point> pendingBrush;
     std::string error; ///< a brush or key edit the session refused
 
-    noise::Camera windowCamera(GLFWwindow* window) const {
-        int w = 0, h = 0;
-        glfwGetWindowSize(window, &w, &h);
-        return view->camera(std::max(w, 1), std::max(h, 1));
+    /// The camera of the viewport (its aspect ratio; pointer positions are window pixels, the
+    /// viewport's origin is the window's).
+    noise::Camera viewCamera() const {
+        return view->camera(std::max(layout.viewportWidth, 1),
+                            std::max(layout.viewportHeight(), 1));
     }
     void moved() {
         sceneDirty = true;
@@ -150,10 +155,9 @@ InputState& state(GLFWwindow* window) {
     return *static_cast<InputState*>(glfwGetWindowUserPointer(window));
 }
 
-void frameMesh(GLFWwindow* window, InputState& s) {
-    int w = 0, h = 0;
-    glfwGetWindowSize(window, &w, &h);
-    s.view->frame(s.sphere, h > 0 ? double(w) / double(h) : 1.0);
+void frameMesh(InputState& s) {
+    const int w = s.layout.viewportWidth, h = s.layout.viewportHeight();
+    s.view->frame(s.sphere, h > 0 && w > 0 ? double(w) / double(h) : 1.0);
     s.moved();
 }
 
@@ -180,12 +184,11 @@ void applyBrushKey(InputState& s, const InputAction& a) {
 }
 
 /// Carry out what mapInput() made of an event: the view moves, the session paints or undoes.
-void applyInput(GLFWwindow* window, InputState& s, const InputAction& a) {
+void applyInput(InputState& s, const InputAction& a) {
     using T = InputAction::Type;
     using Phase = edit::Session::PointerPhase;
     s.drag = a.drag;
-    int w = 0, h = 0;
-    glfwGetWindowSize(window, &w, &h);
+    const int h = s.layout.viewportHeight();
     try {
         switch (a.type) {
         case T::None:
@@ -209,7 +212,7 @@ void applyInput(GLFWwindow* window, InputState& s, const InputAction& a) {
             s.brush(a.type == T::BrushPress  ? Phase::Press
                     : a.type == T::BrushDrag ? Phase::Drag
                                              : Phase::Release,
-                    s.windowCamera(window), a.x, a.y, a.invert);
+                    s.viewCamera(), a.x, a.y, a.invert);
             break;
         case T::Undo:
             s.sceneDirty |= s.session->undo();
@@ -218,7 +221,7 @@ void applyInput(GLFWwindow* window, InputState& s, const InputAction& a) {
             s.sceneDirty |= s.session->redo();
             break;
         case T::FrameMesh:
-            frameMesh(window, s);
+            frameMesh(s);
             break;
         case T::BrushRadius:
         case T::BrushStrength:
@@ -228,6 +231,9 @@ void applyInput(GLFWwindow* window, InputState& s, const InputAction& a) {
             break;
         case T::Export:
             s.exportRequested = true;
+            break;
+        case T::TogglePanels:
+            s.togglePanels = true;
             break;
         }
     } catch (const InputError& e) {
@@ -246,7 +252,10 @@ void onMouseButton(GLFWwindow* window, int button, int action, int mods) {
     if (!s.pointerKnown)
         glfwGetCursorPos(window, &s.lastX, &s.lastY);
     const InputEvent e = InputEvent::button(button, action, mods, s.lastX, s.lastY);
-    applyInput(window, s, mapInput(e, inputContext(s, ImGui::GetIO().WantCaptureMouse, false)));
+    // Outside the viewport (over the column) a press is the panels', even before ImGui has seen
+    // the pointer there (a click without a motion first).
+    const bool panel = ImGui::GetIO().WantCaptureMouse || !s.layout.inViewport(s.lastX, s.lastY);
+    applyInput(s, mapInput(e, inputContext(s, panel, false)));
 }
 
 void onCursor(GLFWwindow* window, double x, double y) {
@@ -255,21 +264,21 @@ void onCursor(GLFWwindow* window, double x, double y) {
     s.lastX = x;
     s.lastY = y;
     s.pointerKnown = true;
-    applyInput(window, s, a);
+    applyInput(s, a);
 }
 
 void onScroll(GLFWwindow* window, double dx, double dy) {
     InputState& s = state(window);
-    applyInput(window, s,
-               mapInput(InputEvent::scroll(dx, dy),
-                        inputContext(s, ImGui::GetIO().WantCaptureMouse, false)));
+    if (!s.pointerKnown)
+        glfwGetCursorPos(window, &s.lastX, &s.lastY);
+    const bool panel = ImGui::GetIO().WantCaptureMouse || !s.layout.inViewport(s.lastX, s.lastY);
+    applyInput(s, mapInput(InputEvent::scroll(dx, dy), inputContext(s, panel, false)));
 }
 
 void onKey(GLFWwindow* window, int key, int, int action, int mods) {
     InputState& s = state(window);
-    applyInput(window, s,
-               mapInput(InputEvent::key(key, action, mods),
-                        inputContext(s, false, ImGui::GetIO().WantCaptureKeyboard)));
+    applyInput(s, mapInput(InputEvent::key(key, action, mods),
+                           inputContext(s, false, ImGui::GetIO().WantCaptureKeyboard)));
 }
 
 void onClose(GLFWwindow* window) {
@@ -311,19 +320,13 @@ std::string megabytes(std::uint64_t bytes) {
     return text;
 }
 
-/// Returns whether a setting changed (the scene is then rendered again).
-bool methodPanel(PanelState& p) {
+/// The Render section; returns whether a setting changed (the scene is then rendered again).
+bool methodPanel(PanelState& p, const SessionPanels& sections) {
+    if (!beginSection("Render", sections))
+        return false;
     bool changed = false;
     const auto& methods = splat::gpuMethods();
-    ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
-    // A small window shows the scene first: the panel starts folded (below 700 pixels high, to
-    // leave the left side to the Brush panel).
-    ImGui::SetNextWindowCollapsed(ImGui::GetIO().DisplaySize.x < 640.0f ||
-                                      ImGui::GetIO().DisplaySize.y < 700.0f,
-                                  ImGuiCond_FirstUseEver);
-    ImGui::Begin("Render");
-    ImGui::PushItemWidth(150);
+    ImGui::PushItemWidth(-125.0f);
     if (ImGui::BeginCombo("method", methods[std::size_t(p.method)].name.c_str())) {
         for (int i = 0; i < int(methods.size()); ++i) {
             if (ImGui::Selectable(methods[std::size_t(i)].name.c_str(), i == p.method)) {
@@ -343,70 +346,66 @@ bool methodPanel(PanelState& p) {
     changed |= ImGui::Combo("resolution", &p.scale, kScaleNames);
     ImGui::Combo("moving / painting", &p.navigationScale, kScaleNames);
     changed |= ImGui::SliderInt("refine when idle", &p.refineFrames, 0, 64);
-    ImGui::TextDisabled("orbit: middle drag (alt+left)\npan: shift+middle\nzoom: wheel\n"
-                        "frame the mesh: F or Home");
+    hint("orbit: middle drag (alt+left)\npan: shift+middle\nzoom: wheel\n"
+         "frame the mesh: F or Home\nshow or hide this column: N");
     if (!p.error.empty())
         ImGui::TextColored(ImVec4(1.0f, 0.3f, 0.2f, 1.0f), "%s", p.error.c_str());
     ImGui::PopItemWidth();
-    ImGui::End();
     return changed;
 }
 
-void statsPanel(const splat::FrameStats& st, int renderW, int renderH, int windowW, int windowH,
-                double frameMs, double presentMs, bool navigating, bool srgb,
-                const std::string& refining) {
-    const ImGuiIO& io = ImGui::GetIO();
-    ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - 8, io.DisplaySize.y - 8), ImGuiCond_Always,
-                            ImVec2(1, 1));
-    // The status line below says what matters; the details start folded in a small window.
-    ImGui::SetNextWindowCollapsed(io.DisplaySize.x < 640.0f || io.DisplaySize.y < 700.0f,
-                                  ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowBgAlpha(0.6f);
-    ImGui::Begin("Stats", nullptr,
-                 ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoMove |
-                     ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
-    if (renderW != windowW || renderH != windowH)
-        ImGui::Text("%s  %dx%d scaled up%s", st.method.c_str(), renderW, renderH,
-                    navigating ? " while moving or painting" : "");
-    else
-        ImGui::Text("%s  %dx%d", st.method.c_str(), renderW, renderH);
+/// What the Stats section and the status show of the frame.
+struct FrameReport {
+    const splat::FrameStats* stats = nullptr; ///< the last render (a refinement step's too)
+    std::string method;                       ///< the method chosen (the Render section's)
+    int renderW = 0, renderH = 0;             ///< the last interactive render's size
+    int viewportW = 0, viewportH = 0;
+    double frameMs = 0.0, presentMs = 0.0;
+    bool scaledUp = false;             ///< rendered smaller while moving or painting
+    int refined = 0, refineTarget = 0; ///< refinement steps shown (0: the method's frame)
+    bool srgb = true;
+};
+
+/// The Stats section: the last render's passes, timings and counts.
+void statsPanel(const FrameReport& r, const SessionPanels& sections) {
+    if (!beginSection("Stats", sections))
+        return;
+    const splat::FrameStats& st = *r.stats;
+    ImGui::Text("last render: %s %s", st.method.c_str(),
+                r.refined > 0 ? "(a refinement step)" : "");
     for (const auto& [pass, ms] : st.passMs)
         ImGui::Text("  %-12s %8.2f ms GPU", pass.c_str(), ms);
-    if (!refining.empty())
-        ImGui::TextColored(ImVec4(0.5f, 0.8f, 1.0f, 1.0f), "%s", refining.c_str());
     ImGui::Text("total GPU      %8.2f ms", st.gpuMs);
     ImGui::Text("render wall    %8.2f ms", st.wallMs);
-    ImGui::Text("present+ImGui  %8.2f ms", presentMs);
-    ImGui::Text("frame          %8.2f ms (%.1f fps)", frameMs,
-                frameMs > 0 ? 1000.0 / frameMs : 0.0);
+    ImGui::Text("present+ImGui  %8.2f ms", r.presentMs);
+    ImGui::Text("frame          %8.2f ms (%.1f fps)", r.frameMs,
+                r.frameMs > 0 ? 1000.0 / r.frameMs : 0.0);
     ImGui::Text("kernels %u generated%s, %u drawn", st.kernelsGenerated,
                 st.regenerated ? " (new)" : "", st.counters.kernelsDrawn);
     ImGui::Text("cells %u of %u visible", st.cellsGenerated, st.visibleCells);
     ImGui::Text("GPU memory %s (peak)", megabytes(st.gpuMemoryBytes).c_str());
-    if (!srgb)
+    if (!r.srgb)
         ImGui::TextColored(ImVec4(1, 0.5f, 0.2f, 1), "no sRGB swapchain: shown linear (dark)");
-    ImGui::End();
 }
 
-/// One line at the bottom left, always shown: the method, the render size and whether it is
-/// scaled up (moving or painting), the frame rate, the refinement's progress.
-void statusLine(const splat::FrameStats& st, int renderW, int renderH, int windowW, int windowH,
-                double frameMs, bool lowRes, const std::string& refining) {
-    std::string text = cat(st.method, " ", renderW, "x", renderH);
-    if (renderW != windowW || renderH != windowH)
-        text += lowRes ? " scaled up while moving or painting" : " scaled up";
+/// The status at the foot of the column, always shown: the method chosen and the last frame's
+/// time (a refinement step's, when that was the last), then what the viewport shows: that method's
+/// frame (its size, scaled up or not) or the idle refinement's average of jittered `sorted` frames,
+/// with its progress.
+std::string statusText(const FrameReport& r) {
     char rate[48];
-    std::snprintf(rate, sizeof rate, "  %.0f ms (%.1f fps)", frameMs,
-                  frameMs > 0 ? 1000.0 / frameMs : 0.0);
-    text += rate;
-    if (!refining.empty())
-        text += "  " + refining;
-    ImDrawList* draw = ImGui::GetForegroundDrawList();
-    const ImVec2 size = ImGui::CalcTextSize(text.c_str());
-    const ImVec2 at(8.0f, ImGui::GetIO().DisplaySize.y - size.y - 8.0f);
-    draw->AddRectFilled(ImVec2(at.x - 4, at.y - 2), ImVec2(at.x + size.x + 4, at.y + size.y + 2),
-                        IM_COL32(0, 0, 0, 150));
-    draw->AddText(at, IM_COL32(255, 255, 255, 255), text.c_str());
+    std::snprintf(rate, sizeof rate, "%.0f ms (%.1f fps)", r.frameMs,
+                  r.frameMs > 0 ? 1000.0 / r.frameMs : 0.0);
+    std::string text = cat("method ", r.method, "  last frame ", rate, "\nshown: ");
+    if (r.refined > 0)
+        text += cat(r.refined < r.refineTarget ? "refining " : "refined ", r.refined, "/",
+                    r.refineTarget, ", an average of jittered sorted frames");
+    else
+        text += cat(r.method, " ", r.renderW, "x", r.renderH,
+                    r.renderW == r.viewportW && r.renderH == r.viewportH ? ""
+                    : r.scaledUp ? " scaled up while moving or painting"
+                                 : " scaled up");
+    return text;
 }
 
 /// The idle refinement: the running average of jittered full-resolution frames, on the host
@@ -442,7 +441,7 @@ struct Refinement {
 /// preset's constant scale.
 class KernelPreview {
 public:
-    static constexpr int kSize = 160;
+    static constexpr int kSize = SessionPanels::kPreviewSize;
 
     /// Render again when the kernel's JSON changed; the image to show.
     const splat::Image& update(splat::Context& ctx, const edit::Session& session) {
@@ -551,7 +550,8 @@ PanelState initialPanel(const EditWindowOptions& options) {
 /// What one pass of the window's loop decided, shared by its steps.
 struct FrameState {
     Clock::time_point start;
-    int fullW = 0, fullH = 0;               ///< the swapchain's size
+    WindowLayout layout;                    ///< the viewport and the column in the swapchain
+    int fullW = 0, fullH = 0;               ///< the viewport's size (full resolution)
     std::optional<glm::vec2> scriptPointer; ///< the script's stroke point this frame
     bool stroking = false, lowRes = false;
     double overlayMs = 0.0;
@@ -581,13 +581,22 @@ public:
         m_imgui.emplace(m_ctx, m_window.handle, m_swapchain);
         m_panels.savePath = cat(m_session.scene().name, "-edited.json");
         m_panels.exportPath = cat(m_session.scene().name, "-view.png");
+        if (!options.openPanels.empty())
+            m_panels.openAtStart = options.openPanels;
+        m_columnWanted = options.column;
         m_navigationScaleChosen = m_panel.navigationScale;
+        // The clear colour of the column (under its panels, which are drawn without a
+        // background so that the kernel preview blitted into it shows): the panels' own
+        // background, already linear for an sRGB swapchain.
+        const ImVec4 bg = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
+        m_columnColor = {{bg.x, bg.y, bg.z, 1.0f}};
     }
 
     EditWindowReport run() {
         m_lastTick = Clock::now();
         while (!glfwWindowShouldClose(m_window.handle) && !m_quit) {
-            if (m_options.frames > 0 && m_report.frames >= m_options.frames && scriptDone())
+            if (m_options.frames > 0 && m_report.frames >= m_options.frames && scriptDone() &&
+                refinementDone(m_refine.count))
                 break;
             FrameState f;
             f.start = Clock::now();
@@ -614,6 +623,11 @@ public:
 
 private:
     bool scriptDone() const { return m_scriptNext >= m_options.script.size(); }
+    /// With --frames, the run waits for the idle refinement's steps too (none while the wind
+    /// animates: it never rests).
+    bool refinementDone(int steps) const {
+        return m_panel.refineFrames == 0 || steps >= m_panel.refineFrames || m_session.wind();
+    }
     const std::string& methodName() const {
         return splat::gpuMethods()[std::size_t(m_panel.method)].name;
     }
@@ -653,8 +667,19 @@ private:
             ImGui_ImplVulkan_SetMinImageCount(m_swapchain.minImageCount);
             m_input.resized = false;
         }
-        f.fullW = int(m_swapchain.extent.width);
-        f.fullH = int(m_swapchain.extent.height);
+        const int width = int(m_swapchain.extent.width), height = int(m_swapchain.extent.height);
+        if (m_input.togglePanels) {
+            m_columnWanted = !m_input.layout.columnShown();
+            m_input.togglePanels = false;
+        }
+        f.layout =
+            windowLayout(width, height, m_columnWanted.value_or(width >= kColumnMinWindowWidth));
+        if (f.layout.viewportWidth != m_input.layout.viewportWidth ||
+            f.layout.height != m_input.layout.height)
+            m_input.sceneDirty = true; // the viewport changed size
+        m_input.layout = f.layout;
+        f.fullW = f.layout.viewportWidth;
+        f.fullH = f.layout.viewportHeight();
         return true;
     }
 
@@ -668,7 +693,9 @@ private:
             m_input.sceneDirty |= next != m_panel.method;
             m_panel.method = next;
         }
-        if (m_options.orbitDegreesPerFrame != 0.0 && m_report.frames > 0) {
+        // From the second frame to the last of --frames (the refinement it waits for then rests).
+        if (m_options.orbitDegreesPerFrame != 0.0 && m_report.frames > 0 &&
+            m_report.frames < m_options.frames) {
             m_view.orbit(m_options.orbitDegreesPerFrame, 0.0, 180.0); // 180 pixels: half a turn
             m_input.moved();
         }
@@ -686,6 +713,7 @@ private:
         m_session.setCamera(m_view.camera(f.fullW, f.fullH));
         edit::runScriptAction(m_session, a, m_options.scriptName, m_options.log, m_scriptReport);
         ++m_scriptNext;
+        m_lastScriptAction = &a; // a render that fails next names this line
         m_panel.method = methodIndex(m_session.method());
         m_panel.settings = m_session.settings();
         const noise::Camera now = m_session.camera(), shown = m_view.camera(f.fullW, f.fullH);
@@ -705,10 +733,11 @@ private:
         try {
             if (!m_input.pendingBrush && phase != Phase::Release)
                 m_input.pendingBrush = Clock::now();
-            m_session.pointer(phase, a.points[i], m_input.windowCamera(m_window.handle));
+            m_session.pointer(phase, a.points[i], m_input.viewCamera());
         } catch (const InputError& e) {
-            throw InputError(cat("script ", m_options.scriptName, ":", a.line, ": ", e.what()));
+            throw InputError(edit::scriptLineError(m_options.scriptName, a, e.what()));
         }
+        m_lastScriptAction = &a;
         m_input.sceneDirty = true;
         if (phase == Phase::Release) {
             ++m_scriptReport.strokes;
@@ -732,43 +761,98 @@ private:
         }
     }
 
-    /// The ImGui frame: the panels (whose edits reach the session), F12's export, the quit
-    /// modal, the stats, the status line, the brush circle and the kernel preview's frame.
+    /// The ImGui frame: the column (the Render section, the session's sections, Stats, and the
+    /// status at its foot; edits reach the session), F12's export, the quit modal and the brush
+    /// circle.
     void buildOverlay(FrameState& f) {
         const auto overlayStart = Clock::now();
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
-        const int methodShown = m_panel.method;
-        m_input.sceneDirty |= methodPanel(m_panel);
-        if (m_panel.navigationScale != m_navigationScaleChosen || m_panel.method != methodShown) {
-            m_navigationScaleChosen = m_panel.navigationScale;
-            m_movingScale = 0;
-        }
         if (!m_input.error.empty()) {
             m_panels.message = m_input.error;
             m_panels.messageIsError = true;
             m_input.error.clear();
         }
-        // The panels' Export renders the view as the window shows it.
-        m_session.setMethod(methodName(), m_panel.settings);
-        m_session.setCamera(m_view.camera(f.fullW, f.fullH));
-        m_input.sceneDirty |= sessionPanels(m_session, m_panels);
+        m_panels.previewShown = false;
+        if (f.layout.columnShown())
+            drawColumn(f);
         if (m_input.exportRequested)
             exportView();
         const QuitStep quitting = quitStep(m_session.dirty(), false, quitModal(m_input, m_panels));
         if (quitting.close && (!quitting.save || saveSession(m_session, m_panels)))
             m_quit = true;
-        drawStatus(f);
-        drawBrushAndPreviewFrame(f);
+        drawBrush(f);
         ImGui::Render();
         f.overlayMs = msSince(overlayStart);
+    }
+
+    /// The panels' column right of the viewport: one ImGui window without a background (the
+    /// present clears the column to the panels' colour, and the kernel preview is blitted into
+    /// it), its sections in a scrolling child, the status at its foot.
+    void drawColumn(const FrameState& f) {
+        const WindowLayout& l = f.layout;
+        ImGui::SetNextWindowPos(ImVec2(float(l.viewportWidth), 0.0f));
+        ImGui::SetNextWindowSize(ImVec2(float(l.columnWidth), float(l.height)));
+        ImGui::SetNextWindowBgAlpha(0.0f);
+        ImGui::Begin("##column", nullptr,
+                     ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize |
+                         ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse |
+                         ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus);
+        const FrameReport report = frameReport(f);
+        const std::string status = statusText(report);
+        // The status's lines, wrapped to the column, and a separator above them.
+        const float statusHeight =
+            ImGui::CalcTextSize(status.c_str(), nullptr, false, ImGui::GetContentRegionAvail().x)
+                .y +
+            2.0f * ImGui::GetStyle().ItemSpacing.y + 4.0f;
+        ImGui::BeginChild("##sections", ImVec2(0.0f, -statusHeight));
+        const int methodShown = m_panel.method;
+        m_input.sceneDirty |= methodPanel(m_panel, m_panels);
+        if (m_panel.navigationScale != m_navigationScaleChosen || m_panel.method != methodShown) {
+            m_navigationScaleChosen = m_panel.navigationScale;
+            m_movingScale = 0;
+        }
+        // The panels' Export renders the view as the window shows it.
+        m_session.setMethod(methodName(), m_panel.settings);
+        m_session.setCamera(m_view.camera(f.fullW, f.fullH));
+        m_input.sceneDirty |= sessionPanels(m_session, m_panels);
+        statsPanel(report, m_panels);
+        ImGui::EndChild();
+        ImGui::Separator();
+        ImGui::TextWrapped("%s", status.c_str());
+        ImGui::End();
+    }
+
+    FrameReport frameReport(const FrameState& f) const {
+        FrameReport r;
+        r.stats = &m_stats;
+        r.method = methodName();
+        r.renderW = m_renderW;
+        r.renderH = m_renderH;
+        r.viewportW = f.fullW;
+        r.viewportH = f.fullH;
+        r.frameMs = m_lastFrameMs;
+        r.presentMs = m_lastPresentMs;
+        r.scaledUp = f.lowRes && std::max(m_panel.navigationScale, m_movingScale) > m_panel.scale;
+        // The panels are built before the frame renders: what this frame will show (one more
+        // refinement step, unless a change since resets it; the status is then current).
+        const bool change = sceneChanges(f);
+        r.refined = m_panel.refineFrames == 0 || change ? 0
+                    : refinesNext(f, change)            ? m_refine.count + 1
+                                                        : m_refine.count;
+        r.refineTarget = m_panel.refineFrames;
+        r.srgb = m_swapchain.srgb;
+        return r;
     }
 
     /// F12: what the File panel's Export does.
     void exportView() {
         m_input.exportRequested = false;
         try {
+            m_session.setMethod(methodName(), m_panel.settings);
+            m_session.setCamera(
+                m_view.camera(m_input.layout.viewportWidth, m_input.layout.viewportHeight()));
             m_session.exportImage(m_panels.exportPath);
             m_panels.message = "wrote " + m_panels.exportPath;
             m_panels.messageIsError = false;
@@ -778,58 +862,50 @@ private:
         }
     }
 
-    /// The Stats panel and the status line.
-    void drawStatus(const FrameState& f) {
-        std::string refining;
-        if (m_panel.refineFrames > 0 && m_refine.count > 0)
-            refining = m_refine.count < m_panel.refineFrames
-                           ? cat("refining ", m_refine.count, "/", m_panel.refineFrames,
-                                 " (sorted, jittered)")
-                           : cat("refined ", m_refine.count, "/", m_panel.refineFrames,
-                                 " (sorted, jittered)");
-        const bool scaledUp =
-            f.lowRes && std::max(m_panel.navigationScale, m_movingScale) > m_panel.scale;
-        statsPanel(m_stats, m_renderW, m_renderH, f.fullW, f.fullH, m_lastFrameMs, m_lastPresentMs,
-                   scaledUp, m_swapchain.srgb, refining);
-        statusLine(m_stats, m_renderW, m_renderH, f.fullW, f.fullH, m_lastFrameMs, scaledUp,
-                   refining);
-    }
-
-    /// The brush under the pointer (or the script's pointer), and a frame around the kernel
-    /// preview.
-    void drawBrushAndPreviewFrame(const FrameState& f) {
+    /// The brush under the pointer (or the script's pointer) when it is over the viewport.
+    void drawBrush(const FrameState& f) {
         const ImVec2 mouse = ImGui::GetIO().MousePos;
-        const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid();
+        const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid() &&
+                               f.layout.inViewport(mouse.x, mouse.y);
         if (f.scriptPointer ||
             (overScene && m_input.drag != Drag::Orbit && m_input.drag != Drag::Pan)) {
             const ImVec2 at =
                 f.scriptPointer ? ImVec2(f.scriptPointer->x, f.scriptPointer->y) : mouse;
-            ImGui::GetForegroundDrawList()->AddCircle(at, m_session.brush().radiusPx,
-                                                      IM_COL32(255, 255, 255, 200), 48, 1.5f);
+            // Clipped to the viewport: the circle never reaches into the column.
+            ImDrawList* draw = ImGui::GetBackgroundDrawList();
+            draw->PushClipRect(ImVec2(0.0f, 0.0f),
+                               ImVec2(float(f.layout.viewportWidth), float(f.layout.height)));
+            draw->AddCircle(at, m_session.brush().radiusPx, IM_COL32(255, 255, 255, 200), 48, 1.5f);
+            draw->PopClipRect();
         }
-        if (m_panels.kernelOpen) {
-            const float x = float(f.fullW - 330 - 8 - KernelPreview::kSize);
-            ImGui::GetForegroundDrawList()->AddRect(
-                ImVec2(x - 1, 7), ImVec2(x + KernelPreview::kSize + 1, 9 + KernelPreview::kSize),
-                IM_COL32(120, 120, 140, 255));
-        }
+    }
+
+    /// Whether this frame renders the scene anew: something changed, or navigation or a stroke
+    /// ended (back to the resolution chosen).
+    bool sceneChanges(const FrameState& f) const {
+        const bool resolution = !f.lowRes && m_scene && m_refine.count == 0 &&
+                                (m_renderW != std::max(1, f.fullW / kScales[m_panel.scale]) ||
+                                 m_renderH != std::max(1, f.fullH / kScales[m_panel.scale]));
+        return m_input.sceneDirty || !m_scene || resolution;
+    }
+
+    /// Whether this frame is one more refinement step: nothing changed, not moving or painting,
+    /// steps left, the wind off.
+    bool refinesNext(const FrameState& f, bool change) const {
+        return !change && !f.lowRes && m_panel.refineFrames > 0 &&
+               m_refine.count < m_panel.refineFrames && !m_session.wind();
     }
 
     /// The scene for this frame: one more refinement step when idle, a render when something
     /// changed (or every frame when asked), else the last image. False when the method refused
     /// the settings interactively (the frame is dropped; the panel shows why).
     bool renderScene(FrameState& f) {
-        // Navigation or a stroke ended: back to the resolution chosen.
-        if (!f.lowRes && m_scene && m_refine.count == 0 &&
-            (m_renderW != std::max(1, f.fullW / kScales[m_panel.scale]) ||
-             m_renderH != std::max(1, f.fullH / kScales[m_panel.scale])))
-            m_input.sceneDirty = true;
-        const bool change = m_input.sceneDirty || !m_scene;
+        const bool change = sceneChanges(f);
         if (change)
             m_refine.count = 0;
-        f.last = m_options.frames > 0 && scriptDone() && m_report.frames + 1 >= m_options.frames;
-        const bool refineNow = !change && !f.lowRes && m_panel.refineFrames > 0 &&
-                               m_refine.count < m_panel.refineFrames && !m_session.wind();
+        const bool refineNow = refinesNext(f, change);
+        f.last = m_options.frames > 0 && scriptDone() && m_report.frames + 1 >= m_options.frames &&
+                 refinementDone(m_refine.count + (refineNow ? 1 : 0));
         f.shown = m_refine.count > 0 ? &m_refine.image() : m_scene;
         if (refineNow)
             refineStep(f);
@@ -870,7 +946,9 @@ private:
         m_renderW = std::max(1, f.fullW / scale);
         m_renderH = std::max(1, f.fullH / scale);
         noise::Image image;
-        const bool capture = f.last && !m_options.screenshot.empty();
+        // --screenshot is the viewport at full resolution: the frame itself when it is that.
+        const bool capture =
+            f.last && !m_options.screenshot.empty() && m_renderW == f.fullW && m_renderH == f.fullH;
         const std::string& method = methodName();
         const auto renderStart = Clock::now();
         try {
@@ -882,8 +960,13 @@ private:
             // Interactively, a setting the method refuses (or a frame beyond the memory
             // budget) is shown in the panel; scripted, it fails. The session may have
             // rebuilt its frame: the last image is gone.
-            if (!m_scene || m_options.frames > 0)
+            if (!m_scene || m_options.frames > 0) {
+                // The script line that asked for it (a method or setting the frame refuses).
+                if (m_lastScriptAction)
+                    throw InputError(
+                        edit::scriptLineError(m_options.scriptName, *m_lastScriptAction, e.what()));
                 throw;
+            }
             m_panel.error = e.what();
             m_input.sceneDirty = false;
             m_scene = nullptr;
@@ -891,6 +974,9 @@ private:
             return false;
         }
         const double renderWall = msSince(renderStart);
+        m_lastScriptAction = nullptr;
+        m_report.renderWidth = m_renderW;
+        m_report.renderHeight = m_renderH;
         if (capture)
             m_screenshot = std::move(image);
         m_scene = &m_session.frame().renderer(method).result();
@@ -918,20 +1004,27 @@ private:
         if (grab && !m_swapchain.readable)
             throw std::runtime_error("--window-screenshot: the window's images cannot be read back "
                                      "on this surface");
-        // The kernel preview while the Kernel panel is open (rendered again when the kernel
-        // changed), left of the panel's place at the top right.
+        // The kernel preview where the Kernel section left room for it, when all of it is in
+        // view (rendered again when the kernel changed).
         const splat::Image* inset = nullptr;
-        const int insetX = f.fullW - 330 - 8 - KernelPreview::kSize;
-        if (m_panels.kernelOpen && insetX >= 8 && f.fullH >= KernelPreview::kSize + 16) {
+        const VkOffset2D insetAt{int(std::lround(m_panels.previewAt.x)),
+                                 int(std::lround(m_panels.previewAt.y))};
+        if (m_panels.previewShown && insetAt.x >= f.layout.viewportWidth &&
+            insetAt.x + KernelPreview::kSize <= f.layout.width && insetAt.y >= 0 &&
+            insetAt.y + KernelPreview::kSize <= f.layout.height) {
             try {
                 inset = &m_preview.update(m_ctx, m_session);
+                m_report.previewX = insetAt.x;
+                m_report.previewY = insetAt.y;
             } catch (const InputError& e) {
                 m_panels.message = e.what();
                 m_panels.messageIsError = true;
             }
         }
-        if (!present(m_ctx, m_swapchain, m_sync, *f.shown, grab ? &m_windowGrab : nullptr, inset,
-                     VkOffset2D{insetX, 8}))
+        const VkExtent2D viewport{std::uint32_t(f.layout.viewportWidth),
+                                  std::uint32_t(f.layout.height)};
+        if (!present(m_ctx, m_swapchain, m_sync, *f.shown, viewport, m_columnColor,
+                     grab ? &m_windowGrab : nullptr, inset, insetAt))
             m_input.resized = true;
         if (grab)
             m_windowImage = m_windowGrab.read(m_swapchain.srgb);
@@ -978,10 +1071,13 @@ private:
     /// --window-screenshot.
     void writeScreenshots() {
         if (!m_options.screenshot.empty()) {
-            if (!m_screenshot) { // closed by the user: the view as it was last shown
+            // The viewport at full resolution, whatever the render scale: when the last frame
+            // was rendered smaller (the render scale, moving or painting) or the user closed
+            // the window, the view as it was last shown, rendered again at that size.
+            const int w = m_input.layout.viewportWidth, h = m_input.layout.viewportHeight();
+            if (!m_screenshot || m_screenshot->width != w || m_screenshot->height != h) {
                 m_session.setMethod(methodName(), m_panel.settings);
-                m_session.setCamera(
-                    m_view.camera(int(m_swapchain.extent.width), int(m_swapchain.extent.height)));
+                m_session.setCamera(m_view.camera(w, h));
                 noise::Image image;
                 m_session.render(&image);
                 m_screenshot = std::move(image);
@@ -1016,6 +1112,10 @@ private:
         report.strokeFrameMs = median(m_strokeFrameMs);
         report.strokeFrames = int(m_strokeFrameMs.size());
         report.lowScale = kScales[std::max(m_panel.navigationScale, m_movingScale)];
+        report.windowWidth = m_input.layout.width;
+        report.windowHeight = m_input.layout.height;
+        report.viewportWidth = m_input.layout.viewportWidth;
+        report.viewportHeight = m_input.layout.viewportHeight();
         return report;
     }
 
@@ -1029,6 +1129,9 @@ private:
     const splat::UniqueSurface m_surface;
     Swapchain m_swapchain;
     PresentSync m_sync;
+    VkClearColorValue m_columnColor{};  ///< under the panels' column
+    std::optional<bool> m_columnWanted; ///< N or --panels (none: by the window's width)
+    const edit::ScriptAction* m_lastScriptAction = nullptr; ///< ran since the last render
     OrbitView m_view;
     InputState m_input;
     std::optional<ImGuiLayer> m_imgui;
@@ -1068,10 +1171,20 @@ std::vector<cli::OptionSpec> editWindowOptions() {
     return {
         {"method", "NAME",
          "the method shown first: " + splat::gpuMethodNames() + " (default instanced)", false},
-        {"frames", "N", "render N frames, then close (default: until the window is closed)", false},
+        {"frames", "N",
+         "render N frames (and then the --refine steps), then close (default: until the window "
+         "is closed)",
+         false},
         {"screenshot", "FILE",
-         "write the last rendered scene (without the panels) as .png or .exr when the window "
-         "closes (without a window: the view after the script)",
+         "write the scene as last shown (without the panels) as .png or .exr when the window "
+         "closes, at the viewport's full size whatever the render scale (without a window: the "
+         "view after the script, at --size)",
+         false},
+        {"panels", "LIST",
+         "the panels' column: the sections to unfold at first, separated by commas (render, "
+         "brush, kernel, distribution, wind, file, stats; or all; default render,brush,file), "
+         "or off to hide the column (N shows or hides it; it starts hidden in windows narrower "
+         "than 560 pixels unless this is given)",
          false},
         {"window-screenshot", "FILE",
          "with --frames: write the last frame as the window "
@@ -1092,7 +1205,7 @@ std::vector<cli::OptionSpec> editWindowOptions() {
          false},
         {"refine", "N",
          "when idle, average N jittered full-resolution frames of `sorted` (default 16; 0 "
-         "with --frames unless given)",
+         "with --frames unless given; with --frames the window waits for them before it closes)",
          false}};
 }
 
@@ -1120,6 +1233,29 @@ EditWindowOptions editWindowOptions(const cli::Args& args, int width, int height
             throw InputError(cat("--resize '", size, "' must be WxH with sides in [1, 16384]"));
     }
     o.cycleMethods = args.has("cycle-methods");
+    if (args.has("panels")) {
+        const std::string list = args.str("panels");
+        const std::vector<std::string>& names = sectionNames();
+        if (list == "off") {
+            o.column = false;
+        } else {
+            o.column = true;
+            o.openPanels.clear();
+            std::stringstream in(list);
+            for (std::string name; std::getline(in, name, ',');) {
+                if (name == "all")
+                    o.openPanels.insert(o.openPanels.end(), names.begin(), names.end());
+                else if (std::find(names.begin(), names.end(), name) != names.end())
+                    o.openPanels.push_back(name);
+                else
+                    throw InputError(cat("--panels: '", name,
+                                         "' is not a section (render, brush, kernel, "
+                                         "distribution, wind, file, stats, all) or off"));
+            }
+            if (o.openPanels.empty())
+                throw InputError("--panels needs a section name, all or off");
+        }
+    }
     o.orbitDegreesPerFrame = args.number("orbit", 0.0, -180.0, 180.0);
     o.renderScale = int(args.integer("render-scale", 1, 1, 4));
     if (o.renderScale == 3)

@@ -5,13 +5,16 @@
 /// panels (render, brush, kernel, distribution, wind, file, stats; edit_panels.h). The session
 /// is built on the window's context, so strokes, undo and panel edits show in the next frame.
 ///
-/// A frame: splat::Frame::render() renders into the method's result image (RGBA32F, linear) and
-/// waits; a second command buffer blits it into the swapchain image (an sRGB format, so the blit
-/// encodes; scaled up when the scene is rendered at a lower resolution while navigating), draws
-/// ImGui on top in a render pass, and is presented. One frame in flight: the editor waits for the
-/// present's submit before the next frame (lavapipe runs both on the same CPU cores anyway).
-/// While the camera moves or a stroke is in progress the scene renders at a lower resolution;
-/// when idle the window refines: it averages sub-pixel-jittered `sorted` frames at full
+/// The window is the viewport (the scene, at the top left; the camera's aspect ratio is its) and
+/// a column of panels along the right edge (edit_view.h's WindowLayout): no panel covers the
+/// scene. A frame: splat::Frame::render() renders into the method's result image (RGBA32F,
+/// linear) and waits; a second command buffer clears the swapchain image to the panels' colour,
+/// blits the scene into the viewport (an sRGB format, so the blit encodes; scaled up when the
+/// scene is rendered at a lower resolution while navigating) and the kernel preview into the
+/// column, draws ImGui on top in a render pass, and is presented. One frame in flight: the editor
+/// waits for the present's submit before the next frame (lavapipe runs both on the same CPU cores
+/// anyway). While the camera moves or a stroke is in progress the scene renders at a lower
+/// resolution; when idle the window refines: it averages sub-pixel-jittered `sorted` frames at full
 /// resolution (read back, averaged on the host, uploaded to an image the blit shows).
 ///
 /// The mouse and keys map to actions through edit_input.h (a tested pure function); the
@@ -23,6 +26,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,7 +45,7 @@ namespace spot::editor {
 
 struct EditWindowOptions {
     std::string title = "spotshell edit";
-    /// Initial window size, screen pixels (the scene's image size by default).
+    /// Initial window size, screen pixels (the viewport is the part left of the panels' column).
     int width = 1280, height = 720;
     std::string method = "instanced"; ///< a name of splat::gpuMethods()
     splat::RenderSettings settings;
@@ -49,8 +53,9 @@ struct EditWindowOptions {
     /// closed). Every one of these frames renders the scene (no redraw-on-demand), so they time
     /// the whole frame, unless the idle refinement runs (refineFrames > 0).
     int frames = 0;
-    /// Write the last rendered scene image here when the window closes (.png or .exr; the scene
-    /// only, without the ImGui overlay; the refinement's average when it ran), atomically.
+    /// Write the scene as last shown here when the window closes (.png or .exr; the viewport
+    /// only, at its full size whatever the render scale, without the panels; the refinement's
+    /// average when it ran), atomically.
     std::filesystem::path screenshot;
     /// With `frames`: write the last frame as presented (scene and panels), read back from the
     /// swapchain image.
@@ -65,10 +70,15 @@ struct EditWindowOptions {
     double orbitDegreesPerFrame = 0.0;
     /// Scripted checks: frame i uses method i modulo the registry's count.
     bool cycleMethods = false;
+    /// The panels' column shown or not (none: shown in windows at least kColumnMinWindowWidth
+    /// wide), and its sections unfolded at first (lower-case names; empty: Render, Brush, File).
+    std::optional<bool> column;
+    std::vector<std::string> openPanels;
 
     /// Idle refinement: after the interactive frame, while nothing changes, accumulate this
     /// many sub-pixel-jittered frames of the `sorted` method at full resolution into a running
-    /// average (0: off). The Render panel changes it.
+    /// average (0: off). The Render panel changes it. With `frames`, the window closes once
+    /// these steps are done too.
     int refineFrames = 16;
     /// Replay these script actions, one between two frames (strokes as pointer events, one per
     /// frame); `scriptName` names the file in messages, `log` gets one line per action.
@@ -98,6 +108,10 @@ struct EditWindowReport {
     /// Moving and painting rendered at 1/lowScale of the window's size at the end (lowered
     /// from the Render panel's choice when those frames were slower than 10 fps).
     int lowScale = 2;
+    int windowWidth = 0, windowHeight = 0;     ///< at the end
+    int viewportWidth = 0, viewportHeight = 0; ///< the scene's part of it at the end
+    int renderWidth = 0, renderHeight = 0;     ///< the last interactive render (not refinement)
+    int previewX = -1, previewY = -1;     ///< where the kernel preview was last drawn (-1: never)
     bool validation = false;              ///< the validation layer was on (SPOT_VALIDATION=1)
     std::uint32_t validationWarnings = 0; ///< its warnings (errors throw)
 };
@@ -115,8 +129,8 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession, const EditWind
 /// The window's command-line options (besides the scene options and the render settings).
 std::vector<cli::OptionSpec> editWindowOptions();
 /// Options from the command line: --method, --frames, --screenshot, --window-screenshot,
-/// --render-scale, --orbit, --resize, --cycle-methods, --refine, and the render settings;
-/// `width` x `height` is the window's size (the scene's image size or --size).
+/// --render-scale, --orbit, --resize, --cycle-methods, --refine, --panels, and the render
+/// settings; `width` x `height` is the window's size (1280x720 or --size).
 EditWindowOptions editWindowOptions(const cli::Args& args, int width, int height,
                                     const std::string& sceneName);
 

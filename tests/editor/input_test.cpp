@@ -142,6 +142,8 @@ TEST(EditInput, KeysUndoRedoFrameAndTheBrush) {
     EXPECT_EQ(key(GLFW_KEY_X).type, Type::MirrorX);
     EXPECT_EQ(key(GLFW_KEY_F12).type, Type::Export);
     EXPECT_EQ(key(GLFW_KEY_F12, 0, idle(), GLFW_REPEAT).type, Type::None); // one file a press
+    EXPECT_EQ(key(GLFW_KEY_N).type, Type::TogglePanels);
+    EXPECT_EQ(key(GLFW_KEY_N, 0, idle(), GLFW_REPEAT).type, Type::None); // one toggle a press
     // No undo or brush change in the middle of a stroke; navigation drags allow them.
     EXPECT_EQ(key(GLFW_KEY_Z, GLFW_MOD_CONTROL, dragging(Drag::Brush)).type, Type::None);
     EXPECT_EQ(key(GLFW_KEY_2, 0, dragging(Drag::Brush)).type, Type::None);

@@ -10,6 +10,8 @@
 #include "edit_test_support.h"
 #include "editor/edit_script.h"
 #include "noise/error.h"
+#include "noise/image.h"
+#include "splat/image_compare.h"
 
 namespace {
 
@@ -81,6 +83,73 @@ TEST(EditScript, BadLinesNameTheirLine) {
     EXPECT_NE(parseError("screenshot x.tiff\n").find("must end in .png, .exr"), std::string::npos);
     EXPECT_NE(parseError("brush comb strength 2\n").find("outside [-1, 1]"), std::string::npos);
     EXPECT_NE(parseError("jump\n").find("unknown action 'jump'"), std::string::npos);
+    // The line itself too, as written (comments and outer blanks dropped).
+    EXPECT_NE(parseError("frames 2\n  brush   fluff  # soft\n").find("(the line: brush   fluff)"),
+              std::string::npos)
+        << parseError("frames 2\n  brush   fluff  # soft\n");
+}
+
+// A `method` line changes only the settings it gives: the command line's others stay (`method
+// baked` keeps --bake), and the image is `render`'s with those settings. An error while the
+// script runs names the line that caused it, with its text: a method whose settings are refused
+// (baked without a bake) on its own line, not on the next that renders; a key of a `set` line
+// that the preset does not have, without blaming the preset's file. The log prints long lines
+// whole.
+TEST(EditScript, MethodKeepsTheCommandLineAndErrorsNameTheLine) {
+    const fs::path dir = test::tmpPath("edit_method_line");
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path bake = dir / "bunny.vdb";
+    std::string err;
+    ASSERT_EQ(test::spotshell("bake --scene " + test::bunnyScene().string() +
+                                  " --resolution 48 --out " + bake.string(),
+                              &err),
+              0)
+        << err;
+    // The scene's own camera: the image is the scene's.
+    const std::string longLine = "camera eye 1.1 0.75 2.3 target 0.0 0.45 0.0 fov 30";
+    const fs::path script = dir / "method.script";
+    test::writeText(script, "method hybrid\n" + longLine + "\nmethod baked peel-passes 2\n" +
+                                "screenshot " + (dir / "edited.exr").string() + "\n");
+    const test::CliResult e = test::runSpotshell("edit --scene " + test::bunnyScene().string() +
+                                                 " --size 96x96 --method baked --bake " +
+                                                 bake.string() + " --script " + script.string());
+    ASSERT_EQ(e.code, 0) << e.err;
+    EXPECT_NE(e.out.find("   2  " + longLine + " "), std::string::npos) << e.out;
+
+    // The same bake and settings with `render`.
+    ASSERT_EQ(test::spotshell("render --scene " + test::bunnyScene().string() +
+                                  " --size 96x96 --method baked --bake " + bake.string() +
+                                  " --peel-passes 2 --out " + (dir / "rendered.exr").string(),
+                              &err),
+              0)
+        << err;
+    EXPECT_GT(
+        splat::psnr(noise::readImage(dir / "rendered.exr"), noise::readImage(dir / "edited.exr")),
+        60.0);
+
+    // Baked without a bake: line 2 is to blame, not line 3 (the first that renders after it).
+    const fs::path noBake = dir / "nobake.script";
+    test::writeText(noBake, "method hybrid\nmethod baked\nframes 1\n");
+    EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() +
+                                  " --size 64x64 --script " + noBake.string(),
+                              &err),
+              2);
+    EXPECT_NE(err.find("nobake.script:2: "), std::string::npos) << err;
+    EXPECT_NE(err.find("(the line: method baked)"), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+
+    const fs::path typo = dir / "typo.script";
+    test::writeText(typo, "frames 1\nset distribution.densty_max 4000\n");
+    EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() +
+                                  " --size 64x64 --script " + typo.string(),
+                              &err),
+              2);
+    EXPECT_NE(err.find("typo.script:2: set distribution.densty_max: unknown key"),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("(the line: set distribution.densty_max 4000)"), std::string::npos) << err;
+    EXPECT_EQ(err.find("fur.json"), std::string::npos) << "blames the preset's file: " << err;
 }
 
 // A malformed script fails with its line and exit 2 before anything is written, even the files
@@ -197,7 +266,7 @@ TEST(EditScript, WindowOptionsNeedTheWindow) {
     test::writeText(script, "frames 1\n");
     for (const std::string option :
          {"--frames 3", "--orbit 5", "--resize 100x100", "--cycle-methods",
-          "--window-screenshot w.png", "--render-scale 2", "--refine 4"}) {
+          "--window-screenshot w.png", "--render-scale 2", "--refine 4", "--panels all"}) {
         std::string err;
         EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --script " +
                                       script.string() + " " + option,

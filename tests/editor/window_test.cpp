@@ -69,6 +69,23 @@ double fractionDiffering(const spot::noise::Image& a, const spot::noise::Image& 
     return double(differing) / double(std::max<std::size_t>(a.pixels.size(), 1));
 }
 
+/// The largest difference between two 8-bit images in display levels (0-255), or -1 when their
+/// sizes differ.
+int maxLevelDifference(const spot::noise::Image& a, const spot::noise::Image& b) {
+    if (a.width != b.width || a.height != b.height)
+        return -1;
+    int most = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const long da = std::lround(
+                spot::noise::srgbEncode(std::clamp(a.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            const long db = std::lround(
+                spot::noise::srgbEncode(std::clamp(b.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
+            most = std::max(most, int(std::abs(da - db)));
+        }
+    return most;
+}
+
 TEST(EditWindow, ShowsWhatRenderRenders) {
     const std::string shot = tmp("edit.png"), window = tmp("window.png"), ref = tmp("render.png");
     const Result e =
@@ -97,13 +114,110 @@ TEST(EditWindow, ShowsWhatRenderRenders) {
     EXPECT_GT(covered, 0.25) << "the bunny covers too little of the screenshot";
     EXPECT_LT(covered, 0.9);
 
-    // The window as shown: the scene, sRGB-encoded by the blit, with the panels over part of it.
+    // The window as shown: the scene alone, sRGB-encoded by the blit (a window narrower than
+    // 560 pixels starts with the panels' column hidden; nothing is drawn over the scene).
     const spot::noise::Image shown = spot::noise::readImage(window);
     ASSERT_EQ(shown.width, 320);
     ASSERT_EQ(shown.height, 240);
-    const double overlaid = fractionDiffering(edited, shown, 1);
-    EXPECT_GT(overlaid, 0.05) << "no panels drawn over the scene";
-    EXPECT_LT(overlaid, 0.95) << "the scene does not show through";
+    EXPECT_EQ(fractionDiffering(edited, shown, 1), 0.0) << "something drawn over the scene";
+    EXPECT_NE(e.out.find("in a 320x240 viewport (the panels hidden)"), std::string::npos) << e.out;
+}
+
+/// The size after `prefix` in `text` ("WxH"), or (0, 0).
+glm::ivec2 sizeAfter(const std::string& text, const std::string& prefix) {
+    const std::size_t at = text.find(prefix);
+    glm::ivec2 size(0);
+    if (at != std::string::npos)
+        std::sscanf(text.c_str() + at + prefix.size(), "%dx%d", &size.x, &size.y);
+    return size;
+}
+
+/// A virtual screen larger than any window here, so that its pointer (at the screen's centre)
+/// is outside the window and the brush circle is not drawn over the scene.
+const std::string kXvfbLarge = "SPOT_VALIDATION=1 xvfb-run -a -s '-screen 0 3000x2000x24'";
+
+// The editor's layout: with every panel unfolded, at 800x600 and at the default size (1280x720),
+// the panels sit in a column right of the viewport and cover none of it. The window as shown
+// equals, over the viewport, the scene alone (--screenshot), which is `render`'s image at the
+// viewport's size (the camera's aspect follows the viewport); the column right of it shows the
+// panels. Shown here: tests/tmp/window-*-layout-*.png.
+TEST(EditWindowLayout, NoPanelCoversTheViewport) {
+    for (const std::string size : {"800x600", "1280x720"}) {
+        SCOPED_TRACE(size);
+        const std::string shot = tmp("layout-scene-" + size + ".png"),
+                          window = tmp("layout-window-" + size + ".png"),
+                          ref = tmp("layout-render-" + size + ".png");
+        // 1280x720 is the window's size without --size.
+        const std::string sizeOption = size == "1280x720" ? "" : " --size " + size;
+        const Result e = run(kXvfbLarge, "edit --scene " + scene() + sizeOption +
+                                             " --frames 2 --panels all --screenshot " + shot +
+                                             " --window-screenshot " + window);
+        ASSERT_EQ(e.code, 0) << e.err;
+        EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
+        const glm::ivec2 windowSize = sizeAfter(e.out, "edit: a ");
+        const glm::ivec2 viewport = sizeAfter(e.out, "the scene in a ");
+        EXPECT_EQ(std::to_string(windowSize.x) + "x" + std::to_string(windowSize.y), size);
+        // The column takes 300 to 400 pixels at the right; the viewport is the rest.
+        EXPECT_GE(windowSize.x - viewport.x, 300) << e.out;
+        EXPECT_LE(windowSize.x - viewport.x, 400) << e.out;
+        EXPECT_EQ(viewport.y, windowSize.y) << e.out;
+
+        const spot::noise::Image edited = spot::noise::readImage(shot);
+        const spot::noise::Image shown = spot::noise::readImage(window);
+        ASSERT_EQ(edited.width, viewport.x);
+        ASSERT_EQ(edited.height, viewport.y);
+        ASSERT_EQ(shown.width, windowSize.x);
+        ASSERT_EQ(shown.height, windowSize.y);
+        // Over the viewport, the window shows the scene and nothing else: to the 8-bit level
+        // (the blit's sRGB encoding against the PNG writer's), pixel by pixel.
+        spot::noise::Image left(viewport.x, viewport.y),
+            right(windowSize.x - viewport.x, windowSize.y);
+        for (int y = 0; y < shown.height; ++y)
+            for (int x = 0; x < shown.width; ++x) {
+                const glm::vec3 c =
+                    shown.pixels[std::size_t(y) * std::size_t(shown.width) + std::size_t(x)];
+                if (x < viewport.x)
+                    left.pixels[std::size_t(y) * std::size_t(viewport.x) + std::size_t(x)] = c;
+                else
+                    right.pixels[std::size_t(y) * std::size_t(right.width) +
+                                 std::size_t(x - viewport.x)] = c;
+            }
+        EXPECT_LE(maxLevelDifference(left, edited), 1) << "something covers the viewport";
+        // The column is not the scene's background: the panels are drawn there (text, widgets).
+        const spot::noise::Image background(right.width, right.height,
+                                            glm::vec3(0.02f, 0.02f, 0.03f));
+        EXPECT_GT(fractionDiffering(background, right, 8), 0.5) << "no column of panels";
+        // The scene is `render`'s at the viewport's size: the same camera, its aspect the
+        // viewport's.
+        const Result r =
+            run("", "render --scene " + scene() + " --size " + std::to_string(viewport.x) + "x" +
+                        std::to_string(viewport.y) + " --method instanced --out " + ref);
+        ASSERT_EQ(r.code, 0) << r.err;
+        EXPECT_GT(spot::splat::psnr(spot::noise::readImage(ref), edited), 60.0);
+    }
+}
+
+TEST(EditWindowLayout, ColumnAndViewportFillTheWindow) {
+    using spot::editor::windowLayout;
+    for (int w : {1, 150, 320, 359, 360, 559, 560, 800, 1000, 1280, 1920, 4000})
+        for (bool column : {false, true}) {
+            const spot::editor::WindowLayout l = windowLayout(w, 600, column);
+            EXPECT_EQ(l.viewportWidth + l.columnWidth, w) << w;
+            EXPECT_EQ(l.viewportHeight(), 600);
+            EXPECT_GE(l.viewportWidth, std::min(w, 160)) << w;
+            if (!column)
+                EXPECT_FALSE(l.columnShown());
+            if (l.columnShown()) {
+                EXPECT_GE(l.columnWidth, 200) << w;
+                EXPECT_LE(l.columnWidth, 400) << w;
+                // The column's pixels are not the viewport's.
+                EXPECT_FALSE(l.inViewport(l.viewportWidth, 10.0)) << w;
+                EXPECT_TRUE(l.inViewport(l.viewportWidth - 0.5, 10.0)) << w;
+            }
+        }
+    EXPECT_EQ(windowLayout(800, 600, true).columnWidth, 300);
+    EXPECT_EQ(windowLayout(1280, 720, true).columnWidth, 384);
+    EXPECT_EQ(windowLayout(1920, 1080, true).columnWidth, 400);
 }
 
 TEST(EditWindow, EveryMethodAndAResize) {
@@ -133,12 +247,20 @@ TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
                                     shot + " --window-screenshot " + window);
     ASSERT_EQ(e.code, 0) << e.err;
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
-    const spot::noise::Image scene = spot::noise::readImage(shot);
-    EXPECT_EQ(scene.width, 160);
-    EXPECT_EQ(scene.height, 120);
+    // The window showed the scene rendered at 160x120; --screenshot is the viewport's size
+    // whatever the render scale: `render`'s image at 320x240.
+    EXPECT_NE(e.out.find("the last frame rendered at 160x120"), std::string::npos) << e.out;
+    const spot::noise::Image edited = spot::noise::readImage(shot);
+    EXPECT_EQ(edited.width, 320);
+    EXPECT_EQ(edited.height, 240);
     const spot::noise::Image shown = spot::noise::readImage(window);
     EXPECT_EQ(shown.width, 320);
     EXPECT_EQ(shown.height, 240);
+    const std::string ref = tmp("half-render.png");
+    const Result r =
+        run("", "render --scene " + scene() + " --size 320x240 --method instanced --out " + ref);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_GT(spot::splat::psnr(spot::noise::readImage(ref), edited), 60.0);
 }
 
 TEST(EditWindow, ScriptedOrbitRendersAtHalfResolutionWhileMoving) {
@@ -154,9 +276,23 @@ TEST(EditWindow, ScriptedOrbitRendersAtHalfResolutionWhileMoving) {
     EXPECT_EQ(b.err.find("validation error"), std::string::npos) << b.err;
     const spot::noise::Image s = spot::noise::readImage(still), m = spot::noise::readImage(moving);
     EXPECT_EQ(s.width, 200);
-    // The camera moved 90 degrees around the bunny, rendered at half the size while moving.
-    EXPECT_EQ(m.width, 100);
-    EXPECT_EQ(m.height, 80);
+    EXPECT_NE(a.out.find("the last frame rendered at 200x160"), std::string::npos) << a.out;
+    // The camera moved 90 degrees around the bunny, rendered at half the size while moving; the
+    // screenshot is the viewport's size all the same.
+    EXPECT_NE(b.out.find("the last frame rendered at 100x80"), std::string::npos) << b.out;
+    EXPECT_EQ(m.width, 200);
+    EXPECT_EQ(m.height, 160);
+    EXPECT_LT(spot::splat::psnr(s, m), 30.0) << "the camera did not move";
+}
+
+// --frames N --refine K closes after the N frames and the K refinement steps, however few the
+// frames.
+TEST(EditWindowSession, FramesWaitForTheRefinement) {
+    const Result e = run(kXvfb, "edit --scene " + scene() +
+                                    " --size 160x120 --method sorted "
+                                    "--frames 2 --refine 6");
+    ASSERT_EQ(e.code, 0) << e.err;
+    EXPECT_NE(e.out.find("idle refinement: 6 steps"), std::string::npos) << e.out;
 }
 
 TEST(EditWindow, WithoutADisplayOneErrorLine) {
@@ -172,6 +308,13 @@ TEST(EditWindow, UnknownMethodIsAnInputError) {
     const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --method nope");
     EXPECT_EQ(e.code, 2) << e.err;
     EXPECT_NE(e.err.find("instanced"), std::string::npos) << e.err;
+}
+
+TEST(EditWindow, UnknownPanelIsAnInputError) {
+    const Result e = run("env -u DISPLAY", "edit --scene " + scene() + " --panels render,nope");
+    EXPECT_EQ(e.code, 2) << e.err;
+    EXPECT_NE(e.err.find("--panels: 'nope' is not a section"), std::string::npos) << e.err;
+    EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
 }
 
 // --- the window on the session --------------------------------------------------------------
@@ -301,26 +444,37 @@ TEST(EditWindowSession, IdleRefinementConverges) {
                                    << " dB, refined " << after << " dB";
 }
 
-// The Kernel panel (unfolded in a tall window) shows a rendered preview of one kernel beside it,
+// The Kernel section (unfolded by --panels) shows a rendered preview of one kernel in the column,
 // which follows a lobe edit.
 TEST(EditWindowSession, KernelPreviewFollowsTheKernel) {
     const std::string plain = writeScript("plain.script", "method instanced\n");
     const std::string red = writeScript("red.script", "method instanced\nlobe 2 color 1 0 0\n");
+    int x0 = -1, y0 = -1; // the preview's top left in the window
     auto shot = [&](const std::string& script, const std::string& name) {
         const std::string file = tmp(name);
-        const Result e = run("SPOT_VALIDATION=1 xvfb-run -a -s '-screen 0 1280x1024x24'",
-                             "edit --scene " + scene() + " --size 1000x900 --script " + script +
-                                 " --window --frames 1 --window-screenshot " + file);
+        const Result e =
+            run("SPOT_VALIDATION=1 xvfb-run -a -s '-screen 0 1280x1024x24'",
+                "edit --scene " + scene() + " --size 1000x900 --script " + script +
+                    " --window --frames 1 --panels kernel --window-screenshot " + file);
         EXPECT_EQ(e.code, 0) << e.err;
+        // Where the Kernel section left room for it, in the column right of the viewport.
+        const std::size_t at = e.out.find("drawn at (");
+        EXPECT_NE(at, std::string::npos) << e.out;
+        if (at != std::string::npos)
+            std::sscanf(e.out.c_str() + at, "drawn at (%d, %d)", &x0, &y0);
+        const glm::ivec2 viewport = sizeAfter(e.out, "the scene in a ");
+        EXPECT_GE(x0, viewport.x) << "the preview is over the scene";
         return spot::noise::readImage(file);
     };
     const spot::noise::Image a = shot(plain, "preview-plain.png"), b = shot(red, "preview-red.png");
     ASSERT_EQ(a.width, 1000);
-    // The preview: 160x160 pixels at the top, 338 pixels left of the right edge.
-    const int x0 = 1000 - 338 - 160;
+    ASSERT_GE(x0, 0);
+    ASSERT_LE(x0 + 160, 1000);
+    ASSERT_GE(y0, 0);
+    ASSERT_LE(y0 + 160, 900);
     double redder = 0.0;
     std::size_t strand = 0; // pixels of the plain preview away from the background
-    for (int y = 8; y < 168; ++y)
+    for (int y = y0; y < y0 + 160; ++y)
         for (int x = x0; x < x0 + 160; ++x) {
             const std::size_t i = std::size_t(y) * 1000 + std::size_t(x);
             redder += (b.pixels[i].r - b.pixels[i].g) - (a.pixels[i].r - a.pixels[i].g);
@@ -357,23 +511,6 @@ std::string xdotoolDrag(const Gesture& gesture, int button, const std::string& m
     return s;
 }
 
-/// The largest difference between two 8-bit images in display levels (0-255), or -1 when their
-/// sizes differ.
-int maxLevelDifference(const spot::noise::Image& a, const spot::noise::Image& b) {
-    if (a.width != b.width || a.height != b.height)
-        return -1;
-    int most = 0;
-    for (std::size_t i = 0; i < a.pixels.size(); ++i)
-        for (int c = 0; c < 3; ++c) {
-            const long da = std::lround(
-                spot::noise::srgbEncode(std::clamp(a.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
-            const long db = std::lround(
-                spot::noise::srgbEncode(std::clamp(b.pixels[i][c], 0.0f, 1.0f)) * 255.0f);
-            most = std::max(most, int(std::abs(da - db)));
-        }
-    return most;
-}
-
 // The window as a user drives it: X events from xdotool under a virtual display, through GLFW's
 // callbacks and the input mapping (edit_input.h), to the session. A shift-drag erases, ctrl+z
 // undoes it, a middle drag orbits; F12 exports the view after each (the File panel's Export: the
@@ -389,7 +526,7 @@ TEST(EditWindowInput, XEventsDoWhatTheScriptDoes) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     const int width = 320, height = 240;
-    // Over the bunny's body, clear of the folded panels (top left) and the status line.
+    // Over the bunny's body (a window this narrow starts with the panels' column hidden).
     const Gesture erase = horizontal(120, 220, 10, 130);
     const Gesture orbit = horizontal(160, 250, 15, 120);
     const spot::noise::SceneDesc desc = spot::noise::loadScene(scene());
@@ -471,6 +608,50 @@ TEST(EditWindowInput, XEventsDoWhatTheScriptDoes) {
     EXPECT_GT(fractionDiffering(shown[0], shown[1], 4), 0.01) << "the erase changed nothing";
     EXPECT_EQ(maxLevelDifference(shown[0], shown[2]), 0) << "undo did not restore the start";
     EXPECT_GT(fractionDiffering(shown[0], shown[3], 4), 0.1) << "the orbit changed nothing";
+}
+
+// N hides the panels' column and shows it again, as a user presses it (X events): the view F12
+// exports is the viewport's size, the window's whole width without the column.
+TEST(EditWindowInput, NTogglesThePanelsColumn) {
+    ASSERT_EQ(std::system("command -v xdotool >/dev/null 2>&1"), 0)
+        << "xdotool is not installed (scripts/install-deps.sh installs it)";
+    const std::string dir = tmp("ntoggle");
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    const std::string exported = spot::noise::loadScene(scene()).name + "-view.png";
+    const std::string driver =
+        "set -u\ncd '" + dir + "'\n'" + std::string(SPOT_SPOTSHELL) + "' edit --scene '" + scene() +
+        "' --size 800x600 --method instanced --refine 0 >edit.log 2>&1 &\n"
+        "pid=$!\ntrap 'kill $pid 2>/dev/null' EXIT\n"
+        "win=$(timeout 120 xdotool search --sync --onlyvisible --name 'spotshell edit' | "
+        "head -n1)\n"
+        "[ -n \"$win\" ] || { echo 'no window'; cat edit.log; exit 3; }\n"
+        "xdotool windowfocus --sync $win\nxdotool mousemove --window $win 250 300\n"
+        "capture() {\n"
+        "  xdotool key F12\n"
+        "  for i in $(seq 1 1200); do [ -f '" +
+        exported +
+        "' ] && break; kill -0 $pid || break; sleep 0.1; done\n"
+        "  mv '" +
+        exported +
+        "' \"$1.png\" || { echo \"no $1\"; cat edit.log; exit 4; }\n"
+        "}\n"
+        "capture shown\nxdotool key n\ncapture hidden\nxdotool key n\ncapture again\n"
+        "kill $pid\nwait $pid\n";
+    std::ofstream(dir + "/drive.sh") << driver;
+    std::string log;
+    FILE* pipe = popen(
+        ("xvfb-run -a -s '-screen 0 1024x768x24' bash '" + dir + "/drive.sh' 2>&1").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), int(buf.size()), pipe))
+        log += buf.data();
+    pclose(pipe);
+    for (const char* step : {"shown", "hidden", "again"})
+        ASSERT_TRUE(std::filesystem::exists(dir + "/" + step + ".png")) << step << "\n" << log;
+    EXPECT_EQ(spot::noise::readImage(dir + "/shown.png").width, 500) << log;
+    EXPECT_EQ(spot::noise::readImage(dir + "/hidden.png").width, 800) << log;
+    EXPECT_EQ(spot::noise::readImage(dir + "/again.png").width, 500) << log;
 }
 
 TEST(EditWindowSession, BadScriptLineInTheWindowIsAnInputError) {
