@@ -62,11 +62,16 @@ using uint = std::uint32_t;
 } // namespace layout_baked
 
 #include "baked_march.comp.h"
+#include "baked_march_2.comp.h"
+#include "baked_march_3.comp.h"
+#include "baked_march_4.comp.h"
 #include "baked_peel.frag.h"
 #include "baked_shell.comp.h"
 #include "baked_tet.vert.h"
 #include "generate_jittered.comp.h"
+#include "generate_jittered_partial.comp.h"
 #include "generate_poisson.comp.h"
+#include "generate_poisson_partial.comp.h"
 #include "generate_scan.comp.h"
 #include "generate_scatter.comp.h"
 #include "raymarch_bin.comp.h"
@@ -79,18 +84,25 @@ using uint = std::uint32_t;
 #include "sort_scatter.comp.h"
 #include "splat_closest.frag.h"
 #include "splat_compact.comp.h"
+#include "splat_compact_small.comp.h"
 #include "splat_instanced.frag.h"
 #include "splat_mesh.frag.h"
 #include "splat_mesh.vert.h"
 #include "splat_oit.frag.h"
+#include "splat_oit_closest.frag.h"
 #include "splat_prepare.comp.h"
 #include "splat_quad.vert.h"
+#include "splat_resolve_copy.comp.h"
+#include "splat_resolve_hybrid.comp.h"
 #include "splat_resolve_hybrid_fixed.comp.h"
 #include "splat_resolve_hybrid_pass.comp.h"
 #include "splat_resolve_instanced.comp.h"
+#include "splat_resolve_oit.comp.h"
+#include "splat_resolve_oit_fixed.comp.h"
 #include "splat_roofline.frag.h"
 #include "splat_small_hybrid.comp.h"
 #include "splat_small_instanced.comp.h"
+#include "splat_small_oit.comp.h"
 #include "splat_sorted.frag.h"
 #include "splat_sorted_keys.comp.h"
 
@@ -310,7 +322,19 @@ TEST(SharedLayout, EveryFieldOffsetTheShadersUseIsTheHosts) {
                               SPOT_MODULE(spv_splat_small_hybrid_comp),
                               SPOT_MODULE(spv_splat_small_instanced_comp),
                               SPOT_MODULE(spv_splat_sorted_frag),
-                              SPOT_MODULE(spv_splat_sorted_keys_comp)};
+                              SPOT_MODULE(spv_splat_sorted_keys_comp),
+                              SPOT_MODULE(spv_splat_compact_small_comp),
+                              SPOT_MODULE(spv_splat_oit_closest_frag),
+                              SPOT_MODULE(spv_splat_small_oit_comp),
+                              SPOT_MODULE(spv_splat_resolve_copy_comp),
+                              SPOT_MODULE(spv_splat_resolve_oit_comp),
+                              SPOT_MODULE(spv_splat_resolve_oit_fixed_comp),
+                              SPOT_MODULE(spv_splat_resolve_hybrid_comp),
+                              SPOT_MODULE(spv_generate_poisson_partial_comp),
+                              SPOT_MODULE(spv_generate_jittered_partial_comp),
+                              SPOT_MODULE(spv_baked_march_2_comp),
+                              SPOT_MODULE(spv_baked_march_3_comp),
+                              SPOT_MODULE(spv_baked_march_4_comp)};
     const auto host = hostOffsets();
     std::map<std::string, int> checked; // fields compared, per struct
     for (const Module& m : modules) {

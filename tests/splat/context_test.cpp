@@ -1,4 +1,5 @@
 // The Vulkan context on whatever device this machine has (lavapipe here), validation on.
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
@@ -12,7 +13,15 @@
 #include <gtest/gtest.h>
 
 #include "noise/error.h"
+#include "shaders/spot_shared.hpp"
 #include "splat/context_vk.h"
+#include "splat/pass_vk.h"
+
+#include "splat_resolve_copy.comp.h"
+#include "splat_resolve_hybrid.comp.h"
+#include "splat_resolve_hybrid_pass.comp.h"
+#include "splat_resolve_oit.comp.h"
+#include "splat_resolve_oit_fixed.comp.h"
 
 namespace {
 
@@ -55,9 +64,11 @@ TEST(VulkanContext, CreatesADeviceWithValidation) {
 TEST(VulkanContext, BufferRoundTripAndMemoryAccounting) {
     splat::Context ctx(validated());
     {
-        splat::Buffer a(ctx, 1024, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+        splat::Buffer a(ctx, 1024,
+                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                         splat::Buffer::Memory::HostVisible, "a");
-        splat::Buffer b(ctx, 1024, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+        splat::Buffer b(ctx, 1024,
+                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                         splat::Buffer::Memory::HostVisible, "b");
         EXPECT_GE(ctx.allocatedBytes(), 2048u);
         std::vector<std::uint32_t> data(256);
@@ -245,3 +256,69 @@ TEST(VulkanContext, UniqueHandlesDestroyTheirObjectOnce) {
 }
 
 } // namespace
+
+// A pipeline binds exactly what its modules declare, and a push writes exactly that: no binding
+// is filled with a stand-in (splat/context_vk.h, Pipeline).
+TEST(VulkanContext, PipelinesBindExactlyWhatTheirModulesDeclare) {
+    using namespace spot::splat::gpu_splat;
+    using spot::splat::storageBuffer;
+    using spot::splat::storageImage;
+    // Each resolve module declares the targets of its method alone.
+    const auto declared = [](std::span<const std::uint32_t> m) {
+        return spot::splat::declaredBindings(m);
+    };
+    const std::vector<std::uint32_t> oit = {kSplatBindBase, kSplatBindAccum, kSplatBindOpticalDepth,
+                                            kSplatBindResult};
+    EXPECT_EQ(declared(spot::splat::spirv(spv_splat_resolve_oit_comp)), oit);
+    EXPECT_EQ(declared(spot::splat::spirv(spv_splat_resolve_copy_comp)),
+              (std::vector<std::uint32_t>{kSplatBindBase, kSplatBindResult}));
+    const std::vector<std::uint32_t> fixed =
+        declared(spot::splat::spirv(spv_splat_resolve_oit_fixed_comp));
+    EXPECT_EQ(fixed.size(), oit.size() + 2);
+    EXPECT_NE(std::find(fixed.begin(), fixed.end(), kSplatBindOitFixed), fixed.end());
+    const std::vector<std::uint32_t> hybrid =
+        declared(spot::splat::spirv(spv_splat_resolve_hybrid_comp));
+    EXPECT_NE(std::find(hybrid.begin(), hybrid.end(), kSplatBindClosest), hybrid.end());
+    EXPECT_EQ(std::find(hybrid.begin(), hybrid.end(), kSplatBindClosestKernel), hybrid.end());
+    const std::vector<std::uint32_t> pass =
+        declared(spot::splat::spirv(spv_splat_resolve_hybrid_pass_comp));
+    EXPECT_EQ(std::find(pass.begin(), pass.end(), kSplatBindClosest), pass.end());
+    EXPECT_NE(std::find(pass.begin(), pass.end(), kSplatBindClosestKernel), pass.end());
+
+    splat::Context ctx(validated());
+    const auto copy = spot::splat::spirv(spv_splat_resolve_copy_comp);
+    const std::uint32_t push = sizeof(SpotSplatFrame);
+    const spot::splat::Bindings exact = {storageImage(kSplatBindBase),
+                                         storageImage(kSplatBindResult)};
+    spot::splat::Bindings extra = exact, missing = {storageImage(kSplatBindResult)};
+    extra.push_back(storageBuffer(kSplatBindCounters)); // a stand-in the module does not read
+    EXPECT_THROW(spot::splat::makeComputePipeline(ctx, copy, extra, push), std::logic_error);
+    EXPECT_THROW(spot::splat::makeComputePipeline(ctx, copy, missing, push), std::logic_error);
+    const spot::splat::Pipeline p = spot::splat::makeComputePipeline(ctx, copy, exact, push);
+    EXPECT_EQ(p.bindings(), (std::vector<std::uint32_t>{kSplatBindBase, kSplatBindResult}));
+    // A push that leaves a binding out, or writes one the pipeline does not have, is refused.
+    spot::splat::Image image(ctx, 4, 4, VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT,
+                             VK_IMAGE_ASPECT_COLOR_BIT, "test image");
+    spot::splat::Buffer buffer(ctx, 64, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                               spot::splat::Buffer::Memory::HostVisible, "test buffer");
+    ctx.submitAndWait([&](VkCommandBuffer cmd) {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
+        spot::splat::Descriptors partial;
+        partial.image(kSplatBindResult, image, VK_IMAGE_LAYOUT_GENERAL,
+                      VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
+        EXPECT_THROW(partial.push(ctx, cmd, p), std::logic_error);
+        spot::splat::Descriptors over;
+        over.image(kSplatBindResult, image, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kSplatBindBase, image, VK_IMAGE_LAYOUT_GENERAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .buffer(kSplatBindCounters, buffer);
+        EXPECT_THROW(over.push(ctx, cmd, p), std::logic_error);
+        spot::splat::Descriptors both;
+        both.image(kSplatBindResult, image, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+            .image(kSplatBindBase, image, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_DESCRIPTOR_TYPE_STORAGE_IMAGE);
+        EXPECT_NO_THROW(both.push(ctx, cmd, p));
+    });
+    EXPECT_EQ(ctx.validation().errors, 0u) << ctx.validation().firstError;
+}
