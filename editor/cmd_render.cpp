@@ -147,7 +147,9 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
         r.stats["fragment_efficiency"] =
             c.pixelsCovered > 0 ? double(c.fragmentsShaded) / double(c.pixelsCovered) : 0.0;
     }
-    r.summary = cat(first.kernelsGenerated, " kernels, ", last.counters.kernelsDrawn, " drawn, ");
+    r.summary = cat(first.kernelsGenerated, " kernels, ");
+    if (method.drawsKernels)
+        r.summary += cat(last.counters.kernelsDrawn, " drawn, ");
     if (method.summarize)
         r.summary += method.summarize(settings);
     r.summary += cat(first.gpuMs, " ms GPU");

@@ -413,6 +413,7 @@ std::string statusText(const FrameReport& r) {
 struct Refinement {
     int count = 0; ///< frames averaged (0: not refining; the interactive frame is shown)
     std::vector<glm::vec3> sum;
+    std::vector<float> alphaSum; ///< the coverage's, averaged alike (the export keeps alpha)
     noise::Image average;
     UploadedImage uploaded;
     const splat::Image& image() const { return uploaded.image; }
@@ -421,13 +422,20 @@ struct Refinement {
         if (count == 0 || average.width != frame.width || average.height != frame.height) {
             count = 0;
             sum.assign(frame.pixels.size(), glm::vec3(0.0f));
+            alphaSum.assign(frame.alpha.size(), 0.0f);
             average = noise::Image(frame.width, frame.height);
+            average.alpha.assign(frame.alpha.size(), 0.0f);
+            average.background = frame.background;
         }
         ++count;
         const float inv = 1.0f / float(count);
         for (std::size_t i = 0; i < sum.size(); ++i) {
             sum[i] += frame.pixels[i];
             average.pixels[i] = sum[i] * inv;
+        }
+        for (std::size_t i = 0; i < alphaSum.size() && i < frame.alpha.size(); ++i) {
+            alphaSum[i] += frame.alpha[i];
+            average.alpha[i] = alphaSum[i] * inv;
         }
         uploaded.upload(ctx, average, "idle refinement");
     }

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <stdexcept>
 
 #include <OpenImageIO/imageio.h>
 
@@ -46,9 +48,21 @@ void writeImage(const std::filesystem::path& file, const Image& image,
     const std::filesystem::path tmp =
         dir / cat(".", file.stem().string(), ".tmp", std::hex, rd(), ext);
 
-    OIIO::ImageSpec spec(image.width, image.height, 3, exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    const bool hasAlpha = !image.alpha.empty();
+    if (hasAlpha && image.alpha.size() != image.pixels.size())
+        throw std::logic_error("writeImage: alpha and pixels differ in size");
+    const int nc = hasAlpha ? 4 : 3;
+    OIIO::ImageSpec spec(image.width, image.height, nc,
+                         exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     for (const auto& [key, value] : metadata)
         spec.attribute("spotshell:" + key, value);
+    if (hasAlpha) {
+        spec.alpha_channel = 3;
+        const glm::vec3 b = image.background;
+        spec.attribute("spotshell:background", cat(b.r, " ", b.g, " ", b.b));
+        if (!exr) // straight, as PNG's convention is: OpenImageIO writes the values as given
+            spec.attribute("oiio:UnassociatedAlpha", 1);
+    }
     if (exr)
         spec.attribute("compression", "zip");
     else
@@ -57,20 +71,31 @@ void writeImage(const std::filesystem::path& file, const Image& image,
     std::vector<float> linear;
     std::vector<unsigned char> bytes;
     const void* data = nullptr;
-    if (exr) {
-        linear.resize(image.pixels.size() * 3);
-        for (std::size_t i = 0; i < image.pixels.size(); ++i)
-            for (int c = 0; c < 3; ++c)
-                linear[i * 3 + std::size_t(c)] = image.pixels[i][c];
-        data = linear.data();
-    } else {
-        bytes.resize(image.pixels.size() * 3);
-        for (std::size_t i = 0; i < image.pixels.size(); ++i)
-            for (int c = 0; c < 3; ++c)
-                bytes[i * 3 + std::size_t(c)] =
-                    (unsigned char)std::lround(srgbEncode(image.pixels[i][c]) * 255.0f);
-        data = bytes.data();
+    if (exr)
+        linear.resize(image.pixels.size() * std::size_t(nc));
+    else
+        bytes.resize(image.pixels.size() * std::size_t(nc));
+    for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+        glm::vec3 v = image.pixels[i];
+        const float a = hasAlpha ? std::clamp(image.alpha[i], 0.0f, 1.0f) : 1.0f;
+        if (hasAlpha) {
+            v -= (1.0f - a) * image.background; // premultiplied: the colour over nothing
+            if (!exr)
+                v = a > 0.0f ? v / a : glm::vec3(0.0f); // straight
+        }
+        for (int c = 0; c < nc; ++c) {
+            const float x = c < 3 ? v[c] : a;
+            if (exr)
+                linear[i * std::size_t(nc) + std::size_t(c)] = x;
+            else
+                bytes[i * std::size_t(nc) + std::size_t(c)] =
+                    (unsigned char)std::lround((c < 3 ? srgbEncode(x) : x) * 255.0f);
+        }
     }
+    if (exr)
+        data = linear.data();
+    else
+        data = bytes.data();
     try {
         auto out = OIIO::ImageOutput::create(tmp.string());
         if (!out || !out->open(tmp.string(), spec) ||
@@ -92,7 +117,9 @@ Image readImage(const std::filesystem::path& file, std::map<std::string, std::st
     if (!std::filesystem::is_regular_file(file, ec))
         throw InputError(cat(file.string(), ": no such file"));
     StderrSilencer quiet; // libpng prints its own copy of errors we report ourselves
-    auto in = OIIO::ImageInput::open(file.string());
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1); // PNG's straight alpha as stored
+    auto in = OIIO::ImageInput::open(file.string(), &config);
     if (!in)
         throw InputError(cat(file.string(), ": cannot read image (", OIIO::geterror(), ")"));
     const OIIO::ImageSpec& spec = in->spec();
@@ -119,6 +146,21 @@ Image readImage(const std::filesystem::path& file, std::map<std::string, std::st
         }
     Image image(spec.width, spec.height);
     const int nc = spec.nchannels;
+    const int alphaChannel = spec.alpha_channel >= 0 && spec.alpha_channel < nc ? spec.alpha_channel
+                             : nc == 4 || nc == 2                               ? nc - 1
+                                                                                : -1;
+    // Straight (integer formats, as read with oiio:UnassociatedAlpha) or premultiplied (float).
+    const bool straight = !isFloat || spec.get_int_attribute("oiio:UnassociatedAlpha", 0) != 0;
+    if (alphaChannel >= 0) {
+        image.alpha.resize(image.pixels.size());
+        const std::string b = spec.get_string_attribute("spotshell:background");
+        if (!b.empty() && std::sscanf(b.c_str(), "%f %f %f", &image.background.r,
+                                      &image.background.g, &image.background.b) != 3)
+            throw InputError(
+                cat(file.string(), ": spotshell:background '", b, "' is not 3 numbers"));
+        if (!std::isfinite(image.background.r + image.background.g + image.background.b))
+            throw InputError(cat(file.string(), ": spotshell:background is not finite"));
+    }
     for (std::size_t i = 0; i < image.pixels.size(); ++i) {
         glm::vec3 v;
         for (int c = 0; c < 3; ++c) {
@@ -127,6 +169,16 @@ Image readImage(const std::filesystem::path& file, std::map<std::string, std::st
                 throw InputError(cat(file.string(), ": pixel ", i % std::size_t(spec.width), ",",
                                      i / std::size_t(spec.width), " is not finite"));
             v[c] = isFloat ? x : srgbDecode(x);
+        }
+        if (alphaChannel >= 0) {
+            const float a = data[i * std::size_t(nc) + std::size_t(alphaChannel)];
+            if (!std::isfinite(a))
+                throw InputError(cat(file.string(), ": pixel ", i % std::size_t(spec.width), ",",
+                                     i / std::size_t(spec.width), " has no finite alpha"));
+            image.alpha[i] = std::clamp(a, 0.0f, 1.0f);
+            if (straight)
+                v *= image.alpha[i];
+            v += (1.0f - image.alpha[i]) * image.background;
         }
         image.pixels[i] = v;
     }

@@ -3,6 +3,14 @@
 ///
 /// EXR holds linear float RGB; PNG (and other 8-bit formats) hold sRGB-encoded 8-bit values.
 /// Metadata (method, spp, seconds, kernel counts) travels as string attributes.
+///
+/// A rendered image carries its coverage: alpha = 1 - the transmittance through the detail and
+/// the mesh, so that it composites over a plate. In memory the colour stays the image as rendered
+/// over the scene's background (every comparison and metric reads that), with the background
+/// beside it; a file holds the convention of its format: EXR premultiplied (colour over nothing:
+/// colour - (1 - alpha) background), PNG straight (that divided by alpha, sRGB-encoded; alpha
+/// linear). The background travels as the `spotshell:background` attribute, so reading the file
+/// back gives the image over its background again.
 #pragma once
 
 #include <filesystem>
@@ -18,6 +26,10 @@ struct Image {
     int width = 0;
     int height = 0;
     std::vector<glm::vec3> pixels; ///< linear RGB, row-major, top row first
+    /// Coverage per pixel, in [0, 1] (empty: opaque, no alpha channel). `pixels` are composited
+    /// over `background` where it is below 1.
+    std::vector<float> alpha;
+    glm::vec3 background{0.0f};
 
     Image() = default;
     Image(int w, int h, glm::vec3 fill = glm::vec3(0.0f))
@@ -31,14 +43,17 @@ struct Image {
 float srgbEncode(float linear);
 float srgbDecode(float encoded);
 
-/// Write by extension: .exr (linear float RGB) or .png (sRGB 8-bit). Atomic: written to a
-/// temporary file in the same folder, then renamed. Throws InputError for an unknown extension
+/// Write by extension: .exr (linear float RGB, premultiplied alpha) or .png (sRGB 8-bit, straight
+/// alpha); RGBA where the image has alpha. Atomic: written to a temporary file in the same
+/// folder, then renamed. Throws InputError for an unknown extension
 /// or a folder that does not exist.
 void writeImage(const std::filesystem::path& file, const Image& image,
                 const std::map<std::string, std::string>& metadata = {});
 
 /// Read any image OpenImageIO reads into linear RGB (8-bit and other integer formats are taken as
-/// sRGB-encoded; float formats as linear). Grey images are expanded, alpha is dropped. Throws
+/// sRGB-encoded; float formats as linear). Grey images are expanded. An alpha channel is kept
+/// as `alpha`, and the colour is composited over the file's `spotshell:background` (black for
+/// files spotshell did not write). Throws
 /// InputError naming the file when it is missing, corrupt or absurdly large.
 Image readImage(const std::filesystem::path& file, std::map<std::string, std::string>* metadata = nullptr);
 

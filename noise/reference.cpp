@@ -136,7 +136,8 @@ glm::vec3 ReferenceRenderer::shade(glm::vec3 color, glm::dvec3 normal) const {
                                                double(m_shading.ambient)));
 }
 
-glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, ReferenceStats* stats) const {
+glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, ReferenceStats* stats,
+                                      double* coverage) const {
     glm::vec3 meshNormal(0.0f);
     const double tEnd = hitMesh(ray, meshNormal);
 
@@ -237,6 +238,8 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
     }
     const glm::vec3 behind = std::isfinite(tEnd) ? shade(m_baseColor, glm::dvec3(meshNormal)) : m_background;
     radiance += transmittance * glm::dvec3(behind);
+    if (coverage)
+        *coverage = std::isfinite(tEnd) ? 1.0 : 1.0 - transmittance;
     if (stats)
         stats->rays += 1;
     return glm::vec3(radiance);
@@ -254,6 +257,8 @@ Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& s
     const CameraRays rays(camera);
     const auto start = std::chrono::steady_clock::now();
     Image image(camera.width, camera.height);
+    image.alpha.resize(image.pixels.size());
+    image.background = m_background;
     std::atomic<int> rowsDone{0};
     std::vector<ReferenceStats> rowStats(std::size_t(camera.height));
     tbb::parallel_for(0, camera.height, [&](int y) {
@@ -263,11 +268,17 @@ Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& s
                 sh::spotHashCombine(sh::spotHashCombine(settings.seed ^ 0x2545f491u, std::uint32_t(x)),
                                     std::uint32_t(y));
             glm::dvec3 sum(0.0);
+            double covered = 0.0;
             for (int s = 0; s < settings.spp; ++s) {
                 const glm::dvec2 u = cmjSample(std::uint32_t(s), std::uint32_t(settings.spp), pattern);
-                sum += glm::dvec3(radiance(rays.ray(x + u.x, y + u.y), settings.stepScale, &rs));
+                double c = 0.0;
+                sum +=
+                    glm::dvec3(radiance(rays.ray(x + u.x, y + u.y), settings.stepScale, &rs, &c));
+                covered += c;
             }
             image.at(x, y) = glm::vec3(sum / double(settings.spp));
+            image.alpha[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)] =
+                float(covered / double(settings.spp));
         }
         const int finished = ++rowsDone;
         if (progress)

@@ -63,8 +63,10 @@ public:
     ReferenceRenderer(const Mesh& mesh, const Kernel& kernel, const std::vector<Impulse>& impulses,
                       const Shading& shading, glm::vec3 background, glm::vec3 baseColor);
 
-    /// Radiance along one ray (linear RGB).
-    glm::vec3 radiance(const Ray& ray, double stepScale, ReferenceStats* stats = nullptr) const;
+    /// Radiance along one ray (linear RGB); `coverage`, when given, receives 1 - the
+    /// transmittance through the detail and the mesh (1 where the mesh is hit).
+    glm::vec3 radiance(const Ray& ray, double stepScale, ReferenceStats* stats = nullptr,
+                       double* coverage = nullptr) const;
 
     /// Render the camera's image. `progress(done, total)` is called from worker threads as rows
     /// finish (may be empty).

@@ -9,6 +9,8 @@ packages=(
   # libraries
   libglm-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
+  # oiiotool: the alpha test composites a render over a plate as users do
+  openimageio-tools
   # Vulkan on the CPU (lavapipe) with validation, shaders
   # (vulkan-validationlayers-dev: vk_enum_string_helper.h, the names of VkResult values)
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-validationlayers-dev

@@ -181,14 +181,17 @@ bool layerPixel(out ivec2 pixel, inout uint tet, inout uint entryFace) {
 
 // The layer's radiance and transmittance composited under what the earlier layers left (acc),
 // its composite over the mesh colour (under) into the frame's result, and its exit depth.
-void compositeLayer(ivec2 pixel, vec4 acc, vec3 under, vec3 radiance, float transmittance,
+void compositeLayer(ivec2 pixel, vec4 acc, vec4 under, vec3 radiance, float transmittance,
                     float tEnd, float tMesh, float viewCos) {
     acc.rgb += (1.0 - acc.a) * radiance;
     acc.a += (1.0 - acc.a) * (1.0 - transmittance);
     if (transmittance < kBakedOpaque)
         acc.a = 1.0;
     imageStore(accum, pixel, acc);
-    imageStore(baseColor, pixel, vec4(acc.rgb + (1.0 - acc.a) * under, 1.0));
+    // The colour over the mesh's (or the background), and the coverage: 1 - the layers'
+    // transmittance x the mesh's (its alpha: 1 where hit).
+    imageStore(baseColor, pixel,
+               vec4(acc.rgb + (1.0 - acc.a) * under.rgb, 1.0 - (1.0 - acc.a) * (1.0 - under.a)));
     float depth = tEnd * viewCos;
     // Opaque (alpha 1: this layer's transmittance fell below kBakedOpaque, or the layers' alpha
     // rounded to 1) or at the mesh: no later layer.
@@ -203,12 +206,12 @@ void main() {
     if (!layerPixel(pixel, tet, entryFace))
         return;
     vec4 acc = kFirstLayer ? vec4(0.0) : imageLoad(accum, pixel);
-    vec3 under;
+    vec4 under;
     if (kFirstLayer) {
-        under = imageLoad(baseColor, pixel).rgb;
-        imageStore(baseKept, pixel, vec4(under, 1.0));
+        under = imageLoad(baseColor, pixel);
+        imageStore(baseKept, pixel, under);
     } else {
-        under = imageLoad(baseKept, pixel).rgb;
+        under = imageLoad(baseKept, pixel);
     }
     vec3 origin, dir;
     splatPixelRay(vec2(pixel) + 0.5, origin, dir);

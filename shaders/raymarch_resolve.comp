@@ -1,7 +1,8 @@
 #version 450
 // Ray march, step 3: each output pixel is the mean of its n x n march pixels (a box filter, the
 // reference's), each the marched radiance over the mesh colour behind it:
-// radiance + transmittance * base. Summed in row order, so the image is deterministic.
+// radiance + transmittance * base, and its coverage 1 - transmittance x (1 - the base's alpha: 1
+// where the mesh is hit). Summed in row order, so the image is deterministic.
 #extension GL_GOOGLE_include_directive : require
 #include "spot_shared.h"
 #include "spot_layout.h"
@@ -22,11 +23,14 @@ void main() {
     if (p.x >= marchWidth / n || p.y >= uint(push.size.y) / n)
         return;
     vec3 sum = vec3(0.0);
+    float covered = 0.0;
     for (uint sy = 0u; sy < n; ++sy)
         for (uint sx = 0u; sx < n; ++sx) {
             uvec2 q = p * n + uvec2(sx, sy);
             vec4 s = state[q.y * marchWidth + q.x];
-            sum += s.rgb + s.a * imageLoad(baseColor, ivec2(q)).rgb;
+            vec4 base = imageLoad(baseColor, ivec2(q));
+            sum += s.rgb + s.a * base.rgb;
+            covered += 1.0 - s.a * (1.0 - base.a);
         }
-    imageStore(result, ivec2(p), vec4(sum / float(n * n), 1.0));
+    imageStore(result, ivec2(p), vec4(sum / float(n * n), covered / float(n * n)));
 }

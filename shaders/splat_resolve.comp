@@ -1,5 +1,7 @@
 #version 450
-// The final image, one thread per pixel, into the linear float RGBA result image. OIT and hybrid
+// The final image, one thread per pixel, into the linear float RGBA result image: the colour over
+// the base (the mesh's colour, or the background) and the coverage alpha = 1 - the transmittance
+// through the kernels and the mesh (the base's alpha: 1 where the mesh is hit, 0 elsewhere). OIT and hybrid
 // first add the small kernels' fixed-point sums (splat_small.comp) to the raster targets'.
 // Pixels with a closest kernel (hybrid, instanced) are listed, and a second dispatch over the list
 // evaluates that kernel and writes them (kResolveList; see SpotSplatList for why).
@@ -113,6 +115,7 @@ void resolveListed() {
                                       imageLoad(meshDistance, pixel).r);
 #ifdef SPLAT_RESOLVE_INSTANCED
     vec3 color = f.premul / f.alpha;
+    float alpha = 1.0; // an opaque kernel
 #else
     // The first dispatch stored the sums with the small kernels' added.
     vec4 accum = imageLoad(accumulation, pixel);
@@ -121,10 +124,12 @@ void resolveListed() {
     // Below about 1e-6 of accum.a the difference is float noise and the others' mean
     // colour cannot be told: take the mean of all (f's, mostly) there.
     vec3 average = rest.a > 1e-5 * accum.a ? max(rest.rgb, vec3(0.0)) / rest.a : oitAverage(accum);
-    vec3 color = f.premul + (1.0 - f.alpha) * oitComposite(average, max(tau - f.tau, 0.0),
-                                                           imageLoad(baseColor, pixel).rgb);
+    vec4 base = imageLoad(baseColor, pixel);
+    float others = max(tau - f.tau, 0.0);
+    vec3 color = f.premul + (1.0 - f.alpha) * oitComposite(average, others, base.rgb);
+    float alpha = 1.0 - (1.0 - f.alpha) * exp(-others) * (1.0 - base.a);
 #endif
-    imageStore(result, pixel, vec4(color, 1.0));
+    imageStore(result, pixel, vec4(color, alpha));
 }
 #endif
 
@@ -143,8 +148,10 @@ void main() {
     if (p.x >= width || p.y >= uint(frame.size.y))
         return;
     ivec2 pixel = ivec2(p);
-    vec3 base = imageLoad(baseColor, pixel).rgb;
+    vec4 baseSample = imageLoad(baseColor, pixel);
+    vec3 base = baseSample.rgb;
     vec3 color = base;
+    float alpha = baseSample.a; // sorted: the coverage its blend left there
 #ifdef SPLAT_RESOLVE_LIST
     uint64_t key = closestKey(p, width);
     bool listed = key != ~uint64_t(0);
@@ -176,6 +183,7 @@ void main() {
     }
 #endif
     color = oitComposite(oitAverage(accum), tau, base);
+    alpha = 1.0 - exp(-tau) * (1.0 - baseSample.a);
 #endif
 #ifdef SPLAT_RESOLVE_LIST
     if (listed) {
@@ -185,5 +193,5 @@ void main() {
         return; // the second dispatch writes the result
     }
 #endif
-    imageStore(result, pixel, vec4(color, 1.0));
+    imageStore(result, pixel, vec4(color, alpha));
 }

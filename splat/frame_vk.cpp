@@ -21,11 +21,15 @@ void ResultReadback::record(Context& ctx, VkCommandBuffer cmd, const Image& resu
                   VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
 }
 
-noise::Image ResultReadback::read() const {
+noise::Image ResultReadback::read(glm::vec3 background) const {
     noise::Image image(static_cast<int>(width), static_cast<int>(height));
+    image.alpha.resize(image.pixels.size());
+    image.background = background;
     const auto* rgba = static_cast<const glm::vec4*>(buffer.mapped());
-    for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    for (std::size_t i = 0; i < image.pixels.size(); ++i) {
         image.pixels[i] = glm::vec3(rgba[i]);
+        image.alpha[i] = rgba[i].a;
+    }
     return image;
 }
 
@@ -105,7 +109,7 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
     stats.candidates = m_generator.candidates();
     stats.cellsGenerated = m_generator.cells();
     if (image)
-        *image = m_readback.read();
+        *image = m_readback.read(view.background);
     stats.wallMs = since(start);
     return stats;
 }
@@ -140,7 +144,7 @@ noise::Image renderImpulses(Context& ctx, Renderer& renderer, const View& view,
         stats->kernelsGenerated = count;
         stats->wallMs = since(start);
     }
-    return readback.read();
+    return readback.read(view.background);
 }
 
 } // namespace spot::splat

@@ -47,7 +47,9 @@ struct FrameStats {
 /// record() before the submit, read() after.
 struct ResultReadback {
     void record(Context& ctx, VkCommandBuffer cmd, const Image& result);
-    noise::Image read() const;
+    /// The result's colour and coverage alpha; `background`: what the colour is composited over
+    /// where the coverage is below 1 (the frame's View::background).
+    noise::Image read(glm::vec3 background) const;
     Buffer buffer;
     std::uint32_t width = 0, height = 0;
 };

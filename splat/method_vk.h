@@ -170,6 +170,10 @@ struct MethodInfo {
     /// empty when nothing.
     std::function<std::string(const RenderSettings&)> summarize;
 
+    /// Whether its frames draw the impulses' kernels (render's "N drawn"); `baked` marches its
+    /// bake instead.
+    bool drawsKernels = true;
+
     bool gpu() const { return bool(make); }
     bool takes(const Setting& setting) const;
     bool takes(std::string_view setting) const;

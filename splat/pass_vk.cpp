@@ -103,7 +103,7 @@ void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& fram
                       const std::function<void(VkCommandBuffer)>& after) const {
     const VkRenderingAttachmentInfo depthInfo = depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
     beginRendering(cmd, base.width(), base.height(),
-                   {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 1.0f)),
+                   {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 0.0f)),
                     colorAttachment(distance, VK_ATTACHMENT_LOAD_OP_CLEAR,
                                     glm::vec4(gpu_splat::kSplatNoMesh))},
                    &depthInfo);

@@ -146,7 +146,10 @@ const Setting weight = choice(describe("weight", T::Choice, "W", "the OIT weight
 const Setting closest = choice(
     describe("closest", T::Choice, "HOW",
              "find each pixel's closest kernel with an atomicMin in the OIT pass (atomic) or in "
-             "a depth pass of its own (depth-pass); the same image either way"),
+             "a depth pass of its own (depth-pass): the same kernel either way; the depth pass "
+             "draws every kernel (no small-kernel compute path), so the images are identical "
+             "with --small-pixels 0 and differ by the compute path's fixed-point rounding "
+             "otherwise"),
     {"atomic", "depth-pass"}, &RenderSettings::closest);
 const Setting smallPixels = numeric(
     describe("small-pixels", T::Integer, "N",

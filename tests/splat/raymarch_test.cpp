@@ -636,7 +636,7 @@ TEST(RaymarchFrame, WarmFramesAllocateNothingAndKeepTheLists) {
         renderer.record(cmd, timer);
         readback.record(ctx, cmd, renderer.result());
         commands.submitAndWait();
-        return readback.read();
+        return readback.read(view.background);
     };
     const auto same = [](const noise::Image& a, const noise::Image& b) {
         return a.pixels.size() == b.pixels.size() &&

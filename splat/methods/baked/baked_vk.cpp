@@ -619,7 +619,10 @@ MethodInfo bakedMethod() {
     m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<BakedRenderer>(scene);
     };
-    m.summarize = [](const RenderSettings& s) { return cat(s.peelPasses, " peel passes, "); };
+    m.summarize = [](const RenderSettings& s) {
+        return cat(s.peelPasses, s.peelPasses == 1 ? " peel pass, " : " peel passes, ");
+    };
+    m.drawsKernels = false;
     return m;
 }
 
