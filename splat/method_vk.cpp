@@ -45,6 +45,16 @@ double PassTimer::totalMilliseconds() const {
     return m_timestamps.milliseconds(std::uint32_t(m_names.size()) + 1).back();
 }
 
+void ImpulseSet::require(const char* who, std::uint32_t most, const char* verb) const {
+    if (capacity > most)
+        throw InputError(
+            cat(who, ": ", capacity, " impulses, more than the ", most, " one frame can ", verb));
+    const std::uint64_t need = std::uint64_t(capacity) * sizeof(gpu::SpotImpulse);
+    if (!impulses || !count || !impulses->handle() || need > impulses->size())
+        throw InputError(cat(who, ": the impulse buffer holds ", impulses ? impulses->size() : 0,
+                             " bytes, ", capacity, " impulses need ", need));
+}
+
 SceneGpu::SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
     : m_ctx(&ctx), m_meshHash(noise::meshHash(mesh)), m_kernel(kernel),
       m_meshPass(ctx, mesh, "scene"), m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}

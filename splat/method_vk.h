@@ -61,6 +61,10 @@ struct ImpulseSet {
     std::uint64_t version = 0;
     /// The surface cells the impulses were generated in, in cell order (the ray-march's shell).
     const noise::SurfaceCells* cells = nullptr;
+
+    /// InputError, begun by `who`, unless the buffers are there and hold `capacity` impulses,
+    /// at most `most` (what one frame can `verb`: "prepare", "place").
+    void require(const char* who, std::uint32_t most, const char* verb) const;
 };
 
 /// GPU timestamps around a frame's passes: begin() once, then mark() at the end of each named

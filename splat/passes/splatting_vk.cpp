@@ -107,6 +107,19 @@ SplattingRenderer::SplattingRenderer(const SceneGpu& scene, std::string name, bo
                Buffer::Memory::HostVisible, "splat fragment counters");
 }
 
+void SplattingRenderer::declareClosest(Buffer& closest, Buffer& list,
+                                       FrameResources::Wanted atomic) {
+    constexpr VkBufferUsageFlags kCleared = kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    m_targets.buffer(
+        closest, "splat closest kernels",
+        [](Extent e) { return e.width * e.height * sizeof(std::uint64_t); }, kCleared, kDevice,
+        std::move(atomic));
+    m_targets.buffer(
+        list, "splat resolve's listed pixels",
+        [](Extent e) { return sizeof(SpotSplatList) + e.width * e.height * sizeof(std::uint32_t); },
+        kCleared | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, kDevice);
+}
+
 Specialization SplattingRenderer::specialization(const Spec& s) const {
     Specialization spec;
     spec.set(kSplatSpecLobes, m_scene.lobeCount())
@@ -207,15 +220,7 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
                              " outside [0, ", kSplatMaxSmallPixels, "]"));
     if (settings.roofline && !drawsRoofline())
         throw InputError(cat("splat renderer: the roofline is drawn by oit, not by ", m_name));
-    if (impulses.capacity > kMaxImpulses)
-        throw InputError(cat("splat renderer: ", impulses.capacity, " impulses, more than the ",
-                             kMaxImpulses, " one frame can prepare"));
-    if (!impulses.impulses || !impulses.count || !impulses.impulses->handle() ||
-        std::uint64_t(impulses.capacity) * sizeof(gpu::SpotImpulse) > impulses.impulses->size())
-        throw InputError(cat("splat renderer: the impulse buffer holds ",
-                             impulses.impulses ? impulses.impulses->size() : 0, " bytes, ",
-                             impulses.capacity, " impulses need ",
-                             std::uint64_t(impulses.capacity) * sizeof(gpu::SpotImpulse)));
+    impulses.require("splat renderer", kMaxImpulses, "prepare");
     const std::uint32_t width = std::uint32_t(view.camera.width);
     const std::uint32_t height = std::uint32_t(view.camera.height);
     if (m_targets.ensure(Extent{width, height}, settings,

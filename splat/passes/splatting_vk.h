@@ -101,6 +101,11 @@ protected:
     /// Whether it draws RenderSettings::roofline frames (oit does).
     virtual bool drawsRoofline() const { return false; }
 
+    /// Declares what `instanced` and `hybrid` share to composite each pixel's closest kernel:
+    /// its key per pixel for the 64-bit atomicMin (uint64, where `atomic` says) and the
+    /// resolve's list of the pixels that have one (SpotSplatList and a uint per pixel).
+    void declareClosest(Buffer& closest, Buffer& list, FrameResources::Wanted atomic = {});
+
     // ---- Pipelines -------------------------------------------------------------------------
     Specialization specialization(const Spec& spec) const;
     /// The quads (splat_quad.vert): the bounds, the kept list and the lobes.

@@ -41,26 +41,15 @@ public:
         requireFormat(m_ctx, kKernelIndexFormat,
                       VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT,
                       "stored R32_UINT kernel index targets");
-        constexpr VkBufferUsageFlags kCleared =
-            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
         const auto byAtomic = [](const RenderSettings& s, Extent) { return atomic(s); };
         const auto byPass = [](const RenderSettings& s, Extent) { return !atomic(s); };
-        m_targets.buffer(
-            m_closest, "splat closest kernels",
-            [](Extent e) { return e.width * e.height * sizeof(std::uint64_t); }, kCleared,
-            Buffer::Memory::DeviceLocal, byAtomic);
+        declareClosest(m_closest, m_closestList, byAtomic);
         m_targets.image(m_closestKernel, "splat closest kernel index", kKernelIndexFormat,
                         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
                         VK_IMAGE_ASPECT_COLOR_BIT, byPass);
         m_targets.image(m_closestDepth, "splat closest kernel depth", kDepthFormat,
                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
                         byPass);
-        m_targets.buffer(
-            m_closestList, "splat resolve's listed pixels",
-            [](Extent e) {
-                return sizeof(SpotSplatList) + e.width * e.height * sizeof(std::uint32_t);
-            },
-            kCleared | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, Buffer::Memory::DeviceLocal);
     }
 
     void record(VkCommandBuffer cmd, PassTimer& timer) override {

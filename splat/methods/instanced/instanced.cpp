@@ -22,18 +22,7 @@ class InstancedRenderer final : public SplattingRenderer {
 public:
     explicit InstancedRenderer(const SceneGpu& scene)
         : SplattingRenderer(scene, "instanced", true) {
-        constexpr VkBufferUsageFlags kCleared =
-            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-        m_targets.buffer(
-            m_closest, "splat closest kernels",
-            [](Extent e) { return e.width * e.height * sizeof(std::uint64_t); }, kCleared,
-            Buffer::Memory::DeviceLocal);
-        m_targets.buffer(
-            m_closestList, "splat resolve's listed pixels",
-            [](Extent e) {
-                return sizeof(SpotSplatList) + e.width * e.height * sizeof(std::uint32_t);
-            },
-            kCleared | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, Buffer::Memory::DeviceLocal);
+        declareClosest(m_closest, m_closestList);
     }
 
     void record(VkCommandBuffer cmd, PassTimer& timer) override {

@@ -863,15 +863,7 @@ void RaymarchRenderer::prepare(const View& view, const ImpulseSet& impulses,
     noise::Camera marchCamera = view.camera;
     marchCamera.width = int(std::min<std::int64_t>(std::int64_t(view.camera.width) * n, 1 << 30));
     marchCamera.height = int(std::min<std::int64_t>(std::int64_t(view.camera.height) * n, 1 << 30));
-    if (impulses.capacity > kMaxImpulses)
-        throw InputError(cat("raymarch: ", impulses.capacity, " impulses, more than the ",
-                             kMaxImpulses, " one frame can place"));
-    if (!impulses.impulses || !impulses.count || !impulses.impulses->handle() ||
-        std::uint64_t(impulses.capacity) * sizeof(gpu::SpotImpulse) > impulses.impulses->size())
-        throw InputError(cat("raymarch: the impulse buffer holds ",
-                             impulses.impulses ? impulses.impulses->size() : 0, " bytes, ",
-                             impulses.capacity, " impulses need ",
-                             std::uint64_t(impulses.capacity) * sizeof(gpu::SpotImpulse)));
+    impulses.require("raymarch", kMaxImpulses, "place");
     if (!impulses.cells)
         throw InputError("raymarch: the impulses came without their surface cells (the shell)");
     if (!(impulses.cells->cellSize > 0.0f) || !std::isfinite(impulses.cells->cellSize))
