@@ -2,6 +2,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "noise/animated_mesh.h"
 #include "noise/bake.h"
 #include "noise/error.h"
 #include "noise/mesh.h"
@@ -9,13 +10,20 @@
 namespace spot::cmd {
 
 int info(int argc, char** argv) {
-    cli::Args args("info",
-                   "Load and validate a mesh (OBJ or PLY) and print its counts and bounds, or read "
-                   "a bake (spotshell bake) and print its levels.",
-                   {{"mesh", "FILE",
-                     "mesh to inspect (.obj or .ply, or generated:NAME as scenes take)", false},
-                    {"bake", "FILE", "bake to inspect (.vdb written by spotshell bake)", false}},
-                   argc, argv);
+    cli::Args args(
+        "info",
+        "Load and validate a mesh (OBJ or PLY, a glTF 2.0 clip or a numbered mesh cache) "
+        "and print its counts and bounds (an animated one's at --time), or read a bake "
+        "(spotshell bake) and print its levels.",
+        {{"mesh", "FILE",
+          "mesh to inspect (.obj, .ply, .gltf, .glb, a cache walk.%04d.ply, or "
+          "generated:NAME as scenes take)",
+          false},
+         {"clip", "NAME", "a glTF file's clip (default: its first)", false},
+         {"fps", "N", "a mesh cache's frames per second (default 24)", false},
+         {"time", "T", "an animated mesh's pose at T seconds (default: the rest pose)", false},
+         {"bake", "FILE", "bake to inspect (.vdb written by spotshell bake)", false}},
+        argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);
         return 0;
@@ -42,7 +50,13 @@ int info(int argc, char** argv) {
                     double(noise::kBakeDistanceCap));
         return 0;
     }
-    const noise::Mesh mesh = noise::loadMeshOrGenerated(args.str("mesh"));
+    const noise::AnimatedMesh animated =
+        noise::AnimatedMesh::load(args.str("mesh"), args.has("clip") ? args.str("clip") : "",
+                                  args.number("fps", 24.0, 1e-3, 1e4));
+    if (args.has("time") && !animated.animated())
+        throw InputError(cat("spotshell info: ", args.str("mesh"), " does not move (--time)"));
+    const noise::Mesh mesh =
+        args.has("time") ? animated.pose(args.number("time", 0.0, -1e9, 1e9)) : animated.rest();
     const noise::Bounds b = mesh.bounds();
     std::printf("mesh %s\n", mesh.name.c_str());
     std::printf("  vertices   %zu\n", mesh.positions.size());
@@ -52,6 +66,21 @@ int info(int argc, char** argv) {
                 b.hi.z);
     std::printf("  area       %g\n", mesh.surfaceArea());
     std::printf("  uv         %s\n", mesh.hasUv() ? "yes" : "no");
+    if (animated.animated() || !animated.clipNames().empty() || animated.jointCount() > 0) {
+        std::string clips;
+        for (const std::string& c : animated.clipNames())
+            clips += (clips.empty() ? "" : ", ") + (c.empty() ? std::string("(unnamed)") : c);
+        std::printf("  clips      %s\n", clips.empty() ? "none" : clips.c_str());
+        std::printf("  clip       %s, %g s from %g s\n",
+                    animated.clipName().empty() ? "(unnamed)" : animated.clipName().c_str(),
+                    animated.duration(), animated.start());
+        std::printf("  joints     %zu\n", animated.jointCount());
+        std::printf("  morphs     %zu targets\n", animated.morphTargetCount());
+    }
+    if (animated.frameCount() > 0)
+        std::printf("  frames     %zu (%g s)\n", animated.frameCount(), animated.duration());
+    if (args.has("time"))
+        std::printf("  pose       at %g s (bounds above)\n", args.number("time", 0.0, -1e9, 1e9));
     return 0;
 }
 

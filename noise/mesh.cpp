@@ -318,6 +318,13 @@ void finalizeMesh(Mesh& mesh) {
     computeTangents(mesh);
 }
 
+void recomputeFrames(Mesh& mesh) {
+    checkValues(mesh, meshName(mesh));
+    mesh.normals.clear();
+    computeNormals(mesh);
+    computeTangents(mesh);
+}
+
 void savePly(const Mesh& mesh, const std::filesystem::path& file) {
     const std::string name = file.string();
     checkSizes(mesh, name);

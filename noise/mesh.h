@@ -75,6 +75,9 @@ Mesh parsePly(std::string_view bytes, const std::string& name, const MeshLimits&
 /// (area-weighted), renormalizes given ones, computes tangents when uvs are present.
 void finalizeMesh(Mesh& mesh);
 
+/// After the positions moved (a pose of an animated mesh): checks they are finite (InputError)
+/// and recomputes the normals (area-weighted) and tangents, keeping every triangle.
+void recomputeFrames(Mesh& mesh);
 /// Write a mesh as binary little-endian PLY (positions, normals, uvs if present, faces), via a
 /// temporary file renamed into place.
 void savePly(const Mesh& mesh, const std::filesystem::path& file);

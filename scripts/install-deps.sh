@@ -9,6 +9,8 @@ packages=(
   # libraries
   libglm-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev nlohmann-json3-dev libtinyobjloader-dev
+  # glTF 2.0 (animated meshes: noise/animated_mesh.h)
+  libtinygltf-dev
   # oiiotool: the alpha test composites a render over a plate as users do
   openimageio-tools
   # Vulkan on the CPU (lavapipe) with validation, shaders

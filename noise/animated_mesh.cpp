@@ -1,0 +1,682 @@
+#include "animated_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <limits>
+
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "noise/error.h"
+
+namespace spot::noise {
+
+namespace {
+
+using Interpolation = AnimatedMesh::Interpolation;
+
+/// An accessor's elements as floats, `components` each (integer components converted as glTF
+/// says: normalized ones to [0, 1] or [-1, 1], others as their value). InputError for anything
+/// out of the buffers, sparse, or of another shape.
+std::vector<float> readAccessor(const tinygltf::Model& model, int index, int components,
+                                const std::string& what) {
+    if (index < 0 || index >= int(model.accessors.size()))
+        throw InputError(cat(what, ": accessor ", index, " does not exist"));
+    const tinygltf::Accessor& a = model.accessors[std::size_t(index)];
+    if (a.sparse.isSparse)
+        throw InputError(cat(what, ": sparse accessors are not supported (export without them)"));
+    const int n = tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
+    if (n != components)
+        throw InputError(
+            cat(what, ": accessor ", index, " has ", n, " components, ", components, " expected"));
+    std::vector<float> out(a.count * std::size_t(components), 0.0f);
+    if (a.bufferView < 0)
+        return out; // all zeros, as glTF says
+    if (a.bufferView >= int(model.bufferViews.size()))
+        throw InputError(cat(what, ": buffer view ", a.bufferView, " does not exist"));
+    const tinygltf::BufferView& view = model.bufferViews[std::size_t(a.bufferView)];
+    if (view.buffer < 0 || view.buffer >= int(model.buffers.size()))
+        throw InputError(cat(what, ": buffer ", view.buffer, " does not exist"));
+    const std::vector<unsigned char>& data = model.buffers[std::size_t(view.buffer)].data;
+    const int size = tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType));
+    const int stride = a.ByteStride(view);
+    if (size <= 0 || stride <= 0)
+        throw InputError(cat(what, ": accessor ", index, " has an unknown component type"));
+    const std::uint64_t begin = std::uint64_t(view.byteOffset) + a.byteOffset;
+    const std::uint64_t end = a.count == 0 ? begin
+                                           : begin + std::uint64_t(stride) * (a.count - 1) +
+                                                 std::uint64_t(size) * components;
+    if (end > view.byteOffset + view.byteLength || end > data.size())
+        throw InputError(cat(what, ": accessor ", index, " reaches past its buffer"));
+    for (std::size_t i = 0; i < a.count; ++i)
+        for (int c = 0; c < components; ++c) {
+            const unsigned char* p =
+                data.data() + begin + i * std::size_t(stride) + std::size_t(c * size);
+            float v = 0.0f;
+            switch (a.componentType) {
+            case TINYGLTF_COMPONENT_TYPE_FLOAT:
+                std::memcpy(&v, p, 4);
+                break;
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+                v = a.normalized ? float(*p) / 255.0f : float(*p);
+                break;
+            case TINYGLTF_COMPONENT_TYPE_BYTE:
+                v = a.normalized ? std::max(float(std::int8_t(*p)) / 127.0f, -1.0f)
+                                 : float(std::int8_t(*p));
+                break;
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+                std::uint16_t u;
+                std::memcpy(&u, p, 2);
+                v = a.normalized ? float(u) / 65535.0f : float(u);
+                break;
+            }
+            case TINYGLTF_COMPONENT_TYPE_SHORT: {
+                std::int16_t s;
+                std::memcpy(&s, p, 2);
+                v = a.normalized ? std::max(float(s) / 32767.0f, -1.0f) : float(s);
+                break;
+            }
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+                std::uint32_t u;
+                std::memcpy(&u, p, 4);
+                v = float(u);
+                break;
+            }
+            default:
+                throw InputError(
+                    cat(what, ": accessor ", index, " has component type ", a.componentType));
+            }
+            if (!std::isfinite(v))
+                throw InputError(cat(what, ": accessor ", index, " holds a non-finite value"));
+            out[i * std::size_t(components) + std::size_t(c)] = v;
+        }
+    return out;
+}
+
+/// Indices are read exactly (floats hold integers up to 2^24 exactly; larger are refused).
+std::vector<std::uint32_t> readIndices(const tinygltf::Model& model, int index,
+                                       std::size_t vertices, const std::string& what) {
+    const std::vector<float> f = readAccessor(model, index, 1, what);
+    std::vector<std::uint32_t> out(f.size());
+    for (std::size_t i = 0; i < f.size(); ++i) {
+        if (!(f[i] >= 0.0f) || f[i] >= float(vertices) || f[i] > 16777216.0f)
+            throw InputError(
+                cat(what, ": index ", i, " is ", f[i], ", outside [0, ", vertices, ")"));
+        out[i] = std::uint32_t(f[i]);
+    }
+    return out;
+}
+
+template <int N> std::vector<glm::vec<N, float>> asVectors(const std::vector<float>& f) {
+    std::vector<glm::vec<N, float>> out(f.size() / N);
+    for (std::size_t i = 0; i < out.size(); ++i)
+        for (int c = 0; c < N; ++c)
+            out[i][c] = f[i * N + std::size_t(c)];
+    return out;
+}
+
+glm::mat4 localMatrix(const AnimatedMesh::Node& n) {
+    if (n.hasMatrix)
+        return n.matrix;
+    return glm::translate(glm::mat4(1.0f), n.translation) * glm::mat4_cast(n.rotation) *
+           glm::scale(glm::mat4(1.0f), n.scale);
+}
+
+} // namespace
+
+std::vector<float> AnimatedMesh::sample(const std::vector<float>& times,
+                                        const std::vector<float>& values, int width,
+                                        Interpolation interpolation, bool rotation, double t) {
+    const std::size_t keys = times.size();
+    const std::size_t stride =
+        std::size_t(width) * (interpolation == Interpolation::CubicSpline ? 3 : 1);
+    std::vector<float> out(std::size_t(width), 0.0f);
+    if (keys == 0)
+        return out;
+    const std::size_t valueAt =
+        interpolation == Interpolation::CubicSpline ? std::size_t(width) : 0;
+    const auto value = [&](std::size_t k) { return values.data() + k * stride + valueAt; };
+    std::size_t k = 0;
+    if (t <= times.front() || keys == 1) {
+        std::copy(value(0), value(0) + width, out.begin());
+        return out;
+    }
+    if (t >= times.back()) {
+        std::copy(value(keys - 1), value(keys - 1) + width, out.begin());
+        return out;
+    }
+    k = std::size_t(std::upper_bound(times.begin(), times.end(), float(t)) - times.begin()) - 1;
+    const double t0 = times[k], t1 = times[k + 1], dt = t1 - t0;
+    const double u = dt > 0.0 ? (t - t0) / dt : 0.0;
+    const float* a = value(k);
+    const float* b = value(k + 1);
+    if (interpolation == Interpolation::Step) {
+        std::copy(a, a + width, out.begin());
+    } else if (interpolation == Interpolation::Linear && rotation) {
+        const glm::quat qa(a[3], a[0], a[1], a[2]), qb(b[3], b[0], b[1], b[2]);
+        const glm::quat q = glm::normalize(glm::slerp(qa, qb, float(u))); // the short way round
+        out = {q.x, q.y, q.z, q.w};
+    } else if (interpolation == Interpolation::Linear) {
+        for (int c = 0; c < width; ++c)
+            out[std::size_t(c)] = float(a[c] + (b[c] - a[c]) * u);
+    } else { // Hermite with the tangents scaled by the interval
+        const float* outTangent = values.data() + k * stride + 2 * std::size_t(width);
+        const float* inTangent = values.data() + (k + 1) * stride;
+        const double u2 = u * u, u3 = u2 * u;
+        for (int c = 0; c < width; ++c)
+            out[std::size_t(c)] =
+                float((2 * u3 - 3 * u2 + 1) * a[c] + (u3 - 2 * u2 + u) * dt * outTangent[c] +
+                      (-2 * u3 + 3 * u2) * b[c] + (u3 - u2) * dt * inTangent[c]);
+        if (rotation) {
+            const glm::quat q = glm::normalize(glm::quat(out[3], out[0], out[1], out[2]));
+            out = {q.x, q.y, q.z, q.w};
+        }
+    }
+    return out;
+}
+
+AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std::string& clip,
+                                    const MeshLimits& limits) {
+    const std::string name = file.string();
+    std::error_code ec;
+    const std::uintmax_t bytes = std::filesystem::file_size(file, ec);
+    if (ec)
+        throw InputError(cat(name, ": cannot read (", ec.message(), ")"));
+    if (bytes > limits.maxFileBytes)
+        throw InputError(
+            cat(name, ": ", bytes, " bytes, more than the ", limits.maxFileBytes, " accepted"));
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(
+        [](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*,
+           int, void*) { return true; }, // images are not read: spotshell's fields read their own
+        nullptr);
+    tinygltf::Model model;
+    std::string err, warn;
+    const bool binary = file.extension() == ".glb" || file.extension() == ".GLB";
+    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, name)
+                           : loader.LoadASCIIFromFile(&model, &err, &warn, name);
+    if (!ok) {
+        std::string first = err.substr(0, err.find('\n'));
+        throw InputError(cat(name, ": not a glTF 2.0 file tinygltf reads (",
+                             first.empty() ? "no reason given" : first, ")"));
+    }
+    AnimatedMesh out;
+    // Nodes, with their parents.
+    out.m_nodes.resize(model.nodes.size());
+    for (std::size_t i = 0; i < model.nodes.size(); ++i) {
+        const tinygltf::Node& n = model.nodes[i];
+        Node& node = out.m_nodes[i];
+        if (n.matrix.size() == 16) {
+            node.hasMatrix = true;
+            for (int c = 0; c < 16; ++c)
+                glm::value_ptr(node.matrix)[c] = float(n.matrix[std::size_t(c)]);
+        }
+        if (n.translation.size() == 3)
+            node.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
+        if (n.rotation.size() == 4)
+            node.rotation = glm::quat(float(n.rotation[3]), float(n.rotation[0]),
+                                      float(n.rotation[1]), float(n.rotation[2]));
+        if (n.scale.size() == 3)
+            node.scale = glm::vec3(n.scale[0], n.scale[1], n.scale[2]);
+        for (const int c : n.children) {
+            if (c < 0 || c >= int(model.nodes.size()) || out.m_nodes[std::size_t(c)].parent >= 0 ||
+                c == int(i))
+                throw InputError(cat(name, ": node ", i, " has a bad child ", c));
+            out.m_nodes[std::size_t(c)].parent = int(i);
+        }
+    }
+    for (std::size_t i = 0; i < out.m_nodes.size(); ++i) { // no cycles
+        std::size_t steps = 0;
+        for (int p = out.m_nodes[i].parent; p >= 0; p = out.m_nodes[std::size_t(p)].parent)
+            if (++steps > out.m_nodes.size())
+                throw InputError(cat(name, ": its node hierarchy has a cycle"));
+    }
+    // Skins.
+    for (const tinygltf::Skin& s : model.skins) {
+        Skin skin;
+        for (const int j : s.joints) {
+            if (j < 0 || j >= int(model.nodes.size()))
+                throw InputError(
+                    cat(name, ": a skin names joint node ", j, " that does not exist"));
+            skin.joints.push_back(j);
+        }
+        skin.inverseBind.assign(skin.joints.size(), glm::mat4(1.0f));
+        if (s.inverseBindMatrices >= 0) {
+            const auto m =
+                readAccessor(model, s.inverseBindMatrices, 16, name + " inverse bind matrices");
+            if (m.size() != skin.joints.size() * 16)
+                throw InputError(cat(name, ": a skin has ", m.size() / 16,
+                                     " inverse bind matrices for ", skin.joints.size(), " joints"));
+            for (std::size_t j = 0; j < skin.joints.size(); ++j)
+                std::copy(m.begin() + std::ptrdiff_t(16 * j),
+                          m.begin() + std::ptrdiff_t(16 * j + 16),
+                          glm::value_ptr(skin.inverseBind[j]));
+        }
+        out.m_jointCount += skin.joints.size();
+        out.m_skins.push_back(std::move(skin));
+    }
+    for (const tinygltf::Mesh& m : model.meshes) {
+        std::vector<float> w(m.weights.begin(), m.weights.end());
+        out.m_meshWeights.push_back(std::move(w));
+    }
+    // The scene's nodes in depth-first order, their primitives merged.
+    Mesh& mesh = out.m_rest;
+    mesh.name = name;
+    bool anyUv = false, allUv = true;
+    std::vector<int> order;
+    const int sceneIndex = model.defaultScene >= 0 ? model.defaultScene : 0;
+    std::function<void(int)> visit = [&](int n) {
+        order.push_back(n);
+        for (const int c : model.nodes[std::size_t(n)].children)
+            visit(c);
+    };
+    if (sceneIndex < int(model.scenes.size())) {
+        for (const int n : model.scenes[std::size_t(sceneIndex)].nodes) {
+            if (n < 0 || n >= int(model.nodes.size()) || out.m_nodes[std::size_t(n)].parent >= 0)
+                throw InputError(cat(name, ": its scene names node ", n, ", not a root node"));
+            visit(n);
+        }
+    } else {
+        for (std::size_t n = 0; n < model.nodes.size(); ++n)
+            if (out.m_nodes[n].parent < 0)
+                visit(int(n));
+    }
+    std::vector<glm::vec2> uvs;
+    for (const int n : order) {
+        const tinygltf::Node& node = model.nodes[std::size_t(n)];
+        if (node.mesh < 0)
+            continue;
+        if (node.mesh >= int(model.meshes.size()))
+            throw InputError(
+                cat(name, ": node ", n, " names mesh ", node.mesh, " that does not exist"));
+        if (node.skin >= int(out.m_skins.size()))
+            throw InputError(
+                cat(name, ": node ", n, " names skin ", node.skin, " that does not exist"));
+        const tinygltf::Mesh& m = model.meshes[std::size_t(node.mesh)];
+        for (std::size_t p = 0; p < m.primitives.size(); ++p) {
+            const tinygltf::Primitive& prim = m.primitives[p];
+            const std::string what = cat(name, " mesh '", m.name, "' primitive ", p);
+            if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1)
+                throw InputError(cat(what, ": mode ", prim.mode, " is not triangles (4)"));
+            const auto attr = [&](const char* key) {
+                const auto it = prim.attributes.find(key);
+                return it == prim.attributes.end() ? -1 : it->second;
+            };
+            if (attr("POSITION") < 0)
+                throw InputError(cat(what, ": has no POSITION"));
+            Piece piece;
+            piece.node = n;
+            piece.skin = node.skin;
+            piece.mesh = node.mesh;
+            piece.first = mesh.positions.size();
+            piece.base = asVectors<3>(readAccessor(model, attr("POSITION"), 3, what + " POSITION"));
+            piece.count = piece.base.size();
+            if (mesh.positions.size() + piece.count > limits.maxVertices)
+                throw InputError(cat(name, ": more than ", limits.maxVertices, " vertices"));
+            if (attr("TEXCOORD_0") >= 0) {
+                auto uv =
+                    asVectors<2>(readAccessor(model, attr("TEXCOORD_0"), 2, what + " TEXCOORD_0"));
+                if (uv.size() != piece.count)
+                    throw InputError(cat(what, ": TEXCOORD_0 has ", uv.size(), " values for ",
+                                         piece.count, " vertices"));
+                for (glm::vec2& t : uv)
+                    t.y = 1.0f -
+                          t.y; // glTF's uv (0, 0) is the image's top-left; spotshell's bottom-left
+                uvs.insert(uvs.end(), uv.begin(), uv.end());
+                anyUv = true;
+            } else {
+                allUv = false;
+                uvs.resize(uvs.size() + piece.count, glm::vec2(0.0f));
+            }
+            for (int set = 0; set < 2; ++set) {
+                const int j = attr(set == 0 ? "JOINTS_0" : "JOINTS_1");
+                const int w = attr(set == 0 ? "WEIGHTS_0" : "WEIGHTS_1");
+                if ((j < 0) != (w < 0))
+                    throw InputError(
+                        cat(what, ": JOINTS_", set, " and WEIGHTS_", set, " come in pairs"));
+                if (j < 0)
+                    continue;
+                if (node.skin < 0)
+                    throw InputError(cat(what, ": has joints but its node has no skin"));
+                const auto joints = asVectors<4>(readAccessor(model, j, 4, what + " JOINTS"));
+                const auto weights = asVectors<4>(readAccessor(model, w, 4, what + " WEIGHTS"));
+                if (joints.size() != piece.count || weights.size() != piece.count)
+                    throw InputError(
+                        cat(what, ": JOINTS/WEIGHTS do not have one value per vertex"));
+                const std::size_t jointCount = out.m_skins[std::size_t(node.skin)].joints.size();
+                piece.joints[set].resize(piece.count);
+                for (std::size_t v = 0; v < piece.count; ++v)
+                    for (int c = 0; c < 4; ++c) {
+                        if (joints[v][c] < 0.0f || joints[v][c] >= float(jointCount))
+                            throw InputError(cat(what, ": vertex ", v, " names joint ",
+                                                 joints[v][c], " of a skin with ", jointCount));
+                        piece.joints[set][v][c] = std::uint32_t(joints[v][c]);
+                    }
+                piece.weights[set] = weights;
+            }
+            if (node.skin >= 0 && piece.joints[0].empty())
+                throw InputError(
+                    cat(what, ": its node has a skin but it has no JOINTS_0/WEIGHTS_0"));
+            for (std::size_t t = 0; t < prim.targets.size(); ++t) {
+                const auto it = prim.targets[t].find("POSITION");
+                std::vector<glm::vec3> delta(piece.count, glm::vec3(0.0f));
+                if (it != prim.targets[t].end()) {
+                    delta =
+                        asVectors<3>(readAccessor(model, it->second, 3, cat(what, " target ", t)));
+                    if (delta.size() != piece.count)
+                        throw InputError(cat(what, ": morph target ", t, " has ", delta.size(),
+                                             " positions for ", piece.count, " vertices"));
+                }
+                piece.targets.push_back(std::move(delta));
+            }
+            out.m_morphTargets = std::max(out.m_morphTargets, piece.targets.size());
+            std::vector<std::uint32_t> indices;
+            if (prim.indices >= 0) {
+                indices = readIndices(model, prim.indices, piece.count, what + " indices");
+            } else {
+                indices.resize(piece.count);
+                for (std::size_t i = 0; i < piece.count; ++i)
+                    indices[i] = std::uint32_t(i);
+            }
+            if (indices.size() % 3 != 0)
+                throw InputError(cat(what, ": ", indices.size(), " indices, not a multiple of 3"));
+            if (mesh.triangles.size() + indices.size() / 3 > limits.maxTriangles)
+                throw InputError(cat(name, ": more than ", limits.maxTriangles, " triangles"));
+            for (std::size_t i = 0; i < indices.size(); i += 3)
+                mesh.triangles.emplace_back(std::uint32_t(piece.first) + indices[i],
+                                            std::uint32_t(piece.first) + indices[i + 1],
+                                            std::uint32_t(piece.first) + indices[i + 2]);
+            mesh.positions.resize(mesh.positions.size() + piece.count);
+            out.m_pieces.push_back(std::move(piece));
+        }
+    }
+    if (out.m_pieces.empty())
+        throw InputError(cat(name, ": its scene holds no triangle mesh"));
+    if (anyUv && allUv)
+        mesh.uvs = std::move(uvs);
+    // The clip.
+    for (const tinygltf::Animation& a : model.animations)
+        out.m_clipNames.push_back(a.name);
+    int chosen = -1;
+    if (!clip.empty()) {
+        for (std::size_t i = 0; i < model.animations.size(); ++i)
+            if (model.animations[i].name == clip)
+                chosen = int(i);
+        if (chosen < 0) {
+            std::string names;
+            for (const std::string& c : out.m_clipNames)
+                names += (names.empty() ? "" : ", ") + (c.empty() ? std::string("(unnamed)") : c);
+            throw InputError(
+                cat(name, ": has no clip '", clip, "' (", names.empty() ? "none" : names, ")"));
+        }
+    } else if (!model.animations.empty()) {
+        chosen = 0;
+    }
+    if (chosen >= 0) {
+        const tinygltf::Animation& a = model.animations[std::size_t(chosen)];
+        out.m_clipName = a.name;
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (const tinygltf::AnimationChannel& c : a.channels) {
+            const std::string what = cat(name, " clip '", a.name, "'");
+            if (c.sampler < 0 || c.sampler >= int(a.samplers.size()))
+                throw InputError(cat(what, ": a channel names sampler ", c.sampler));
+            if (c.target_node < 0 || c.target_node >= int(model.nodes.size()))
+                continue; // a channel without a node (an extension's) moves nothing here
+            const tinygltf::AnimationSampler& s = a.samplers[std::size_t(c.sampler)];
+            Channel ch;
+            ch.node = c.target_node;
+            int width = 0;
+            if (c.target_path == "translation") {
+                ch.path = Channel::Path::Translation;
+                width = 3;
+            } else if (c.target_path == "rotation") {
+                ch.path = Channel::Path::Rotation;
+                width = 4;
+            } else if (c.target_path == "scale") {
+                ch.path = Channel::Path::Scale;
+                width = 3;
+            } else if (c.target_path == "weights") {
+                ch.path = Channel::Path::Weights;
+                const int m = model.nodes[std::size_t(c.target_node)].mesh;
+                if (m < 0 || m >= int(model.meshes.size()) ||
+                    model.meshes[std::size_t(m)].primitives.empty())
+                    continue; // weights of a node without a mesh move nothing
+                width = int(std::max<std::size_t>(
+                    1, model.meshes[std::size_t(m)].primitives.front().targets.size()));
+            } else {
+                continue; // "pointer" and others: nothing of the mesh
+            }
+            ch.interpolation = s.interpolation == "STEP"          ? Interpolation::Step
+                               : s.interpolation == "CUBICSPLINE" ? Interpolation::CubicSpline
+                                                                  : Interpolation::Linear;
+            ch.times = readAccessor(model, s.input, 1, what + " times");
+            for (std::size_t k = 1; k < ch.times.size(); ++k)
+                if (!(ch.times[k] >= ch.times[k - 1]))
+                    throw InputError(cat(what, ": its key times are not ascending"));
+            const int outWidth = ch.path == Channel::Path::Weights ? 1 : width;
+            ch.values = readAccessor(model, s.output, outWidth, what + " values");
+            const std::size_t per =
+                std::size_t(width) * (ch.interpolation == Interpolation::CubicSpline ? 3 : 1);
+            if (ch.values.size() != ch.times.size() * per)
+                throw InputError(cat(what, ": ", ch.values.size(), " values for ", ch.times.size(),
+                                     " keys of ", per));
+            if (!ch.times.empty()) {
+                lo = std::min(lo, double(ch.times.front()));
+                hi = std::max(hi, double(ch.times.back()));
+            }
+            out.m_channels.push_back(std::move(ch));
+        }
+        if (hi >= lo) {
+            out.m_start = lo;
+            out.m_duration = hi - lo;
+        }
+    }
+    // The rest pose.
+    const std::vector<glm::vec3> rest = out.positionsAt(0.0, true);
+    mesh.positions = rest;
+    finalizeMesh(mesh);
+    return out;
+}
+
+std::vector<glm::mat4> AnimatedMesh::worldMatrices(double t, bool rest) const {
+    std::vector<Node> nodes = m_nodes;
+    if (!rest)
+        for (const Channel& c : m_channels) {
+            Node& n = nodes[std::size_t(c.node)];
+            switch (c.path) {
+            case Channel::Path::Translation: {
+                const auto v = sample(c.times, c.values, 3, c.interpolation, false, t);
+                n.translation = glm::vec3(v[0], v[1], v[2]);
+                break;
+            }
+            case Channel::Path::Rotation: {
+                const auto v = sample(c.times, c.values, 4, c.interpolation, true, t);
+                n.rotation = glm::quat(v[3], v[0], v[1], v[2]);
+                break;
+            }
+            case Channel::Path::Scale: {
+                const auto v = sample(c.times, c.values, 3, c.interpolation, false, t);
+                n.scale = glm::vec3(v[0], v[1], v[2]);
+                break;
+            }
+            case Channel::Path::Weights:
+                break;
+            }
+        }
+    std::vector<glm::mat4> world(nodes.size(), glm::mat4(1.0f));
+    std::vector<bool> done(nodes.size(), false);
+    std::function<const glm::mat4&(std::size_t)> get = [&](std::size_t i) -> const glm::mat4& {
+        if (!done[i]) {
+            const int p = nodes[i].parent;
+            world[i] = (p >= 0 ? get(std::size_t(p)) : glm::mat4(1.0f)) * localMatrix(nodes[i]);
+            done[i] = true;
+        }
+        return world[i];
+    };
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+        get(i);
+    return world;
+}
+
+std::vector<float> AnimatedMesh::morphWeights(int mesh, double t, bool rest) const {
+    std::vector<float> w(m_morphTargets, 0.0f);
+    if (rest)
+        return w; // the bind pose: the base geometry
+    const std::vector<float>& d = m_meshWeights[std::size_t(mesh)];
+    std::copy(d.begin(), d.begin() + std::ptrdiff_t(std::min(d.size(), w.size())), w.begin());
+    for (const Channel& c : m_channels) {
+        if (c.path != Channel::Path::Weights)
+            continue;
+        bool ours = false;
+        for (const Piece& p : m_pieces)
+            ours = ours || (p.node == c.node && p.mesh == mesh);
+        if (!ours)
+            continue;
+        const int width = int(c.values.size() / std::max<std::size_t>(c.times.size(), 1) /
+                              (c.interpolation == Interpolation::CubicSpline ? 3 : 1));
+        const auto v = sample(c.times, c.values, width, c.interpolation, false, t);
+        std::copy(v.begin(), v.begin() + std::ptrdiff_t(std::min(v.size(), w.size())), w.begin());
+    }
+    return w;
+}
+
+std::vector<glm::vec3> AnimatedMesh::positionsAt(double t, bool rest) const {
+    if (!m_frames.empty()) {
+        if (rest)
+            return m_rest.positions;
+        const double f = std::clamp(t * m_fps, 0.0, double(m_frames.size() - 1));
+        const std::size_t i = std::min(std::size_t(f), m_frames.size() - 1);
+        const std::size_t j = std::min(i + 1, m_frames.size() - 1);
+        const float u = float(f - double(i));
+        std::vector<glm::vec3> out(m_frames[i].size());
+        for (std::size_t v = 0; v < out.size(); ++v)
+            out[v] = m_frames[i][v] + (m_frames[j][v] - m_frames[i][v]) * u;
+        return out;
+    }
+    if (m_pieces.empty())
+        return m_rest.positions; // a mesh that does not move
+    const std::vector<glm::mat4> world = worldMatrices(t, rest);
+    std::size_t total = 0;
+    for (const Piece& p : m_pieces)
+        total = std::max(total, p.first + p.count);
+    std::vector<glm::vec3> out(total);
+    for (const Piece& p : m_pieces) {
+        const std::vector<float> w = morphWeights(p.mesh, t, rest);
+        std::vector<glm::mat4> joints;
+        if (p.skin >= 0) {
+            const Skin& s = m_skins[std::size_t(p.skin)];
+            joints.resize(s.joints.size());
+            for (std::size_t j = 0; j < joints.size(); ++j)
+                joints[j] =
+                    rest ? glm::mat4(1.0f) : world[std::size_t(s.joints[j])] * s.inverseBind[j];
+        }
+        for (std::size_t v = 0; v < p.count; ++v) {
+            glm::vec3 x = p.base[v];
+            for (std::size_t k = 0; k < p.targets.size() && k < w.size(); ++k)
+                x += w[k] * p.targets[k][v];
+            if (p.skin < 0) {
+                out[p.first + v] = glm::vec3(world[std::size_t(p.node)] * glm::vec4(x, 1.0f));
+                continue;
+            }
+            glm::mat4 m(0.0f);
+            float sum = 0.0f;
+            for (int set = 0; set < 2; ++set) {
+                if (p.joints[set].empty())
+                    continue;
+                for (int c = 0; c < 4; ++c) {
+                    const float weight = p.weights[set][v][c];
+                    if (weight == 0.0f)
+                        continue;
+                    m += weight * joints[p.joints[set][v][c]];
+                    sum += weight;
+                }
+            }
+            // The weights normalised (exporters round them); none: the vertex stays at rest.
+            out[p.first + v] = sum > 0.0f ? glm::vec3(m * glm::vec4(x, 1.0f)) / sum : x;
+        }
+    }
+    return out;
+}
+
+std::vector<glm::vec3> AnimatedMesh::posePositions(double t) const {
+    return positionsAt(m_frames.empty() ? std::clamp(t, m_start, m_start + m_duration) : t, false);
+}
+
+Mesh AnimatedMesh::pose(double t) const {
+    Mesh out = m_rest;
+    out.positions = posePositions(t);
+    recomputeFrames(out);
+    return out;
+}
+
+AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int first,
+                                     int restFrame, const MeshLimits& limits) {
+    if (!(fps > 0.0) || !std::isfinite(fps))
+        throw InputError(cat(pattern, ": fps ", fps, " is not positive"));
+    const std::size_t percent = pattern.find('%');
+    if (percent == std::string::npos || pattern.find('%', percent + 1) != std::string::npos)
+        throw InputError(
+            cat(pattern, ": a mesh cache names its frames with one %d (walk.%04d.ply)"));
+    const auto frameName = [&](int i) {
+        char buf[4096];
+        const int n = std::snprintf(buf, sizeof(buf), pattern.c_str(), i);
+        if (n <= 0 || n >= int(sizeof(buf)))
+            throw InputError(cat(pattern, ": not a frame pattern"));
+        return std::string(buf);
+    };
+    constexpr int kMaxFrames = 100000;
+    int start = first;
+    if (start < 0) {
+        for (start = 0; start < kMaxFrames && !std::filesystem::exists(frameName(start)); ++start) {
+        }
+        if (start == kMaxFrames)
+            throw InputError(cat(pattern, ": no frame found (tried 0 to ", kMaxFrames - 1, ")"));
+    }
+    AnimatedMesh out;
+    out.m_fps = fps;
+    std::vector<Mesh> meshes;
+    for (int i = start; i < start + kMaxFrames && std::filesystem::exists(frameName(i)); ++i) {
+        Mesh m = loadMesh(frameName(i), limits);
+        if (!meshes.empty() && (m.positions.size() != meshes.front().positions.size() ||
+                                m.triangles != meshes.front().triangles))
+            throw InputError(cat(frameName(i), ": its topology differs from ", meshes.front().name,
+                                 "'s (", m.positions.size(), " vertices, ", m.triangles.size(),
+                                 " triangles against ", meshes.front().positions.size(), " and ",
+                                 meshes.front().triangles.size(), ")"));
+        out.m_frames.push_back(m.positions);
+        meshes.push_back(std::move(m));
+    }
+    if (meshes.empty())
+        throw InputError(cat(frameName(start), ": no such file"));
+    if (restFrame < 0 || restFrame >= int(meshes.size()))
+        throw InputError(cat(pattern, ": rest frame ", restFrame, " is not one of the ",
+                             meshes.size(), " frames"));
+    out.m_rest = std::move(meshes[std::size_t(restFrame)]);
+    out.m_duration = double(meshes.size() - 1) / fps;
+    return out;
+}
+
+AnimatedMesh AnimatedMesh::load(const std::string& spec, const std::string& clip, double fps) {
+    const std::filesystem::path p(spec);
+    std::string ext = p.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".gltf" || ext == ".glb")
+        return loadGltf(p, clip);
+    if (spec.find('%') != std::string::npos)
+        return loadCache(spec, fps);
+    AnimatedMesh out;
+    out.m_rest = loadMeshOrGenerated(spec);
+    return out;
+}
+
+} // namespace spot::noise

@@ -1,0 +1,127 @@
+/// @file animated_mesh.h
+/// @brief Meshes that move (docs/design.md section 6): a glTF 2.0 clip or a numbered mesh cache,
+/// posed on the CPU at any time. The first part of animated surfaces: what moves, and where every
+/// vertex is at time t; the noise is still evaluated on the rest pose (`rest()`), which is what
+/// every renderer draws today.
+///
+/// glTF 2.0 (`.gltf` or `.glb`, read with tinygltf): every triangle primitive of the scene's
+/// meshes, merged into one mesh in node order; node hierarchies with TRS animation; skins with
+/// JOINTS_0/WEIGHTS_0 and, where present, JOINTS_1/WEIGHTS_1 (linear blend skinning, the weights
+/// normalised); morph targets (POSITION deltas, the mesh's weights or the clip's); samplers with
+/// LINEAR (slerp for rotations), STEP and CUBICSPLINE interpolation. The rest pose is the bind
+/// pose: skinned vertices as stored (every joint at its bind matrix), other meshes placed by
+/// their nodes' static transforms, morph weights 0. Times outside a clip clamp to its ends.
+///
+/// A mesh cache: a printf pattern (`walk.%04d.ply`) over consecutive frames from the first file
+/// that exists; every frame must have the first's vertex count and triangles (the rest pose
+/// unless the scene names another frame). `pose(t)` interpolates linearly between the frames
+/// around t x fps.
+///
+/// A pose keeps the rest's topology (no triangle is dropped, even where a pose makes one
+/// degenerate); its normals are recomputed (area-weighted) and its tangents carried from the rest.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "noise/mesh.h"
+
+namespace spot::noise {
+
+class AnimatedMesh {
+public:
+    /// A glTF file's clip `clip` (by name; empty: the first clip, or none when the file has no
+    /// animation). InputError naming the file and the reason for anything malformed or not
+    /// supported (a primitive that is not triangles, sparse accessors, an unknown clip).
+    static AnimatedMesh loadGltf(const std::filesystem::path& file, const std::string& clip = "",
+                                 const MeshLimits& limits = {});
+    /// A mesh cache: `pattern` with one printf integer conversion (`%d`, `%04d`), frames from
+    /// `first` (or the first that exists from 0 when negative) while files exist, played at
+    /// `fps`; `restFrame` (an index into the frames found) is the rest pose.
+    static AnimatedMesh loadCache(const std::string& pattern, double fps, int first = -1,
+                                  int restFrame = 0, const MeshLimits& limits = {});
+    /// A file by extension: .gltf/.glb as glTF; a name with a '%' as a cache (24 fps); anything
+    /// else (a static OBJ/PLY or a generated shape) as a mesh that does not move.
+    static AnimatedMesh load(const std::string& spec, const std::string& clip = "",
+                             double fps = 24.0);
+
+    const Mesh& rest() const { return m_rest; }
+    bool animated() const { return m_duration > 0.0; }
+    /// Seconds from the clip's first key to its last (0: it does not move).
+    double duration() const { return m_duration; }
+    double start() const { return m_start; }
+    const std::string& clipName() const { return m_clipName; }
+    const std::vector<std::string>& clipNames() const { return m_clipNames; }
+    std::size_t jointCount() const { return m_jointCount; }
+    std::size_t morphTargetCount() const { return m_morphTargets; }
+    std::size_t frameCount() const { return m_frames.size(); } ///< a cache's frames
+    /// The mesh at time t (seconds; clamped to the clip).
+    Mesh pose(double t) const;
+    /// Its positions only (what `pose` recomputes normals from).
+    std::vector<glm::vec3> posePositions(double t) const;
+
+    /// A glTF animation sampler's value at `t` (exposed for tests). `times` ascending; `values`
+    /// holds `width` floats per key (3 times that for CUBICSPLINE: in-tangent, value, out-tangent);
+    /// `rotation`: values are quaternions (x, y, z, w) interpolated by slerp and normalised.
+    enum class Interpolation { Linear, Step, CubicSpline };
+    static std::vector<float> sample(const std::vector<float>& times,
+                                     const std::vector<float>& values, int width,
+                                     Interpolation interpolation, bool rotation, double t);
+
+    struct Node {
+        int parent = -1;
+        glm::vec3 translation{0.0f};
+        glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+        glm::vec3 scale{1.0f};
+        glm::mat4 matrix{1.0f}; ///< a node given by a matrix (then TRS are not animated)
+        bool hasMatrix = false;
+    };
+    struct Channel {
+        int node = -1;
+        enum class Path { Translation, Rotation, Scale, Weights } path = Path::Translation;
+        Interpolation interpolation = Interpolation::Linear;
+        std::vector<float> times, values;
+    };
+    /// A primitive's vertices within the merged mesh and how they move.
+    struct Piece {
+        std::size_t first = 0, count = 0; ///< its vertices in the merged mesh
+        int node = -1;                    ///< the node that instances its mesh
+        int skin = -1;
+        int mesh = -1;                               ///< its glTF mesh (the morph weights' owner)
+        std::vector<glm::vec3> base;                 ///< positions as stored (mesh space)
+        std::vector<std::vector<glm::vec3>> targets; ///< morph POSITION deltas, per target
+        std::vector<glm::uvec4> joints[2];           ///< JOINTS_0/1 (skin joint indices)
+        std::vector<glm::vec4> weights[2];           ///< WEIGHTS_0/1 (normalised together)
+    };
+    struct Skin {
+        std::vector<int> joints;            ///< node per joint
+        std::vector<glm::mat4> inverseBind; ///< per joint
+    };
+
+private:
+    /// Node world matrices at time t (the clip's channels applied; t < start: the rest pose).
+    std::vector<glm::mat4> worldMatrices(double t, bool rest) const;
+    std::vector<float> morphWeights(int mesh, double t, bool rest) const;
+    std::vector<glm::vec3> positionsAt(double t, bool rest) const;
+
+    Mesh m_rest;
+    std::string m_clipName;
+    std::vector<std::string> m_clipNames;
+    double m_start = 0.0, m_duration = 0.0;
+    std::size_t m_jointCount = 0, m_morphTargets = 0;
+    // glTF
+    std::vector<Node> m_nodes;
+    std::vector<Channel> m_channels;
+    std::vector<Piece> m_pieces;
+    std::vector<Skin> m_skins;
+    std::vector<std::vector<float>> m_meshWeights; ///< per glTF mesh: its default morph weights
+    // a mesh cache
+    std::vector<std::vector<glm::vec3>> m_frames;
+    double m_fps = 24.0;
+};
+
+} // namespace spot::noise
