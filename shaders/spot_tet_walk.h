@@ -74,24 +74,40 @@ SPOT_FN real spotTetEntry(uint tet, uint entryFace, rvec3 origin, rvec3 dir) {
     return den != real(0.0) ? max(num / den, real(0.0)) : real(0.0);
 }
 
-/* The face through which the ray leaves tetrahedron `tet`, entered through `entryFace`
- * (kTetNoFace: the ray starts inside): the nearest plane, of the other faces, that the ray
- * leaves through; tOut receives its parameter (not clamped to the entry). kTetNoFace when no
- * face qualifies (a flat or degenerate tetrahedron: the walk stops there). With `count`,
- * `loops` counts the planes examined (the shader's loop budget). */
+/* The face through which the walk leaves tetrahedron `tet`, entered through `entryFace`
+ * (kTetNoFace: the ray starts inside, at the eye): tOut receives its parameter (not clamped to
+ * the entry). The walk follows the ray's preimage through the shell's tetrahedra, which is one
+ * curve even where the shell folds (vertex normals that diverge over a crease invert some
+ * tetrahedra, and neighbouring prisms then overlap): where the ray crosses the entry face into
+ * the tetrahedron as t grows (always, in a shell without folds) it runs forward, and leaves
+ * through the nearest of the other planes that it leaves through; where it crosses the entry
+ * face out of the tetrahedron (a folded, inverted one lies on the side it came from), the
+ * preimage runs backward through it, and leaves through the farthest of the other planes that
+ * the ray enters through, before the entry: `backward` tells which. Walking on into the
+ * neighbour there keeps to the curve; following only the forward rule, a walk in a fold left the
+ * shell early or circled among the fold's tetrahedra. kTetNoFace when no face qualifies (a flat or
+ * degenerate tetrahedron: the walk stops there). With `count`, `loops` counts the planes examined
+ * (the shader's loop budget: 4 per tetrahedron). */
 SPOT_FN uint spotTetExit(uint tet, uint entryFace, rvec3 origin, rvec3 dir, bool count,
-                         SPOT_OUT(real) tOut, SPOT_INOUT(uint) loops) {
-    tOut = real(3.0e38);
+                         SPOT_OUT(real) tOut, SPOT_OUT(bool) backward, SPOT_INOUT(uint) loops) {
+    real num;
+    real den;
+    backward = false;
+    if (entryFace != kTetNoFace) {
+        if (count)
+            ++loops;
+        spotTetCrossing(spotWalkPlane(tet, entryFace), origin, dir, num, den);
+        backward = den < real(0.0);
+    }
+    tOut = backward ? real(-3.0e38) : real(3.0e38);
     uint exitFace = kTetNoFace;
     /* The 3 faces after the entry face (from inside, entry face 4: faces 1 to 3, then 0). */
     for (uint i = 1u; i < 4u; ++i) {
         if (count)
             ++loops;
         uint f = (entryFace + i) & 3u;
-        real num;
-        real den;
         spotTetCrossing(spotWalkPlane(tet, f), origin, dir, num, den);
-        if (den < real(0.0) && num / den < tOut) {
+        if (backward ? den > real(0.0) && num / den > tOut : den < real(0.0) && num / den < tOut) {
             tOut = num / den;
             exitFace = f;
         }
@@ -99,8 +115,6 @@ SPOT_FN uint spotTetExit(uint tet, uint entryFace, rvec3 origin, rvec3 dir, bool
     if (entryFace == kTetNoFace) {
         if (count)
             ++loops;
-        real num;
-        real den;
         spotTetCrossing(spotWalkPlane(tet, 0u), origin, dir, num, den);
         if (den < real(0.0) && num / den < tOut) {
             tOut = num / den;
