@@ -147,6 +147,12 @@ vec3 toRest(uint tet, vec3 x) {
     return spotTetToRest(tets[tet].toRest[0], tets[tet].toRest[1], tets[tet].toRest[2], x);
 }
 
+// Whether tetrahedron t is folded (spot_tet_walk.h).
+bool folded(uint t) {
+    return spotTetFolded(tets[t].world[0].xyz, tets[t].world[1].xyz, tets[t].world[2].xyz,
+                         tets[t].world[3].xyz);
+}
+
 // The layer ends: the depth the next peel's entries must lie behind (reversed: near / view depth;
 // 0: no later layer) and the ray parameter the layers have sampled to.
 void finish(ivec2 pixel, float depth, float sampledTo) {
@@ -213,6 +219,17 @@ void main() {
     // The earlier layers sampled the ray up to here (a layer may start inside what an earlier
     // one walked, where parts of the shell overlap): this one samples behind it only.
     float sampledTo = kFirstLayer ? 0.0 : imageLoad(exitDepth, pixel).y;
+    // An entry through a face of a folded tetrahedron with a neighbour there (the peel draws
+    // them: the ray can enter the shell across a fold, baked_shell.comp): both lie behind the
+    // face, and the walk follows the fold from the neighbour's side when it is not folded itself
+    // (into the folded one it soon meets the top surface, the fold's other side).
+    if (!fromEye && folded(tet)) {
+        int across = neighbours[tet][entryFace];
+        if (across >= 0 && !folded(uint(across) >> 2u)) {
+            tet = uint(across) >> 2u;
+            entryFace = uint(across) & 3u;
+        }
+    }
     vec4 acc = kFirstLayer ? vec4(0.0) : imageLoad(accum, pixel);
     vec3 under;
     if (kFirstLayer) {

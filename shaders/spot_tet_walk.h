@@ -47,6 +47,14 @@ SPOT_FN void spotTetRestMap(rvec3 p0, rvec3 p1, rvec3 p2, rvec3 p3, rvec3 r0, rv
     row2 = rvec4(m[0][2], m[1][2], m[2][2], offset[2]);
 }
 
+/* Whether the tetrahedron with corners p0..p3 (shellTetrahedra's order) is folded: the shell's
+ * tetrahedra are positively oriented (p3 on the side of p0, p1, p2's counter-clockwise normal)
+ * unless vertex normals that diverge over a crease turn one inside out, and then it overlaps its
+ * neighbours. */
+SPOT_FN bool spotTetFolded(rvec3 p0, rvec3 p1, rvec3 p2, rvec3 p3) {
+    return dot(cross(p1 - p0, p2 - p0), p3 - p0) < real(0.0);
+}
+
 /* A point x of the tetrahedron at rest, by its rest map's rows. */
 SPOT_FN rvec3 spotTetToRest(rvec4 row0, rvec4 row1, rvec4 row2, rvec3 x) {
     return rvec3(dot(rvec3(row0), x) + row0.w, dot(rvec3(row1), x) + row1.w,

@@ -362,7 +362,9 @@ void BakedRenderer::ensureShell(std::uint32_t triangles) {
         m_entryMasks = Buffer(m_ctx, masks.size() * sizeof(std::uint32_t), kStorage, kHost,
                               "baked entry face masks");
         m_entryMasks.upload(std::span<const std::uint32_t>(masks));
-        m_peelDraw = Buffer(m_ctx, 16 + (std::size_t(m_entryFaceCount) + 1) * sizeof(std::uint32_t),
+        // Room for every face but the base: the shell pass lists the faces of folded
+        // tetrahedra too, which the geometry decides frame by frame.
+        m_peelDraw = Buffer(m_ctx, 16 + (11 * std::size_t(triangles) + 1) * sizeof(std::uint32_t),
                             kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             kDevice, "baked peel draw");
