@@ -623,10 +623,11 @@ CoverageHoles coverageHoles(const noise::Mesh& mesh, const noise::ImpulseGenerat
     settings.bake = splat::BakeData::load(bake);
     const noise::CameraRays rays(camera);
     for (int side = 0; side < 2; ++side) {
-        const glm::vec3 behind = glm::vec3(float(side)); // the mesh and the background: black, then white
+        // The mesh and the background: black, then white.
+        const glm::vec3 behind = glm::vec3(float(side));
         frame.render("baked", {camera, shading, behind, behind}, settings, &baked[side]);
-        const noise::ReferenceRenderer renderer(mesh, generator.kernel(), impulses, shading,
-                                                behind, behind);
+        const noise::ReferenceRenderer renderer(mesh, generator.kernel(), impulses, shading, behind,
+                                                behind);
         for (int y = 0; y < camera.height; ++y)
             for (int x = 0; x < camera.width; ++x)
                 reference[side].pixels[std::size_t(y) * camera.width + x] =
@@ -666,9 +667,8 @@ CoverageHoles coverageHoles(const noise::Mesh& mesh, const noise::ImpulseGenerat
 TEST(BakedScenes, FurBunnyHasNoHolesWhereTheReferenceIsCovered) {
     BakedScene s = loadBakedScene("fur-bunny", 160, 0.0019125f, 1);
     s.scene.camera.height = 120;
-    const CoverageHoles r =
-        coverageHoles(s.mesh, *s.generator, s.bake, s.scene.camera, s.scene.shading, 0.1f,
-                      "holes-bunny");
+    const CoverageHoles r = coverageHoles(s.mesh, *s.generator, s.bake, s.scene.camera,
+                                          s.scene.shading, 0.1f, "holes-bunny");
     std::printf("fur-bunny 160x120: %zu covered pixels, %zu holes, worst coverage %.3f\n",
                 r.covered, r.holes, double(r.worst));
     EXPECT_GT(r.covered, 4000u);
