@@ -15,11 +15,11 @@
 // the pixel became opaque, or the walk reached the mesh), not behind its exit: where parts of the
 // shell overlap (a fold, a part thinner than the shell), the ray can enter another part before it
 // leaves this one, and that part goes on behind this walk's exit. Each layer samples only behind
-// the farthest point the earlier ones walked (written with the depth), so nothing is sampled
-// twice. Each layer also writes its pixels' composite over the mesh colour into the frame's result
-// (the base image: the mesh's colour elsewhere), from the mesh colour the first layer kept (every pixel a later layer walks, the
-// first walked: a pixel with no entry face before the mesh has none in any layer), and clears the
-// pixel's entry for the next peel.
+// the farthest point the earlier ones walked (written with the depth), so nothing is sampled twice.
+// Each layer also writes its pixels' composite over the mesh colour into the frame's result (the
+// base image: the mesh's colour elsewhere), from the mesh colour the first layer kept (every pixel
+// a later layer walks, the first walked: a pixel with no entry face before the mesh has none in any
+// layer), and clears the pixel's entry for the next peel.
 //
 // A layer starts at the entry face the peel kept (the layer's entries); but the first layer
 // (kFirstLayer), when the eye is inside the shell, starts every pixel at t = 0 in the

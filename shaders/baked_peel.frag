@@ -1,14 +1,14 @@
 #version 450
 // Baked renderer, one depth-peeling layer (docs/design.md section 5): of the shell's entry faces
 // strictly farther than the previous layer's entry (reversed depth: smaller is farther; not its
-// exit: where prisms overlap, at a fold or a thin part, the ray may enter another part of the
-// shell before leaving the one it walks, and that part goes on behind the walk's exit; the march
-// samples only behind what the earlier layers sampled), the nearest is kept; the mesh's depth
-// (the depth attachment, tested before the shader runs, not written) culls those behind the mesh. The nearest is kept by a 64-bit
-// atomicMax of (depth bits << 32 | 4 tet + face + 1) per pixel (depth >= 0, so its bits order as
-// the floats do): the same entry whatever order the faces are drawn in, the larger entry on a tie
-// (the faces that face the eye are listed by baked_shell.comp's atomics). The march
-// (baked_march.comp) then walks the shell from there.
+// exit: where prisms overlap, at a fold or a thin part, the ray may enter another part of the shell
+// before leaving the one it walks, and that part goes on behind the walk's exit; the march samples
+// only behind what the earlier layers sampled), the nearest is kept; the mesh's depth (the depth
+// attachment, tested before the shader runs, not written) culls those behind the mesh. The nearest
+// is kept by a 64-bit atomicMax of (depth bits << 32 | 4 tet + face + 1) per pixel (depth >= 0, so
+// its bits order as the floats do): the same entry whatever order the faces are drawn in, the
+// larger entry on a tie (the faces that face the eye are listed by baked_shell.comp's atomics). The
+// march (baked_march.comp) then walks the shell from there.
 // The layer's list of pixels to march: the fragment whose atomicMax found the pixel without an
 // entry (the march clears each entry it takes, so a layer starts with none) appends the pixel.
 // The list's order depends on the atomics' order; every pixel is marched on its own, so the image

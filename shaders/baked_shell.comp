@@ -8,7 +8,8 @@
 // whose neighbours the host uploads). Each corner carries its position now (world) and at rest
 // (the texture coordinate into the bake): its 4 face planes, normals inwards, and its affine map
 // from world now to rest, for the march.
-// The peel's faces: of its tetrahedra's entry faces (the host's mask), those that face the eye
+// The peel's faces: of its tetrahedra's entry faces (the host's mask, and every face but the base
+// of a folded tetrahedron, which the geometry decides each frame), those that face the eye
 // (the eye on the face's outer side, or within 1e-3 of its distance of the face's plane: the
 // peel's vertex shader decides those) are appended to the peel's draw, all of an invocation's
 // with one atomicAdd. The list's order depends on the atomics' order; the peel keeps the same
