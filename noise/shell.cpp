@@ -135,7 +135,9 @@ bool walkSegment(Twin twin, std::uint32_t tet, glm::dvec3 origin, glm::dvec3 dir
     }
     Real exit;
     std::uint32_t loops = 0;
-    if (twin.spotTetExit(tet, Twin::kTetNoFace, o, d, false, exit, loops) == Twin::kTetNoFace)
+    bool backward = false;
+    if (twin.spotTetExit(tet, Twin::kTetNoFace, o, d, false, exit, backward, loops) ==
+        Twin::kTetNoFace)
         exit = std::numeric_limits<Real>::infinity(); // no plane left: unbounded (inside)
     tEnter = double(enter);
     tExit = double(exit);
@@ -154,10 +156,12 @@ std::vector<WalkSegment> walkFrom(Twin twin, const std::vector<glm::ivec4>& neig
     std::uint32_t loops = 0;
     while (out.size() < maxTets) {
         Real tOut;
-        const std::uint32_t exitFace = twin.spotTetExit(tet, entryFace, o, d, false, tOut, loops);
+        bool backward = false;
+        const std::uint32_t exitFace =
+            twin.spotTetExit(tet, entryFace, o, d, false, tOut, backward, loops);
         if (exitFace == Twin::kTetNoFace)
             break; // flat or degenerate: the walk stops here
-        tOut = std::max(tOut, tIn);
+        tOut = backward ? std::min(tOut, tIn) : std::max(tOut, tIn);
         const bool atMesh = tOut >= tMesh;
         tOut = std::min(tOut, tMesh);
         out.push_back({tet, double(tIn), double(tOut), exitFace});

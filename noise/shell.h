@@ -70,7 +70,8 @@ ShellMesh buildShell(const Mesh& mesh, float thickness);
 /// walk enters it through), or -1 on the shell's boundary.
 std::vector<glm::ivec4> shellWalkNeighbours(const std::vector<ShellTetrahedron>& tetrahedra);
 
-/// One tetrahedron of a walk: the ray's parameters where it enters and leaves it.
+/// One tetrahedron of a walk: the ray's parameters where the walk enters and leaves it (tOut <
+/// tIn where the walk runs backward through a folded, inverted tetrahedron: spotTetExit).
 struct WalkSegment {
     std::uint32_t tet = 0;
     double tIn = 0.0, tOut = 0.0;
@@ -95,9 +96,10 @@ public:
                  double& tExit) const;
 
     /// The walk of the ray origin + t dir from tetrahedron `tet`, entered through `entryFace`
-    /// (4: the ray starts inside it, at t = 0, as from the eye), front to back across the faces
-    /// it leaves through into the neighbours there, as baked_march.comp walks it: ends at the
-    /// shell's boundary, at t = tEnd (the mesh), at a flat tetrahedron, or after `maxTets`.
+    /// (4: the ray starts inside it, at t = 0, as from the eye), across the faces it leaves
+    /// through into the neighbours there, as baked_march.comp walks it: front to back, and back
+    /// through the tetrahedra of a fold (spotTetExit). Ends at the shell's boundary, at t = tEnd
+    /// (the mesh), at a flat tetrahedron, or after `maxTets`.
     std::vector<WalkSegment> walk(glm::dvec3 origin, glm::dvec3 dir, std::uint32_t tet,
                                   std::uint32_t entryFace, double tEnd,
                                   std::uint32_t maxTets) const;

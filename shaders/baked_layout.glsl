@@ -53,7 +53,9 @@ SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
 SPOT_CONST uint kBakedBindTable = 5u;       /* int[]: the leaf tables */
 SPOT_CONST uint kBakedBindBricks = 6u;      /* uvec2[]: density bricks of every level (the first buffer's) */
 /* 7: free (was the distance bricks, which no pass reads) */
-SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* r32f image: the previous layer's exit depth */
+SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* rgba32f image: x the depth the next peel's entries
+                                               lie behind (the previous layer's entry; 0: none),
+                                               y the ray parameter the layers have sampled to */
 SPOT_CONST uint kBakedBindLayerEntry = 9u;  /* uvec2 per pixel (row-major): this layer's entry,
                                                x 4 tet + face + 1 (0: none), y its depth's bits
                                                (baked_peel.frag) */
@@ -66,7 +68,7 @@ SPOT_CONST uint kBakedBindBaseKept = 13u;   /* rgba32f image: the mesh's colour 
 SPOT_CONST uint kBakedBindLoops = 14u;      /* uint: the most loop iterations (counted frames) */
 SPOT_CONST uint kBakedBindNeighbours = 15u; /* ivec4[3 x triangles]: across face f, 4 tet + its face there, or -1 */
 SPOT_CONST uint kBakedBindEyeTet = 17u;     /* uint: the lowest tetrahedron holding the eye, or kBakedNoTet */
-SPOT_CONST uint kBakedBindExitDepth = 18u;  /* r32f image: where this layer's walk left the shell */
+SPOT_CONST uint kBakedBindExitDepth = 18u;  /* rgba32f image: the same, as the march writes it */
 SPOT_CONST uint kBakedBindBricks1 = 20u;    /* uvec2[]: the second to fourth buffers of density bricks */
 SPOT_CONST uint kBakedBindBricks2 = 21u;
 SPOT_CONST uint kBakedBindBricks3 = 22u;

@@ -4,18 +4,22 @@
 // shell's tetrahedra from the layer's entry, front to back, across the face where the ray leaves
 // each into the neighbour there (the host's noise::shellNeighbours), so one layer covers the
 // ray's whole contiguous passage through the shell. Per tetrahedron: the exit is the nearest of
-// its face planes the ray leaves through (the entry face excluded, the previous exit the entry),
+// its face planes the ray leaves through (the entry face excluded, the previous exit the entry;
+// backward through a fold's inverted tetrahedra, spot_tet_walk.h),
 // and the samples of the layer's fixed spacing that fall in [entry, exit) are taken in rest-pose
 // (texture) coordinates by the tetrahedron's affine map, through the baked grid at the mip level
 // of the pixel's footprint at the layer's entry; composited under what the earlier layers left.
 // The walk ends at the shell's boundary (no neighbour), at the mesh, when the transmittance
-// falls below kBakedOpaque, or at kBakedMaxLayerTets tetrahedra or kBakedMaxLayerSamples samples;
-// the exit depth it writes is where the next layer's peel starts (0 when nothing behind can
-// show: the pixel became opaque, or the walk reached the mesh). Each layer also writes its pixels'
-// composite over the mesh colour into the frame's result (the base image: the mesh's colour
-// elsewhere), from the mesh colour the first layer kept (every pixel a later layer walks, the
-// first walked: a pixel with no entry face before the mesh has none in any layer), and clears the
-// pixel's entry for the next peel.
+// falls below kBakedOpaque, or at kBakedMaxLayerTets tetrahedra or kBakedMaxLayerSamples samples.
+// The next layer's peel takes entries behind this layer's entry (0 when nothing behind can show:
+// the pixel became opaque, or the walk reached the mesh), not behind its exit: where parts of the
+// shell overlap (a fold, a part thinner than the shell), the ray can enter another part before it
+// leaves this one, and that part goes on behind this walk's exit. Each layer samples only behind
+// the farthest point the earlier ones walked (written with the depth), so nothing is sampled twice.
+// Each layer also writes its pixels' composite over the mesh colour into the frame's result (the
+// base image: the mesh's colour elsewhere), from the mesh colour the first layer kept (every pixel
+// a later layer walks, the first walked: a pixel with no entry face before the mesh has none in any
+// layer), and clears the pixel's entry for the next peel.
 //
 // A layer starts at the entry face the peel kept (the layer's entries); but the first layer
 // (kFirstLayer), when the eye is inside the shell, starts every pixel at t = 0 in the
@@ -63,7 +67,7 @@ layout(binding = kBakedBindMeshDistance, r32f) uniform readonly image2D meshDist
 layout(binding = kBakedBindAccum, rgba32f) uniform image2D accum;
 layout(binding = kBakedBindBase, rgba32f) uniform image2D baseColor;
 layout(binding = kBakedBindBaseKept, rgba32f) uniform image2D baseKept;
-layout(binding = kBakedBindExitDepth, r32f) uniform writeonly image2D exitDepth;
+layout(binding = kBakedBindExitDepth, rgba32f) uniform image2D exitDepth;
 layout(std430, binding = kBakedBindLoops) buffer Loops { uint maxLoops; };
 layout(std430, binding = kBakedBindList) readonly buffer List { SpotBakedList list; };
 layout(std430, binding = kBakedBindListPixels) readonly buffer ListPixels { uint listPixels[]; };
@@ -143,17 +147,25 @@ vec3 toRest(uint tet, vec3 x) {
     return spotTetToRest(tets[tet].toRest[0], tets[tet].toRest[1], tets[tet].toRest[2], x);
 }
 
-// The layer ends: its exit depth (reversed: near / view depth) for the next peel.
-void finish(ivec2 pixel, float depth) {
-    imageStore(exitDepth, pixel, vec4(depth));
+// Whether tetrahedron t is folded (spot_tet_walk.h).
+bool folded(uint t) {
+    return spotTetFolded(tets[t].world[0].xyz, tets[t].world[1].xyz, tets[t].world[2].xyz,
+                         tets[t].world[3].xyz);
+}
+
+// The layer ends: the depth the next peel's entries must lie behind (reversed: near / view depth;
+// 0: no later layer) and the ray parameter the layers have sampled to.
+void finish(ivec2 pixel, float depth, float sampledTo) {
+    imageStore(exitDepth, pixel, vec4(depth, sampledTo, 0.0, 0.0));
     if (kCountLoops)
         atomicMax(maxLoops, loops);
 }
 
 // This invocation's pixel, and where its walk starts: the eye's tetrahedron (first layer, eye in
 // the shell: every pixel) or the entry the peel kept (the layer's list), whose record it clears
-// for the next peel. False when the invocation has no pixel.
-bool layerPixel(out ivec2 pixel, inout uint tet, inout uint entryFace) {
+// for the next peel, and the depth the next peel's entries must lie behind (the entry's, as the
+// peel kept it; from the eye, every entry face). False when the invocation has no pixel.
+bool layerPixel(out ivec2 pixel, inout uint tet, inout uint entryFace, out float entryDepth) {
     bool fromEye = tet != kBakedNoTet;
     uint item = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kBakedMarchGroupSize +
                 gl_LocalInvocationID.x; // rows of workgroups (SpotBakedList)
@@ -169,20 +181,23 @@ bool layerPixel(out ivec2 pixel, inout uint tet, inout uint entryFace) {
         pixel = ivec2(packedPixel & 0xffffu, packedPixel >> 16u);
     }
     uint index = splatPixelIndex(pixel);
+    entryDepth = 2.0; // reversed depth is at most 1
     if (!fromEye) {
         // Not 0: the list holds pixels with an entry.
-        uint id = layerEntry[index].x;
-        tet = (id - 1u) >> 2u;
-        entryFace = (id - 1u) & 3u;
+        uvec2 entry = layerEntry[index];
+        tet = (entry.x - 1u) >> 2u;
+        entryFace = (entry.x - 1u) & 3u;
+        entryDepth = uintBitsToFloat(entry.y);
     }
     layerEntry[index] = uvec2(0u); // the next peel starts with no entry
     return true;
 }
 
 // The layer's radiance and transmittance composited under what the earlier layers left (acc),
-// its composite over the mesh colour (under) into the frame's result, and its exit depth.
+// its composite over the mesh colour (under) into the frame's result, and where the next layer
+// starts: behind this layer's entry (entryDepth), sampling behind sampledTo.
 void compositeLayer(ivec2 pixel, vec4 acc, vec4 under, vec3 radiance, float transmittance,
-                    float tEnd, float tMesh, float viewCos) {
+                    float tEnd, float tMesh, float entryDepth, float sampledTo) {
     acc.rgb += (1.0 - acc.a) * radiance;
     acc.a += (1.0 - acc.a) * (1.0 - transmittance);
     if (transmittance < kBakedOpaque)
@@ -192,19 +207,32 @@ void compositeLayer(ivec2 pixel, vec4 acc, vec4 under, vec3 radiance, float tran
     // transmittance x the mesh's (its alpha: 1 where hit).
     imageStore(baseColor, pixel,
                vec4(acc.rgb + (1.0 - acc.a) * under.rgb, 1.0 - (1.0 - acc.a) * (1.0 - under.a)));
-    float depth = tEnd * viewCos;
     // Opaque (alpha 1: this layer's transmittance fell below kBakedOpaque, or the layers' alpha
     // rounded to 1) or at the mesh: no later layer.
-    finish(pixel, acc.a >= 1.0 || tEnd >= tMesh ? 0.0
-                  : depth > 0.0 ? frame.forward.w / depth : 2.0);
+    finish(pixel, acc.a >= 1.0 || tEnd >= tMesh ? 0.0 : entryDepth, max(sampledTo, tEnd));
 }
 
 void main() {
     uint tet = kFirstLayer ? eyeTet : kBakedNoTet, entryFace = kTetNoFace; // from the eye
     bool fromEye = tet != kBakedNoTet;
     ivec2 pixel;
-    if (!layerPixel(pixel, tet, entryFace))
+    float entryDepth;
+    if (!layerPixel(pixel, tet, entryFace, entryDepth))
         return;
+    // The earlier layers sampled the ray up to here (a layer may start inside what an earlier
+    // one walked, where parts of the shell overlap): this one samples behind it only.
+    float sampledTo = kFirstLayer ? 0.0 : imageLoad(exitDepth, pixel).y;
+    // An entry through a face of a folded tetrahedron with a neighbour there (the peel draws
+    // them: the ray can enter the shell across a fold, baked_shell.comp): both lie behind the
+    // face, and the walk follows the fold from the neighbour's side when it is not folded itself
+    // (into the folded one it soon meets the top surface, the fold's other side).
+    if (!fromEye && folded(tet)) {
+        int across = neighbours[tet][entryFace];
+        if (across >= 0 && !folded(uint(across) >> 2u)) {
+            tet = uint(across) >> 2u;
+            entryFace = uint(across) & 3u;
+        }
+    }
     vec4 acc = kFirstLayer ? vec4(0.0) : imageLoad(accum, pixel);
     vec4 under;
     if (kFirstLayer) {
@@ -232,7 +260,7 @@ void main() {
     ivec3 leafDims = params.leafDims[level].xyz;
     float unit = params.unit.x;
     float dt = kBakedStepFraction * size;
-    float tStart = tIn;
+    float tStart = max(tIn, sampledTo);
     // No empty-space skipping: the distance grid (capped at 4 voxels) could skip at most 2 steps
     // at level 0 and none above, and its lookup cost more than it saved (docs/design.md 5).
     uint k = 0u;       // the next sample
@@ -258,11 +286,14 @@ void main() {
             if (walked == kBakedMaxLayerTets)
                 break;
             ++walked;
-            // The exit: the nearest plane the ray leaves through, the entry face excluded.
-            exitFace = spotTetExit(tet, entryFace, origin, dir, kCountLoops, tOut, loops);
+            // The exit: the nearest plane the ray leaves through, the entry face excluded (or,
+            // backward through a fold's inverted tetrahedron, the farthest it enters through
+            // before the entry: no sample there, it was taken before the fold).
+            bool backward;
+            exitFace = spotTetExit(tet, entryFace, origin, dir, kCountLoops, tOut, backward, loops);
             if (exitFace == kTetNoFace)
                 break; // flat or degenerate: the walk stops here
-            tOut = max(tOut, tIn);
+            tOut = backward ? min(tOut, tIn) : max(tOut, tIn);
             atMesh = tOut >= tMesh;
             tOut = min(tOut, tMesh);
             inTet = true;
@@ -285,7 +316,7 @@ void main() {
             ++k;
             ++samples;
             if (transmittance < kBakedOpaque) {
-                tEnd = tOut;
+                tEnd = max(tEnd, tOut);
                 break;
             }
             t = tStart + (float(k) + 0.5) * dt;
@@ -294,7 +325,7 @@ void main() {
         // last sample (a step in an iteration of its own made a tetrahedron of n samples take
         // n + 1).
         if (!(t < tOut && samples < kBakedMaxLayerSamples)) {
-            tEnd = tOut;
+            tEnd = max(tEnd, tOut); // the farthest the walk reached
             tIn = tOut;
             if (atMesh || samples >= kBakedMaxLayerSamples)
                 break;
@@ -303,5 +334,5 @@ void main() {
             inTet = false;
         }
     }
-    compositeLayer(pixel, acc, under, radiance, transmittance, tEnd, tMesh, viewCos);
+    compositeLayer(pixel, acc, under, radiance, transmittance, tEnd, tMesh, entryDepth, sampledTo);
 }

@@ -8,7 +8,8 @@
 // whose neighbours the host uploads). Each corner carries its position now (world) and at rest
 // (the texture coordinate into the bake): its 4 face planes, normals inwards, and its affine map
 // from world now to rest, for the march.
-// The peel's faces: of its tetrahedra's entry faces (the host's mask), those that face the eye
+// The peel's faces: of its tetrahedra's entry faces (the host's mask, and every face but the base
+// of a folded tetrahedron, which the geometry decides each frame), those that face the eye
 // (the eye on the face's outer side, or within 1e-3 of its distance of the face's plane: the
 // peel's vertex shader decides those) are appended to the peel's draw, all of an invocation's
 // with one atomicAdd. The list's order depends on the atomics' order; the peel keeps the same
@@ -71,6 +72,11 @@ void main() {
     bool reversed = !((a == v0 && b == v1) || (b == v0 && c == v1) || (c == v0 && a == v1));
     uint mask = entryMasks[t];
     uint front = 0u; // the entry faces that face the eye, bit 4 k + f
+    // The faces of folded (inverted) tetrahedra are entries too: where the shell folds, the ray
+    // can enter it across the fold, through a face inside the shell that both its tetrahedra lie
+    // behind, with no boundary face before it (the walk, spot_tet_walk.h, follows the fold from
+    // there). Not the base (face 3 of the prism's first tetrahedron: the mesh).
+    uint folded = 0u;
     for (uint k = 0u; k < 3u; ++k) {
         SpotBakedTet tet;
         vec3 p[4], r[4];
@@ -96,6 +102,8 @@ void main() {
             if (eyeSide <= 1e-3 * length(tet.plane[f].xyz) * length(frame.eye.xyz - a))
                 front |= 1u << (4u * k + f);
         }
+        if (spotTetFolded(p[0], p[1], p[2], p[3]))
+            folded |= (k == 0u ? 0x7u : 0xfu) << (4u * k);
         spotTetRestMap(p[0], p[1], p[2], p[3], r[0], r[1], r[2], r[3], tet.toRest[0],
                        tet.toRest[1], tet.toRest[2]);
         tets[3u * t + k] = tet;
@@ -106,7 +114,7 @@ void main() {
             atomicMax(firstList.groups.y, groups.y);
         }
     }
-    front &= mask;
+    front &= mask | folded;
     if (front != 0u) {
         uint n = bitCount(front);
         uint slot = atomicAdd(peelDraw.x, 3u * n) / 3u;

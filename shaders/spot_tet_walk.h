@@ -47,6 +47,14 @@ SPOT_FN void spotTetRestMap(rvec3 p0, rvec3 p1, rvec3 p2, rvec3 p3, rvec3 r0, rv
     row2 = rvec4(m[0][2], m[1][2], m[2][2], offset[2]);
 }
 
+/* Whether the tetrahedron with corners p0..p3 (shellTetrahedra's order) is folded: the shell's
+ * tetrahedra are positively oriented (p3 on the side of p0, p1, p2's counter-clockwise normal)
+ * unless vertex normals that diverge over a crease turn one inside out, and then it overlaps its
+ * neighbours. */
+SPOT_FN bool spotTetFolded(rvec3 p0, rvec3 p1, rvec3 p2, rvec3 p3) {
+    return dot(cross(p1 - p0, p2 - p0), p3 - p0) < real(0.0);
+}
+
 /* A point x of the tetrahedron at rest, by its rest map's rows. */
 SPOT_FN rvec3 spotTetToRest(rvec4 row0, rvec4 row1, rvec4 row2, rvec3 x) {
     return rvec3(dot(rvec3(row0), x) + row0.w, dot(rvec3(row1), x) + row1.w,
@@ -74,24 +82,40 @@ SPOT_FN real spotTetEntry(uint tet, uint entryFace, rvec3 origin, rvec3 dir) {
     return den != real(0.0) ? max(num / den, real(0.0)) : real(0.0);
 }
 
-/* The face through which the ray leaves tetrahedron `tet`, entered through `entryFace`
- * (kTetNoFace: the ray starts inside): the nearest plane, of the other faces, that the ray
- * leaves through; tOut receives its parameter (not clamped to the entry). kTetNoFace when no
- * face qualifies (a flat or degenerate tetrahedron: the walk stops there). With `count`,
- * `loops` counts the planes examined (the shader's loop budget). */
+/* The face through which the walk leaves tetrahedron `tet`, entered through `entryFace`
+ * (kTetNoFace: the ray starts inside, at the eye): tOut receives its parameter (not clamped to
+ * the entry). The walk follows the ray's preimage through the shell's tetrahedra, which is one
+ * curve even where the shell folds (vertex normals that diverge over a crease invert some
+ * tetrahedra, and neighbouring prisms then overlap): where the ray crosses the entry face into
+ * the tetrahedron as t grows (always, in a shell without folds) it runs forward, and leaves
+ * through the nearest of the other planes that it leaves through; where it crosses the entry
+ * face out of the tetrahedron (a folded, inverted one lies on the side it came from), the
+ * preimage runs backward through it, and leaves through the farthest of the other planes that
+ * the ray enters through, before the entry: `backward` tells which. Walking on into the
+ * neighbour there keeps to the curve; following only the forward rule, a walk in a fold left the
+ * shell early or circled among the fold's tetrahedra. kTetNoFace when no face qualifies (a flat or
+ * degenerate tetrahedron: the walk stops there). With `count`, `loops` counts the planes examined
+ * (the shader's loop budget: 4 per tetrahedron). */
 SPOT_FN uint spotTetExit(uint tet, uint entryFace, rvec3 origin, rvec3 dir, bool count,
-                         SPOT_OUT(real) tOut, SPOT_INOUT(uint) loops) {
-    tOut = real(3.0e38);
+                         SPOT_OUT(real) tOut, SPOT_OUT(bool) backward, SPOT_INOUT(uint) loops) {
+    real num;
+    real den;
+    backward = false;
+    if (entryFace != kTetNoFace) {
+        if (count)
+            ++loops;
+        spotTetCrossing(spotWalkPlane(tet, entryFace), origin, dir, num, den);
+        backward = den < real(0.0);
+    }
+    tOut = backward ? real(-3.0e38) : real(3.0e38);
     uint exitFace = kTetNoFace;
     /* The 3 faces after the entry face (from inside, entry face 4: faces 1 to 3, then 0). */
     for (uint i = 1u; i < 4u; ++i) {
         if (count)
             ++loops;
         uint f = (entryFace + i) & 3u;
-        real num;
-        real den;
         spotTetCrossing(spotWalkPlane(tet, f), origin, dir, num, den);
-        if (den < real(0.0) && num / den < tOut) {
+        if (backward ? den > real(0.0) && num / den > tOut : den < real(0.0) && num / den < tOut) {
             tOut = num / den;
             exitFace = f;
         }
@@ -99,8 +123,6 @@ SPOT_FN uint spotTetExit(uint tet, uint entryFace, rvec3 origin, rvec3 dir, bool
     if (entryFace == kTetNoFace) {
         if (count)
             ++loops;
-        real num;
-        real den;
         spotTetCrossing(spotWalkPlane(tet, 0u), origin, dir, num, den);
         if (den < real(0.0) && num / den < tOut) {
             tOut = num / den;

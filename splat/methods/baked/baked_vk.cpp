@@ -262,7 +262,9 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
     m_distance =
         Image(m_ctx, width, height, kScalarFormat, kAttach | kStore, kColor, "baked mesh distance");
     m_meshDepth = Image(m_ctx, width, height, kDepthFormat, kDepthUse, kDepth, "baked mesh depth");
-    m_exitDepth = Image(m_ctx, width, height, kScalarFormat, kStore, kColor, "baked exit depth");
+    // x: the depth the next peel's entries lie behind, y: the ray parameter sampled to.
+    m_exitDepth =
+        Image(m_ctx, width, height, kColorFormat, kStore, kColor, "baked peel depth and coverage");
     m_layerEntry =
         Buffer(m_ctx, std::uint64_t(width) * height * 8,
                kStorage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, kDevice, "baked layer entries");
@@ -360,7 +362,9 @@ void BakedRenderer::ensureShell(std::uint32_t triangles) {
         m_entryMasks = Buffer(m_ctx, masks.size() * sizeof(std::uint32_t), kStorage, kHost,
                               "baked entry face masks");
         m_entryMasks.upload(std::span<const std::uint32_t>(masks));
-        m_peelDraw = Buffer(m_ctx, 16 + (std::size_t(m_entryFaceCount) + 1) * sizeof(std::uint32_t),
+        // Room for every face but the base: the shell pass lists the faces of folded
+        // tetrahedra too, which the geometry decides frame by frame.
+        m_peelDraw = Buffer(m_ctx, 16 + (11 * std::size_t(triangles) + 1) * sizeof(std::uint32_t),
                             kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             kDevice, "baked peel draw");
@@ -505,8 +509,8 @@ void BakedRenderer::recordMeshAndFirstPeel(VkCommandBuffer cmd) {
     transitionImage(cmd, m_meshDepth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0, kTests,
                     kDepthRW);
-    // The exit depth: written by a layer's march at every pixel the next peel tests (a pixel
-    // without an entry in the first layer has none in any), so never cleared.
+    // The peel depth and coverage: written by a layer's march at every pixel the next peel tests
+    // (a pixel without an entry in the first layer has none in any), so never cleared.
     transitionImage(cmd, m_exitDepth.handle(), kColorAspect, VK_IMAGE_LAYOUT_UNDEFINED, kGeneral,
                     VK_PIPELINE_STAGE_2_NONE, 0, kAll,
                     VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
