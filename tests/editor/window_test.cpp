@@ -95,9 +95,9 @@ TEST(EditWindow, ShowsWhatRenderRenders) {
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
     EXPECT_NE(e.out.find("edit: 3 frames"), std::string::npos) << e.out;
     EXPECT_NE(e.out.find("validation on: no errors"), std::string::npos) << e.out;
-    const Result r =
-        run("SPOT_VALIDATION=1",
-            "render --scene " + scene() + " --size 320x240 --method instanced --out " + ref);
+    const Result r = run("SPOT_VALIDATION=1",
+                         "render --scene " + scene() + " --size 320x240 --out " +
+                             ref); // both: --quality balanced
     ASSERT_EQ(r.code, 0) << r.err;
 
     const spot::noise::Image edited = spot::noise::readImage(shot);
@@ -191,7 +191,7 @@ TEST(EditWindowLayout, NoPanelCoversTheViewport) {
         // viewport's.
         const Result r =
             run("", "render --scene " + scene() + " --size " + std::to_string(viewport.x) + "x" +
-                        std::to_string(viewport.y) + " --method instanced --out " + ref);
+                        std::to_string(viewport.y) + " --out " + ref); // both: balanced
         ASSERT_EQ(r.code, 0) << r.err;
         EXPECT_GT(spot::splat::psnr(spot::noise::readImage(ref), edited), 60.0);
     }
@@ -258,7 +258,7 @@ TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
     EXPECT_EQ(shown.height, 240);
     const std::string ref = tmp("half-render.png");
     const Result r =
-        run("", "render --scene " + scene() + " --size 320x240 --method instanced --out " + ref);
+        run("", "render --scene " + scene() + " --size 320x240 --out " + ref); // both: balanced
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_GT(spot::splat::psnr(spot::noise::readImage(ref), edited), 60.0);
 }
