@@ -5,23 +5,26 @@
 /// The choices rest on the bench's measurements (docs/bench/: PSNR against the converged
 /// reference and wall milliseconds per frame on lavapipe, the quick, full and realtime suites),
 /// and the bench checks them on every run: over the scenes a run measured, each choice must lie
-/// on (or within noise of) the Pareto front of mean PSNR against mean wall time of the rows the
-/// run made, and the three must be ordered (fast no slower than balanced no slower than best,
-/// and no more accurate either way, within noise). A run where the table no longer follows the
-/// measurements fails with a line naming the choice and the row that beats it
-/// (editor/cmd_bench.cpp, qualityCheck). When a method changes, rerun
+/// on (or within noise of) the Pareto front of mean PSNR against the geometric mean of wall time
+/// of the rows the run made, and the three must be ordered (fast no slower than balanced no slower
+/// than best, and no more accurate either way, within noise). A run where the table no longer
+/// follows the measurements fails with a line naming the choice and the row that beats it
+/// (editor/bench_quality.h). When a method changes, rerun
 /// `spotshell bench --suite quick` (and full, realtime) and move the choice along the front here.
 ///
-/// What the numbers said when the table was set (lavapipe, 2 cores; PSNR in dB, wall ms):
-/// - fast, `oit`: the cheapest splatter whose error stays near the others' (fur-bunny 128x128
-///   32.1 dB; `instanced` costs as much at 640x480 and loses 5 to 15 dB).
-/// - balanced, `sorted`: as accurate as `hybrid` or more on every fur scene (fur-dense-bunny
-///   640x480: 33.0 dB against hybrid's 30.2 and oit's 27.7) and no slower at 640x480
-///   (171 against 177 ms); at 128x128 it is the front's point past `hybrid`.
-/// - best, `raymarch` with 64 steps and 2 x 2 rays a pixel: the most accurate GPU row on fur
-///   (fur-bunny 128x128: 40 dB against sorted's 33), at 6 to 15 times sorted's time. It misses
-///   paper-thin flakes and grazing blades (flakes-sphere 8 dB, grass-plane-grazing 26 dB against
-///   sorted's 35 and 42): balanced is the choice there.
+/// What the numbers said when the table was set: mean PSNR over the suite's scenes and the
+/// geometric mean of wall milliseconds per frame, lavapipe on 2 cores (README, "Which method to
+/// use when", has the table):
+/// - quick (2 scenes, 128x128): oit 30.96 dB 18.7 ms, hybrid 32.21 dB 19.4 ms, sorted 32.59 dB
+///   25.0 ms, raymarch 64 steps 2x2 35.92 dB 258 ms; instanced 25.71 dB 15.2 ms.
+/// - full (9 scenes, 128x128): oit 32.18 dB 21.9 ms, hybrid 32.61 dB 24.9 ms, sorted 33.52 dB
+///   30.1 ms, raymarch 64 steps 2x2 34.93 dB 178 ms.
+/// - realtime (10 scenes, 640x480): oit 34.25 dB 97.0 ms, sorted 36.67 dB 98.3 ms, hybrid
+///   35.61 dB 120 ms (sorted beats it), instanced 27.71 dB 76.7 ms.
+/// So: fast is `oit`, the cheapest row rated ok on both quick scenes (instanced is degraded on
+/// the close-up); balanced is `sorted`; best is the ray-march at 64 steps and 2 x 2 rays, the
+/// most accurate GPU row on fur and volumes, which misses paper-thin flakes (flakes-sphere
+/// 8 dB against sorted's 36): balanced is the choice there.
 #pragma once
 
 #include <string>
@@ -51,8 +54,8 @@ inline const std::vector<QualityChoice>& qualityChoices() {
         return std::vector<QualityChoice>{
             {"fast", "oit", fast, "oit: the cheapest splatting at a usable error"},
             {"balanced", "sorted", balanced,
-             "sorted: exact per-pixel order, as accurate as hybrid or more and no slower at "
-             "640x480"},
+             "sorted: every kernel composited in order, more accurate than hybrid and no "
+             "slower over the bench's scenes at 640x480"},
             {"best", "raymarch", best,
              "raymarch, 64 steps, 2x2 rays a pixel: the most accurate on fur and volumes, "
              "several times slower; misses paper-thin flakes"}};
