@@ -112,12 +112,15 @@ QualityVerdict qualityCheck(const json& rows, const std::vector<splat::QualityCh
         const Point& c = *it;
         chosen.push_back(&c);
         const Point* beaten = nullptr;
+        // Beaten: a point as accurate (within the PSNR noise) and faster beyond the time noise.
+        // One clearly more accurate at about the same time is not judged: which of two rows
+        // within the time noise is faster changes from run to run.
         for (const Point& o : all) {
-            if (&o == &c || o.psnr < c.psnr || ms(o) > ms(c))
+            if (&o == &c || o.psnr < c.psnr - kQualityPsnrNoise ||
+                ms(o) * kQualityTimeNoise >= ms(c))
                 continue;
-            if (o.psnr > c.psnr + kQualityPsnrNoise || ms(o) * kQualityTimeNoise < ms(c))
-                if (!beaten || o.psnr - c.psnr > beaten->psnr - c.psnr)
-                    beaten = &o;
+            if (!beaten || ms(o) < ms(*beaten))
+                beaten = &o;
         }
         entry.update({{"setting", c.setting},
                       {"psnr", c.psnr},
