@@ -149,9 +149,10 @@ TEST(EditWindowLayout, NoPanelCoversTheViewport) {
                           ref = tmp("layout-render-" + size + ".png");
         // 1280x720 is the window's size without --size.
         const std::string sizeOption = size == "1280x720" ? "" : " --size " + size;
-        const Result e = run(kXvfbLarge, "edit --scene " + scene() + sizeOption +
-                                             " --frames 2 --panels all --screenshot " + shot +
-                                             " --window-screenshot " + window);
+        const Result e =
+            run(kXvfbLarge, "edit --scene " + scene() + sizeOption +
+                                " --method instanced --frames 2 --panels all --screenshot " + shot +
+                                " --window-screenshot " + window);
         ASSERT_EQ(e.code, 0) << e.err;
         EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
         const glm::ivec2 windowSize = sizeAfter(e.out, "edit: a ");
@@ -191,7 +192,7 @@ TEST(EditWindowLayout, NoPanelCoversTheViewport) {
         // viewport's.
         const Result r =
             run("", "render --scene " + scene() + " --size " + std::to_string(viewport.x) + "x" +
-                        std::to_string(viewport.y) + " --out " + ref); // both: balanced
+                        std::to_string(viewport.y) + " --method instanced --out " + ref);
         ASSERT_EQ(r.code, 0) << r.err;
         EXPECT_GT(spot::splat::psnr(spot::noise::readImage(ref), edited), 60.0);
     }
