@@ -14,6 +14,7 @@
 
 #include "bench_bake.h"
 #include "bench_plot.h"
+#include "bench_quality.h"
 #include "cli.h"
 #include "commands.h"
 #include "noise/error.h"
@@ -28,6 +29,7 @@
 #include "splat/generate_vk.h"
 #include "splat/image_compare.h"
 #include "splat/methods/baked/baked_vk.h"
+#include "splat/quality.h"
 
 namespace spot::cmd {
 
@@ -818,6 +820,17 @@ int bench(int argc, char** argv) {
                  [](const Variant& v) { return v.method; });
         suite.scaling = false;
     }
+    // Each quality's choice is a row of the run (the check below needs it): the suite's own when
+    // it has the choice's method and settings, else one more row. Not when --methods chose.
+    if (!args.has("methods"))
+        for (const splat::QualityChoice& q : splat::qualityChoices()) {
+            const splat::MethodInfo& m = splat::gpuMethod(q.method);
+            const json want = cli::describe(m, q.settings);
+            if (std::none_of(suite.variants.begin(), suite.variants.end(), [&](const Variant& v) {
+                    return v.method == q.method && cli::describe(m, v.settings) == want;
+                }))
+                suite.variants.push_back({q.method, cat("quality ", q.name), q.settings});
+        }
     Bench b{splat::Context(), fs::path(args.str("out")),
             fs::path(args.str("scenes", SPOT_SOURCE_DIR "/presets/scenes")), std::move(suite),
             json::array()};
@@ -837,6 +850,7 @@ int bench(int argc, char** argv) {
         b.runScaling(bar, done, total);
     bar.finish();
 
+    const QualityVerdict quality = qualityCheck(b.rows, splat::qualityChoices());
     const json doc = {{"suite", b.suite.name},
                       {"width", b.suite.width},
                       {"height", b.suite.height},
@@ -847,6 +861,7 @@ int bench(int argc, char** argv) {
                       {"max_timed_frames", b.suite.maxTimedFrames},
                       {"reference_spp", b.suite.referenceSpp},
                       {"device", b.ctx.deviceName()},
+                      {"quality", quality.doc},
                       {"rows", b.rows}};
     writeFileAtomic(b.out / "results.json", [&](std::ostream& o) { o << doc.dump(2) << "\n"; });
     writeCsv(b.out / "results.csv", b.rows);
@@ -859,7 +874,12 @@ int bench(int argc, char** argv) {
                 "(%zu rows, suite %s)\n",
                 b.out.string().c_str(), b.suite.scaling ? ",scaling.png" : "", b.rows.size(),
                 b.suite.name.c_str());
-    return 0;
+    for (const std::string& line : quality.lines)
+        std::printf("%s\n", line.c_str());
+    // The quality table no longer following the measurements fails the run, after its outputs.
+    for (const std::string& f : quality.failures)
+        std::fprintf(stderr, "spotshell bench: %s\n", f.c_str());
+    return quality.failures.empty() ? 0 : 1;
 }
 
 } // namespace spot::cmd

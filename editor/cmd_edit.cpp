@@ -117,9 +117,9 @@ EditJob editJob(const cli::Args& args) {
                 cat("--screenshot '", job.screenshot->string(), "' must end in .png or .exr"));
     }
     job.options = sessionOptions(args);
-    job.method = args.str("method", "instanced");
-    job.settings = cli::renderSettings(args);
-    splat::gpuMethod(job.method); // InputError naming the methods
+    const cli::MethodChoice choice = cli::methodChoice(args, "spotshell edit", true);
+    job.method = choice.method;
+    job.settings = cli::renderSettings(args, choice.settings);
     return job;
 }
 

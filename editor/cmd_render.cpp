@@ -42,8 +42,8 @@ nlohmann::json statValue(double v) {
 }
 
 /// A CPU method (the reference) on the scene's impulses, with a progress bar.
-Rendered renderCpu(const cli::Args& args, cli::SceneJob& job, const splat::MethodInfo& method) {
-    const splat::RenderSettings settings = cli::renderSettings(args);
+Rendered renderCpu(cli::SceneJob& job, const splat::MethodInfo& method,
+                   const splat::RenderSettings& settings) {
     const splat::CpuScene scene{
         job.mesh,
         job.generator->kernel(),
@@ -85,8 +85,8 @@ nlohmann::json summary(std::vector<double> values) {
 
 /// A GPU method through the persistent frame: one frame (read back), then `--repeat N` warm
 /// frames (not read back), timed.
-Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::MethodInfo& method) {
-    const splat::RenderSettings settings = cli::renderSettings(args);
+Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::MethodInfo& method,
+                   const splat::RenderSettings& settings) {
     const int repeat = int(args.integer("repeat", 0, 0, 100000));
     splat::Context ctx;
     splat::Frame frame(ctx, job.mesh, *job.generator);
@@ -164,7 +164,11 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::Metho
 
 int render(int argc, char** argv) {
     std::vector<cli::OptionSpec> specs = cli::sceneOptions();
-    specs.push_back({"method", "NAME", splat::methodNames(), true});
+    specs.push_back({"method", "NAME",
+                     splat::methodNames() + " (default: --quality " +
+                         std::string(splat::kDefaultQuality) + "'s method)",
+                     false});
+    specs.push_back(cli::qualityOption());
     for (const cli::OptionSpec& o : cli::renderOptions())
         specs.push_back(o);
     specs.insert(specs.end(),
@@ -183,12 +187,14 @@ int render(int argc, char** argv) {
         std::fputs(args.usage().c_str(), stdout);
         return 0;
     }
-    const std::string method = args.str("method");
+    const cli::MethodChoice choice = cli::methodChoice(args, "spotshell render", false);
+    const std::string& method = choice.method;
     const splat::MethodInfo* info = splat::findMethod(method);
-    if (!info)
-        throw InputError(
-            cat("spotshell render: unknown method '", method, "' (", splat::methodNames(), ")"));
-    cli::refuseSettingsNotTakenBy(args, *info, "spotshell render");
+    cli::refuseSettingsNotTakenBy(
+        args, *info,
+        choice.quality.empty()
+            ? std::string("spotshell render")
+            : cat("spotshell render (--quality ", choice.quality, " picks ", method, ")"));
     if (!info->gpu() && args.has("repeat"))
         throw InputError(cat("spotshell render: --repeat times the warm frames of a GPU method (",
                              splat::gpuMethodNames(), "), not of ", method));
@@ -200,7 +206,9 @@ int render(int argc, char** argv) {
     // A CPU method renders the impulses generated on the host.
     cli::SceneJob job = cli::prepareScene(args, !info->gpu());
     const std::string out = args.str("out");
-    Rendered r = info->gpu() ? renderGpu(args, job, *info) : renderCpu(args, job, *info);
+    const splat::RenderSettings settings = cli::renderSettings(args, choice.settings);
+    Rendered r =
+        info->gpu() ? renderGpu(args, job, *info, settings) : renderCpu(job, *info, settings);
 
     std::map<std::string, std::string> metadata = {{"method", method},
                                                    {"scene", job.scene.name},
@@ -214,6 +222,8 @@ int render(int argc, char** argv) {
     if (args.has("stats")) {
         nlohmann::json j = r.stats;
         j["method"] = method;
+        if (!choice.quality.empty())
+            j["quality"] = choice.quality;
         j["scene"] = job.scene.name;
         j["width"] = r.image.width;
         j["height"] = r.image.height;
@@ -224,7 +234,9 @@ int render(int argc, char** argv) {
         j["visible_cells"] = job.visibleCells;
         writeFileAtomic(args.str("stats"), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
     }
-    std::printf("wrote %s (%s, %dx%d, %s)\n", out.c_str(), method.c_str(), r.image.width,
+    const std::string chosen =
+        choice.quality.empty() ? method : cat(method, ", quality ", choice.quality);
+    std::printf("wrote %s (%s, %dx%d, %s)\n", out.c_str(), chosen.c_str(), r.image.width,
                 r.image.height, r.summary.c_str());
     return 0;
 }

@@ -1178,7 +1178,10 @@ EditWindowReport runEditWindow(const SessionFactory& makeSession,
 std::vector<cli::OptionSpec> editWindowOptions() {
     return {
         {"method", "NAME",
-         "the method shown first: " + splat::gpuMethodNames() + " (default instanced)", false},
+         "the method shown first: " + splat::gpuMethodNames() + " (default: --quality " +
+             std::string(splat::kDefaultQuality) + "'s method)",
+         false},
+        cli::qualityOption(),
         {"frames", "N",
          "render N frames (and then the --refine steps), then close (default: until the window "
          "is closed)",
@@ -1223,9 +1226,9 @@ EditWindowOptions editWindowOptions(const cli::Args& args, int width, int height
     o.title = cat("spotshell edit - ", sceneName);
     o.width = width;
     o.height = height;
-    o.method = args.str("method", "instanced");
-    splat::gpuMethod(o.method); // InputError naming the methods
-    o.settings = cli::renderSettings(args);
+    const cli::MethodChoice choice = cli::methodChoice(args, "spotshell edit", true);
+    o.method = choice.method;
+    o.settings = cli::renderSettings(args, choice.settings);
     o.frames = int(args.integer("frames", 0, 0, 1000000));
     // Scripted runs time and compare the interactive frames: no refinement unless asked for.
     o.refineFrames = int(args.integer("refine", o.frames > 0 ? 0 : 16, 0, 1024));

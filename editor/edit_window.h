@@ -47,7 +47,7 @@ struct EditWindowOptions {
     std::string title = "spotshell edit";
     /// Initial window size, screen pixels (the viewport is the part left of the panels' column).
     int width = 1280, height = 720;
-    std::string method = "instanced"; ///< a name of splat::gpuMethods()
+    std::string method = "sorted"; ///< a name of splat::gpuMethods() (the command line sets it)
     splat::RenderSettings settings;
     /// Render this many frames (after the script, if any), then close (0: until the window is
     /// closed). Every one of these frames renders the scene (no redraw-on-demand), so they time

@@ -38,8 +38,8 @@ std::vector<OptionSpec> renderOptions() {
     return specs;
 }
 
-splat::RenderSettings renderSettings(const Args& args) {
-    splat::RenderSettings r;
+splat::RenderSettings renderSettings(const Args& args, splat::RenderSettings base) {
+    splat::RenderSettings r = std::move(base);
     const std::vector<const Setting*> all = splat::allSettings();
     // Values first, files last: a bad value is named before a file is read.
     for (const bool files : {false, true})
@@ -62,6 +62,40 @@ splat::RenderSettings renderSettings(const Args& args) {
             }
         }
     return r;
+}
+
+OptionSpec qualityOption() {
+    std::string help = "pick the method and its settings from the speed/accuracy front the bench "
+                       "measured (splat/quality.h): ";
+    for (const splat::QualityChoice& q : splat::qualityChoices())
+        help += cat(q.name, " = ", q.summary, "; ");
+    help +=
+        cat("default ", splat::kDefaultQuality, " when --method is not given; not with --method");
+    return {"quality", "NAME", help, false};
+}
+
+MethodChoice methodChoice(const Args& args, const std::string& context, bool gpuOnly) {
+    if (args.has("method") && args.has("quality"))
+        throw InputError(cat(context, ": --quality ", args.str("quality"),
+                             " picks the method; give --quality or --method ", args.str("method"),
+                             ", not both"));
+    MethodChoice c;
+    if (args.has("method")) {
+        c.method = args.str("method");
+        const splat::MethodInfo* info = splat::findMethod(c.method);
+        if (!info || (gpuOnly && !info->gpu()))
+            throw InputError(cat(context, ": unknown method '", c.method, "' (",
+                                 gpuOnly ? splat::gpuMethodNames() : splat::methodNames(), ")"));
+    } else {
+        c.quality = args.str("quality", std::string(splat::kDefaultQuality));
+        const splat::QualityChoice* q = splat::findQuality(c.quality);
+        if (!q)
+            throw InputError(
+                cat(context, ": unknown quality '", c.quality, "' (", splat::qualityNames(), ")"));
+        c.method = q->method;
+        c.settings = q->settings;
+    }
+    return c;
 }
 
 void refuseSettingsNotTakenBy(const Args& args, const splat::MethodInfo& method,

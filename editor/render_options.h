@@ -11,6 +11,7 @@
 
 #include "cli.h"
 #include "splat/method_vk.h"
+#include "splat/quality.h"
 
 namespace spot::cli {
 
@@ -18,9 +19,27 @@ namespace spot::cli {
 /// methods take it, its default and its range.
 std::vector<OptionSpec> renderOptions();
 
-/// The settings `args` asks for (defaults where it says nothing); InputError for a bad value.
+/// The settings `args` asks for (`base`'s where it says nothing); InputError for a bad value.
 /// A file setting (the bake) is read here, once.
-splat::RenderSettings renderSettings(const Args& args);
+splat::RenderSettings renderSettings(const Args& args, splat::RenderSettings base = {});
+
+/// The `--quality NAME` option (splat/quality.h's table).
+OptionSpec qualityOption();
+
+/// A method and its settings, as `--method` or `--quality` chose them.
+struct MethodChoice {
+    std::string method;
+    /// The quality's settings (the defaults with --method): the base that renderSettings(args,
+    /// settings) lays the setting options on, once the caller has refused those the method does
+    /// not take.
+    splat::RenderSettings settings;
+    std::string quality; ///< the quality that chose it; empty when --method did
+};
+
+/// `--method NAME`, else `--quality NAME`'s choice, else the default quality's (balanced). Both
+/// options: InputError, one line starting with `context`; an unknown name: InputError naming the
+/// known ones. With `gpuOnly`, a CPU method is refused.
+MethodChoice methodChoice(const Args& args, const std::string& context, bool gpuOnly);
 
 /// InputError, one line naming the methods that take it, for the first option of `args` that
 /// sets what `method` does not take (it would silently do nothing). `context` starts the line

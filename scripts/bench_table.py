@@ -9,7 +9,9 @@ over it. Table 2, per scene and splat method at its default setting: the splat p
 against its roofline (the rasterizer's own cost for the same quads) and the fragment efficiency
 (fragments shaded / pixels where a kernel's alpha reaches 1/255). Table 3, when the run has baked
 rows, per scene: each baked setting's time (GPU and wall) and error against hybrid's default
-setting, the bake's seconds and file size (refused rows with their reason).
+setting, the bake's seconds and file size (refused rows with their reason). Table 4, when the
+run checked the --quality table (splat/quality.h): each quality's choice, its mean PSNR and the
+geometric mean of its wall milliseconds over the run's scenes, and the verdict.
 """
 import json
 import sys
@@ -118,6 +120,22 @@ def main(path):
                 status = f"{r['status']}: {r.get('reason', '')}"
             print("| " + " | ".join([r["scene"], r["setting"]] + cells + [hyb, secs, size, status])
                   + " |")
+    quality = doc.get("quality")
+    if quality and quality.get("choices"):
+        print(f"\n--quality over {', '.join(quality['scenes'])} (noise: "
+              f"{quality['psnr_noise_db']} dB, {quality['time_noise_factor']}x time)\n")
+        print("| quality | method (setting) | mean PSNR (dB) | wall ms (geometric mean) | verdict |")
+        print("| --- | --- | --- | --- | --- |")
+        for c in quality["choices"]:
+            setting = f" ({c['setting']})" if "setting" in c else ""
+            psnr = f"{c['psnr']:.2f}" if "psnr" in c else "-"
+            wall = f"{c['wall_ms']:.1f}" if "wall_ms" in c else "-"
+            verdict = c["status"]
+            if "beaten_by" in c:
+                b = c["beaten_by"]
+                verdict += (f": {b['method']} ({b['setting']}) {b['psnr']:.2f} dB in "
+                            f"{b['wall_ms']:.1f} ms")
+            print(f"| {c['quality']} | {c['method']}{setting} | {psnr} | {wall} | {verdict} |")
 
 
 if __name__ == "__main__":

@@ -95,9 +95,9 @@ TEST(EditWindow, ShowsWhatRenderRenders) {
     EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
     EXPECT_NE(e.out.find("edit: 3 frames"), std::string::npos) << e.out;
     EXPECT_NE(e.out.find("validation on: no errors"), std::string::npos) << e.out;
-    const Result r =
-        run("SPOT_VALIDATION=1",
-            "render --scene " + scene() + " --size 320x240 --method instanced --out " + ref);
+    const Result r = run("SPOT_VALIDATION=1",
+                         "render --scene " + scene() + " --size 320x240 --out " +
+                             ref); // both: --quality balanced
     ASSERT_EQ(r.code, 0) << r.err;
 
     const spot::noise::Image edited = spot::noise::readImage(shot);
@@ -149,9 +149,10 @@ TEST(EditWindowLayout, NoPanelCoversTheViewport) {
                           ref = tmp("layout-render-" + size + ".png");
         // 1280x720 is the window's size without --size.
         const std::string sizeOption = size == "1280x720" ? "" : " --size " + size;
-        const Result e = run(kXvfbLarge, "edit --scene " + scene() + sizeOption +
-                                             " --frames 2 --panels all --screenshot " + shot +
-                                             " --window-screenshot " + window);
+        const Result e =
+            run(kXvfbLarge, "edit --scene " + scene() + sizeOption +
+                                " --method instanced --frames 2 --panels all --screenshot " + shot +
+                                " --window-screenshot " + window);
         ASSERT_EQ(e.code, 0) << e.err;
         EXPECT_EQ(e.err.find("validation error"), std::string::npos) << e.err;
         const glm::ivec2 windowSize = sizeAfter(e.out, "edit: a ");
@@ -258,7 +259,7 @@ TEST(EditWindow, RendersAtAQuarterOfThePixelsAndScalesUp) {
     EXPECT_EQ(shown.height, 240);
     const std::string ref = tmp("half-render.png");
     const Result r =
-        run("", "render --scene " + scene() + " --size 320x240 --method instanced --out " + ref);
+        run("", "render --scene " + scene() + " --size 320x240 --out " + ref); // both: balanced
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_GT(spot::splat::psnr(spot::noise::readImage(ref), edited), 60.0);
 }

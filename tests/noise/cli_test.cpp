@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_run.h"
+#include "splat/quality.h"
 
 namespace {
 
@@ -293,4 +294,50 @@ TEST(Cli, InfoTakesGeneratedMeshes) {
     EXPECT_NE(r.out.find("mesh torus"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("triangles"), std::string::npos) << r.out;
     expectInputError("info --mesh generated:teapot", "teapot");
+}
+
+// --quality picks the method and its settings from splat/quality.h's table; without --method,
+// render uses the balanced choice; --quality with --method is refused; the setting options still
+// apply on top of a quality's choice.
+TEST(Cli, RenderQualityPicksTheTablesChoice) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
+    const auto renderStats = [&](const std::string& options, const std::string& name) {
+        const std::string out = tmp("quality-" + name + ".png"),
+                          stats = tmp("quality-" + name + ".json");
+        const Result r = run("render --scene " + scene + " --size 40x30 " + options + " --out " +
+                             out + " --stats " + stats);
+        EXPECT_EQ(r.code, 0) << options << ": " << r.err;
+        return r.code == 0 ? nlohmann::json::parse(slurp(stats)) : nlohmann::json();
+    };
+    const spot::splat::QualityChoice* balanced =
+        spot::splat::findQuality(spot::splat::kDefaultQuality);
+    ASSERT_NE(balanced, nullptr);
+    const nlohmann::json byDefault = renderStats("", "default");
+    EXPECT_EQ(byDefault.value("method", ""), balanced->method) << byDefault.dump();
+    EXPECT_EQ(byDefault.value("quality", ""), "balanced") << byDefault.dump();
+    // Each quality renders its choice (best with fewer steps: a setting option on top of the
+    // choice; its other settings stay the table's).
+    ASSERT_EQ(spot::splat::qualityChoices().size(), 3u);
+    for (const spot::splat::QualityChoice& q : spot::splat::qualityChoices()) {
+        if (q.name == balanced->name)
+            continue; // the default's
+        const std::string steps = q.method == "raymarch" ? " --steps 8" : "";
+        const nlohmann::json j = renderStats("--quality " + q.name + steps, q.name);
+        EXPECT_EQ(j.value("method", ""), q.method) << q.name;
+        EXPECT_EQ(j.value("quality", ""), q.name) << q.name;
+        if (q.method == "raymarch") {
+            EXPECT_EQ(j.value("steps", 0), 8) << j.dump();
+            EXPECT_EQ(j.value("supersample", 0), q.settings.supersample) << j.dump();
+        }
+    }
+    // --quality with --method is refused; an unknown quality names the known ones; a setting
+    // the chosen method does not take names the quality that chose it.
+    expectInputError("render --scene " + scene + " --method oit --quality best --out " +
+                         tmp("x.png"),
+                     "give --quality or --method oit, not both");
+    expectInputError("render --scene " + scene + " --quality great --out " + tmp("x.png"),
+                     "unknown quality 'great' (fast, balanced or best)");
+    expectInputError("render --scene " + scene + " --steps 16 --out " + tmp("x.png"),
+                     "(--quality balanced picks " + balanced->method +
+                         "): --steps is a setting of");
 }

@@ -1,7 +1,8 @@
 // The quick benchmark suite, run as a user runs it, and the paper's claims asserted on its
 // results (hybrid error <= oit error on the close-up; every method's status is ok on
 // fur-bunny; the speed-up over the ray-march at matched error is reported, not asserted), and its
-// baked rows (the bench bakes each scene itself, into DIR/cache).
+// baked rows (the bench bakes each scene itself, into DIR/cache), and the --quality table
+// checked against the run.
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -38,7 +39,10 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
                             " bench --suite quick --out " + out.string() + " > " +
                             (out.parent_path() / "bench-quick.log").string() + " 2>&1";
     const int status = std::system(cmd.c_str());
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << cmd;
+    std::ifstream logIn(out.parent_path() / "bench-quick.log");
+    const std::string log((std::istreambuf_iterator<char>(logIn)),
+                          std::istreambuf_iterator<char>());
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << cmd << "\n" << log;
     for (const char* f : {"results.json", "results.csv", "stability.md", "stability.png", "pareto.png"})
         EXPECT_GT(fs::file_size(out / f), 100u) << f;
 
@@ -181,6 +185,17 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
                          "bake_bytes,bake_cached"),
               std::string::npos)
         << first;
+    // The --quality table (splat/quality.h) follows this run's measurements: each choice on the
+    // front of mean PSNR against wall time over the two scenes, within noise, and the three in
+    // order (the bench exits 1 otherwise, above, with a line naming the row that beats a choice;
+    // editor/bench_quality.h).
+    const json& quality = doc["quality"];
+    ASSERT_TRUE(quality.is_object()) << doc.dump().substr(0, 400);
+    EXPECT_TRUE(quality["ok"].get<bool>()) << quality.dump(2);
+    ASSERT_EQ(quality["choices"].size(), 3u) << quality.dump(2);
+    for (const json& c : quality["choices"])
+        EXPECT_EQ(c["status"], "on the front") << c.dump() << "\n" << quality.dump(2);
+    EXPECT_NE(log.find("quality balanced = "), std::string::npos) << log;
     // The stability matrix has baked's column.
     std::ifstream mdIn(out / "stability.md");
     const std::string md((std::istreambuf_iterator<char>(mdIn)), std::istreambuf_iterator<char>());
