@@ -43,17 +43,20 @@ nlohmann::json statValue(double v) {
 
 /// A CPU method (the reference) on the scene's impulses, with a progress bar.
 Rendered renderCpu(cli::SceneJob& job, const splat::MethodInfo& method,
-                   const splat::RenderSettings& settings) {
+                   const splat::RenderSettings& settings, bool quiet) {
     const splat::CpuScene scene{
-        job.mesh,
+        job.renderedMesh(),
         job.generator->kernel(),
         job.impulses,
         {job.scene.camera, job.scene.shading, job.scene.background, job.scene.baseColor},
         job.scene.seed,
         job.scene.referenceSpp};
-    cli::ProgressBar bar(method.name);
+    cli::ProgressBar bar(quiet ? std::string() : method.name);
     splat::CpuFrame f =
-        method.renderCpu(scene, settings, [&](int done, int total) { bar.update(done, total); });
+        method.renderCpu(scene, settings, [&](int done, int total) {
+            if (!quiet)
+                bar.update(done, total);
+        });
     bar.finish();
     Rendered r;
     r.image = std::move(f.image);
@@ -85,11 +88,10 @@ nlohmann::json summary(std::vector<double> values) {
 
 /// A GPU method through the persistent frame: one frame (read back), then `--repeat N` warm
 /// frames (not read back), timed.
-Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, const splat::MethodInfo& method,
+Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Context& ctx,
+                   splat::Frame& frame, const splat::MethodInfo& method,
                    const splat::RenderSettings& settings) {
     const int repeat = int(args.integer("repeat", 0, 0, 100000));
-    splat::Context ctx;
-    splat::Frame frame(ctx, job.mesh, *job.generator);
     const splat::View view{job.scene.camera, job.scene.shading, job.scene.background,
                            job.scene.baseColor};
     Rendered r;
@@ -177,9 +179,14 @@ int render(int argc, char** argv) {
                    "their times (frame_ms, wall_ms in --stats, and gpu_ms: each "
                    "pass's median; default 0)",
                    false},
-                  {"out", "FILE", "output image: .exr (linear float) or .png (sRGB 8-bit)", true},
+                  {"out", "FILE",
+                   "output image: .exr (linear float) or .png (sRGB 8-bit); with --frames, a "
+                   "pattern with one %d (shot.%04d.exr) numbered by frame",
+                   true},
                   {"stats", "FILE", "also write timings and counts as JSON", false},
                   cli::threadsOption()});
+    for (const cli::OptionSpec& o : cli::timeOptions())
+        specs.push_back(o);
     cli::Args args("render", "Render a scene with one of the methods. GPU methods run on Vulkan "
                              "(lavapipe without a GPU); SPOT_VALIDATION=1 turns validation on.",
                    specs, argc, argv);
@@ -207,18 +214,45 @@ int render(int argc, char** argv) {
     cli::SceneJob job = cli::prepareScene(args, !info->gpu());
     const std::string out = args.str("out");
     const splat::RenderSettings settings = cli::renderSettings(args, choice.settings);
-    Rendered r =
-        info->gpu() ? renderGpu(args, job, *info, settings) : renderCpu(job, *info, settings);
-
-    std::map<std::string, std::string> metadata = {{"method", method},
-                                                   {"scene", job.scene.name},
-                                                   {"seconds", cat(r.seconds)},
-                                                   {"kernels", std::to_string(r.kernels)},
-                                                   {"seed", std::to_string(job.scene.seed)},
-                                                   {"stats", r.stats.dump()}};
-    if (r.stats.contains("spp"))
-        metadata["spp"] = r.stats["spp"].dump();
-    noise::writeImage(out, r.image, metadata);
+    const cli::Shot shot = cli::shotOf(args, job.scene.animation, out);
+    if (!info->gpu() && shot.frames.size() > 1 && args.has("stats"))
+        throw InputError("spotshell render: --stats describes one frame; give --time, not --frames");
+    std::optional<splat::Context> ctx;
+    std::optional<splat::Frame> frame;
+    if (info->gpu()) {
+        ctx.emplace();
+        frame.emplace(*ctx, job.mesh, *job.generator);
+        if (job.animated())
+            frame->animate(job.animation, job.scene.wind);
+    }
+    cli::ProgressBar bar(shot.frames.size() > 1 ? "frames" : "");
+    Rendered r;
+    std::string written;
+    for (std::size_t i = 0; i < shot.frames.size(); ++i) {
+        const double t = shot.frames[i].time;
+        if (info->gpu()) {
+            frame->setTime(t);
+            r = renderGpu(args, job, *ctx, *frame, *info, settings);
+        } else {
+            if (i > 0 || t != job.scene.animation.time)
+                job.poseAt(t);
+            r = renderCpu(job, *info, settings, shot.frames.size() > 1);
+        }
+        std::map<std::string, std::string> metadata = {{"method", method},
+                                                       {"scene", job.scene.name},
+                                                       {"seconds", cat(r.seconds)},
+                                                       {"kernels", std::to_string(r.kernels)},
+                                                       {"seed", std::to_string(job.scene.seed)},
+                                                       {"stats", r.stats.dump()}};
+        if (job.animated())
+            metadata["time"] = cat(t);
+        if (r.stats.contains("spp"))
+            metadata["spp"] = r.stats["spp"].dump();
+        written = shot.frames[i].file;
+        noise::writeImage(written, r.image, metadata);
+        bar.update(long(i + 1), long(shot.frames.size()));
+    }
+    bar.finish();
     if (args.has("stats")) {
         nlohmann::json j = r.stats;
         j["method"] = method;
@@ -232,12 +266,19 @@ int render(int argc, char** argv) {
         j["generate_seconds"] = job.generateSeconds;
         j["cells"] = job.generator->cells().cells.size();
         j["visible_cells"] = job.visibleCells;
+        if (job.animated())
+            j["time"] = shot.frames.back().time;
         writeFileAtomic(args.str("stats"), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
     }
     const std::string chosen =
         choice.quality.empty() ? method : cat(method, ", quality ", choice.quality);
-    std::printf("wrote %s (%s, %dx%d, %s)\n", out.c_str(), chosen.c_str(), r.image.width,
-                r.image.height, r.summary.c_str());
+    if (shot.frames.size() > 1)
+        std::printf("wrote %zu frames, %s to %s (%s, %dx%d, last: %s)\n", shot.frames.size(),
+                    shot.frames.front().file.c_str(), written.c_str(), chosen.c_str(),
+                    r.image.width, r.image.height, r.summary.c_str());
+    else
+        std::printf("wrote %s (%s, %dx%d, %s)\n", written.c_str(), chosen.c_str(),
+                    r.image.width, r.image.height, r.summary.c_str());
     return 0;
 }
 

@@ -1,6 +1,9 @@
 #include "scene_job.h"
 
+#include <cctype>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <utility>
 
@@ -11,7 +14,10 @@ namespace spot::cli {
 
 std::vector<OptionSpec> sceneOptions() {
     return {{"scene", "FILE", "scene JSON (presets/scenes/*.json)", true},
-            {"mesh", "FILE", "override the scene's mesh (.obj/.ply or generated:NAME)", false},
+            {"mesh", "FILE",
+             "override the scene's mesh (.obj/.ply, .gltf/.glb, a cache walk.%04d.ply, or "
+             "generated:NAME)",
+             false},
             {"preset", "FILE", "override the scene's preset", false},
             {"size", "WxH", "override the image size, e.g. 640x480", false},
             {"seed", "N", "override the impulse seed", false}};
@@ -19,17 +25,48 @@ std::vector<OptionSpec> sceneOptions() {
 
 bool SceneJob::cellVisible(const noise::SurfaceCell& cell) const {
     const double h = generator->cellSize();
+    if (deformer) {
+        glm::vec3 lo, hi;
+        noise::posedCellBounds(generator->cells(), cell, mesh.triangles,
+                               deformer->posed().positions, lo, hi);
+        return rays->boxMayBeVisible(glm::dvec3(lo) - h, glm::dvec3(hi) + h);
+    }
     return rays->boxMayBeVisible(glm::dvec3(cell.ijk) * h - h, glm::dvec3(cell.ijk + 1) * h + h);
 }
 
-SceneJob::SceneJob(noise::SceneDesc desc, bool cpuImpulses) : scene(std::move(desc)) {
+void SceneJob::poseAt(double t) {
+    if (!deformer)
+        return;
+    const auto start = std::chrono::steady_clock::now();
+    deformer->pose(t);
+    if (cpuImpulses) {
+        visibleCells = 0;
+        for (const noise::SurfaceCell& cell : generator->cells().cells)
+            visibleCells += cellVisible(cell);
+        impulses = deformer->move(
+            generator->generate([&](const noise::SurfaceCell& cell) { return cellVisible(cell); }),
+            scene.wind);
+    }
+    generateSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+SceneJob::SceneJob(noise::SceneDesc desc, bool withCpuImpulses)
+    : scene(std::move(desc)), cpuImpulses(withCpuImpulses) {
     rays = std::make_unique<noise::CameraRays>(scene.camera);
-    mesh = noise::loadMeshOrGenerated(scene.mesh);
+    animation = noise::AnimatedMesh::load(scene.mesh, scene.animation.clip, scene.animation.fps,
+                                          scene.animation.restFrame);
+    mesh = animation.rest();
     preset = noise::loadPreset(scene.preset);
     noise::GeneratorOptions options;
     options.seed = scene.seed;
     const auto start = std::chrono::steady_clock::now();
     generator = std::make_unique<noise::ImpulseGenerator>(mesh, preset, options);
+    if (animation.animated() || scene.wind.on()) {
+        deformer = std::make_unique<noise::Deformer>(animation);
+        poseAt(scene.animation.time);
+        return;
+    }
     for (const noise::SurfaceCell& cell : generator->cells().cells)
         visibleCells += cellVisible(cell);
     if (cpuImpulses)
@@ -37,6 +74,64 @@ SceneJob::SceneJob(noise::SceneDesc desc, bool cpuImpulses) : scene(std::move(de
             generator->generate([&](const noise::SurfaceCell& cell) { return cellVisible(cell); });
     generateSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<OptionSpec> timeOptions() {
+    return {{"time", "T",
+             "seconds into the mesh's clip (default: the scene's animation.time; clamped to the "
+             "clip)",
+             false},
+            {"frames", "A-B[:STEP]",
+             "render frames A to B (every STEP-th; frame f at f / animation.fps seconds) in one "
+             "process, to --out's %d pattern",
+             false}};
+}
+
+namespace {
+
+/// `pattern` with its one printf integer conversion (%d, %04d) replaced by `frame`.
+std::string frameFile(const std::string& pattern, long frame) {
+    const std::size_t p = pattern.find('%');
+    std::size_t e = p + 1;
+    while (e < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[e])))
+        ++e;
+    if (p == std::string::npos || e >= pattern.size() || pattern[e] != 'd' ||
+        pattern.find('%', e) != std::string::npos || e - p > 4)
+        throw InputError(cat("--out '", pattern,
+                             "' must name the frames with one %d or %0Nd (shot.%04d.exr)"));
+    const int width = e > p + 1 ? std::stoi(pattern.substr(p + 1, e - p - 1)) : 0;
+    std::string number = std::to_string(std::labs(frame));
+    if (int(number.size()) < width)
+        number.insert(0, std::size_t(width) - number.size(), '0');
+    return pattern.substr(0, p) + (frame < 0 ? "-" : "") + number + pattern.substr(e + 1);
+}
+
+} // namespace
+
+Shot shotOf(const Args& args, const noise::AnimationDesc& animation, const std::string& out) {
+    Shot shot;
+    if (args.has("time") && args.has("frames"))
+        throw InputError("give --time or --frames, not both");
+    if (!args.has("frames")) {
+        ShotFrame f;
+        f.time = args.has("time") ? args.number("time", 0.0, -1e6, 1e6) : animation.time;
+        f.frame = std::lround(f.time * animation.fps);
+        f.file = out;
+        shot.frames.push_back(f);
+        return shot;
+    }
+    const std::string range = args.str("frames");
+    long a = 0, b = 0, step = 1;
+    char dash = 0, colon = 0, extra = 0;
+    const int n = std::sscanf(range.c_str(), "%ld%c%ld%c%ld%c", &a, &dash, &b, &colon, &step, &extra);
+    const bool ok = (n == 3 && dash == '-') || (n == 5 && dash == '-' && colon == ':');
+    if (!ok || step < 1 || b < a)
+        throw InputError(cat("--frames '", range, "' must be A-B or A-B:STEP with A <= B, STEP >= 1"));
+    if ((b - a) / step + 1 > 100000)
+        throw InputError(cat("--frames '", range, "' is more than 100000 frames"));
+    for (long f = a; f <= b; f += step)
+        shot.frames.push_back({f, double(f) / animation.fps, frameFile(out, f)});
+    return shot;
 }
 
 SceneJob loadSceneJob(const std::filesystem::path& scene, int width, int height, bool cpuImpulses) {

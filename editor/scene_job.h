@@ -9,7 +9,9 @@
 #include <vector>
 
 #include "cli.h"
+#include "noise/animated_mesh.h"
 #include "noise/camera.h"
+#include "noise/deform.h"
 #include "noise/impulses.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
@@ -32,18 +34,49 @@ struct SceneJob {
     SceneJob(SceneJob&&) = delete;
     SceneJob& operator=(SceneJob&&) = delete;
 
-    /// Cells whose kernels may reach the view (a cell's kernels reach at most h beyond it).
+    /// Cells whose kernels may reach the view (a cell's kernels reach at most h beyond it; at a
+    /// pose, from the cell's posed box).
     bool cellVisible(const noise::SurfaceCell& cell) const;
+
+    /// Whether the scene moves: an animated mesh, or wind (docs/design.md section 6).
+    bool animated() const { return deformer != nullptr; }
+    /// Pose the scene at time t (seconds; clamped to the clip): the posed mesh, and with
+    /// `cpuImpulses` the impulses of the cells visible at that pose, carried to it. Nothing for
+    /// a scene that does not move.
+    void poseAt(double t);
+    /// The mesh as rendered: posed (poseAt's), or the mesh as loaded.
+    const noise::Mesh& renderedMesh() const { return deformer ? deformer->posed() : mesh; }
 
     noise::SceneDesc scene;
     std::unique_ptr<noise::CameraRays> rays; ///< the scene's camera, after the overrides
-    noise::Mesh mesh;
+    noise::AnimatedMesh animation; ///< the scene's mesh as loaded, at rest and at any time
+    noise::Mesh mesh;              ///< its rest pose: what the noise is generated on
     noise::PresetDesc preset;
     std::unique_ptr<noise::ImpulseGenerator> generator;
-    std::vector<noise::Impulse> impulses; ///< of the visible cells only
+    std::unique_ptr<noise::Deformer> deformer; ///< a scene that moves
+    bool cpuImpulses = false;
+    std::vector<noise::Impulse> impulses; ///< of the visible cells only (at poseAt's pose)
     std::size_t visibleCells = 0;
     double generateSeconds = 0.0;
 };
+
+/// --time T and --frames A-B[:STEP] (docs/design.md section 6).
+std::vector<OptionSpec> timeOptions();
+
+/// One frame of a shot: its number, its time (seconds) and its output file.
+struct ShotFrame {
+    long frame = 0;
+    double time = 0.0;
+    std::string file;
+};
+struct Shot {
+    std::vector<ShotFrame> frames; ///< in order; one without --frames
+};
+/// The frames `args` asks for: --frames A-B[:STEP] (frame f at f / fps, `out` a pattern with one
+/// printf integer conversion), --time T, or the scene's time (`out` as given). InputError for a
+/// malformed range, both options, a pattern without (or with more than) one conversion, or more
+/// than 100,000 frames.
+Shot shotOf(const Args& args, const noise::AnimationDesc& animation, const std::string& out);
 
 /// Load a scene file with an optional image size override; mesh, preset and surface cells, and
 /// with `cpuImpulses` the impulses of the visible cells generated on the CPU.

@@ -481,6 +481,7 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
         }
     }
     // The rest pose.
+    out.buildPoseGeometry();
     const std::vector<glm::vec3> rest = out.positionsAt(0.0, true);
     mesh.positions = rest;
     finalizeMesh(mesh);
@@ -549,66 +550,148 @@ std::vector<float> AnimatedMesh::morphWeights(int mesh, double t, bool rest) con
     return w;
 }
 
-std::vector<glm::vec3> AnimatedMesh::positionsAt(double t, bool rest) const {
-    if (!m_frames.empty()) {
-        if (rest)
-            return m_rest.positions;
-        const double f = std::clamp(t * m_fps, 0.0, double(m_frames.size() - 1));
-        const std::size_t i = std::min(std::size_t(f), m_frames.size() - 1);
-        const std::size_t j = std::min(i + 1, m_frames.size() - 1);
-        const float u = float(f - double(i));
-        std::vector<glm::vec3> out(m_frames[i].size());
-        for (std::size_t v = 0; v < out.size(); ++v)
-            out[v] = m_frames[i][v] + (m_frames[j][v] - m_frames[i][v]) * u;
-        return out;
+void AnimatedMesh::buildPoseGeometry() {
+    PoseInputs& g = m_geometry;
+    g = PoseInputs{};
+    g.geometry = 0;
+    m_skinPalette.clear();
+    std::uint32_t palette = std::uint32_t(m_nodes.size()); // node matrices first
+    for (const Skin& s : m_skins) {
+        m_skinPalette.push_back(palette);
+        palette += std::uint32_t(s.joints.size());
     }
-    if (m_pieces.empty())
-        return m_rest.positions; // a mesh that does not move
-    const std::vector<glm::mat4> world = worldMatrices(t, rest);
+    m_pieceWeights.clear();
+    m_weightCount = 0;
     std::size_t total = 0;
     for (const Piece& p : m_pieces)
         total = std::max(total, p.first + p.count);
-    std::vector<glm::vec3> out(total);
-    for (const Piece& p : m_pieces) {
-        const std::vector<float> w = morphWeights(p.mesh, t, rest);
-        std::vector<glm::mat4> joints;
-        if (p.skin >= 0) {
-            const Skin& s = m_skins[std::size_t(p.skin)];
-            joints.resize(s.joints.size());
-            for (std::size_t j = 0; j < joints.size(); ++j)
-                joints[j] =
-                    rest ? glm::mat4(1.0f) : world[std::size_t(s.joints[j])] * s.inverseBind[j];
-        }
+    g.vertices.resize(total);
+    for (std::size_t i = 0; i < m_pieces.size(); ++i) {
+        const Piece& p = m_pieces[i];
+        gpu::SpotDeformPiece piece{};
+        piece.info = glm::uvec4(p.first, p.count, p.targets.size(), g.deltas.size());
+        piece.morph.x = m_weightCount;
+        m_pieceWeights.push_back(m_weightCount);
+        m_weightCount += std::uint32_t(p.targets.size());
+        g.pieces.push_back(piece);
+        for (const std::vector<glm::vec3>& target : p.targets)
+            for (const glm::vec3& d : target)
+                g.deltas.emplace_back(d, 0.0f);
         for (std::size_t v = 0; v < p.count; ++v) {
-            glm::vec3 x = p.base[v];
-            for (std::size_t k = 0; k < p.targets.size() && k < w.size(); ++k)
-                x += w[k] * p.targets[k][v];
-            if (p.skin < 0) {
-                out[p.first + v] = glm::vec3(world[std::size_t(p.node)] * glm::vec4(x, 1.0f));
+            gpu::SpotDeformVertex& d = g.vertices[p.first + v];
+            d.base = glm::vec4(p.base[v], glm::uintBitsToFloat(std::uint32_t(i)));
+            if (p.skin < 0) { // the node's matrix alone
+                d.joints0 = glm::uvec4(std::uint32_t(p.node), 0, 0, 0);
+                d.weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
                 continue;
             }
-            glm::mat4 m(0.0f);
-            float sum = 0.0f;
-            for (int set = 0; set < 2; ++set) {
-                if (p.joints[set].empty())
-                    continue;
-                for (int c = 0; c < 4; ++c) {
-                    const float weight = p.weights[set][v][c];
-                    if (weight == 0.0f)
-                        continue;
-                    m += weight * joints[p.joints[set][v][c]];
-                    sum += weight;
-                }
+            const std::uint32_t first = m_skinPalette[std::size_t(p.skin)];
+            if (!p.joints[0].empty()) {
+                d.joints0 = p.joints[0][v] + first;
+                d.weights0 = p.weights[0][v];
             }
-            // The weights normalised (exporters round them); none: the vertex stays at rest.
-            out[p.first + v] = sum > 0.0f ? glm::vec3(m * glm::vec4(x, 1.0f)) / sum : x;
+            if (!p.joints[1].empty()) {
+                d.joints1 = p.joints[1][v] + first;
+                d.weights1 = p.weights[1][v];
+            }
         }
     }
+}
+
+double AnimatedMesh::clampTime(double t) const {
+    return m_frames.empty() ? std::clamp(t, m_start, m_start + m_duration)
+                            : std::clamp(t, 0.0, m_duration);
+}
+
+void AnimatedMesh::inputsAt(double t, bool rest, PoseInputs& in) const {
+    if (!m_frames.empty()) {
+        // A cache: frame i's positions as the base, frame j - frame i as one morph target.
+        std::size_t i = 0, j = 0;
+        float u = 0.0f;
+        if (!rest) {
+            const double f = std::clamp(t * m_fps, 0.0, double(m_frames.size() - 1));
+            i = std::min(std::size_t(f), m_frames.size() - 1);
+            j = std::min(i + 1, m_frames.size() - 1);
+            u = float(f - double(i));
+        }
+        const std::uint64_t key = rest ? ~std::uint64_t(0) - 1 : i;
+        if (in.geometry != key) {
+            const std::vector<glm::vec3>& a = rest ? m_rest.positions : m_frames[i];
+            const std::vector<glm::vec3>& b = rest ? m_rest.positions : m_frames[j];
+            in.vertices.assign(a.size(), gpu::SpotDeformVertex{});
+            in.deltas.resize(a.size());
+            for (std::size_t v = 0; v < a.size(); ++v) {
+                in.vertices[v].base = glm::vec4(a[v], glm::uintBitsToFloat(0u));
+                in.vertices[v].weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+                in.deltas[v] = glm::vec4(b[v] - a[v], 0.0f);
+            }
+            in.pieces = {gpu::SpotDeformPiece{glm::uvec4(0, a.size(), 1, 0), glm::uvec4(0)}};
+            in.geometry = key;
+        }
+        in.palette.assign(1, glm::mat4(1.0f));
+        in.weights.assign(1, u);
+        return;
+    }
+    if (m_pieces.empty()) { // a mesh that does not move
+        if (in.geometry != 0) {
+            in.vertices.assign(m_rest.positions.size(), gpu::SpotDeformVertex{});
+            for (std::size_t v = 0; v < m_rest.positions.size(); ++v) {
+                in.vertices[v].base = glm::vec4(m_rest.positions[v], glm::uintBitsToFloat(0u));
+                in.vertices[v].weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+            }
+            in.pieces = {gpu::SpotDeformPiece{glm::uvec4(0, m_rest.positions.size(), 0, 0),
+                                              glm::uvec4(0)}};
+            in.deltas.clear();
+            in.geometry = 0;
+        }
+        in.palette.assign(1, glm::mat4(1.0f));
+        in.weights.clear();
+        return;
+    }
+    if (in.geometry != 0) {
+        in.vertices = m_geometry.vertices;
+        in.pieces = m_geometry.pieces;
+        in.deltas = m_geometry.deltas;
+        in.geometry = 0;
+    }
+    const std::vector<glm::mat4> world = worldMatrices(t, rest);
+    in.palette = world;
+    for (std::size_t s = 0; s < m_skins.size(); ++s)
+        for (std::size_t j = 0; j < m_skins[s].joints.size(); ++j)
+            in.palette.push_back(rest ? glm::mat4(1.0f)
+                                      : world[std::size_t(m_skins[s].joints[j])] *
+                                            m_skins[s].inverseBind[j]);
+    in.weights.assign(m_weightCount, 0.0f);
+    for (std::size_t i = 0; i < m_pieces.size(); ++i) {
+        const Piece& p = m_pieces[i];
+        if (p.targets.empty())
+            continue;
+        const std::vector<float> w = morphWeights(p.mesh, t, rest);
+        for (std::size_t k = 0; k < p.targets.size() && k < w.size(); ++k)
+            in.weights[m_pieceWeights[i] + k] = w[k];
+    }
+}
+
+std::vector<glm::vec3> AnimatedMesh::positionsAt(double t, bool rest) const {
+    if (rest && !m_frames.empty())
+        return m_rest.positions;
+    PoseInputs in;
+    inputsAt(t, rest, in);
+    shared::f32::PoseArrays arrays;
+    arrays.vertices = in.vertices.data();
+    arrays.pieces = in.pieces.data();
+    arrays.deltas = in.deltas.data();
+    arrays.weights = in.weights.data();
+    arrays.palette = in.palette.data();
+    shared::f32::SharedPoser poser(arrays);
+    std::vector<glm::vec3> out(in.vertices.size());
+    for (std::size_t v = 0; v < out.size(); ++v)
+        out[v] = poser.spotPoseVertex(std::uint32_t(v));
     return out;
 }
 
 std::vector<glm::vec3> AnimatedMesh::posePositions(double t) const {
-    return positionsAt(m_frames.empty() ? std::clamp(t, m_start, m_start + m_duration) : t, false);
+    return positionsAt(clampTime(t), false);
 }
 
 Mesh AnimatedMesh::pose(double t) const {
@@ -665,7 +748,8 @@ AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int
     return out;
 }
 
-AnimatedMesh AnimatedMesh::load(const std::string& spec, const std::string& clip, double fps) {
+AnimatedMesh AnimatedMesh::load(const std::string& spec, const std::string& clip, double fps,
+                                int restFrame) {
     const std::filesystem::path p(spec);
     std::string ext = p.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -673,7 +757,7 @@ AnimatedMesh AnimatedMesh::load(const std::string& spec, const std::string& clip
     if (ext == ".gltf" || ext == ".glb")
         return loadGltf(p, clip);
     if (spec.find('%') != std::string::npos)
-        return loadCache(spec, fps);
+        return loadCache(spec, fps, -1, restFrame);
     AnimatedMesh out;
     out.m_rest = loadMeshOrGenerated(spec);
     return out;

@@ -17,6 +17,9 @@
 /// unless the scene names another frame). `pose(t)` interpolates linearly between the frames
 /// around t x fps.
 ///
+/// Every pose, on the CPU and on the GPU, is spot_pose.h's formula over PoseInputs: per vertex its
+/// base, morph deltas and joints; per time the joint matrices (the palette) and morph weights.
+///
 /// A pose keeps the rest's topology (no triangle is dropped, even where a pose makes one
 /// degenerate); its normals are recomputed (area-weighted) and its tangents carried from the rest.
 #pragma once
@@ -29,8 +32,25 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "noise/mesh.h"
+#include "shaders/spot_deform.hpp"
 
 namespace spot::noise {
+
+/// What spot_pose.h reads to pose every vertex at one time: the pose pass's buffers
+/// (splat/deform_vk.h), and the CPU's pose.
+struct PoseInputs {
+    /// The geometry: per vertex its base and joints, per piece its vertices and morph targets.
+    std::vector<gpu::SpotDeformVertex> vertices;
+    std::vector<gpu::SpotDeformPiece> pieces;
+    std::vector<glm::vec4> deltas;
+    /// Which geometry the three above hold (a cache's frame pair; 0 for a glTF file, whose
+    /// geometry never changes); all ones: none yet.
+    std::uint64_t geometry = ~std::uint64_t(0);
+    /// The time's: the joint matrices (node world matrices, then each skin's joints times their
+    /// inverse bind matrices) and every piece's morph weights.
+    std::vector<glm::mat4> palette;
+    std::vector<float> weights;
+};
 
 class AnimatedMesh {
 public:
@@ -47,7 +67,7 @@ public:
     /// A file by extension: .gltf/.glb as glTF; a name with a '%' as a cache (24 fps); anything
     /// else (a static OBJ/PLY or a generated shape) as a mesh that does not move.
     static AnimatedMesh load(const std::string& spec, const std::string& clip = "",
-                             double fps = 24.0);
+                             double fps = 24.0, int restFrame = 0);
 
     const Mesh& rest() const { return m_rest; }
     bool animated() const { return m_duration > 0.0; }
@@ -63,6 +83,13 @@ public:
     Mesh pose(double t) const;
     /// Its positions only (what `pose` recomputes normals from).
     std::vector<glm::vec3> posePositions(double t) const;
+    /// What spot_pose.h reads at time t (clamped to the clip): the palette and the weights, and
+    /// the geometry too when `inputs` holds another (a cache's next frame pair, or none yet).
+    void poseInputs(double t, PoseInputs& inputs) const { inputsAt(clampTime(t), false, inputs); }
+    /// The same at rest (the bind pose).
+    void restInputs(PoseInputs& inputs) const { inputsAt(0.0, true, inputs); }
+    /// t clamped to the clip (a cache's frames: [0, duration]).
+    double clampTime(double t) const;
 
     /// A glTF animation sampler's value at `t` (exposed for tests). `times` ascending; `values`
     /// holds `width` floats per key (3 times that for CUBICSPLINE: in-tangent, value, out-tangent);
@@ -107,6 +134,9 @@ private:
     std::vector<glm::mat4> worldMatrices(double t, bool rest) const;
     std::vector<float> morphWeights(int mesh, double t, bool rest) const;
     std::vector<glm::vec3> positionsAt(double t, bool rest) const;
+    void inputsAt(double t, bool rest, PoseInputs& inputs) const;
+    /// The glTF pieces' SpotDeformVertex/Piece/deltas (after loading).
+    void buildPoseGeometry();
 
     Mesh m_rest;
     std::string m_clipName;
@@ -119,6 +149,10 @@ private:
     std::vector<Piece> m_pieces;
     std::vector<Skin> m_skins;
     std::vector<std::vector<float>> m_meshWeights; ///< per glTF mesh: its default morph weights
+    PoseInputs m_geometry;                         ///< a glTF file's (palette and weights empty)
+    std::vector<std::uint32_t> m_skinPalette;      ///< per skin: its first palette entry
+    std::vector<std::uint32_t> m_pieceWeights;     ///< per piece: its first morph weight
+    std::uint32_t m_weightCount = 0;
     // a mesh cache
     std::vector<std::vector<glm::vec3>> m_frames;
     double m_fps = 24.0;

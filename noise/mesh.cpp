@@ -22,7 +22,7 @@ constexpr double kDegenerateRelArea = 1e-12;
 
 /// A vertex normal or tangent whose accumulated sum is this small relative to the largest
 /// contribution cancelled out (opposite faces sharing a vertex); its direction is noise.
-constexpr double kCancelledRel = 1e-6;
+constexpr double kCancelledRel = 1e-6; // shaders/spot_deform_layout.h kDeformCancelled
 
 bool isFinite(const glm::vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);

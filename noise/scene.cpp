@@ -68,6 +68,44 @@ Shading parseShading(const json::Reader& rd, const json::Json& j) {
     return s;
 }
 
+AnimationDesc parseAnimation(const json::Reader& rd, const json::Json& j) {
+    rd.requireObject(j, "animation", {"clip", "fps", "time", "frame", "rest_frame"});
+    AnimationDesc a;
+    if (const json::Json* c = json::Reader::find(j, "clip"))
+        a.clip = rd.string(*c, "animation.clip", false);
+    if (const json::Json* f = json::Reader::find(j, "fps"))
+        a.fps = rd.number(*f, "animation.fps", json::Interval{0.0, 1000.0, true, false});
+    const json::Json* time = json::Reader::find(j, "time");
+    const json::Json* frame = json::Reader::find(j, "frame");
+    if (time && frame)
+        rd.fail("animation: give \"time\" (seconds) or \"frame\", not both");
+    if (time)
+        a.time = rd.number(*time, "animation.time", json::Interval{-1e6, 1e6});
+    if (frame)
+        a.time = rd.number(*frame, "animation.frame", json::Interval{-1e9, 1e9}) / a.fps;
+    if (const json::Json* r = json::Reader::find(j, "rest_frame"))
+        a.restFrame = int(rd.integer(*r, "animation.rest_frame", 0, 100000));
+    return a;
+}
+
+Wind parseWind(const json::Reader& rd, const json::Json& j) {
+    rd.requireObject(j, "wind", {"direction", "strength", "gust_frequency", "variation"});
+    Wind w;
+    if (const json::Json* d = json::Reader::find(j, "direction")) {
+        const glm::vec3 v = rd.vec3(*d, "wind.direction", kCoordinate);
+        if (!(glm::length(v) > 1e-6f))
+            rd.fail("wind.direction must not be zero");
+        w.direction = glm::normalize(v);
+    }
+    w.strength = rd.real(rd.require(j, "wind", "strength"), "wind.strength",
+                         json::Interval{-3.14159, 3.14159});
+    if (const json::Json* f = json::Reader::find(j, "gust_frequency"))
+        w.gustFrequency = rd.real(*f, "wind.gust_frequency", json::Interval{0.0, 100.0});
+    if (const json::Json* v = json::Reader::find(j, "variation"))
+        w.variation = rd.real(*v, "wind.variation", kUnit);
+    return w;
+}
+
 } // namespace
 
 SceneDesc parseScene(std::string_view text, const std::string& name,
@@ -79,7 +117,7 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
     const json::Reader rd(name);
     rd.requireObject(root, "", {"version", "name", "description", "mesh", "preset", "seed",
                                 "camera", "image", "background", "base_color", "shading",
-                                "reference"});
+                                "reference", "animation", "wind"});
     rd.requireVersion(root, kSceneVersion);
     SceneDesc s;
     if (const json::Json* n = json::Reader::find(root, "name"))
@@ -109,6 +147,10 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
         if (const json::Json* spp = json::Reader::find(*r, "spp"))
             s.referenceSpp = int(rd.integer(*spp, "reference.spp", 1, 65536));
     }
+    if (const json::Json* a = json::Reader::find(root, "animation"))
+        s.animation = parseAnimation(rd, *a);
+    if (const json::Json* w = json::Reader::find(root, "wind"))
+        s.wind = parseWind(rd, *w);
     return s;
 }
 

@@ -11,11 +11,20 @@
 #include <glm/glm.hpp>
 
 #include "camera.h"
+#include "deform.h"
 #include "reference.h"
 
 namespace spot::noise {
 
 inline constexpr int kSceneVersion = 1;
+
+/// How an animated mesh plays (scene key "animation"; docs/design.md section 6).
+struct AnimationDesc {
+    std::string clip;  ///< a glTF file's clip by name; empty: its first
+    double fps = 24.0; ///< frames per second: --frames' numbering, a mesh cache's rate
+    double time = 0.0; ///< the time rendered when the command line names none (seconds)
+    int restFrame = 0; ///< a mesh cache's rest pose: an index into its frames
+};
 
 struct SceneDesc {
     std::string name;
@@ -27,6 +36,8 @@ struct SceneDesc {
     glm::vec3 baseColor{0.5f};       ///< linear RGB of the opaque base mesh
     Shading shading;
     int referenceSpp = 16;
+    AnimationDesc animation;
+    Wind wind;
 };
 
 /// Parse a scene; `name` is the file (for messages), `baseDir` resolves relative paths.

@@ -62,7 +62,16 @@ Renderer& Frame::renderer(std::string_view method) {
     return *m_renderers.emplace(info.name, info.make(m_scene)).first->second;
 }
 
+void Frame::animate(const noise::AnimatedMesh& animation, const noise::Wind& wind) {
+    if (animation.rest().positions.size() != m_cpuGenerator.mesh().positions.size() ||
+        animation.rest().triangles != m_cpuGenerator.mesh().triangles)
+        throw InputError("Frame::animate: the animation's rest is not the frame's mesh");
+    m_deformer = std::make_unique<GpuDeformer>(m_ctx, animation, m_scene.posedMeshPass(), wind);
+}
+
 bool Frame::cellVisible(const noise::CameraRays& rays, const noise::SurfaceCell& cell) const {
+    if (m_deformer)
+        return m_deformer->cellVisible(rays, m_cpuGenerator.cells(), cell);
     const double h = m_cpuGenerator.cellSize();
     return rays.boxMayBeVisible(glm::dvec3(cell.ijk) * h - h, glm::dvec3(cell.ijk + 1) * h + h);
 }
@@ -74,6 +83,8 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
     FrameStats stats;
     stats.method = std::string(method);
     const noise::CameraRays rays(view.camera); // validates the camera (InputError)
+    if (m_deformer)
+        m_deformer->prepare(m_time);
     const bool regenerate = m_generator.prepare(
         [&](const noise::SurfaceCell& cell) {
             const bool visible = cellVisible(rays, cell);
@@ -81,29 +92,43 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
             return visible;
         },
         lodParameters(view.camera, settings.lodPixels));
-    bool generateInFrame = regenerate;
-    if (regenerate && r.readsImpulsesInPrepare()) {
-        // The renderer reads the new impulses on the host: generate them in a submit of their own.
+    // What the frame records before the method: the generation when the cells changed, the
+    // deform passes every frame of an animated mesh.
+    const auto recordImpulses = [&](VkCommandBuffer cmd, bool generate) {
+        if (generate)
+            m_generator.record(cmd, m_timer);
+        if (m_deformer)
+            m_deformer->record(cmd, m_timer, m_generator.impulses());
+    };
+    bool impulsesInFrame = true;
+    if (r.readsImpulsesInPrepare() && (regenerate || m_deformer)) {
+        // The renderer reads the new impulses on the host: make them in a submit of their own.
         VkCommandBuffer cmd = m_commands.begin();
         m_timer.begin(cmd);
-        m_generator.record(cmd, m_timer);
+        recordImpulses(cmd, regenerate);
         m_commands.submitAndWait();
         for (const auto& pass : m_timer.passMilliseconds())
             stats.passMs.push_back(pass);
-        generateInFrame = false;
+        impulsesInFrame = false;
     }
-    r.prepare(view, m_generator.impulses(), settings);
+    // The deform passes' set stands in for the generator's from the first record on (its
+    // buffer is made there; the version changes every frame).
+    if (m_deformer && impulsesInFrame)
+        m_deformer->reserve(m_generator.impulses());
+    r.prepare(view, m_deformer ? m_deformer->moved() : m_generator.impulses(), settings);
     VkCommandBuffer cmd = m_commands.begin();
     m_timer.begin(cmd);
-    if (generateInFrame)
-        m_generator.record(cmd, m_timer);
+    if (impulsesInFrame)
+        recordImpulses(cmd, regenerate);
     r.record(cmd, m_timer);
     if (image)
         m_readback.record(m_ctx, cmd, r.result());
     m_commands.submitAndWait();
-    const double generateMs = stats.passMs.empty() ? 0.0 : stats.passMs.front().second;
+    double earlierMs = 0.0; // the passes of a submit of their own
+    for (const auto& pass : stats.passMs)
+        earlierMs += pass.second;
     fillStats(stats, m_timer, r, m_ctx);
-    stats.gpuMs += generateMs;
+    stats.gpuMs += earlierMs;
     stats.regenerated = regenerate;
     stats.kernelsGenerated = m_generator.count();
     stats.candidates = m_generator.candidates();

@@ -23,6 +23,7 @@
 #include "noise/image.h"
 #include "noise/impulses.h"
 #include "splat/context_vk.h"
+#include "splat/deform_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/method_vk.h"
 
@@ -82,14 +83,27 @@ public:
     /// stay bit for bit (GpuGenerator::refreshFields(cells)).
     void fieldsChanged(const std::vector<std::uint32_t>& cells) { m_generator.refreshFields(cells); }
     /// Whether a cell may be seen by the camera (its box grown by one cell: kernels reach the
-    /// neighbouring cells).
+    /// neighbouring cells; an animated mesh's cell, its posed box).
     bool cellVisible(const noise::CameraRays& rays, const noise::SurfaceCell& cell) const;
+
+    /// Make every later render() pose `animation` (whose rest() must be the frame's mesh, and
+    /// which must outlive the frame) at the time setTime() gives, and turn the impulses by
+    /// `wind` (docs/design.md section 6). A static mesh with wind animates too. InputError for a
+    /// mesh the deform passes cannot take.
+    void animate(const noise::AnimatedMesh& animation, const noise::Wind& wind);
+    bool animated() const { return m_deformer != nullptr; }
+    /// The time (seconds) of the next render()s' pose; clamped to the clip.
+    void setTime(double t) { m_time = t; }
+    double time() const { return m_time; }
+    GpuDeformer* deformer() { return m_deformer.get(); }
 
 private:
     Context& m_ctx;
     const noise::ImpulseGenerator& m_cpuGenerator;
     SceneGpu m_scene;
     GpuGenerator m_generator;
+    std::unique_ptr<GpuDeformer> m_deformer;
+    double m_time = 0.0;
     std::map<std::string, std::unique_ptr<Renderer>, std::less<>> m_renderers;
     PassTimer m_timer;
     CommandBuffer m_commands;

@@ -102,6 +102,8 @@ public:
     SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel);
     Context& context() const { return *m_ctx; }
     const MeshPass& meshPass() const { return m_meshPass; }
+    /// The same, for the frame that poses an animated mesh into it (splat/deform_vk.h).
+    MeshPass& posedMeshPass() { return m_meshPass; }
     const Buffer& lobes() const { return m_lobes; } ///< gpu::SpotLobe[lobeCount()]
     const noise::Kernel& kernel() const { return m_kernel; }
     std::uint32_t lobeCount() const { return std::uint32_t(m_kernel.lobes.size()); }

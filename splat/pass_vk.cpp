@@ -37,6 +37,14 @@ gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const nois
     return frame;
 }
 
+void MeshPass::keepRest() {
+    if (m_rest.handle() || m_vertices.size() == 0)
+        return;
+    m_rest = Buffer(*m_ctx, m_vertices.size(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                    Buffer::Memory::HostVisible, "mesh vertices at rest");
+    m_rest.upload(m_vertices.mapped(), m_vertices.size());
+}
+
 MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_ctx(&ctx) {
     std::vector<gpu_splat::SpotMeshVertex> vertices(mesh.positions.size());
     for (std::size_t i = 0; i < vertices.size(); ++i) {

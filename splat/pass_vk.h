@@ -94,18 +94,28 @@ public:
     /// outside them, and meets a front face first). Half the triangles are then dropped at setup,
     /// which is most of the pass on lavapipe (ring-sphere's 36,864 triangles at 128x128: 6.2 to
     /// 3.1 ms); the colour, distance and depth written are the same. The closedness and bounds
-    /// are the constructor's mesh's: a mesh that animates (docs/design.md section 6) will have to
-    /// refresh them with its vertices.
+    /// are the constructor's mesh's (a pose keeps the topology), the bounds the pose's (setBounds).
     bool cullsBackFaces(const gpu_splat::SpotSplatFrame& frame) const;
-    /// gpu_splat::SpotMeshVertex[] (world units, unit normals or zero).
+    /// gpu_splat::SpotMeshVertex[] (world units, unit normals or zero): the mesh as drawn, which
+    /// an animated mesh's deform passes write every frame (splat/deform_vk.h).
     const Buffer& vertices() const { return m_vertices; }
+    /// The mesh at rest: vertices() until keepRest(), then a copy of the rest that no pass
+    /// writes (what the baked method's shell maps back to, and the deform passes rotate from).
+    const Buffer& restVertices() const { return m_rest.handle() ? m_rest : m_vertices; }
+    /// Keep a copy of the rest vertices before the deform passes overwrite vertices().
+    void keepRest();
+    /// The posed mesh's bounds (cullsBackFaces' test), set by the host each frame it poses.
+    void setBounds(glm::vec3 lo, glm::vec3 hi) {
+        m_lo = lo;
+        m_hi = hi;
+    }
     /// uint32[3 x triangles], usable as a storage buffer too.
     const Buffer& indices() const { return m_indices; }
     std::uint32_t indexCount() const { return m_indexCount; }
 
 private:
     Context* m_ctx;
-    Buffer m_vertices, m_indices;
+    Buffer m_vertices, m_indices, m_rest;
     std::uint32_t m_indexCount = 0;
     bool m_closed = false;
     glm::vec3 m_lo{0.0f}, m_hi{0.0f};

@@ -1,0 +1,221 @@
+#include "deform_vk.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "deform_frames.comp.h"
+#include "deform_move.comp.h"
+#include "deform_normals.comp.h"
+#include "deform_pose.comp.h"
+#include "noise/error.h"
+#include "shaders/spot_deform.hpp"
+
+namespace spot::splat {
+
+namespace {
+
+using namespace passes;
+using gpu::SpotDeformPush;
+using namespace gpu; // the binding names
+
+constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+constexpr auto kHost = Buffer::Memory::HostVisible;
+
+/// `items` into `buffer`, grown (with a quarter more room) when it holds too few.
+template <typename T>
+void put(Context& ctx, Buffer& buffer, const std::vector<T>& items, const char* what) {
+    const VkDeviceSize need = std::max<VkDeviceSize>(items.size() * sizeof(T), 16);
+    if (!buffer.handle() || buffer.size() < need) {
+        buffer = Buffer();
+        buffer = Buffer(ctx, need + need / 4, kStorage, kHost, what);
+    }
+    if (!items.empty())
+        buffer.upload(items.data(), items.size() * sizeof(T));
+}
+
+void dispatch(VkCommandBuffer cmd, std::uint32_t n) {
+    const std::uint32_t groups = (n + kDeformGroup - 1) / kDeformGroup;
+    if (groups == 0)
+        return;
+    const std::uint32_t x = std::min<std::uint32_t>(groups, 65535);
+    vkCmdDispatch(cmd, x, (groups + x - 1) / x, 1);
+}
+
+void bind(VkCommandBuffer cmd, const Pipeline& p, const SpotDeformPush& push) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
+    vkCmdPushConstants(cmd, p.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+}
+
+} // namespace
+
+GpuDeformer::GpuDeformer(Context& ctx, const noise::AnimatedMesh& animation, MeshPass& mesh,
+                         const noise::Wind& wind)
+    : m_ctx(ctx), m_animation(animation), m_mesh(mesh), m_wind(wind) {
+    const noise::Mesh& rest = animation.rest();
+    m_vertexCount = std::uint32_t(rest.positions.size());
+    m_triangleCount = std::uint32_t(rest.triangles.size());
+    // Each vertex's triangles (offsets, then the lists): the normals pass gathers over them.
+    std::vector<std::uint32_t> adjacency(m_vertexCount + 1 + 3 * std::size_t(m_triangleCount), 0);
+    for (const glm::uvec3& t : rest.triangles)
+        for (int k = 0; k < 3; ++k)
+            ++adjacency[t[k] + 1];
+    for (std::uint32_t v = 0; v < m_vertexCount; ++v) {
+        if (adjacency[v + 1] > kDeformMaxValence)
+            throw InputError(cat(rest.name, ": vertex ", v, " is shared by ", adjacency[v + 1],
+                                 " triangles, more than the ", kDeformMaxValence,
+                                 " an animated mesh may have"));
+        adjacency[v + 1] += adjacency[v];
+    }
+    std::vector<std::uint32_t> fill(adjacency.begin(), adjacency.begin() + m_vertexCount);
+    for (std::uint32_t t = 0; t < m_triangleCount; ++t)
+        for (int k = 0; k < 3; ++k)
+            adjacency[m_vertexCount + 1 + fill[rest.triangles[t][k]]++] = t;
+    put(ctx, m_adjacency, adjacency, "deform adjacency");
+    // Every triangle starts at rest (no rotation).
+    std::vector<glm::vec4> rotations(3 * std::size_t(m_triangleCount));
+    for (std::size_t t = 0; t < m_triangleCount; ++t) {
+        rotations[3 * t] = glm::vec4(1, 0, 0, 0);
+        rotations[3 * t + 1] = glm::vec4(0, 1, 0, 0);
+        rotations[3 * t + 2] = glm::vec4(0, 0, 1, 0);
+    }
+    put(ctx, m_rotations, rotations, "deform rotations");
+    mesh.keepRest();
+
+    m_pose = makeComputePipeline(
+        ctx, spirv(spv_deform_pose_comp),
+        {storageBuffer(kDeformBindVertices), storageBuffer(kDeformBindPieces),
+         storageBuffer(kDeformBindDeltas), storageBuffer(kDeformBindPalette),
+         storageBuffer(kDeformBindWeights), storageBuffer(kDeformBindPosed)},
+        sizeof(SpotDeformPush));
+    m_normals = makeComputePipeline(ctx, spirv(spv_deform_normals_comp),
+                                    {storageBuffer(kDeformBindPosed),
+                                     storageBuffer(kDeformBindIndices),
+                                     storageBuffer(kDeformBindAdjacency)},
+                                    sizeof(SpotDeformPush));
+    m_frames = makeComputePipeline(
+        ctx, spirv(spv_deform_frames_comp),
+        {storageBuffer(kDeformBindPosed), storageBuffer(kDeformBindRest),
+         storageBuffer(kDeformBindIndices), storageBuffer(kDeformBindRotations)},
+        sizeof(SpotDeformPush));
+    m_move = makeComputePipeline(
+        ctx, spirv(spv_deform_move_comp),
+        {storageBuffer(kDeformBindPosed), storageBuffer(kDeformBindIndices),
+         storageBuffer(kDeformBindRotations), storageBuffer(kDeformBindImpulses),
+         storageBuffer(kDeformBindMoved), storageBuffer(kDeformBindCount)},
+        sizeof(SpotDeformPush));
+}
+
+void GpuDeformer::prepare(double t) {
+    m_time = m_animation.animated() ? m_animation.clampTime(t) : t;
+    m_animation.poseInputs(m_time, m_inputs);
+    if (m_inputs.vertices.size() != m_vertexCount)
+        throw InputError(cat("deform: the pose has ", m_inputs.vertices.size(),
+                             " vertices, the mesh ", m_vertexCount));
+    if (m_uploadedGeometry != m_inputs.geometry) {
+        put(m_ctx, m_vertices, m_inputs.vertices, "deform vertices");
+        put(m_ctx, m_pieces, m_inputs.pieces, "deform pieces");
+        put(m_ctx, m_deltas, m_inputs.deltas, "deform morph deltas");
+        m_uploadedGeometry = m_inputs.geometry;
+    }
+    put(m_ctx, m_palette, m_inputs.palette, "deform palette");
+    put(m_ctx, m_weights, m_inputs.weights, "deform morph weights");
+    // The same pose on the host, for culling and the mesh's bounds.
+    shared::f32::PoseArrays arrays;
+    arrays.vertices = m_inputs.vertices.data();
+    arrays.pieces = m_inputs.pieces.data();
+    arrays.deltas = m_inputs.deltas.data();
+    arrays.weights = m_inputs.weights.data();
+    arrays.palette = m_inputs.palette.data();
+    shared::f32::SharedPoser poser(arrays);
+    m_posed.resize(m_vertexCount);
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi = -lo;
+    for (std::uint32_t v = 0; v < m_vertexCount; ++v) {
+        m_posed[v] = poser.spotPoseVertex(v);
+        lo = glm::min(lo, m_posed[v]);
+        hi = glm::max(hi, m_posed[v]);
+    }
+    m_mesh.setBounds(lo, hi);
+}
+
+bool GpuDeformer::cellVisible(const noise::CameraRays& rays, const noise::SurfaceCells& cells,
+                              const noise::SurfaceCell& cell) const {
+    glm::vec3 lo, hi;
+    noise::posedCellBounds(cells, cell, m_animation.rest().triangles, m_posed, lo, hi);
+    const double h = cells.cellSize;
+    return rays.boxMayBeVisible(glm::dvec3(lo) - h, glm::dvec3(hi) + h);
+}
+
+void GpuDeformer::record(VkCommandBuffer cmd, PassTimer& timer, const ImpulseSet& rest) {
+    SpotDeformPush push{};
+    push.counts = glm::uvec4(m_vertexCount, m_triangleCount, rest.capacity, m_wind.on() ? 1u : 0u);
+    push.wind = glm::vec4(m_wind.direction, m_wind.strength);
+    push.gust = glm::vec4(m_wind.gustFrequency, m_wind.variation, float(m_time), 0.0f);
+    const Buffer& posed = m_mesh.vertices();
+    // Every earlier write (the host's uploads, the last frame's reads of the vertices) first.
+    memoryBarrier(cmd, kAll | kHostStage, VK_ACCESS_2_MEMORY_WRITE_BIT | VK_ACCESS_2_MEMORY_READ_BIT,
+                  kCompute, kStorageRW);
+    bind(cmd, m_pose, push);
+    Descriptors()
+        .buffer(kDeformBindVertices, m_vertices)
+        .buffer(kDeformBindPieces, m_pieces)
+        .buffer(kDeformBindDeltas, m_deltas)
+        .buffer(kDeformBindPalette, m_palette)
+        .buffer(kDeformBindWeights, m_weights)
+        .buffer(kDeformBindPosed, posed)
+        .push(m_ctx, cmd, m_pose);
+    dispatch(cmd, m_vertexCount);
+    memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
+    bind(cmd, m_normals, push);
+    Descriptors()
+        .buffer(kDeformBindPosed, posed)
+        .buffer(kDeformBindIndices, m_mesh.indices())
+        .buffer(kDeformBindAdjacency, m_adjacency)
+        .push(m_ctx, cmd, m_normals);
+    dispatch(cmd, m_vertexCount);
+    memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
+    bind(cmd, m_frames, push);
+    Descriptors()
+        .buffer(kDeformBindPosed, posed)
+        .buffer(kDeformBindRest, m_mesh.restVertices())
+        .buffer(kDeformBindIndices, m_mesh.indices())
+        .buffer(kDeformBindRotations, m_rotations)
+        .push(m_ctx, cmd, m_frames);
+    dispatch(cmd, m_triangleCount);
+    memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
+    timer.mark(cmd, "deform");
+
+    if (!m_reserved)
+        reserve(rest);
+    m_reserved = false;
+    if (rest.capacity > 0) {
+        bind(cmd, m_move, push);
+        Descriptors()
+            .buffer(kDeformBindPosed, posed)
+            .buffer(kDeformBindIndices, m_mesh.indices())
+            .buffer(kDeformBindRotations, m_rotations)
+            .buffer(kDeformBindImpulses, *rest.impulses)
+            .buffer(kDeformBindMoved, m_moved)
+            .buffer(kDeformBindCount, *rest.count)
+            .push(m_ctx, cmd, m_move);
+        dispatch(cmd, rest.capacity);
+    }
+    // The posed mesh and the moved impulses for every later command, and the host.
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kAll | kHostStage,
+                  VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
+    timer.mark(cmd, "move");
+}
+
+void GpuDeformer::reserve(const ImpulseSet& rest) {
+    const std::uint64_t need = std::max<std::uint64_t>(rest.capacity, 1) * sizeof(gpu::SpotImpulse);
+    if (!m_moved.handle() || m_moved.size() < need) {
+        m_moved = Buffer();
+        m_moved = Buffer(m_ctx, need + need / 4, kStorage, kHost, "moved impulses");
+    }
+    m_movedSet = rest;
+    m_movedSet.impulses = &m_moved;
+    // Versions of their own (the generator's count up from 0).
+    m_movedSet.version = (std::uint64_t(1) << 63) | ++m_version;
+    m_reserved = true;
+}
+
+} // namespace spot::splat

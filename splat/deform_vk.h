@@ -1,0 +1,76 @@
+/// @file deform_vk.h
+/// @brief An animated mesh's pose on the GPU, per frame (docs/design.md section 6): four compute
+/// passes (shaders/spot_deform_layout.h) pose the vertices into the base mesh's vertex buffer,
+/// recompute their normals, rebuild each triangle's rotation from rest, and carry the rest
+/// impulses to the pose (then turn them by the wind). Every method then renders the moved
+/// impulses over the posed mesh.
+///
+/// The host poses the vertices too, with the same formula (spot_pose.h) and inputs, for what it
+/// decides before the frame: which cells the camera may see (their posed boxes), and the posed
+/// mesh's bounds (MeshPass's back-face test).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "noise/animated_mesh.h"
+#include "noise/cells.h"
+#include "noise/deform.h"
+#include "splat/context_vk.h"
+#include "splat/method_vk.h"
+#include "splat/pass_vk.h"
+
+namespace spot::splat {
+
+class GpuDeformer {
+public:
+    /// Uploads the topology (each vertex's triangles) and the rest pose; `animation` (whose rest
+    /// is the mesh `mesh` holds) must outlive this object. InputError for a vertex shared by more
+    /// than kDeformMaxValence triangles.
+    GpuDeformer(Context& ctx, const noise::AnimatedMesh& animation, MeshPass& mesh,
+                const noise::Wind& wind);
+    GpuDeformer(const GpuDeformer&) = delete;
+    GpuDeformer& operator=(const GpuDeformer&) = delete;
+
+    /// Host side of a frame at time t (clamped to the clip): the pose's inputs uploaded, the
+    /// vertices posed on the host. No frame that reads this deformer may be in flight.
+    void prepare(double t);
+    double time() const { return m_time; }
+    /// The posed positions on the host (prepare's).
+    const std::vector<glm::vec3>& posedPositions() const { return m_posed; }
+    /// Whether the camera may see `cell`'s kernels at this pose.
+    bool cellVisible(const noise::CameraRays& rays, const noise::SurfaceCells& cells,
+                     const noise::SurfaceCell& cell) const;
+
+    /// Host side of the moved set for `rest` (the generator's set of this frame): its buffer
+    /// grown when needed, and a new version. record() does it when not done since the last.
+    void reserve(const ImpulseSet& rest);
+    /// Record the four passes: the mesh posed, its normals, its triangles' rotations, and `rest`
+    /// moved into moved() (marked on `timer` as "deform" and "move"). `rest` must be the set the
+    /// generator holds at record time (its count is read on the GPU).
+    void record(VkCommandBuffer cmd, PassTimer& timer, const ImpulseSet& rest);
+    /// The moved impulses of the last reserve(): the rest set's count and capacity, a version of
+    /// their own (every frame is a new set).
+    ImpulseSet moved() const { return m_movedSet; }
+
+private:
+    Context& m_ctx;
+    const noise::AnimatedMesh& m_animation;
+    MeshPass& m_mesh;
+    noise::Wind m_wind;
+    std::uint32_t m_vertexCount = 0, m_triangleCount = 0;
+    noise::PoseInputs m_inputs;
+    std::vector<glm::vec3> m_posed;
+    double m_time = 0.0;
+    std::uint64_t m_uploadedGeometry = ~std::uint64_t(0);
+    Pipeline m_pose, m_normals, m_frames, m_move;
+    Buffer m_vertices, m_pieces, m_deltas, m_palette, m_weights;
+    Buffer m_adjacency, m_rotations, m_moved;
+    ImpulseSet m_movedSet;
+    std::uint64_t m_version = 0;
+    bool m_reserved = false;
+};
+
+} // namespace spot::splat
