@@ -6,6 +6,8 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "noise/animated_mesh.h"
+#include "noise/deform.h"
 #include "noise/error.h"
 #include "noise/impulse_io.h"
 #include "noise/impulses.h"
@@ -17,7 +19,16 @@ namespace spot::cmd {
 int impulses(int argc, char** argv) {
     cli::Args args("impulses",
                    "Generate the impulses of a preset on a mesh and write them as PLY points.",
-                   {{"mesh", "FILE", "mesh (.obj/.ply) or generated:sphere|torus|plane", true},
+                   {{"mesh", "FILE",
+                     "mesh (.obj/.ply), an animated mesh (.gltf/.glb, a cache walk.%04d.ply) or "
+                     "generated:sphere|torus|plane",
+                     true},
+                    {"time", "T",
+                     "an animated mesh: the impulses generated at rest, carried to the pose at T "
+                     "seconds (default: at rest)",
+                     false},
+                    {"clip", "NAME", "a glTF file's clip (default: its first)", false},
+                    {"fps", "F", "a mesh cache's frames per second (default 24)", false},
                     {"preset", "FILE", "preset JSON (see presets/README.md)", true},
                     {"seed", "N", "global random seed (default 0)", false},
                     {"cell-size", "H", "cell edge in world units (default: the kernel's support "
@@ -35,7 +46,9 @@ int impulses(int argc, char** argv) {
         threadLimit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
 
     const auto start = std::chrono::steady_clock::now();
-    const noise::Mesh mesh = noise::loadMeshOrGenerated(args.str("mesh"));
+    const noise::AnimatedMesh animation = noise::AnimatedMesh::load(
+        args.str("mesh"), args.has("clip") ? args.str("clip") : "", args.number("fps", 24.0, 1e-3, 1e3));
+    const noise::Mesh& mesh = animation.rest();
     const noise::PresetDesc preset = noise::loadPreset(args.str("preset"));
     noise::GeneratorOptions options;
     options.seed = std::uint32_t(args.integer("seed", 0, 0, 0xffffffffll));
@@ -44,7 +57,17 @@ int impulses(int argc, char** argv) {
         throw InputError("spotshell impulses: --cell-size must be positive");
 
     const noise::ImpulseGenerator generator(mesh, preset, options);
-    const std::vector<noise::Impulse> impulses = generator.generate();
+    std::vector<noise::Impulse> impulses = generator.generate();
+    std::string pose = "at rest";
+    if (args.has("time")) {
+        if (!animation.animated())
+            throw InputError(cat("spotshell impulses: --time needs an animated mesh; ", mesh.name,
+                                 " does not move"));
+        noise::Deformer deformer(animation);
+        deformer.pose(args.number("time", 0.0, -1e6, 1e6));
+        impulses = deformer.move(impulses, generator.cellSize());
+        pose = cat("at ", deformer.time(), " s");
+    }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -52,7 +75,7 @@ int impulses(int argc, char** argv) {
     noise::writeImpulsesPly(out, impulses,
                             {cat("spotshell impulses preset=", preset.name, " seed=", options.seed,
                                  " cell_size=", generator.cellSize()),
-                             cat("mesh ", mesh.name)});
+                             cat("mesh ", mesh.name, " ", pose)});
     std::printf("%zu cells (h = %g), %zu impulses of %s on %s, %.3f s (%.0f impulses/s)\n",
                 generator.cells().cells.size(), double(generator.cellSize()), impulses.size(),
                 preset.name.c_str(), mesh.name.c_str(), seconds,

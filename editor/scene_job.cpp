@@ -45,7 +45,7 @@ void SceneJob::poseAt(double t) {
             visibleCells += cellVisible(cell);
         impulses = deformer->move(
             generator->generate([&](const noise::SurfaceCell& cell) { return cellVisible(cell); }),
-            scene.wind);
+            generator->cellSize(), scene.wind);
     }
     generateSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

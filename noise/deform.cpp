@@ -46,7 +46,8 @@ void Deformer::pose(double t) {
     m_collapsed = collapsed;
 }
 
-std::vector<Impulse> Deformer::move(const std::vector<Impulse>& rest, const Wind& wind) const {
+std::vector<Impulse> Deformer::move(const std::vector<Impulse>& rest, float cellSize,
+                                    const Wind& wind) const {
     std::vector<Impulse> out(rest);
     const float t = float(m_time);
     tbb::parallel_for(std::size_t(0), out.size(), [&](std::size_t i) {
@@ -69,6 +70,7 @@ std::vector<Impulse> Deformer::move(const std::vector<Impulse>& rest, const Wind
             turn = W * R;
         }
         imp.position = position;
+        imp.cell = glm::ivec3(glm::floor(root / cellSize));
         imp.normal = turn * imp.normal;
         imp.comb = turn * imp.comb;
         imp.frame = turn * imp.frame;

@@ -61,8 +61,11 @@ public:
     std::size_t collapsed() const { return m_collapsed; }
 
     /// Impulses generated on the rest pose, carried to the last pose, then turned by `wind` at
-    /// its time. Everything but the position, the normal, the comb and the frame is kept.
-    std::vector<Impulse> move(const std::vector<Impulse>& rest, const Wind& wind = {}) const;
+    /// its time. Each one's cell becomes its root's at the pose (floor(root / cellSize)), the
+    /// cells the ray march bins by. Everything but the position, the normal, the comb, the frame
+    /// and the cell is kept: the anchor and every random value are the rest's, bit for bit.
+    std::vector<Impulse> move(const std::vector<Impulse>& rest, float cellSize,
+                              const Wind& wind = {}) const;
 
 private:
     const AnimatedMesh& m_mesh;

@@ -1,7 +1,8 @@
 #version 450
 // Deform pass 4 of 4 (spot_deform_layout.h): each impulse carried from its rest anchor to the
 // pose (spotMoveAnchor: the posed point plus its height along the posed normal; its frame,
-// normal and comb turned by its triangle's rotation), then by the wind about its root.
+// normal and comb turned by its triangle's rotation), then by the wind about its root. Its cell
+// becomes its root's at the pose (the ray march bins by it).
 #extension GL_GOOGLE_include_directive : require
 #include "deform_common.glsl"
 #include "spot_deform.h"
@@ -37,6 +38,7 @@ void main() {
         turn = W * R;
     }
     imp.position.xyz = position;
+    imp.cell.xyz = ivec3(floor(root / push.gust.w));
     imp.normal.xyz = turn * imp.normal.xyz;
     imp.comb.xyz = turn * imp.comb.xyz;
     imp.frameX.xyz = turn * imp.frameX.xyz;

@@ -40,7 +40,8 @@ struct SpotDeformPiece {
 struct SpotDeformPush {
     uvec4 counts; /* x: vertices; y: triangles; z: impulse capacity; w: 1 with wind */
     vec4 wind;    /* xyz: unit direction (world); w: strength (radians) */
-    vec4 gust;    /* x: gust frequency (Hz); y: variation per impulse [0, 1]; z: time (s); w unused */
+    vec4 gust;    /* x: gust frequency (Hz); y: variation per impulse [0, 1]; z: time (s); w: the
+                     cell size h (a moved impulse's cell is its root's, floor(root / h)) */
 };
 
 SPOT_CONST uint kDeformGroup = 64u;

@@ -49,8 +49,8 @@ void bind(VkCommandBuffer cmd, const Pipeline& p, const SpotDeformPush& push) {
 } // namespace
 
 GpuDeformer::GpuDeformer(Context& ctx, const noise::AnimatedMesh& animation, MeshPass& mesh,
-                         const noise::Wind& wind)
-    : m_ctx(ctx), m_animation(animation), m_mesh(mesh), m_wind(wind) {
+                         const noise::SurfaceCells& cells, const noise::Wind& wind)
+    : m_ctx(ctx), m_animation(animation), m_mesh(mesh), m_cells(cells), m_wind(wind) {
     const noise::Mesh& rest = animation.rest();
     m_vertexCount = std::uint32_t(rest.positions.size());
     m_triangleCount = std::uint32_t(rest.triangles.size());
@@ -135,6 +135,45 @@ void GpuDeformer::prepare(double t) {
         hi = glm::max(hi, m_posed[v]);
     }
     m_mesh.setBounds(lo, hi);
+    m_posedCellsValid = false;
+}
+
+const noise::SurfaceCells& GpuDeformer::posedCells() {
+    if (m_posedCellsValid)
+        return m_posedCells;
+    const float h = m_cells.cellSize;
+    const std::vector<glm::uvec3>& triangles = m_animation.rest().triangles;
+    std::vector<glm::ivec3> found;
+    for (const noise::SurfacePiece& p : m_cells.pieces) {
+        const glm::uvec3 t = triangles[p.triangle];
+        glm::vec3 lo(std::numeric_limits<float>::max()), hi = -lo;
+        for (const glm::vec2& c : p.corner) {
+            const glm::vec3 q =
+                (1.0f - c.x - c.y) * m_posed[t.x] + c.x * m_posed[t.y] + c.y * m_posed[t.z];
+            lo = glm::min(lo, q);
+            hi = glm::max(hi, q);
+        }
+        const glm::ivec3 a(glm::floor(lo / h)), b(glm::floor(hi / h));
+        if (glm::any(glm::greaterThan(b - a, glm::ivec3(64))))
+            throw InputError(cat("deform: a posed surface piece spans more than 64 cells along an "
+                                 "axis; the pose stretches the mesh too far"));
+        for (int i = a.x; i <= b.x; ++i)
+            for (int j = a.y; j <= b.y; ++j)
+                for (int k = a.z; k <= b.z; ++k)
+                    found.emplace_back(i, j, k);
+    }
+    const auto less = [](const glm::ivec3& x, const glm::ivec3& y) {
+        return x.x != y.x ? x.x < y.x : x.y != y.y ? x.y < y.y : x.z < y.z;
+    };
+    std::sort(found.begin(), found.end(), less);
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    m_posedCells = noise::SurfaceCells{};
+    m_posedCells.cellSize = h;
+    m_posedCells.cells.resize(found.size());
+    for (std::size_t i = 0; i < found.size(); ++i)
+        m_posedCells.cells[i].ijk = found[i];
+    m_posedCellsValid = true;
+    return m_posedCells;
 }
 
 bool GpuDeformer::cellVisible(const noise::CameraRays& rays, const noise::SurfaceCells& cells,
@@ -149,7 +188,7 @@ void GpuDeformer::record(VkCommandBuffer cmd, PassTimer& timer, const ImpulseSet
     SpotDeformPush push{};
     push.counts = glm::uvec4(m_vertexCount, m_triangleCount, rest.capacity, m_wind.on() ? 1u : 0u);
     push.wind = glm::vec4(m_wind.direction, m_wind.strength);
-    push.gust = glm::vec4(m_wind.gustFrequency, m_wind.variation, float(m_time), 0.0f);
+    push.gust = glm::vec4(m_wind.gustFrequency, m_wind.variation, float(m_time), m_cells.cellSize);
     const Buffer& posed = m_mesh.vertices();
     // Every earlier write (the host's uploads, the last frame's reads of the vertices) first.
     memoryBarrier(cmd, kAll | kHostStage, VK_ACCESS_2_MEMORY_WRITE_BIT | VK_ACCESS_2_MEMORY_READ_BIT,
@@ -203,6 +242,31 @@ void GpuDeformer::record(VkCommandBuffer cmd, PassTimer& timer, const ImpulseSet
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kAll | kHostStage,
                   VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);
     timer.mark(cmd, "move");
+}
+
+ImpulseSet GpuDeformer::sortedByCell(std::uint32_t count) {
+    SPOT_CHECK(count <= m_movedSet.capacity);
+    const auto* moved = static_cast<const gpu::SpotImpulse*>(m_moved.mapped());
+    std::vector<std::uint32_t> order(count);
+    for (std::uint32_t i = 0; i < count; ++i)
+        order[i] = i;
+    const auto less = [&](std::uint32_t a, std::uint32_t b) {
+        const glm::ivec4 x = moved[a].cell, y = moved[b].cell;
+        return x.x != y.x ? x.x < y.x : x.y != y.y ? x.y < y.y : x.z < y.z;
+    };
+    std::stable_sort(order.begin(), order.end(), less);
+    const std::uint64_t need = std::max<std::uint64_t>(m_movedSet.capacity, 1) * sizeof(gpu::SpotImpulse);
+    if (!m_sorted.handle() || m_sorted.size() < need) {
+        m_sorted = Buffer();
+        m_sorted = Buffer(m_ctx, need + need / 4, kStorage, kHost, "moved impulses by cell");
+    }
+    auto* sorted = static_cast<gpu::SpotImpulse*>(m_sorted.mapped());
+    for (std::uint32_t i = 0; i < count; ++i)
+        sorted[i] = moved[order[i]];
+    ImpulseSet set = m_movedSet;
+    set.impulses = &m_sorted;
+    set.cells = &posedCells();
+    return set;
 }
 
 void GpuDeformer::reserve(const ImpulseSet& rest) {

@@ -30,7 +30,7 @@ public:
     /// is the mesh `mesh` holds) must outlive this object. InputError for a vertex shared by more
     /// than kDeformMaxValence triangles.
     GpuDeformer(Context& ctx, const noise::AnimatedMesh& animation, MeshPass& mesh,
-                const noise::Wind& wind);
+                const noise::SurfaceCells& cells, const noise::Wind& wind);
     GpuDeformer(const GpuDeformer&) = delete;
     GpuDeformer& operator=(const GpuDeformer&) = delete;
 
@@ -47,6 +47,15 @@ public:
     /// Host side of the moved set for `rest` (the generator's set of this frame): its buffer
     /// grown when needed, and a new version. record() does it when not done since the last.
     void reserve(const ImpulseSet& rest);
+    /// The grid cells the posed surface passes through (each rest cell's pieces posed, and every
+    /// cell their boxes touch: a superset of the moved impulses' root cells), for the ray
+    /// march's shell. Made on first use after each prepare().
+    const noise::SurfaceCells& posedCells();
+    /// After the frame that moved them ran: the moved impulses reordered by their cells
+    /// (contiguous per cell, cells in (i, j, k) order; the ray march's ranges need that order,
+    /// which the pose breaks), in a buffer of their own, with posedCells() as their cells. Host
+    /// work: a stable sort of the `count` impulses.
+    ImpulseSet sortedByCell(std::uint32_t count);
     /// Record the four passes: the mesh posed, its normals, its triangles' rotations, and `rest`
     /// moved into moved() (marked on `timer` as "deform" and "move"). `rest` must be the set the
     /// generator holds at record time (its count is read on the GPU).
@@ -59,7 +68,10 @@ private:
     Context& m_ctx;
     const noise::AnimatedMesh& m_animation;
     MeshPass& m_mesh;
+    const noise::SurfaceCells& m_cells;
     noise::Wind m_wind;
+    noise::SurfaceCells m_posedCells;
+    bool m_posedCellsValid = false;
     std::uint32_t m_vertexCount = 0, m_triangleCount = 0;
     noise::PoseInputs m_inputs;
     std::vector<glm::vec3> m_posed;
@@ -67,7 +79,7 @@ private:
     std::uint64_t m_uploadedGeometry = ~std::uint64_t(0);
     Pipeline m_pose, m_normals, m_frames, m_move;
     Buffer m_vertices, m_pieces, m_deltas, m_palette, m_weights;
-    Buffer m_adjacency, m_rotations, m_moved;
+    Buffer m_adjacency, m_rotations, m_moved, m_sorted;
     ImpulseSet m_movedSet;
     std::uint64_t m_version = 0;
     bool m_reserved = false;

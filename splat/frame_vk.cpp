@@ -66,7 +66,8 @@ void Frame::animate(const noise::AnimatedMesh& animation, const noise::Wind& win
     if (animation.rest().positions.size() != m_cpuGenerator.mesh().positions.size() ||
         animation.rest().triangles != m_cpuGenerator.mesh().triangles)
         throw InputError("Frame::animate: the animation's rest is not the frame's mesh");
-    m_deformer = std::make_unique<GpuDeformer>(m_ctx, animation, m_scene.posedMeshPass(), wind);
+    m_deformer = std::make_unique<GpuDeformer>(m_ctx, animation, m_scene.posedMeshPass(),
+                                               m_cpuGenerator.cells(), wind);
 }
 
 bool Frame::cellVisible(const noise::CameraRays& rays, const noise::SurfaceCell& cell) const {
@@ -115,7 +116,13 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
     // buffer is made there; the version changes every frame).
     if (m_deformer && impulsesInFrame)
         m_deformer->reserve(m_generator.impulses());
-    r.prepare(view, m_deformer ? m_deformer->moved() : m_generator.impulses(), settings);
+    // A renderer that reads the impulses on the host (the ray march) takes them in cell order,
+    // which the pose breaks: sorted again, with the posed cells as their shell.
+    const ImpulseSet set =
+        !m_deformer                    ? m_generator.impulses()
+        : r.readsImpulsesInPrepare() ? m_deformer->sortedByCell(m_generator.count())
+                                       : m_deformer->moved();
+    r.prepare(view, set, settings);
     VkCommandBuffer cmd = m_commands.begin();
     m_timer.begin(cmd);
     if (impulsesInFrame)

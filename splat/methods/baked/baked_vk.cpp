@@ -478,15 +478,16 @@ void BakedRenderer::recordShell(VkCommandBuffer cmd) {
         vkCmdFillBuffer(cmd, m_loops.handle(), 0, VK_WHOLE_SIZE, 0u);
     fullBarrier(cmd);
 
-    // The shell from the mesh's vertices (the same buffer at rest: the mesh does not move yet),
-    // and the tetrahedron holding the eye, if any (the lowest index).
+    // The shell from the mesh's vertices as posed (an animated mesh's deform passes wrote them
+    // this frame) mapped back to the rest (the bake's coordinates), and the tetrahedron holding
+    // the eye, if any (the lowest index).
     if (triangles > 0) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, m_shell.handle());
         pushFrame(cmd, m_shell, f.frame);
         Descriptors d;
         d.buffer(kBakedBindParams, m_params)
             .buffer(kBakedBindVertices, mesh.vertices())
-            .buffer(kBakedBindRest, mesh.vertices())
+            .buffer(kBakedBindRest, mesh.restVertices())
             .buffer(kBakedBindIndices, mesh.indices())
             .buffer(kBakedBindTets, m_tets)
             .buffer(kBakedBindEyeTet, m_eyeTet)
