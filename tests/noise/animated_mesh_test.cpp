@@ -2,7 +2,9 @@
 // its three interpolations, posed on the CPU; mesh caches; bad files refused with one line.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@
 #include "cli_run.h"
 #include "noise/animated_mesh.h"
 #include "noise/error.h"
+#include "noise/scene.h"
 
 namespace {
 
@@ -907,5 +910,93 @@ TEST(AnimatedMesh, ClipInterpolationAtAndBetweenKeysThroughAFile) {
                    "slerp of (1, 0, 0), the short way");
         expectNear(p[14], glm::vec3(float(-std::sin(turned)), float(std::cos(turned)), 0),
                    "slerp of (0, 1, 0), the short way");
+    }
+}
+
+namespace {
+
+std::string readBytes(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+const std::filesystem::path kExamples =
+    std::filesystem::path(SPOT_SOURCE_DIR) / "examples/animated";
+
+} // namespace
+
+TEST(AnimatedExamples, TheScriptWritesTheShippedFilesByteForByte) {
+    const std::filesystem::path out = tmp("examples");
+    std::filesystem::remove_all(out);
+    const std::string cmd = "python3 '" + std::string(SPOT_SOURCE_DIR) +
+                            "/scripts/make_animated_examples.py' '" + out.string() + "' >/dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    for (const char* name : {"tail.glb", "tuft.glb"}) {
+        const std::string made = readBytes(out / name), shipped = readBytes(kExamples / name);
+        ASSERT_FALSE(shipped.empty()) << name;
+        EXPECT_LT(shipped.size(), 300u * 1024u) << name;
+        EXPECT_TRUE(made == shipped) << name << ": the script's (" << made.size()
+                                     << " bytes) differs from the shipped file (" << shipped.size()
+                                     << " bytes); rerun scripts/make_animated_examples.py";
+    }
+}
+
+TEST(AnimatedExamples, TheTailSwaysAndLoops) {
+    const AnimatedMesh a = AnimatedMesh::loadGltf(kExamples / "tail.glb");
+    EXPECT_EQ(a.clipName(), "sway");
+    EXPECT_EQ(a.clipNames(), std::vector<std::string>{"sway"});
+    EXPECT_EQ(a.jointCount(), 4u);
+    EXPECT_EQ(a.morphTargetCount(), 0u);
+    EXPECT_DOUBLE_EQ(a.start(), 0.0);
+    EXPECT_NEAR(a.duration(), 2.0, 1e-6);
+    EXPECT_EQ(a.rest().triangles.size(), 3008u);
+    EXPECT_EQ(a.rest().droppedTriangles, 0u);
+    EXPECT_TRUE(a.rest().hasUv());
+    EXPECT_TRUE(spot::noise::closedOutward(a.rest()));
+    const spot::noise::Bounds rest = a.rest().bounds();
+    EXPECT_NEAR(rest.lo.y, 0.0f, 1e-6f);
+    EXPECT_NEAR(rest.hi.y, 1.5f, 1e-6f);
+    // It loops: the last frame is the first; half way, the tip has swung well off the axis.
+    const std::vector<glm::vec3> first = a.posePositions(0.0), last = a.posePositions(2.0);
+    for (std::size_t v = 0; v < first.size(); ++v)
+        expectNear(last[v], first[v], "the clip's ends");
+    float swing = 0.0f;
+    for (int f = 0; f <= 48; ++f) {
+        const spot::noise::Mesh posed = a.pose(f / 24.0);
+        const spot::noise::Bounds b = posed.bounds();
+        swing = std::max({swing, std::abs(b.lo.x), std::abs(b.hi.x)});
+        EXPECT_GT(b.hi.y, 1.0f) << "frame " << f; // it sways, it does not fold
+    }
+    EXPECT_GT(swing, 0.4f);
+}
+
+TEST(AnimatedExamples, TheTuftBendsAndItsGroundStays) {
+    const AnimatedMesh a = AnimatedMesh::loadGltf(kExamples / "tuft.glb");
+    EXPECT_EQ(a.clipName(), "bend");
+    EXPECT_EQ(a.jointCount(), 3u);
+    EXPECT_NEAR(a.duration(), 2.0, 1e-6);
+    EXPECT_EQ(a.rest().triangles.size(), 3200u);
+    EXPECT_TRUE(a.rest().hasUv());
+    const std::vector<glm::vec3>& rest = a.rest().positions;
+    const std::vector<glm::vec3> gust = a.posePositions(1.0);
+    float leanTop = 0.0f;
+    for (std::size_t v = 0; v < rest.size(); ++v) {
+        if (rest[v].y == 0.0f) // the ground does not move
+            expectNear(gust[v], rest[v], "ground");
+        if (rest[v].y > 0.445f)
+            leanTop = gust[v].x - rest[v].x;
+    }
+    EXPECT_GT(leanTop, 0.05f) << "the top leans downwind (+x)";
+}
+
+TEST(AnimatedExamples, TheScenesLoadWithTheirClips) {
+    for (const char* name : {"tail-fur.json", "tuft-grass.json"}) {
+        SCOPED_TRACE(name);
+        const spot::noise::SceneDesc s = spot::noise::loadScene(kExamples / name);
+        const AnimatedMesh a = AnimatedMesh::load(s.mesh, s.animation.clip, s.animation.fps);
+        EXPECT_TRUE(a.animated());
+        EXPECT_EQ(a.clipName(), s.animation.clip);
+        EXPECT_DOUBLE_EQ(s.animation.fps, 24.0);
+        EXPECT_TRUE(std::filesystem::exists(s.preset)) << s.preset;
     }
 }
