@@ -1,6 +1,7 @@
 #include "animated_mesh.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -47,6 +48,10 @@ std::vector<float> readAccessor(const tinygltf::Model& model, int index, int com
     if (view.buffer < 0 || view.buffer >= int(model.buffers.size()))
         throw InputError(cat(what, ": buffer ", view.buffer, " does not exist"));
     const std::vector<unsigned char>& data = model.buffers[std::size_t(view.buffer)].data;
+    if (view.byteOffset + view.byteLength > data.size())
+        throw InputError(cat(what, ": buffer view ", a.bufferView, " (bytes ", view.byteOffset,
+                             " to ", view.byteOffset + view.byteLength, ") reaches past buffer ",
+                             view.buffer, " (", data.size(), " bytes: missing or short)"));
     const int size = tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType));
     const int stride = a.ByteStride(view);
     if (size <= 0 || stride <= 0)
@@ -55,8 +60,9 @@ std::vector<float> readAccessor(const tinygltf::Model& model, int index, int com
     const std::uint64_t end = a.count == 0 ? begin
                                            : begin + std::uint64_t(stride) * (a.count - 1) +
                                                  std::uint64_t(size) * components;
-    if (end > view.byteOffset + view.byteLength || end > data.size())
-        throw InputError(cat(what, ": accessor ", index, " reaches past its buffer"));
+    if (end > view.byteOffset + view.byteLength)
+        throw InputError(cat(what, ": accessor ", index, " (", a.count, " elements) reaches past ",
+                             "buffer view ", a.bufferView));
     for (std::size_t i = 0; i < a.count; ++i)
         for (int c = 0; c < components; ++c) {
             const unsigned char* p =
@@ -291,6 +297,7 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
                 visit(int(n));
     }
     std::vector<glm::vec2> uvs;
+    std::size_t skippedPrimitives = 0;
     for (const int n : order) {
         const tinygltf::Node& node = model.nodes[std::size_t(n)];
         if (node.mesh < 0)
@@ -305,8 +312,17 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
         for (std::size_t p = 0; p < m.primitives.size(); ++p) {
             const tinygltf::Primitive& prim = m.primitives[p];
             const std::string what = cat(name, " mesh '", m.name, "' primitive ", p);
-            if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1)
-                throw InputError(cat(what, ": mode ", prim.mode, " is not triangles (4)"));
+            // Points and lines carry no surface: skipped (a file of nothing else is refused
+            // below). Strips and fans are triangles, unrolled as glTF says.
+            const int mode = prim.mode == -1 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+            if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE ||
+                mode == TINYGLTF_MODE_LINE_LOOP || mode == TINYGLTF_MODE_LINE_STRIP) {
+                ++skippedPrimitives;
+                continue;
+            }
+            if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+                mode != TINYGLTF_MODE_TRIANGLE_FAN)
+                throw InputError(cat(what, ": mode ", prim.mode, " is not a glTF primitive mode"));
             const auto attr = [&](const char* key) {
                 const auto it = prim.attributes.find(key);
                 return it == prim.attributes.end() ? -1 : it->second;
@@ -356,9 +372,13 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
                 piece.joints[set].resize(piece.count);
                 for (std::size_t v = 0; v < piece.count; ++v)
                     for (int c = 0; c < 4; ++c) {
-                        if (joints[v][c] < 0.0f || joints[v][c] >= float(jointCount))
+                        if (!(joints[v][c] >= 0.0f) || joints[v][c] >= float(jointCount) ||
+                            joints[v][c] != std::floor(joints[v][c]))
                             throw InputError(cat(what, ": vertex ", v, " names joint ",
                                                  joints[v][c], " of a skin with ", jointCount));
+                        if (weights[v][c] < 0.0f)
+                            throw InputError(cat(what, ": vertex ", v, " has a negative weight ",
+                                                 weights[v][c], " (WEIGHTS_", set, ")"));
                         piece.joints[set][v][c] = std::uint32_t(joints[v][c]);
                     }
                 piece.weights[set] = weights;
@@ -366,6 +386,23 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
             if (node.skin >= 0 && piece.joints[0].empty())
                 throw InputError(
                     cat(what, ": its node has a skin but it has no JOINTS_0/WEIGHTS_0"));
+            // The weights of both sets normalised together, as glTF asks (exporters round them);
+            // a skinned vertex that no joint moves is an error, not a vertex left behind.
+            if (node.skin >= 0)
+                for (std::size_t v = 0; v < piece.count; ++v) {
+                    double sum = 0.0;
+                    for (int set = 0; set < 2; ++set)
+                        if (!piece.weights[set].empty())
+                            for (int c = 0; c < 4; ++c)
+                                sum += double(piece.weights[set][v][c]);
+                    if (!(sum > 0.0))
+                        throw InputError(cat(what, ": vertex ", v,
+                                             "'s joint weights sum to 0 (no joint moves it)"));
+                    for (int set = 0; set < 2; ++set)
+                        if (!piece.weights[set].empty())
+                            piece.weights[set][v] =
+                                glm::vec4(glm::dvec4(piece.weights[set][v]) / sum);
+                }
             for (std::size_t t = 0; t < prim.targets.size(); ++t) {
                 const auto it = prim.targets[t].find("POSITION");
                 std::vector<glm::vec3> delta(piece.count, glm::vec3(0.0f));
@@ -387,6 +424,17 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
                 for (std::size_t i = 0; i < piece.count; ++i)
                     indices[i] = std::uint32_t(i);
             }
+            if (mode == TINYGLTF_MODE_TRIANGLE_STRIP || mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+                std::vector<std::uint32_t> list;
+                for (std::size_t i = 0; i + 2 < indices.size(); ++i) {
+                    if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+                        list.insert(list.end(),
+                                    {indices[i], indices[i + 1 + i % 2], indices[i + 2 - i % 2]});
+                    else
+                        list.insert(list.end(), {indices[i + 1], indices[i + 2], indices[0]});
+                }
+                indices = std::move(list);
+            }
             if (indices.size() % 3 != 0)
                 throw InputError(cat(what, ": ", indices.size(), " indices, not a multiple of 3"));
             if (mesh.triangles.size() + indices.size() / 3 > limits.maxTriangles)
@@ -399,6 +447,9 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
             out.m_pieces.push_back(std::move(piece));
         }
     }
+    if (out.m_pieces.empty() && skippedPrimitives > 0)
+        throw InputError(cat(name, ": its scene holds only point or line primitives (",
+                             skippedPrimitives, "), no triangles"));
     if (out.m_pieces.empty())
         throw InputError(cat(name, ": its scene holds no triangle mesh"));
     if (anyUv && allUv)
@@ -469,6 +520,22 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
             if (ch.values.size() != ch.times.size() * per)
                 throw InputError(cat(what, ": ", ch.values.size(), " values for ", ch.times.size(),
                                      " keys of ", per));
+            // Rotation keys are unit quaternions (glTF asks it): one that is not is normalised
+            // here, so a key's value (and the clip's ends) are rotations too (one within float
+            // rounding of unit is kept as stored). A spline's tangents are left as they are.
+            if (ch.path == Channel::Path::Rotation)
+                for (std::size_t k = 0; k < ch.times.size(); ++k) {
+                    float* q = ch.values.data() + k * per +
+                               (ch.interpolation == Interpolation::CubicSpline ? 4 : 0);
+                    const float length =
+                        std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+                    if (!(length > 1e-6f))
+                        throw InputError(cat(what, ": rotation key ", k, " is not a rotation (",
+                                             q[0], ", ", q[1], ", ", q[2], ", ", q[3], ")"));
+                    if (std::abs(length - 1.0f) > 1e-6f)
+                        for (int c = 0; c < 4; ++c)
+                            q[c] /= length;
+                }
             if (!ch.times.empty()) {
                 lo = std::min(lo, double(ch.times.front()));
                 hi = std::max(hi, double(ch.times.back()));
@@ -705,10 +772,21 @@ AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int
                                      int restFrame, const MeshLimits& limits) {
     if (!(fps > 0.0) || !std::isfinite(fps))
         throw InputError(cat(pattern, ": fps ", fps, " is not positive"));
-    const std::size_t percent = pattern.find('%');
-    if (percent == std::string::npos || pattern.find('%', percent + 1) != std::string::npos)
-        throw InputError(
-            cat(pattern, ": a mesh cache names its frames with one %d (walk.%04d.ply)"));
+    // One integer conversion (%d, %04d, %4d, %i) in the file name, nothing else for printf.
+    const std::filesystem::path patternPath(pattern);
+    const std::string filePattern = patternPath.filename().string();
+    const std::size_t percent = filePattern.find('%');
+    std::size_t conversion = percent == std::string::npos ? percent : percent + 1;
+    while (conversion < filePattern.size() &&
+           (std::isdigit(filePattern[conversion]) != 0 || filePattern[conversion] == ' '))
+        ++conversion;
+    if (percent == std::string::npos || conversion >= filePattern.size() ||
+        (filePattern[conversion] != 'd' && filePattern[conversion] != 'i') ||
+        filePattern.find('%', percent + 1) != std::string::npos ||
+        patternPath.parent_path().string().find('%') != std::string::npos)
+        throw InputError(cat(pattern,
+                             ": a mesh cache names its frames with one %d in the file name "
+                             "(walk.%04d.ply)"));
     const auto frameName = [&](int i) {
         char buf[4096];
         const int n = std::snprintf(buf, sizeof(buf), pattern.c_str(), i);
@@ -716,35 +794,67 @@ AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int
             throw InputError(cat(pattern, ": not a frame pattern"));
         return std::string(buf);
     };
-    constexpr int kMaxFrames = 100000;
-    int start = first;
-    if (start < 0) {
-        for (start = 0; start < kMaxFrames && !std::filesystem::exists(frameName(start)); ++start) {
-        }
-        if (start == kMaxFrames)
-            throw InputError(cat(pattern, ": no frame found (tried 0 to ", kMaxFrames - 1, ")"));
+    // The frames: the files of the pattern's folder that it formats exactly, consecutive from the
+    // first (or from `first`); a gap is an error (a cache that silently stopped at a missing frame
+    // would play a shorter clip).
+    const std::filesystem::path dir =
+        patternPath.parent_path().empty() ? std::filesystem::path(".") : patternPath.parent_path();
+    const std::string prefix = filePattern.substr(0, percent);
+    const std::string suffix = filePattern.substr(conversion + 1);
+    std::vector<int> found;
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string file = it->path().filename().string();
+        if (file.size() <= prefix.size() + suffix.size() || file.rfind(prefix, 0) != 0 ||
+            file.compare(file.size() - suffix.size(), suffix.size(), suffix) != 0)
+            continue;
+        const std::string digits =
+            file.substr(prefix.size(), file.size() - prefix.size() - suffix.size());
+        if (digits.size() > 9 || digits.find_first_not_of(" 0123456789") != std::string::npos ||
+            digits.find_first_of("0123456789") == std::string::npos)
+            continue;
+        const int number = std::stoi(digits);
+        if (std::filesystem::path(frameName(number)).filename().string() == file &&
+            (first < 0 || number >= first))
+            found.push_back(number);
     }
+    if (ec)
+        throw InputError(cat(pattern, ": cannot list ", dir.string(), " (", ec.message(), ")"));
+    std::sort(found.begin(), found.end());
+    if (found.empty())
+        throw InputError(first < 0 ? cat(pattern, ": no file matches the pattern")
+                                   : cat(frameName(first), ": no such file"));
+    const int start = first < 0 ? found.front() : first;
+    if (found.front() != start)
+        throw InputError(cat(frameName(start), ": no such file"));
+    constexpr int kMaxFrames = 100000;
+    if (found.back() - start >= kMaxFrames)
+        throw InputError(cat(pattern, ": more than ", kMaxFrames, " frames"));
+    for (std::size_t i = 1; i < found.size(); ++i)
+        if (found[i] != found[i - 1] + 1)
+            throw InputError(cat(frameName(found[i - 1] + 1), ": missing (the cache has frames ",
+                                 start, " to ", found.back(), "; a cache has no gaps)"));
+    if (restFrame < 0 || restFrame >= int(found.size()))
+        throw InputError(cat(pattern, ": rest frame ", restFrame, " is not one of the ",
+                             found.size(), " frames"));
     AnimatedMesh out;
     out.m_fps = fps;
-    std::vector<Mesh> meshes;
-    for (int i = start; i < start + kMaxFrames && std::filesystem::exists(frameName(i)); ++i) {
-        Mesh m = loadMesh(frameName(i), limits);
-        if (!meshes.empty() && (m.positions.size() != meshes.front().positions.size() ||
-                                m.triangles != meshes.front().triangles))
-            throw InputError(cat(frameName(i), ": its topology differs from ", meshes.front().name,
-                                 "'s (", m.positions.size(), " vertices, ", m.triangles.size(),
-                                 " triangles against ", meshes.front().positions.size(), " and ",
-                                 meshes.front().triangles.size(), ")"));
+    Mesh firstMesh;
+    for (const int number : found) {
+        Mesh m = loadMesh(frameName(number), limits);
+        if (!out.m_frames.empty() && (m.positions.size() != firstMesh.positions.size() ||
+                                      m.triangles != firstMesh.triangles))
+            throw InputError(cat(m.name, ": its topology differs from ", firstMesh.name, "'s (",
+                                 m.positions.size(), " vertices, ", m.triangles.size(),
+                                 " triangles against ", firstMesh.positions.size(), " and ",
+                                 firstMesh.triangles.size(), ")"));
         out.m_frames.push_back(m.positions);
-        meshes.push_back(std::move(m));
+        if (number - start == restFrame)
+            out.m_rest = m;
+        if (number == start)
+            firstMesh = std::move(m);
     }
-    if (meshes.empty())
-        throw InputError(cat(frameName(start), ": no such file"));
-    if (restFrame < 0 || restFrame >= int(meshes.size()))
-        throw InputError(cat(pattern, ": rest frame ", restFrame, " is not one of the ",
-                             meshes.size(), " frames"));
-    out.m_rest = std::move(meshes[std::size_t(restFrame)]);
-    out.m_duration = double(meshes.size() - 1) / fps;
+    out.m_duration = double(out.m_frames.size() - 1) / fps;
     return out;
 }
 

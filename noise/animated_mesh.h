@@ -12,9 +12,9 @@
 /// pose: skinned vertices as stored (every joint at its bind matrix), other meshes placed by
 /// their nodes' static transforms, morph weights 0. Times outside a clip clamp to its ends.
 ///
-/// A mesh cache: a printf pattern (`walk.%04d.ply`) over consecutive frames from the first file
-/// that exists; every frame must have the first's vertex count and triangles (the rest pose
-/// unless the scene names another frame). `pose(t)` interpolates linearly between the frames
+/// A mesh cache: a printf pattern (`walk.%04d.ply`) over the consecutive frames its folder holds
+/// (a gap is an error); every frame must have the first's vertex count and triangles (the rest
+/// pose unless the scene names another frame). `pose(t)` interpolates linearly between the frames
 /// around t x fps.
 ///
 /// Every pose, on the CPU and on the GPU, is spot_pose.h's formula over PoseInputs: per vertex its
@@ -55,13 +55,17 @@ struct PoseInputs {
 class AnimatedMesh {
 public:
     /// A glTF file's clip `clip` (by name; empty: the first clip, or none when the file has no
-    /// animation). InputError naming the file and the reason for anything malformed or not
-    /// supported (a primitive that is not triangles, sparse accessors, an unknown clip).
+    /// animation). Point and line primitives are skipped, triangle strips and fans unrolled.
+    /// InputError naming the file and the reason for anything malformed or not supported:
+    /// buffers missing or short, an index (accessor, buffer view, joint, vertex) out of range,
+    /// a negative joint weight or a skinned vertex whose weights sum to 0, a non-finite number,
+    /// key times that go back, no triangles, sparse accessors, an unknown clip.
     static AnimatedMesh loadGltf(const std::filesystem::path& file, const std::string& clip = "",
                                  const MeshLimits& limits = {});
-    /// A mesh cache: `pattern` with one printf integer conversion (`%d`, `%04d`), frames from
-    /// `first` (or the first that exists from 0 when negative) while files exist, played at
-    /// `fps`; `restFrame` (an index into the frames found) is the rest pose.
+    /// A mesh cache: `pattern` with one printf integer conversion (`%d`, `%04d`) in its file
+    /// name; the frames are the files it names from `first` (the lowest found when negative) to
+    /// the highest, with no gap (InputError naming the missing file), played at `fps`;
+    /// `restFrame` (an index into the frames found) is the rest pose.
     static AnimatedMesh loadCache(const std::string& pattern, double fps, int first = -1,
                                   int restFrame = 0, const MeshLimits& limits = {});
     /// A file by extension: .gltf/.glb as glTF; a name with a '%' as a cache (24 fps); anything
