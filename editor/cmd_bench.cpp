@@ -76,6 +76,10 @@ struct Suite {
     std::vector<SceneEntry> scenes;
     std::vector<Variant> variants;
     bool scaling = false;
+    /// Animated scenes (examples/animated, next to the source) and the clip frames benched in each
+    /// (consecutive frames at the scene's fps from its time).
+    std::vector<SceneEntry> animated;
+    int clipFrames = 6;
 };
 
 splat::RenderSettings splatSettings(bool ewa, splat::OitWeight w, int samples, double lod = 0.0) {
@@ -176,12 +180,15 @@ Suite makeSuite(const std::string& name) {
         s.referenceSpp = 16;
         s.scenes = {{"fur-bunny.json", "whole object"}, {"fur-bunny-close.json", "close-up"}};
         s.variants = variants(Variants::Quick);
+        s.animated = {{SPOT_SOURCE_DIR "/examples/animated/tail-fur.json", "animated"}};
     } else if (name == "full") {
         s.frames = 7;
         s.referenceSpp = 64;
         s.scenes = matrixScenes();
         s.variants = variants(Variants::Full);
         s.scaling = true;
+        s.animated = {{SPOT_SOURCE_DIR "/examples/animated/tail-fur.json", "animated"},
+                      {SPOT_SOURCE_DIR "/examples/animated/tuft-grass.json", "animated, wind"}};
     } else if (name == "realtime") {
         // The interactive sizes: every scene at 640x480, and the real-time target, 50,000 fur
         // kernels at 1024x1024. References at 16 spp, a 5-frame orbit (references dominate the
@@ -494,6 +501,86 @@ struct Bench {
         }
     }
 
+    /// An animated scene (docs/design.md section 6) over suite.clipFrames consecutive frames of
+    /// its clip, per GPU method but baked (whose bake the static rows measure): the median frame
+    /// of the persistent frame animated against the same frame static (the rest pose, nothing
+    /// moving), the update passes' share (deform and move), the error against the reference at
+    /// each frame, and the flicker over the clip against the reference's.
+    void runAnimated(const SceneEntry& entry) {
+        cli::SceneJob job = cli::loadSceneJob(entry.file, suite.width, suite.height, true);
+        std::vector<double> times;
+        for (int k = 0; k < suite.clipFrames; ++k)
+            times.push_back(job.scene.animation.time + k / job.scene.animation.fps);
+        std::vector<noise::Image> refs;
+        const splat::MethodInfo& reference = splat::method("reference");
+        splat::RenderSettings refSettings;
+        refSettings.spp = suite.referenceSpp;
+        const splat::View view{job.scene.camera, job.scene.shading, job.scene.background,
+                               job.scene.baseColor};
+        for (const double t : times) {
+            job.poseAt(t);
+            const splat::CpuScene scene{job.renderedMesh(), job.generator->kernel(), job.impulses,
+                                        view, job.scene.seed, job.scene.referenceSpp};
+            refs.push_back(reference.renderCpu(scene, refSettings, {}).image);
+        }
+        const double refFlicker = flicker(refs);
+        std::vector<std::string> methods;
+        for (const Variant& v : suite.variants)
+            if (!splat::gpuMethod(v.method).takes(splat::settings::bake) &&
+                std::find(methods.begin(), methods.end(), v.method) == methods.end())
+                methods.push_back(v.method);
+        for (const std::string& method : methods) {
+            json row = {{"scene", job.scene.name}, {"scenario", entry.scenario}, {"method", method},
+                        {"width", job.scene.camera.width}, {"height", job.scene.camera.height},
+                        {"clip_frames", times.size()}, {"reference_flicker", refFlicker}};
+            try {
+                const splat::RenderSettings settings;
+                std::vector<double> still, animated, update, psnr;
+                {
+                    splat::Frame frame(ctx, job.mesh, *job.generator);
+                    for (int k = 0; k <= suite.timedFrames; ++k) {
+                        const splat::FrameStats s = frame.render(method, view, settings);
+                        if (k > 0)
+                            still.push_back(s.gpuMs);
+                    }
+                }
+                splat::Frame frame(ctx, job.mesh, *job.generator);
+                frame.animate(job.animation, job.scene.wind);
+                std::vector<noise::Image> images;
+                for (std::size_t k = 0; k < times.size(); ++k) {
+                    frame.setTime(times[k]);
+                    noise::Image image;
+                    const splat::FrameStats s = frame.render(method, view, settings, &image);
+                    double passes = 0.0;
+                    for (const auto& [pass, ms] : s.passMs)
+                        if (pass == "deform" || pass == "move")
+                            passes += ms;
+                    if (k > 0) { // the first frame compiles and generates
+                        animated.push_back(s.gpuMs);
+                        update.push_back(passes);
+                    }
+                    psnr.push_back(splat::psnr(refs[k], image));
+                    images.push_back(std::move(image));
+                }
+                double meanPsnr = 0.0;
+                for (const double p : psnr)
+                    meanPsnr += p / double(psnr.size());
+                row.update({{"static_ms", percentile(still, 0.5)},
+                            {"animated_ms", percentile(animated, 0.5)},
+                            {"update_ms", percentile(update, 0.5)},
+                            {"animated_over_static",
+                             percentile(animated, 0.5) / std::max(percentile(still, 0.5), 1e-9)},
+                            {"psnr", meanPsnr},
+                            {"flicker", flicker(images)},
+                            {"status", "ok"}, {"reason", ""}});
+            } catch (const std::exception& e) {
+                row.update({{"status", "failed"}, {"reason", oneLine(e.what())}});
+            }
+            animatedRows.push_back(row);
+        }
+    }
+    json animatedRows = json::array();
+
     /// Milliseconds and memory against visible kernels (the uniform preset on a sphere at rising
     /// density) and against resolution (fur-bunny).
     void runScaling(cli::ProgressBar& bar, int& done, int total) {
@@ -727,6 +814,34 @@ std::string stabilityMarkdown(const json& rows, const Suite& suite) {
     return md.str();
 }
 
+/// The animated scenes' table (Bench::runAnimated).
+std::string animatedMarkdown(const json& rows) {
+    if (rows.empty())
+        return "";
+    std::ostringstream md;
+    md << "\n# Animated scenes\n\nPer method over the clip's frames: the median frame (GPU ms) "
+          "static and animated, the update passes (deform + move), the mean PSNR against the "
+          "reference at each frame, and the flicker (mean absolute change between consecutive "
+          "frames) against the reference's.\n\n"
+          "| scene | method | static ms | animated ms | ratio | update ms | PSNR dB | flicker | "
+          "reference flicker |\n|---|---|---|---|---|---|---|---|---|\n";
+    for (const json& r : rows) {
+        if (r.value("status", "") != "ok") {
+            md << "| " << r.value("scene", "") << " | " << r.value("method", "") << " | "
+               << r.value("reason", "") << " | | | | | | |\n";
+            continue;
+        }
+        md << "| " << r.value("scene", "") << " | " << r.value("method", "") << " | "
+           << fmt("%.1f", r.value("static_ms", 0.0)) << " | "
+           << fmt("%.1f", r.value("animated_ms", 0.0)) << " | "
+           << fmt("%.2f", r.value("animated_over_static", 0.0)) << " | "
+           << fmt("%.2f", r.value("update_ms", 0.0)) << " | " << fmt("%.2f", r.value("psnr", 0.0))
+           << " | " << fmt("%.4f", r.value("flicker", 0.0)) << " | "
+           << fmt("%.4f", r.value("reference_flicker", 0.0)) << " |\n";
+    }
+    return md.str();
+}
+
 void writeCsv(const fs::path& file, const json& rows) {
     const char* cols[] = {"scene", "scenario", "method", "setting", "width", "height",
                           "kernels_generated", "kernels_drawn", "ms_median", "ms_p90",
@@ -811,8 +926,25 @@ int bench(int argc, char** argv) {
     }
     Suite suite = makeSuite(args.str("suite", "quick"));
     if (args.has("only")) {
-        restrict(suite.scenes, args.str("only"), "--only", "scene",
-                 [](const SceneEntry& e) { return fs::path(e.file).stem().string(); });
+        // The names of animated scenes keep those; the others restrict the static ones.
+        std::string staticNames;
+        std::vector<SceneEntry> animated;
+        std::stringstream list(args.str("only"));
+        for (std::string name; std::getline(list, name, ',');) {
+            const auto it = std::find_if(suite.animated.begin(), suite.animated.end(), [&](const SceneEntry& e) {
+                return fs::path(e.file).stem().string() == name;
+            });
+            if (it != suite.animated.end())
+                animated.push_back(*it);
+            else
+                staticNames += (staticNames.empty() ? "" : ",") + name;
+        }
+        suite.animated = animated;
+        if (staticNames.empty())
+            suite.scenes.clear();
+        else
+            restrict(suite.scenes, staticNames, "--only", "scene",
+                     [](const SceneEntry& e) { return fs::path(e.file).stem().string(); });
         suite.scaling = false;
     }
     if (args.has("methods")) {
@@ -848,6 +980,8 @@ int bench(int argc, char** argv) {
         b.runScene(entry, bar, done, total);
     if (b.suite.scaling)
         b.runScaling(bar, done, total);
+    for (const SceneEntry& entry : b.suite.animated)
+        b.runAnimated(entry);
     bar.finish();
 
     const QualityVerdict quality = qualityCheck(b.rows, splat::qualityChoices());
@@ -862,10 +996,12 @@ int bench(int argc, char** argv) {
                       {"reference_spp", b.suite.referenceSpp},
                       {"device", b.ctx.deviceName()},
                       {"quality", quality.doc},
-                      {"rows", b.rows}};
+                      {"rows", b.rows},
+                      {"animated", b.animatedRows}};
     writeFileAtomic(b.out / "results.json", [&](std::ostream& o) { o << doc.dump(2) << "\n"; });
     writeCsv(b.out / "results.csv", b.rows);
-    const std::string md = stabilityMarkdown(b.rows, b.suite);
+    std::string md = stabilityMarkdown(b.rows, b.suite);
+    md += animatedMarkdown(b.animatedRows);
     writeFileAtomic(b.out / "stability.md", [&](std::ostream& o) { o << md; });
     drawBenchCharts(b.out);
     for (const std::string& f : bakedFindings(b.rows))
