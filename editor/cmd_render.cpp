@@ -244,8 +244,11 @@ int render(int argc, char** argv) {
                                                        {"kernels", std::to_string(r.kernels)},
                                                        {"seed", std::to_string(job.scene.seed)},
                                                        {"stats", r.stats.dump()}};
-        if (job.animated())
-            metadata["time"] = cat(t);
+        if (job.animated()) {
+            char time[32];
+            std::snprintf(time, sizeof(time), "%.17g", t); // round-trips
+            metadata["time"] = time;
+        }
         if (r.stats.contains("spp"))
             metadata["spp"] = r.stats["spp"].dump();
         written = shot.frames[i].file;

@@ -50,6 +50,19 @@ TEST(BenchQuick, RunsAndHoldsThePapersClaims) {
     const json doc = json::parse(in);
     const json& rows = doc["rows"];
     ASSERT_GE(rows.size(), 8u);
+    // The animated scene: every splatting method and the ray march over the clip, the update
+    // passes timed, an error and a flicker per method beside the reference's flicker.
+    const json& animated = doc["animated"];
+    ASSERT_GE(animated.size(), 5u);
+    for (const json& r : animated) {
+        ASSERT_EQ(r.value("status", ""), "ok") << r.dump();
+        EXPECT_GT(double(r["update_ms"]), 0.0) << r.dump();
+        EXPECT_GT(double(r["animated_ms"]), double(r["update_ms"])) << r.dump();
+        EXPECT_GT(double(r["psnr"]), 20.0) << r.dump();
+        EXPECT_GT(double(r["reference_flicker"]), 0.0) << "the clip moves";
+        // No method flickers far beyond the reference's own change between frames.
+        EXPECT_LT(double(r["flicker"]), 3.0 * double(r["reference_flicker"])) << r.dump();
+    }
     // One CSV line per row, plus the header.
     std::ifstream csv(out / "results.csv");
     std::size_t lines = 0;

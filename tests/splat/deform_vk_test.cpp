@@ -2,7 +2,9 @@
 // deform passes move the impulses as the CPU does; a rigid clip gives the image of the static
 // mesh seen from the camera moved back; every method at a bent frame matches the reference
 // there as well as it does at rest.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -153,4 +155,46 @@ TEST(DeformGpu, EveryMethodAtABentFrameMatchesTheReferenceAsAtRest) {
         EXPECT_GT(bent, rest - 1.0) << method << ": " << bent << " dB bent, " << rest << " dB at rest";
         std::printf("bent  %-9s %.2f dB at rest, %.2f dB bent\n", method, rest, bent);
     }
+}
+
+TEST(DeformGpu, RenderFramesWritesEachFrameAndRefusesBadRanges) {
+    const std::string scene = std::string(SPOT_SOURCE_DIR) + "/examples/animated/tail-fur.json";
+    for (const char* f : {"shot.000.png", "shot.002.png", "shot.004.png", "shot.001.png"})
+        std::remove(tmp(f).c_str());
+    const CliResult r = runSpotshell("render --scene " + scene + " --size 48x48 --frames 0-4:2 --out " + tmp("shot.%03d.png"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("wrote 3 frames"), std::string::npos) << r.out;
+    EXPECT_FALSE(std::ifstream(tmp("shot.001.png")).good()) << "STEP 2 skips frame 1";
+    std::map<std::string, std::string> meta0, meta4;
+    const noise::Image f0 = noise::readImage(tmp("shot.000.png"), &meta0);
+    const noise::Image f4 = noise::readImage(tmp("shot.004.png"), &meta4);
+    EXPECT_EQ(meta0["time"], "0");
+    EXPECT_EQ(std::stod(meta4["time"]), 4.0 / 24.0);
+    EXPECT_LT(splat::psnr(f0, f4), 40.0) << "the tail moved between frames 0 and 4";
+    // The same frame alone (--time at 4 / 24 s) is the same image: the persistent frame carries
+    // nothing from one frame to the next that changes it.
+    const CliResult one = runSpotshell("render --scene " + scene + " --size 48x48 --time " +
+                                       std::to_string(4.0 / 24.0) + " --out " + tmp("one.png"));
+    ASSERT_EQ(one.code, 0) << one.err;
+    EXPECT_GT(splat::psnr(f4, noise::readImage(tmp("one.png"))), 60.0);
+    for (const std::string& bad : {std::string("--frames 0-2 --out ") + tmp("nopattern.png"),
+                                   std::string("--frames 0-2 --time 1 --out ") + tmp("both.%d.png"),
+                                   std::string("--frames 5-2 --out ") + tmp("back.%d.png"),
+                                   std::string("--frames 0-2:0 --out ") + tmp("zero.%d.png"),
+                                   std::string("--frames 0-2 --out ") + tmp("two.%d.%d.png")}) {
+        const CliResult e = runSpotshell("render --scene " + scene + " --size 16x16 " + bad);
+        EXPECT_EQ(e.code, 2) << bad << ": " << e.err;
+        EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
+    }
+    for (const char* f : {"nopattern.png", "both.0.png", "back.5.png", "zero.0.png"})
+        EXPECT_FALSE(std::ifstream(tmp(f)).good()) << f << " was written";
+    // impulses --time: the moved impulses; a static mesh has no time.
+    const CliResult moved = runSpotshell("impulses --mesh " + std::string(SPOT_SOURCE_DIR) +
+                                         "/examples/animated/tail.glb --preset " + SPOT_SOURCE_DIR +
+                                         "/presets/fur.json --time 0.5 --out " + tmp("tail.ply"));
+    EXPECT_EQ(moved.code, 0) << moved.err;
+    const CliResult still = runSpotshell("impulses --mesh generated:sphere --preset " +
+                                         std::string(SPOT_SOURCE_DIR) + "/presets/fur.json --time 0.5 --out " + tmp("still.ply"));
+    EXPECT_EQ(still.code, 2);
+    EXPECT_NE(still.err.find("does not move"), std::string::npos) << still.err;
 }
