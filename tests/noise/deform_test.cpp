@@ -154,23 +154,8 @@ TEST(Deform, WindTurnsAboutTheRootDeterministicallyInTime) {
 }
 
 TEST(Deform, ACollapsedTriangleKeepsItsLastFrameAndNoNaN) {
-    // The tube bent by 180 degrees folds the blend region flat: some triangles collapse.
-    spot::test::GltfBuilder b;
-    noise::Mesh plane = noise::loadMeshOrGenerated("generated:plane");
-    tinygltf::Node node;
-    node.mesh = b.meshPrimitive(plane);
-    b.model.nodes = {node};
-    tinygltf::Scene scene;
-    scene.nodes = {0};
-    b.model.scenes.push_back(scene);
-    b.model.defaultScene = 0;
-    tinygltf::Animation clip;
-    clip.name = "squash";
-    // Scale z from 1 to 0: the plane (xz) collapses onto a line at t = 1.
-    b.sampler(clip, {0.0f, 0.5f, 1.0f}, {1, 1, 1, 1, 1, 0.5f, 1, 1, 0}, TINYGLTF_TYPE_VEC3, 3, 0,
-              "scale");
-    b.model.animations.push_back(clip);
-    const noise::AnimatedMesh squash = noise::AnimatedMesh::loadGltf(b.write(tmp("squash.glb")));
+    const noise::AnimatedMesh squash = noise::AnimatedMesh::loadGltf(
+        spot::test::squashClip(noise::loadMeshOrGenerated("generated:plane"), tmp("squash.glb")));
     const noise::ImpulseGenerator generator(squash.rest(), furPreset(), {});
     const std::vector<noise::Impulse> rest = generator.generate();
     noise::Deformer deformer(squash);

@@ -205,4 +205,49 @@ inline std::string bendClip(const std::string& file, float angle = 1.0f) {
     return b.write(file);
 }
 
+/// `mesh` with one morph target, a bump along y (0.3 (1 - r^2) over the unit disc about the
+/// y axis), its weight animated from 0 to 1 over 1 s (LINEAR).
+inline std::string morphClip(const noise::Mesh& mesh, const std::string& file) {
+    GltfBuilder b;
+    tinygltf::Node node;
+    node.mesh = b.meshPrimitive(mesh);
+    std::vector<float> bump;
+    for (const glm::vec3& p : mesh.positions) {
+        const float r2 = p.x * p.x + p.z * p.z;
+        bump.insert(bump.end(), {0.0f, r2 < 1.0f ? 0.3f * (1.0f - r2) : 0.0f, 0.0f});
+    }
+    b.model.meshes[0].primitives[0].targets.push_back(
+        {{"POSITION", b.floats(bump, TINYGLTF_TYPE_VEC3, 3)}});
+    b.model.meshes[0].weights = {0.0};
+    b.model.nodes = {node};
+    tinygltf::Scene scene;
+    scene.nodes = {0};
+    b.model.scenes.push_back(scene);
+    b.model.defaultScene = 0;
+    tinygltf::Animation clip;
+    clip.name = "bump";
+    b.sampler(clip, {0.0f, 1.0f}, {0.0f, 1.0f}, TINYGLTF_TYPE_SCALAR, 1, 0, "weights");
+    b.model.animations.push_back(clip);
+    return b.write(file);
+}
+
+/// `mesh` on a node whose scale along z goes from 1 to 0 over 1 s: a plane in xz collapses onto
+/// a line at t = 1.
+inline std::string squashClip(const noise::Mesh& mesh, const std::string& file) {
+    GltfBuilder b;
+    tinygltf::Node node;
+    node.mesh = b.meshPrimitive(mesh);
+    b.model.nodes = {node};
+    tinygltf::Scene scene;
+    scene.nodes = {0};
+    b.model.scenes.push_back(scene);
+    b.model.defaultScene = 0;
+    tinygltf::Animation clip;
+    clip.name = "squash";
+    b.sampler(clip, {0.0f, 0.5f, 1.0f}, {1, 1, 1, 1, 1, 0.5f, 1, 1, 0}, TINYGLTF_TYPE_VEC3, 3, 0,
+              "scale");
+    b.model.animations.push_back(clip);
+    return b.write(file);
+}
+
 } // namespace spot::test

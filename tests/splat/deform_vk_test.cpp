@@ -59,15 +59,15 @@ noise::Image render(const std::string& scene, const std::string& method, double 
     return noise::readImage(out);
 }
 
-} // namespace
-
-TEST(DeformGpu, MovesTheImpulsesAndPosesTheMeshAsTheCpuDoes) {
-    const noise::AnimatedMesh clip = noise::AnimatedMesh::loadGltf(bendClip(tmp("bend.glb")));
+/// The deform passes against noise::Deformer on `clip` at `times`: the posed vertices, the moved
+/// impulses (positions, frames, root cells), the anchors and random values bit for bit.
+void expectGpuMovesAsCpu(const noise::AnimatedMesh& clip, const std::vector<double>& times,
+                         glm::dvec3 eye, glm::dvec3 target) {
     const noise::ImpulseGenerator generator(clip.rest(), noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur.json"), {});
     const std::vector<noise::Impulse> rest = generator.generate(); // every cell
     noise::Camera camera;
-    camera.eye = glm::dvec3(1.0, 0.5, 6.0);
-    camera.target = glm::dvec3(1.0, 0.5, 0.0);
+    camera.eye = eye;
+    camera.target = target;
     camera.fovYDeg = 60.0;
     camera.width = camera.height = 32; // sees the whole clip: every cell is generated
     const splat::View view{camera, {}, glm::vec3(0.0f), glm::vec3(0.5f)};
@@ -75,7 +75,7 @@ TEST(DeformGpu, MovesTheImpulsesAndPosesTheMeshAsTheCpuDoes) {
     splat::Frame frame(ctx, clip.rest(), generator);
     frame.animate(clip, noise::Wind{});
     noise::Deformer cpu(clip);
-    for (const double t : {0.0, 0.4, 1.0}) {
+    for (const double t : times) {
         frame.setTime(t);
         frame.render("sorted", view, {});
         ASSERT_EQ(frame.generator().count(), rest.size()) << "t " << t;
@@ -87,6 +87,8 @@ TEST(DeformGpu, MovesTheImpulsesAndPosesTheMeshAsTheCpuDoes) {
             static_cast<const gpu::SpotImpulse*>(frame.generator().impulses().impulses->mapped());
         for (std::size_t i = 0; i < want.size(); ++i) {
             const glm::vec3 p(got[i].position);
+            for (int k = 0; k < 3; ++k)
+                ASSERT_TRUE(std::isfinite(p[k]) && std::isfinite(got[i].frameZ[k])) << i;
             ASSERT_LT(glm::length(p - want[i].position), 1e-5f * std::max(1.0f, glm::length(p)))
                 << "impulse " << i << " at t " << t;
             ASSERT_LT(glm::length(glm::vec3(got[i].frameZ) - want[i].frame[2]), 1e-4f) << i;
@@ -112,6 +114,29 @@ TEST(DeformGpu, MovesTheImpulsesAndPosesTheMeshAsTheCpuDoes) {
         }
     }
     expectNoValidationErrors(ctx);
+}
+
+} // namespace
+
+TEST(DeformGpu, MovesTheImpulsesAndPosesTheMeshAsTheCpuDoes) {
+    SCOPED_TRACE("a skin");
+    expectGpuMovesAsCpu(noise::AnimatedMesh::loadGltf(bendClip(tmp("bend.glb"))), {0.0, 0.4, 1.0},
+                        {1.0, 0.5, 6.0}, {1.0, 0.5, 0.0});
+}
+
+TEST(DeformGpu, MovesTheImpulsesOfAMorphTargetAndACollapseAsTheCpuDoes) {
+    const noise::Mesh plane = noise::loadMeshOrGenerated("generated:plane");
+    {
+        SCOPED_TRACE("a morph target");
+        expectGpuMovesAsCpu(noise::AnimatedMesh::loadGltf(morphClip(plane, tmp("bump.glb"))),
+                            {0.0, 0.5, 1.0}, {0.0, 4.0, 0.5}, {0.0, 0.0, 0.0});
+    }
+    {
+        // At t = 1 every triangle is collapsed: they keep t = 0.5's rotations, and nothing is NaN.
+        SCOPED_TRACE("a collapse");
+        expectGpuMovesAsCpu(noise::AnimatedMesh::loadGltf(squashClip(plane, tmp("squash.glb"))),
+                            {0.5, 1.0}, {0.0, 4.0, 0.5}, {0.0, 0.0, 0.0});
+    }
 }
 
 TEST(DeformGpu, ARigidClipIsTheStaticMeshSeenFromTheCameraMovedBack) {
@@ -197,4 +222,34 @@ TEST(DeformGpu, RenderFramesWritesEachFrameAndRefusesBadRanges) {
                                          std::string(SPOT_SOURCE_DIR) + "/presets/fur.json --time 0.5 --out " + tmp("still.ply"));
     EXPECT_EQ(still.code, 2);
     EXPECT_NE(still.err.find("does not move"), std::string::npos) << still.err;
+}
+
+TEST(DeformGpu, AMeshCacheRendersItsInterpolatedFrame) {
+    // Three frames of a sphere squashed along y and moved up: frame f is scaled by 1 - 0.2 f in y
+    // and raised by 0.3 f; played at 2 fps, t = 0.75 is frame 1.5.
+    const noise::Mesh sphere = noise::loadMeshOrGenerated("generated:sphere");
+    for (int f = 0; f < 3; ++f) {
+        noise::Mesh m = sphere;
+        for (glm::vec3& p : m.positions)
+            p = glm::vec3(p.x, p.y * (1.0f - 0.2f * float(f)) + 0.3f * float(f), p.z);
+        m.normals.clear();
+        noise::savePly(m, tmp("cache." + std::to_string(f) + ".ply"));
+    }
+    std::remove(tmp("cache.3.ply").c_str());
+    const std::string scene = writeScene("cache", tmp("cache.%d.ply"), {0.0, 1.0, 4.5}, {0.0, 0.3, 0.0},
+                                         {0, 1, 0}, 64, R"(, "animation": {"fps": 2})");
+    const noise::Image ref = render(scene, "reference", 0.75, "cache-ref");
+    const noise::Image refRest = render(scene, "reference", 0.0, "cache-ref0");
+    EXPECT_LT(splat::psnr(ref, refRest), 25.0) << "frame 1.5 is not the rest";
+    const double sorted = splat::psnr(ref, render(scene, "sorted", 0.75, "cache-sorted"));
+    const double sortedRest = splat::psnr(refRest, render(scene, "sorted", 0.0, "cache-sorted0"));
+    EXPECT_GT(sorted, sortedRest - 1.0) << sorted << " dB at frame 1.5, " << sortedRest << " at rest";
+    // The scene's rest frame: the noise is generated on frame 2 instead, so frame 2 renders what
+    // a static scene of frame 2's file renders.
+    const std::string rest2 = writeScene("cache-rest2", tmp("cache.%d.ply"), {0.0, 1.0, 4.5}, {0.0, 0.3, 0.0},
+                                         {0, 1, 0}, 64, R"(, "animation": {"fps": 2, "rest_frame": 2})");
+    const noise::Image atTwo = render(rest2, "reference", 1.0, "cache-rest2");
+    const std::string still = writeScene("cache-still2", tmp("cache.2.ply"), {0.0, 1.0, 4.5},
+                                         {0.0, 0.3, 0.0}, {0, 1, 0}, 64);
+    EXPECT_GT(splat::psnr(atTwo, render(still, "reference", 0.0, "cache-still2")), 60.0);
 }
