@@ -39,10 +39,10 @@ void SceneJob::poseAt(double t) {
         return;
     const auto start = std::chrono::steady_clock::now();
     deformer->pose(t);
+    visibleCells = 0;
+    for (const noise::SurfaceCell& cell : generator->cells().cells)
+        visibleCells += cellVisible(cell);
     if (cpuImpulses) {
-        visibleCells = 0;
-        for (const noise::SurfaceCell& cell : generator->cells().cells)
-            visibleCells += cellVisible(cell);
         impulses = deformer->move(
             generator->generate([&](const noise::SurfaceCell& cell) { return cellVisible(cell); }),
             generator->cellSize(), scene.wind);
