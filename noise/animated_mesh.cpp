@@ -744,13 +744,7 @@ std::vector<glm::vec3> AnimatedMesh::positionsAt(double t, bool rest) const {
         return m_rest.positions;
     PoseInputs in;
     inputsAt(t, rest, in);
-    shared::f32::PoseArrays arrays;
-    arrays.vertices = in.vertices.data();
-    arrays.pieces = in.pieces.data();
-    arrays.deltas = in.deltas.data();
-    arrays.weights = in.weights.data();
-    arrays.palette = in.palette.data();
-    shared::f32::SharedPoser poser(arrays);
+    shared::f32::SharedPoser poser(in.arrays());
     std::vector<glm::vec3> out(in.vertices.size());
     for (std::size_t v = 0; v < out.size(); ++v)
         out[v] = poser.spotPoseVertex(std::uint32_t(v));

@@ -50,6 +50,17 @@ struct PoseInputs {
     /// inverse bind matrices) and every piece's morph weights.
     std::vector<glm::mat4> palette;
     std::vector<float> weights;
+
+    /// The arrays spot_pose.h reads on the host (shaders/spot_deform.hpp's SharedPoser).
+    shared::f32::PoseArrays arrays() const {
+        shared::f32::PoseArrays a;
+        a.vertices = vertices.data();
+        a.pieces = pieces.data();
+        a.deltas = deltas.data();
+        a.weights = weights.data();
+        a.palette = palette.data();
+        return a;
+    }
 };
 
 class AnimatedMesh {

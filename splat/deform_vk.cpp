@@ -120,13 +120,7 @@ void GpuDeformer::prepare(double t) {
     put(m_ctx, m_palette, m_inputs.palette, "deform palette");
     put(m_ctx, m_weights, m_inputs.weights, "deform morph weights");
     // The same pose on the host, for culling and the mesh's bounds.
-    shared::f32::PoseArrays arrays;
-    arrays.vertices = m_inputs.vertices.data();
-    arrays.pieces = m_inputs.pieces.data();
-    arrays.deltas = m_inputs.deltas.data();
-    arrays.weights = m_inputs.weights.data();
-    arrays.palette = m_inputs.palette.data();
-    shared::f32::SharedPoser poser(arrays);
+    shared::f32::SharedPoser poser(m_inputs.arrays());
     m_posed.resize(m_vertexCount);
     glm::vec3 lo(std::numeric_limits<float>::max()), hi = -lo;
     for (std::uint32_t v = 0; v < m_vertexCount; ++v) {
