@@ -831,13 +831,34 @@ AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int
     if (restFrame < 0 || restFrame >= int(found.size()))
         throw InputError(cat(pattern, ": rest frame ", restFrame, " is not one of the ",
                              found.size(), " frames"));
+    // Two frames have the same topology when their vertex counts are equal and their triangle
+    // lists (in file order, each less the triangles it collapses to zero area, which loading
+    // drops) differ only by triangles that the frame lacking them collapses.
+    const auto sameTopology = [](const Mesh& a, const Mesh& b) {
+        if (a.positions.size() != b.positions.size())
+            return false;
+        std::size_t i = 0, j = 0;
+        while (i < a.triangles.size() || j < b.triangles.size()) {
+            if (i < a.triangles.size() && j < b.triangles.size() &&
+                a.triangles[i] == b.triangles[j]) {
+                ++i;
+                ++j;
+            } else if (i < a.triangles.size() && degenerateTriangle(b.positions, a.triangles[i])) {
+                ++i;
+            } else if (j < b.triangles.size() && degenerateTriangle(a.positions, b.triangles[j])) {
+                ++j;
+            } else {
+                return false;
+            }
+        }
+        return true;
+    };
     AnimatedMesh out;
     out.m_fps = fps;
     Mesh firstMesh;
     for (const int number : found) {
         Mesh m = loadMesh(frameName(number), limits);
-        if (!out.m_frames.empty() && (m.positions.size() != firstMesh.positions.size() ||
-                                      m.triangles != firstMesh.triangles))
+        if (!out.m_frames.empty() && !sameTopology(firstMesh, m))
             throw InputError(cat(m.name, ": its topology differs from ", firstMesh.name, "'s (",
                                  m.positions.size(), " vertices, ", m.triangles.size(),
                                  " triangles against ", firstMesh.positions.size(), " and ",

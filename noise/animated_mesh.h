@@ -13,9 +13,10 @@
 /// their nodes' static transforms, morph weights 0. Times outside a clip clamp to its ends.
 ///
 /// A mesh cache: a printf pattern (`walk.%04d.ply`) over the consecutive frames its folder holds
-/// (a gap is an error); every frame must have the first's vertex count and triangles (the rest
-/// pose unless the scene names another frame). `pose(t)` interpolates linearly between the frames
-/// around t x fps.
+/// (a gap is an error); every frame must have the first's vertex count and triangles (a frame
+/// may collapse a triangle to zero area); the first is the rest pose unless the scene names
+/// another frame, and the rest's triangles are the pose's. `pose(t)` interpolates linearly between
+/// the frames around t x fps.
 ///
 /// Every pose, on the CPU and on the GPU, is spot_pose.h's formula over PoseInputs: per vertex its
 /// base, morph deltas and joints; per time the joint matrices (the palette) and morph weights.

@@ -92,17 +92,7 @@ void checkValues(const Mesh& mesh, const std::string& name) {
 void dropDegenerate(Mesh& mesh) {
     std::size_t kept = 0;
     for (const glm::uvec3& tri : mesh.triangles) {
-        bool degenerate = tri.x == tri.y || tri.y == tri.z || tri.z == tri.x;
-        if (!degenerate) {
-            const glm::dvec3 p0(mesh.positions[tri.x]);
-            const glm::dvec3 e1 = glm::dvec3(mesh.positions[tri.y]) - p0;
-            const glm::dvec3 e2 = glm::dvec3(mesh.positions[tri.z]) - p0;
-            const glm::dvec3 e3 = e2 - e1;
-            const double longest2 =
-                std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
-            degenerate = glm::length(glm::cross(e1, e2)) <= kDegenerateRelArea * longest2;
-        }
-        if (degenerate)
+        if (degenerateTriangle(mesh.positions, tri))
             ++mesh.droppedTriangles;
         else
             mesh.triangles[kept++] = tri;
@@ -299,6 +289,17 @@ bool closedOutward(const Mesh& mesh) {
         if (used[i] && !(volume[i] > 0.0))
             return false;
     return true;
+}
+
+bool degenerateTriangle(const std::vector<glm::vec3>& positions, const glm::uvec3& tri) {
+    if (tri.x == tri.y || tri.y == tri.z || tri.z == tri.x)
+        return true;
+    const glm::dvec3 p0(positions[tri.x]);
+    const glm::dvec3 e1 = glm::dvec3(positions[tri.y]) - p0;
+    const glm::dvec3 e2 = glm::dvec3(positions[tri.z]) - p0;
+    const glm::dvec3 e3 = e2 - e1;
+    const double longest2 = std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
+    return glm::length(glm::cross(e1, e2)) <= kDegenerateRelArea * longest2;
 }
 
 void finalizeMesh(Mesh& mesh) {

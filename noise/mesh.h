@@ -75,6 +75,11 @@ Mesh parsePly(std::string_view bytes, const std::string& name, const MeshLimits&
 /// (area-weighted), renormalizes given ones, computes tangents when uvs are present.
 void finalizeMesh(Mesh& mesh);
 
+/// Whether finalizeMesh drops this triangle at these positions: two corners the same vertex, or
+/// an area that is zero relative to its longest edge squared (a mesh cache's frames are compared
+/// with it: a frame may collapse a triangle the first keeps).
+bool degenerateTriangle(const std::vector<glm::vec3>& positions, const glm::uvec3& tri);
+
 /// After the positions moved (a pose of an animated mesh): checks they are finite (InputError)
 /// and recomputes the normals (area-weighted) and tangents, keeping every triangle.
 void recomputeFrames(Mesh& mesh);

@@ -582,6 +582,29 @@ TEST(AnimatedMesh, MeshCacheGapsAndPatternsThatMatchNothingAreRefused) {
     EXPECT_EQ(AnimatedMesh::loadCache(tmp("pad.%04d.obj"), 24.0).frameCount(), 1u);
 }
 
+TEST(AnimatedMesh, MeshCacheFrameMayCollapseATriangle) {
+    // A quad whose corner 4 moves onto the line through corners 2 and 3 in frame 1 (its second
+    // triangle has no area there: loading that frame alone drops it) and back in frame 2: the
+    // same topology.
+    for (int f = 0; f < 5; ++f)
+        std::remove(tmp("pinch." + std::to_string(f) + ".obj").c_str());
+    const char* corner4[] = {"1 1 0", "2 -1 0", "1 1 0"};
+    for (int f = 0; f < 3; ++f)
+        std::ofstream(tmp("pinch." + std::to_string(f) + ".obj"))
+            << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv " << corner4[f] << "\nf 1 2 3\nf 2 4 3\n";
+    ASSERT_EQ(spot::noise::loadMesh(tmp("pinch.1.obj")).triangles.size(), 1u);
+    const AnimatedMesh a = AnimatedMesh::loadCache(tmp("pinch.%d.obj"), 24.0);
+    EXPECT_EQ(a.frameCount(), 3u);
+    EXPECT_EQ(a.rest().triangles.size(), 2u);
+    const spot::noise::Mesh pinched = a.pose(1.0 / 24.0); // never a NaN
+    EXPECT_EQ(pinched.triangles.size(), 2u);
+    for (const glm::vec3& n : pinched.normals)
+        EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
+    // A frame that changes a triangle is still refused.
+    std::ofstream(tmp("pinch.3.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 3 4\n";
+    EXPECT_THROW(AnimatedMesh::loadCache(tmp("pinch.%d.obj"), 24.0), spot::InputError);
+}
+
 TEST(AnimatedMesh, InfoRefusesABadFileWithOneLine) {
     tinygltf::Model model = makeClip();
     floatAt(model, kStripWeights, 4, 1) = -0.5f;
