@@ -131,6 +131,7 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Context& ct
     r.stats.update({{"device", ctx.deviceName()},
                     {"kernels_generated", first.kernelsGenerated},
                     {"kernel_candidates", first.candidates},
+                    {"visible_cells", first.visibleCells},
                     {"kernels_drawn", last.counters.kernelsDrawn},
                     {"gpu_ms", passes},
                     {"gpu_total_ms", last.gpuMs},
@@ -230,12 +231,12 @@ int render(int argc, char** argv) {
     std::string written;
     for (std::size_t i = 0; i < shot.frames.size(); ++i) {
         const double t = shot.frames[i].time;
+        if (job.moves() && (i > 0 || t != job.scene.animation.time))
+            job.poseAt(t); // the camera; a CPU method's posed impulses
         if (info->gpu()) {
             frame->setTime(t);
             r = renderGpu(args, job, *ctx, *frame, *info, settings);
         } else {
-            if (i > 0 || t != job.scene.animation.time)
-                job.poseAt(t);
             r = renderCpu(job, *info, settings, shot.frames.size() > 1);
         }
         std::map<std::string, std::string> metadata = {{"method", method},
@@ -244,7 +245,7 @@ int render(int argc, char** argv) {
                                                        {"kernels", std::to_string(r.kernels)},
                                                        {"seed", std::to_string(job.scene.seed)},
                                                        {"stats", r.stats.dump()}};
-        if (job.animated()) {
+        if (job.moves()) {
             char time[32];
             std::snprintf(time, sizeof(time), "%.17g", t); // round-trips
             metadata["time"] = time;
@@ -268,8 +269,9 @@ int render(int argc, char** argv) {
         j["seconds"] = r.seconds;
         j["generate_seconds"] = job.generateSeconds;
         j["cells"] = job.generator->cells().cells.size();
-        j["visible_cells"] = job.visibleCells;
-        if (job.animated())
+        j["visible_cells"] = r.stats.contains("visible_cells") ? std::size_t(r.stats["visible_cells"])
+                                                               : job.visibleCells;
+        if (job.moves())
             j["time"] = shot.frames.back().time;
         writeFileAtomic(args.str("stats"), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
     }

@@ -35,24 +35,28 @@ bool SceneJob::cellVisible(const noise::SurfaceCell& cell) const {
 }
 
 void SceneJob::poseAt(double t) {
-    if (!deformer)
+    if (scene.cameraMoves()) {
+        scene.camera = noise::cameraAt(scene, baseCamera, t);
+        rays = std::make_unique<noise::CameraRays>(scene.camera);
+    }
+    if (!cpuImpulses || !moves())
         return;
     const auto start = std::chrono::steady_clock::now();
-    deformer->pose(t);
+    if (deformer)
+        deformer->pose(t);
     visibleCells = 0;
     for (const noise::SurfaceCell& cell : generator->cells().cells)
         visibleCells += cellVisible(cell);
-    if (cpuImpulses) {
-        impulses = deformer->move(
-            generator->generate([&](const noise::SurfaceCell& cell) { return cellVisible(cell); }),
-            generator->cellSize(), scene.wind);
-    }
+    impulses = generator->generate([&](const noise::SurfaceCell& cell) { return cellVisible(cell); });
+    if (deformer)
+        impulses = deformer->move(impulses, generator->cellSize(), scene.wind);
     generateSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 SceneJob::SceneJob(noise::SceneDesc desc, bool withCpuImpulses)
     : scene(std::move(desc)), cpuImpulses(withCpuImpulses) {
+    baseCamera = scene.camera;
     rays = std::make_unique<noise::CameraRays>(scene.camera);
     animation = noise::AnimatedMesh::load(scene.mesh, scene.animation.clip, scene.animation.fps,
                                           scene.animation.restFrame);
@@ -62,10 +66,12 @@ SceneJob::SceneJob(noise::SceneDesc desc, bool withCpuImpulses)
     options.seed = scene.seed;
     const auto start = std::chrono::steady_clock::now();
     generator = std::make_unique<noise::ImpulseGenerator>(mesh, preset, options);
-    if (animation.animated() || scene.wind.on()) {
+    if (animation.animated() || scene.wind.on())
         deformer = std::make_unique<noise::Deformer>(animation);
+    if (moves()) {
         poseAt(scene.animation.time);
-        return;
+        if (cpuImpulses)
+            return;
     }
     for (const noise::SurfaceCell& cell : generator->cells().cells)
         visibleCells += cellVisible(cell);

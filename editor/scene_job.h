@@ -38,17 +38,20 @@ struct SceneJob {
     /// pose, from the cell's posed box).
     bool cellVisible(const noise::SurfaceCell& cell) const;
 
-    /// Whether the scene moves: an animated mesh, or wind (docs/design.md section 6).
+    /// Whether the scene's surface moves: an animated mesh, or wind (docs/design.md section 6).
     bool animated() const { return deformer != nullptr; }
-    /// Pose the scene at time t (seconds; clamped to the clip): the posed mesh, and with
-    /// `cpuImpulses` the impulses of the cells visible at that pose, carried to it. Nothing for
-    /// a scene that does not move.
+    /// Whether anything moves over time: the surface, or the camera (keys, a turntable).
+    bool moves() const { return animated() || scene.cameraMoves(); }
+    /// The scene at time t (seconds): its camera (scene.camera, from the keys and the turntable);
+    /// with `cpuImpulses`, the posed mesh (clamped to the clip) and the impulses of the cells
+    /// visible at that pose and camera, carried to it (the GPU poses on its own: splat::Frame).
     void poseAt(double t);
     /// The mesh as rendered: posed (poseAt's), or the mesh as loaded.
     const noise::Mesh& renderedMesh() const { return deformer ? deformer->posed() : mesh; }
 
     noise::SceneDesc scene;
     std::unique_ptr<noise::CameraRays> rays; ///< the scene's camera, after the overrides
+    noise::Camera baseCamera;                ///< scene.camera as loaded (poseAt moves scene.camera)
     noise::AnimatedMesh animation; ///< the scene's mesh as loaded, at rest and at any time
     noise::Mesh mesh;              ///< its rest pose: what the noise is generated on
     noise::PresetDesc preset;

@@ -1,5 +1,6 @@
 #include "scene.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "json_reader.h"
@@ -19,7 +20,8 @@ constexpr json::Interval kOrthoHeight{0.0, 1e6, true, false};
 constexpr std::int64_t kMaxImageSide = 16384;
 
 Camera parseCamera(const json::Reader& rd, const json::Json& j) {
-    rd.requireObject(j, "camera", {"projection", "eye", "target", "up", "fov_deg", "ortho_height"});
+    rd.requireObject(j, "camera", {"projection", "eye", "target", "up", "fov_deg", "ortho_height",
+                                   "keys", "turntable_deg_per_s"});
     Camera c;
     if (const json::Json* p = json::Reader::find(j, "projection")) {
         const std::string mode = rd.string(*p, "camera.projection", false);
@@ -66,6 +68,29 @@ Shading parseShading(const json::Reader& rd, const json::Json& j) {
     if (const json::Json* a = json::Reader::find(j, "ambient"))
         s.ambient = rd.real(*a, "shading.ambient", kUnit);
     return s;
+}
+
+std::vector<CameraKey> parseCameraKeys(const json::Reader& rd, const json::Json& j,
+                                       const Camera& camera) {
+    if (!j.is_array() || j.empty() || j.size() > 100000)
+        rd.fail("camera.keys must be an array of 1 to 100000 keys");
+    std::vector<CameraKey> keys;
+    for (std::size_t i = 0; i < j.size(); ++i) {
+        const std::string path = cat("camera.keys[", i, "]");
+        rd.requireObject(j[i], path, {"time", "eye", "target"});
+        CameraKey k;
+        k.time = rd.number(rd.require(j[i], path, "time"), path + ".time", json::Interval{-1e6, 1e6});
+        k.eye = glm::dvec3(rd.vec3(rd.require(j[i], path, "eye"), path + ".eye", kCoordinate));
+        k.target = glm::dvec3(rd.vec3(rd.require(j[i], path, "target"), path + ".target", kCoordinate));
+        if (!keys.empty() && !(k.time > keys.back().time))
+            rd.fail(cat(path, ".time must be after the key before it"));
+        if (!(glm::length(k.target - k.eye) > 1e-9))
+            rd.fail(cat(path, ": eye and target must be different points"));
+        if (!(glm::length(glm::cross(glm::normalize(k.target - k.eye), camera.up)) > 1e-6))
+            rd.fail(cat(path, ": camera.up must not be parallel to the view direction"));
+        keys.push_back(k);
+    }
+    return keys;
 }
 
 AnimationDesc parseAnimation(const json::Reader& rd, const json::Json& j) {
@@ -131,7 +156,12 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
     s.preset = baseDir / rd.string(rd.require(root, "", "preset"), "preset", false);
     if (const json::Json* seed = json::Reader::find(root, "seed"))
         s.seed = std::uint32_t(rd.integer(*seed, "seed", 0, 0xffffffffll));
-    s.camera = parseCamera(rd, rd.require(root, "", "camera"));
+    const json::Json& camera = rd.require(root, "", "camera");
+    s.camera = parseCamera(rd, camera);
+    if (const json::Json* k = json::Reader::find(camera, "keys"))
+        s.cameraKeys = parseCameraKeys(rd, *k, s.camera);
+    if (const json::Json* t = json::Reader::find(camera, "turntable_deg_per_s"))
+        s.turntableDegPerSecond = rd.number(*t, "camera.turntable_deg_per_s", json::Interval{-1e4, 1e4});
     const json::Json& image = rd.require(root, "", "image");
     rd.requireObject(image, "image", {"width", "height"});
     s.camera.width = int(rd.integer(rd.require(image, "image", "width"), "image.width", 1, kMaxImageSide));
@@ -152,6 +182,28 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
     if (const json::Json* w = json::Reader::find(root, "wind"))
         s.wind = parseWind(rd, *w);
     return s;
+}
+
+Camera cameraAt(const SceneDesc& scene, const Camera& base, double t) {
+    Camera c = base;
+    const std::vector<CameraKey>& keys = scene.cameraKeys;
+    if (!keys.empty()) {
+        std::size_t i = 0;
+        while (i + 1 < keys.size() && keys[i + 1].time <= t)
+            ++i;
+        const CameraKey& a = keys[i];
+        const CameraKey& b = keys[std::min(i + 1, keys.size() - 1)];
+        const double u = b.time > a.time ? std::clamp((t - a.time) / (b.time - a.time), 0.0, 1.0) : 0.0;
+        c.eye = a.eye + (b.eye - a.eye) * u;
+        c.target = a.target + (b.target - a.target) * u;
+    }
+    if (scene.turntableDegPerSecond != 0.0) {
+        const double angle = scene.turntableDegPerSecond * t * M_PI / 180.0;
+        const glm::dvec3 up = glm::normalize(c.up), d = c.eye - c.target;
+        const glm::dvec3 along = up * glm::dot(up, d), across = d - along;
+        c.eye = c.target + along + across * std::cos(angle) + glm::cross(up, across) * std::sin(angle);
+    }
+    return c;
 }
 
 SceneDesc loadScene(const std::filesystem::path& file) {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -26,6 +27,12 @@ struct AnimationDesc {
     int restFrame = 0; ///< a mesh cache's rest pose: an index into its frames
 };
 
+/// A camera key (scene key "camera.keys"): where the camera is at `time`.
+struct CameraKey {
+    double time = 0.0;
+    glm::dvec3 eye{0.0}, target{0.0};
+};
+
 struct SceneDesc {
     std::string name;
     std::string mesh;                ///< path (resolved against the scene's folder) or generated:NAME
@@ -38,7 +45,17 @@ struct SceneDesc {
     int referenceSpp = 16;
     AnimationDesc animation;
     Wind wind;
+    /// The camera over time: keys (ascending times; eye and target interpolated linearly,
+    /// clamped at the ends), then a turntable turning the eye about the target's up axis by
+    /// turntableDegPerSecond x t. Neither: the camera stands.
+    std::vector<CameraKey> cameraKeys;
+    double turntableDegPerSecond = 0.0;
+    bool cameraMoves() const { return !cameraKeys.empty() || turntableDegPerSecond != 0.0; }
 };
+
+/// The camera at time t (seconds): `base` (the scene's camera as parsed, with the command
+/// line's size) moved by the scene's keys and turntable.
+Camera cameraAt(const SceneDesc& scene, const Camera& base, double t);
 
 /// Parse a scene; `name` is the file (for messages), `baseDir` resolves relative paths.
 SceneDesc parseScene(std::string_view json, const std::string& name,

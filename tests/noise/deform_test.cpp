@@ -201,3 +201,36 @@ TEST(Deform, SceneKeysAnimationAndWind) {
         }
     }
 }
+
+TEST(Deform, SceneCameraKeysAndTurntableMoveTheCamera) {
+    const std::string base = R"({"version": 1, "mesh": "generated:plane", "preset": "p.json",
+        "image": {"width": 8, "height": 8}, "camera": {"eye": [0, 0, 3], "target": [0, 0, 0])";
+    const noise::SceneDesc keys = noise::parseScene(
+        base + R"(, "keys": [{"time": 1, "eye": [0, 0, 3], "target": [0, 0, 0]},
+                             {"time": 3, "eye": [0, 2, 5], "target": [1, 0, 0]}]}})",
+        "s.json", ".");
+    ASSERT_TRUE(keys.cameraMoves());
+    EXPECT_EQ(noise::cameraAt(keys, keys.camera, 0.0).eye, glm::dvec3(0, 0, 3)); // before: the first
+    EXPECT_EQ(noise::cameraAt(keys, keys.camera, 2.0).eye, glm::dvec3(0, 1, 4));
+    EXPECT_EQ(noise::cameraAt(keys, keys.camera, 2.0).target, glm::dvec3(0.5, 0, 0));
+    EXPECT_EQ(noise::cameraAt(keys, keys.camera, 9.0).eye, glm::dvec3(0, 2, 5)); // after: the last
+    const noise::SceneDesc turn = noise::parseScene(base + R"(, "turntable_deg_per_s": 90}})", "s.json", ".");
+    const glm::dvec3 quarter = noise::cameraAt(turn, turn.camera, 1.0).eye;
+    EXPECT_NEAR(quarter.x, 3.0, 1e-12);
+    EXPECT_NEAR(quarter.z, 0.0, 1e-12);
+    EXPECT_EQ(noise::cameraAt(turn, turn.camera, 0.0).eye, glm::dvec3(0, 0, 3));
+    const noise::SceneDesc still = noise::parseScene(base + "}}", "s.json", ".");
+    EXPECT_FALSE(still.cameraMoves());
+    for (const char* bad : {R"(, "keys": []}})",
+                            R"(, "keys": [{"time": 1, "eye": [0, 0, 3], "target": [0, 0, 0]}, {"time": 1, "eye": [0, 0, 2], "target": [0, 0, 0]}]}})",
+                            R"(, "keys": [{"time": 0, "eye": [0, 0, 0], "target": [0, 0, 0]}]}})",
+                            R"(, "keys": [{"time": 0, "eye": [0, 3, 0], "target": [0, 0, 0]}]}})",
+                            R"(, "turntable_deg_per_s": "fast"}})"}) {
+        try {
+            noise::parseScene(base + bad, "s.json", ".");
+            ADD_FAILURE() << "accepted " << bad;
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+        }
+    }
+}

@@ -253,3 +253,32 @@ TEST(DeformGpu, AMeshCacheRendersItsInterpolatedFrame) {
                                          {0.0, 0.3, 0.0}, {0, 1, 0}, 64);
     EXPECT_GT(splat::psnr(atTwo, render(still, "reference", 0.0, "cache-still2")), 60.0);
 }
+
+TEST(DeformGpu, ATurntableFrameIsTheStillSceneFromThatCamera) {
+    // A pure function of the time: frame 12 of a turntable (30 degrees a second, 24 fps) is the
+    // static scene seen from the camera turned by 15 degrees, byte for byte, on the GPU and in
+    // the reference.
+    const std::string turntable = writeScene("turntable", "generated:sphere", {0.0, 0.8, 3.2}, {0.0, 0.0, 0.0},
+                                             {0, 1, 0}, 48, R"(, "animation": {"fps": 24})");
+    {
+        // The camera object with a turntable key: rewrite the file's camera.
+        std::ifstream in(turntable);
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        text.replace(text.find("\"fov_deg\": 40}"), 14, "\"fov_deg\": 40, \"turntable_deg_per_s\": 30}");
+        std::ofstream(turntable) << text;
+    }
+    const double a = 15.0 * M_PI / 180.0;
+    const glm::dvec3 eye(3.2 * std::sin(a), 0.8, 3.2 * std::cos(a));
+    const std::string still = writeScene("turntable-still", "generated:sphere", eye, {0.0, 0.0, 0.0}, {0, 1, 0}, 48);
+    for (const char* method : {"sorted", "reference"}) {
+        const std::string out = tmp(std::string("tt-") + method + ".%02d.exr");
+        const CliResult r = runSpotshell("render --scene " + turntable + " --method " + method +
+                                         " --frames 0-12:12 --out " + out);
+        ASSERT_EQ(r.code, 0) << r.err;
+        const noise::Image frame12 = noise::readImage(tmp(std::string("tt-") + method + ".12.exr"));
+        const noise::Image frame0 = noise::readImage(tmp(std::string("tt-") + method + ".00.exr"));
+        const noise::Image want = render(still, method, 0.0, std::string("tt-still-") + method);
+        EXPECT_GT(splat::psnr(want, frame12), 100.0) << method;
+        EXPECT_LT(splat::psnr(frame0, frame12), 40.0) << method << ": the camera turned";
+    }
+}
