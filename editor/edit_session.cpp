@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <map>
 #include <utility>
 
 #include <sys/resource.h>
@@ -198,11 +200,19 @@ splat::FrameStats Session::render(noise::Image* out) {
 void Session::exportImage(const std::filesystem::path& file) {
     noise::Image image;
     const splat::FrameStats stats = render(&image);
-    noise::writeImage(file, image,
-                      {{"method", m_method},
-                       {"scene", m_scene.name},
-                       {"kernels", std::to_string(stats.kernelsGenerated)},
-                       {"preset", m_presetJson.dump()}});
+    std::map<std::string, std::string> metadata = {
+        {"method", m_method},
+        {"scene", m_scene.name},
+        {"kernels", std::to_string(stats.kernelsGenerated)},
+        {"preset", m_presetJson.dump()}};
+    if (animated()) {
+        // Which frame of the clip this is.
+        char time[32];
+        std::snprintf(time, sizeof time, "%.9g", m_time);
+        metadata["time"] = time;
+        metadata["frame"] = std::to_string(frameNumber());
+    }
+    noise::writeImage(file, image, metadata);
 }
 
 void Session::poseForPick() const {

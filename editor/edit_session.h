@@ -117,7 +117,8 @@ public:
     const splat::RenderSettings& settings() const { return m_settings; }
     /// One frame through splat::Frame::render; `out` receives the pixels when given.
     splat::FrameStats render(noise::Image* out = nullptr);
-    /// Render and write the view (.png or .exr, noise::writeImage).
+    /// Render and write the view (.png or .exr, noise::writeImage); the metadata names the
+    /// method, the scene and, for an animated scene, the time (seconds) and the frame number.
     void exportImage(const std::filesystem::path& file);
 
     // --- picking and strokes ------------------------------------------------------------------
