@@ -502,8 +502,6 @@ void runScriptAction(Session& session, const ScriptAction& a, const std::string&
                 note = cat("t ", session.time(), " s, frame ", session.frameNumber());
                 break;
             case T::Play: {
-                if (!session.animated())
-                    throw InputError("play: the scene does not move (no clip, no wind)");
                 if (a.loop)
                     session.setLoop(*a.loop);
                 const double step = 1.0 / session.timeline().fps;

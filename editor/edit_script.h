@@ -24,7 +24,8 @@
 ///                                        # clamped to the clip)
 ///     play N [loop on|off]               # N frames at the scene's fps, each rendered: the
 ///                                        # timeline's playback (it loops at the clip's end
-///                                        # unless `loop off`, which stops there)
+///                                        # unless `loop off`, which stops there; without a
+///                                        # clip the time runs on)
 ///     save FILE.json                     # the preset, with its .vdb grids beside it
 ///     screenshot FILE.png|FILE.exr
 ///

@@ -1010,12 +1010,16 @@ Timeline Session::timeline() const {
         t.start = m_animation.clampTime(std::numeric_limits<double>::lowest());
         t.end = m_animation.clampTime(std::numeric_limits<double>::max());
     } else {
-        t.end = Timeline::kWindOnlySeconds;
+        t.end = std::max(Timeline::kNoClipSeconds, m_time);
     }
     return t;
 }
 
 bool Session::advance(double seconds) {
+    if (!m_animation.animated()) {
+        setTime(m_time + seconds); // no clip: the time runs on (the wind's gusts never jump)
+        return true;
+    }
     const Timeline t = timeline();
     double next = m_time + seconds;
     bool running = true;

@@ -79,11 +79,11 @@ struct Hit {
 
 /// The span the timeline scrubs over, seconds, and its frame rate.
 struct Timeline {
-    double start = 0.0, end = 0.0; ///< a clip's first and last key; [0, kWindOnlySeconds] else
+    double start = 0.0, end = 0.0; ///< a clip's first and last key (see kNoClipSeconds)
     double fps = 24.0;             ///< the scene's animation.fps
-    /// A scene that only has wind (its mesh does not move) has no clip: its timeline spans
-    /// this many seconds.
-    static constexpr double kWindOnlySeconds = 10.0;
+    /// A mesh that does not move (a scene with wind only) has no clip: its timeline spans
+    /// [0, this many seconds], or to the time when playback went past it.
+    static constexpr double kNoClipSeconds = 10.0;
     /// The frame number of time t (t x fps, rounded).
     long frame(double t) const;
 };
@@ -191,8 +191,9 @@ public:
     /// Loop playback (advance): on by default.
     void setLoop(bool loop) { m_loop = loop; }
     bool loop() const { return m_loop; }
-    /// Move the time by `seconds` (playback): past the timeline's end it wraps to its start when
-    /// looping, else it stops at the end. Returns false when it stopped there (not looping).
+    /// Move the time by `seconds` (playback): past a clip's end it wraps to its start when
+    /// looping, else it stops at the end (without a clip it runs on). Returns false when it
+    /// stopped there.
     bool advance(double seconds);
     /// The frame number of the time (time() x fps, rounded).
     long frameNumber() const { return timeline().frame(m_time); }

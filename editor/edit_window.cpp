@@ -796,7 +796,8 @@ private:
         if (m_panels.playing && !m_wasPlaying) {
             // Play from where the time is (from the start when it stopped at the end).
             const edit::Timeline line = m_session.timeline();
-            if (!m_session.loop() && m_session.time() >= line.end)
+            if (m_session.animation().animated() && !m_session.loop() &&
+                m_session.time() >= line.end)
                 m_session.setTime(line.start);
             m_input.sceneDirty = true;
         } else if (m_panels.playing) {

@@ -116,6 +116,36 @@ TEST(EditAnimated, TimeAndTimeline) {
     test::expectNoValidationErrors(s.context());
 }
 
+// A mesh that does not move with the scene's wind: the scene animates (the impulses turn in the
+// gusts), its timeline has no clip (10 s, and the time runs on past it), and the brush paints
+// where it picks (the rest pose is the pose).
+TEST(EditAnimated, WindOnlySceneHasATimeThatRunsOn) {
+    const std::filesystem::path scene = test::tmpPath("wind-only.json");
+    test::writeText(scene, R"({"version": 1, "name": "wind", "mesh": "generated:sphere",
+  "preset": ")" + (std::filesystem::path(SPOT_SOURCE_DIR) / "presets/fur.json").string() +
+                               R"(", "camera": {"eye": [0, 0, 2.6], "target": [0, 0, 0], "fov_deg": 40},
+  "image": {"width": 96, "height": 96}, "shading": {"mode": "unlit"},
+  "wind": {"direction": [1, 0, 0], "strength": 0.8, "gust_frequency": 1.0}})");
+    edit::Session s(scene, editOptions(96));
+    ASSERT_TRUE(s.animated());
+    EXPECT_FALSE(s.animation().animated());
+    EXPECT_DOUBLE_EQ(s.timeline().start, 0.0);
+    EXPECT_DOUBLE_EQ(s.timeline().end, edit::Timeline::kNoClipSeconds);
+    noise::Image calm, gust;
+    s.render(&calm);
+    s.setTime(0.25);
+    s.render(&gust);
+    EXPECT_GT(difference(calm, gust).count, 50u) << "the wind does not move the fur";
+    s.setTime(9.9);
+    EXPECT_TRUE(s.advance(0.5));
+    EXPECT_NEAR(s.time(), 10.4, 1e-12) << "no clip: the time runs on";
+    EXPECT_NEAR(s.timeline().end, 10.4, 1e-12);
+    const std::optional<edit::Hit> hit = s.pick({48.0f, 48.0f});
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->restPosition, hit->position);
+    test::expectNoValidationErrors(s.context());
+}
+
 // The brush picks the surface as shown at the session's time and paints at rest: a stroke at
 // t = 1, where the skin under it is more than a diameter from where it rests (moved 0.75 along x
 // and turned 45 degrees), writes the density layer around the rest-pose point of the hit's
@@ -270,16 +300,18 @@ TEST(EditAnimated, ScriptTimeAndPlay) {
     EXPECT_DOUBLE_EQ(s.time(), 2.0);
     test::expectNoValidationErrors(s.context());
 
-    // A static scene has nothing to play: the line is named.
+    // A static scene has no clip: its time runs on (the comb's wind would follow it), at the
+    // scene's fps (24 by default), and nothing moves.
     edit::Session still(test::bunnyScene(), editOptions(64));
     EXPECT_FALSE(still.animated());
-    try {
-        edit::runScript(still, edit::parseScript("play 2\n", "still.script"), "still.script",
-                        nullptr);
-        ADD_FAILURE() << "play ran on a static scene";
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("still.script:1:"), std::string::npos) << e.what();
-    }
+    noise::Image first, last;
+    still.render(&first);
+    report = edit::runScript(still, edit::parseScript("time 9.5\nplay 24\n", "still.script"),
+                             "still.script", nullptr);
+    EXPECT_NEAR(still.time(), 10.5, 1e-9) << "no clip: no wrap";
+    EXPECT_EQ(report.frames, 24);
+    still.render(&last);
+    EXPECT_EQ(difference(first, last, 0.0f).count, 0u);
 }
 
 // `edit --script` with `time T` shows what `render --time T` renders (the same method, view

@@ -21,8 +21,8 @@
 
 #include "cli_run.h"
 #include "edit_quit.h"
-#include "editor/spin_clip.h"
 #include "edit_view.h"
+#include "editor/spin_clip.h"
 #include "noise/camera.h"
 #include "noise/image.h"
 #include "noise/mesh.h"
@@ -746,12 +746,10 @@ TEST(EditWindowInput, SpacePlaysAndTheSliderScrubsTheTimeline) {
     EXPECT_EQ(time("scrubbed"), 2.0) << "the slider's right end is the clip's end";
     EXPECT_EQ(time("stepped"), 1.5) << "12 frames back from frame 48 at 24 fps";
     EXPECT_EQ(meta["stepped"]["frame"], "36");
-    EXPECT_EQ(maxLevelDifference(shown["scrubbed"],
-                                 spot::noise::readImage(dir + "/script-end.png")),
-              0);
-    EXPECT_EQ(maxLevelDifference(shown["stepped"],
-                                 spot::noise::readImage(dir + "/script-step.png")),
-              0);
+    EXPECT_EQ(
+        maxLevelDifference(shown["scrubbed"], spot::noise::readImage(dir + "/script-end.png")), 0);
+    EXPECT_EQ(
+        maxLevelDifference(shown["stepped"], spot::noise::readImage(dir + "/script-step.png")), 0);
 }
 
 TEST(EditWindowSession, BadScriptLineInTheWindowIsAnInputError) {
