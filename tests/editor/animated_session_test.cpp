@@ -121,9 +121,10 @@ TEST(EditAnimated, TimeAndTimeline) {
 // where it picks (the rest pose is the pose).
 TEST(EditAnimated, WindOnlySceneHasATimeThatRunsOn) {
     const std::filesystem::path scene = test::tmpPath("wind-only.json");
-    test::writeText(scene, R"({"version": 1, "name": "wind", "mesh": "generated:sphere",
+    test::writeText(scene,
+                    R"({"version": 1, "name": "wind", "mesh": "generated:sphere",
   "preset": ")" + (std::filesystem::path(SPOT_SOURCE_DIR) / "presets/fur.json").string() +
-                               R"(", "camera": {"eye": [0, 0, 2.6], "target": [0, 0, 0], "fov_deg": 40},
+                        R"(", "camera": {"eye": [0, 0, 2.6], "target": [0, 0, 0], "fov_deg": 40},
   "image": {"width": 96, "height": 96}, "shading": {"mode": "unlit"},
   "wind": {"direction": [1, 0, 0], "strength": 0.8, "gust_frequency": 1.0}})");
     edit::Session s(scene, editOptions(96));
