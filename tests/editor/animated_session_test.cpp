@@ -241,6 +241,52 @@ TEST(EditAnimated, PaintAtAPoseStaysOnTheSkin) {
     test::expectNoValidationErrors(s.context());
 }
 
+// A comb stroke at a pose combs the fur as shown: the drag is carried back to rest by the hit
+// triangle's rotation, so at the pose (t = 1: the sphere rolled 45 degrees about the view axis,
+// where a drag taken at rest as it is on the screen would comb 45 degrees off) the impulses under
+// the stroke point along the screen's drag (mean angle below 10 degrees), as at rest on a static
+// mesh (EditSession.CombFollowsTheStroke).
+TEST(EditAnimated, CombAtAPoseFollowsTheStrokeAsShown) {
+    const std::filesystem::path rolled =
+        test::writeSpinClip(test::tmpPath("roll-clip"), glm::vec3(0, 0, 1));
+    edit::Session s(rolled, editOptions());
+    s.setTime(1.0);
+    const std::optional<glm::vec2> centre = sphereCentrePixel(s);
+    ASSERT_TRUE(centre);
+    s.brush().kind = edit::BrushKind::Comb;
+    s.brush().radiusPx = 24.0f;
+    s.brush().strength = 1.0f;
+    s.brush().falloff = edit::Falloff::Constant;
+    s.stroke({*centre - glm::vec2(28.0f, 0.0f), *centre + glm::vec2(28.0f, 0.0f)});
+    const std::optional<edit::Hit> mid = s.pick(*centre);
+    ASSERT_TRUE(mid);
+    const float radius = test::worldRadius(s, *mid, 24.0f);
+    noise::Deformer deformer(s.animation());
+    deformer.pose(1.0);
+    const std::vector<noise::Impulse> posed = deformer.move(s.generator().generate());
+    const glm::dvec3 forward = glm::normalize(s.camera().target - s.camera().eye);
+    const glm::vec3 right(glm::normalize(glm::cross(forward, s.camera().up)));
+    const glm::vec3 eye(s.camera().eye);
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (const noise::Impulse& i : posed) {
+        const glm::vec3 anchor = i.position - i.height * i.normal;
+        if (glm::length(anchor - mid->position) > 0.5f * radius ||
+            glm::dot(i.normal, glm::normalize(eye - anchor)) < 0.3f)
+            continue;
+        const glm::vec3 want = glm::normalize(right - i.normal * glm::dot(right, i.normal));
+        sum += std::acos(std::clamp(glm::dot(glm::normalize(i.comb), want), -1.0f, 1.0f));
+        ++n;
+    }
+    ASSERT_GT(n, 10u);
+    const double meanDeg = sum / double(n) * 180.0 / M_PI;
+    std::printf("comb at t = 1: %zu impulses under the stroke, mean angle to the stroke as shown "
+                "%.2f degrees\n",
+                n, meanDeg);
+    EXPECT_LT(meanDeg, 10.0);
+    test::expectNoValidationErrors(s.context());
+}
+
 // Undo after painting at a pose restores the rest layer bit for bit, whatever the time.
 TEST(EditAnimated, UndoAtAnotherTimeRestoresTheImpulses) {
     edit::Session s(spinScene(), editOptions());

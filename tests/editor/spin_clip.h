@@ -1,7 +1,7 @@
 // A rigid glTF clip for the editor's tests, written by the test itself (tinygltf): a uv sphere of
-// radius 0.5 at the origin that, from t = 0 to 2 s, turns 90 degrees about +y and moves 1.5 along
-// +x (LINEAR), so that at t = 2 every point is far (more than a diameter) from where it rests;
-// and a scene that sees both places, with the fur preset.
+// radius 0.5 at the origin that, from t = 0 to 2 s, turns 90 degrees about an axis (+y unless
+// given) and moves 1.5 along +x (LINEAR), so that at t = 2 every point is far (more than a
+// diameter) from where it rests; and a scene that sees both places, with the fur preset.
 #pragma once
 
 #include <algorithm>
@@ -24,14 +24,15 @@
 namespace spot::test {
 
 /// The clip's motion at time t in [0, 2]: the sphere's rigid transform, world from rest.
-inline glm::mat4 spinTransform(double t) {
+inline glm::mat4 spinTransform(double t, glm::vec3 axis = {0, 1, 0}) {
     const float u = float(std::clamp(t, 0.0, 2.0) / 2.0);
-    const glm::quat turn = glm::angleAxis(u * float(M_PI / 2), glm::vec3(0, 1, 0));
+    const glm::quat turn = glm::angleAxis(u * float(M_PI / 2), glm::normalize(axis));
     return glm::translate(glm::mat4(1.0f), glm::vec3(1.5f * u, 0, 0)) * glm::mat4_cast(turn);
 }
 
 /// Write `dir`/spin.glb and `dir`/spin.json (the scene: 256x256, fps 24) and return the scene.
-inline std::filesystem::path writeSpinClip(const std::filesystem::path& dir) {
+inline std::filesystem::path writeSpinClip(const std::filesystem::path& dir,
+                                           glm::vec3 axis = {0, 1, 0}) {
     std::filesystem::create_directories(dir);
     std::vector<float> positions;
     std::vector<std::uint32_t> indices;
@@ -94,7 +95,7 @@ inline std::filesystem::path writeSpinClip(const std::filesystem::path& dir) {
     model.defaultScene = 0;
 
     const std::vector<float> times = {0.0f, 2.0f};
-    const glm::quat end = glm::angleAxis(float(M_PI / 2), glm::vec3(0, 1, 0));
+    const glm::quat end = glm::angleAxis(float(M_PI / 2), glm::normalize(axis));
     const std::vector<float> rotations = {0, 0, 0, 1, end.x, end.y, end.z, end.w};
     const std::vector<float> translations = {0, 0, 0, 1.5f, 0, 0};
     const int input = add(times.data(), times.size() * 4, times.size(), TINYGLTF_TYPE_SCALAR,
