@@ -225,6 +225,13 @@ void Session::poseForPick() const {
     m_posedAt = m_time;
 }
 
+const noise::Mesh& Session::shownMesh() const {
+    if (!m_animation.animated())
+        return m_mesh;
+    poseForPick();
+    return m_deformer->posed();
+}
+
 std::optional<Hit> Session::pick(glm::vec2 pixel) const {
     const noise::Ray ray = noise::CameraRays(m_camera).ray(pixel.x, pixel.y);
     // A moving mesh is picked as shown, posed at the time on the CPU (the same pose formula as

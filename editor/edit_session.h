@@ -227,6 +227,9 @@ public:
     const noise::SceneDesc& scene() const { return m_scene; }
     /// The mesh at rest (what the noise is generated on and painted in).
     const noise::Mesh& mesh() const { return m_mesh; }
+    /// The mesh as shown at time(): posed on the CPU (the pose the brush picks) when it moves,
+    /// else the rest.
+    const noise::Mesh& shownMesh() const;
     const noise::ImpulseGenerator& generator() const { return *m_generator; }
     splat::Frame& frame() { return *m_frame; }
     splat::Context& context() { return *m_ctx; }

@@ -159,6 +159,9 @@ InputState& state(GLFWwindow* window) {
 
 void frameMesh(InputState& s) {
     const int w = s.layout.viewportWidth, h = s.layout.viewportHeight();
+    // The mesh where it is shown (an animated one moves away from its rest pose).
+    if (s.session->animation().animated())
+        s.sphere = boundingSphere(s.session->shownMesh());
     s.view->frame(s.sphere, h > 0 && w > 0 ? double(w) / double(h) : 1.0);
     s.moved();
 }

@@ -81,10 +81,13 @@ TEST(EditAnimated, TimeAndTimeline) {
     EXPECT_DOUBLE_EQ(line.end, 2.0);
     EXPECT_DOUBLE_EQ(line.fps, 24.0);
     EXPECT_EQ(line.frame(line.end), 48);
-    // The rest pose is the mesh as loaded (the sphere at the origin).
+    // The rest pose is the mesh as loaded (the sphere at the origin); the mesh as shown moves.
     const noise::Bounds b = s.mesh().bounds();
     EXPECT_NEAR(b.lo.x, -0.5f, 1e-3f);
     EXPECT_NEAR(b.hi.x, 0.5f, 1e-3f);
+    s.setTime(2.0);
+    EXPECT_NEAR(s.shownMesh().bounds().lo.x, 1.0f, 1e-3f);
+    EXPECT_NEAR(s.mesh().bounds().lo.x, -0.5f, 1e-3f);
 
     s.setTime(5.0);
     EXPECT_DOUBLE_EQ(s.time(), 2.0) << "a time past the clip is clamped";
