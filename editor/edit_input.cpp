@@ -92,6 +92,11 @@ InputAction mapKey(const InputEvent& e, const InputContext& c) {
         a.type = Type::Export;
     } else if (key == GLFW_KEY_N && e.action == GLFW_PRESS) {
         a.type = Type::TogglePanels;
+    } else if (key == GLFW_KEY_SPACE && e.action == GLFW_PRESS) {
+        a.type = Type::PlayPause;
+    } else if (key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT) {
+        a.type = Type::StepFrame;
+        a.step = key == GLFW_KEY_RIGHT ? 1 : -1;
     }
     return a;
 }

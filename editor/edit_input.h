@@ -19,6 +19,8 @@
 ///     X                    mirror the brush about x = 0
 ///     F12                  export the view (the File panel's Export)
 ///     N                    show or hide the panels' column
+///     space                play or pause the timeline (an animated scene)
+///     left, right          the timeline one frame back / forward
 #pragma once
 
 namespace spot::editor {
@@ -70,7 +72,9 @@ struct InputAction {
         BrushKind,     ///< choose brush kind `kind` (edit::BrushKind's order)
         MirrorX,       ///< toggle the brush's mirror about x = 0
         Export,        ///< write the view as the File panel's Export does
-        TogglePanels   ///< show or hide the panels' column
+        TogglePanels,  ///< show or hide the panels' column
+        PlayPause,     ///< play or pause the timeline
+        StepFrame      ///< move the timeline by `step` frames (+1 forward, -1 back)
     };
     Type type = Type::None;
     Drag drag = Drag::None; ///< the drag after the event

@@ -336,6 +336,36 @@ bool beginSection(const char* title, const SessionPanels& state) {
     return ImGui::CollapsingHeader(title);
 }
 
+bool timelinePanel(edit::Session& session, SessionPanels& st) {
+    if (!session.animated())
+        return false;
+    const edit::Timeline line = session.timeline();
+    if (ImGui::Button(st.playing ? "Pause" : "Play", ImVec2(60.0f, 0.0f)))
+        st.playing = !st.playing;
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("play or pause: space; step a frame: left / right");
+    ImGui::SameLine();
+    bool loop = session.loop();
+    if (ImGui::Checkbox("loop", &loop))
+        session.setLoop(loop);
+    ImGui::SameLine();
+    ImGui::Text("t %.3f s  frame %ld", session.time(), session.frameNumber());
+    // The scrub: the whole column's width, the clip's first key to its last.
+    float t = float(session.time());
+    ImGui::SetNextItemWidth(-1.0f);
+    const bool scrubbed = ImGui::SliderFloat("##time", &t, float(line.start), float(line.end),
+                                             "%.3f s", ImGuiSliderFlags_AlwaysClamp);
+    if (ImGui::IsItemActivated())
+        st.playing = false;
+    if (scrubbed)
+        attempt(st, [&] { session.setTime(double(t)); });
+    hint(cat("frames ", line.frame(line.start), " to ", line.frame(line.end), " at ", line.fps,
+             " fps")
+             .c_str());
+    ImGui::Separator();
+    return scrubbed;
+}
+
 bool saveSession(edit::Session& session, SessionPanels& st) {
     return attempt(st, [&] {
         session.save(st.savePath);

@@ -1,6 +1,7 @@
 /// @file edit_panels.h
-/// @brief The editor window's Dear ImGui panels on an edit::Session: Brush, Kernel (with a
-/// rendered preview and a schematic of the lobes), Distribution, Wind and File. Each is a
+/// @brief The editor window's Dear ImGui panels on an edit::Session: the timeline of an animated
+/// scene, Brush, Kernel (with a rendered preview and a schematic of the lobes), Distribution, Wind
+/// and File. Each is a
 /// section (a collapsing header) of the panels' column at the right of the window (the window
 /// adds Render and Stats; edit_view.h's WindowLayout places the column), so no panel covers the
 /// scene. Built every frame between ImGui::NewFrame() and ImGui::Render(), inside the column's
@@ -36,6 +37,9 @@ struct SessionPanels {
     std::string message;    ///< the last error or file written, shown in the File panel
     bool messageIsError = false;
     float windAmplitudeDeg = 20.0f, windFrequencyHz = 0.5f;
+    /// The timeline plays (the window advances the session's time by the wall-clock time
+    /// between frames); its Play button and the space bar toggle it, a scrub pauses it.
+    bool playing = false;
     /// The sections unfolded when the window opens (lower case: render, brush, kernel,
     /// distribution, wind, file, stats); the user folds and unfolds them after.
     std::vector<std::string> openAtStart = {"render", "brush", "file"};
@@ -62,6 +66,11 @@ bool beginSection(const char* title, const SessionPanels& state);
 /// changed what it shows (render again). Session errors (InputError: a value the preset refuses, a
 /// file that cannot be written) are shown in the File panel, never thrown.
 bool sessionPanels(edit::Session& session, SessionPanels& state);
+
+/// The timeline of an animated scene (nothing for a static one), at the top of the column: Play /
+/// Pause, loop, a slider that scrubs the time over the clip, the time and the frame number at
+/// the scene's fps. Returns true when the time changed (render again).
+bool timelinePanel(edit::Session& session, SessionPanels& state);
 
 /// Save to state.savePath; false (with the message set) when it failed.
 bool saveSession(edit::Session& session, SessionPanels& state);

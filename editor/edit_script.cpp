@@ -287,6 +287,20 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
     } else if (verb == "frames") {
         a.type = T::Frames;
         a.count = line.integer("frame count", 1, 100000);
+    } else if (verb == "time") {
+        a.type = T::Time;
+        a.seconds = line.number("time", -kBig, kBig);
+    } else if (verb == "play") {
+        a.type = T::Play;
+        a.count = line.integer("frame count", 1, 100000);
+        if (!line.done()) {
+            if (line.word("'loop'") != "loop")
+                line.fail("expected 'play N [loop on|off]'");
+            const std::string state = line.word("on or off");
+            if (state != "on" && state != "off")
+                line.fail(cat("loop '", state, "' must be on or off"));
+            a.loop = state == "on";
+        }
     } else if (verb == "save") {
         a.type = T::Save;
         a.file = line.word("file");
@@ -299,7 +313,7 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         line.fail(
             cat("unknown action '", verb,
                 "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, frames, "
-                "save, screenshot)"));
+                "time, play, save, screenshot)"));
     }
     line.end();
     return a;
@@ -483,6 +497,23 @@ void runScriptAction(Session& session, const ScriptAction& a, const std::string&
                 }
                 report.frames += a.count;
                 break;
+            case T::Time:
+                session.setTime(a.seconds);
+                note = cat("t ", session.time(), " s, frame ", session.frameNumber());
+                break;
+            case T::Play: {
+                if (a.loop)
+                    session.setLoop(*a.loop);
+                const double step = 1.0 / session.timeline().fps;
+                for (int i = 0; i < a.count; ++i) {
+                    session.advance(step);
+                    session.render();
+                }
+                report.frames += a.count;
+                note = cat(a.count, " frames to t ", session.time(), " s, frame ",
+                           session.frameNumber());
+                break;
+            }
             case T::Save:
                 session.save(a.file);
                 note = cat("wrote ", a.file.string());

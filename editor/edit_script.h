@@ -20,6 +20,12 @@
 ///     seed N                             # the impulse seed
 ///     wind on|off [amplitude DEG] [frequency HZ]   # animate the comb (Session::setWind)
 ///     frames N                           # render N frames, 1/30 s apart
+///     time T                             # the time, seconds (an animated scene: its pose;
+///                                        # clamped to the clip)
+///     play N [loop on|off]               # N frames at the scene's fps, each rendered: the
+///                                        # timeline's playback (it loops at the clip's end
+///                                        # unless `loop off`, which stops there; without a
+///                                        # clip the time runs on)
 ///     save FILE.json                     # the preset, with its .vdb grids beside it
 ///     screenshot FILE.png|FILE.exr
 ///
@@ -59,6 +65,8 @@ struct ScriptAction {
         Seed,
         Wind,
         Frames,
+        Time,
+        Play,
         Save,
         Screenshot
     };
@@ -77,7 +85,9 @@ struct ScriptAction {
     std::vector<glm::vec2> points;  ///< Stroke
     int index = 0;                  ///< Lobe
     nlohmann::json value;           ///< Lobe, Set
-    int count = 0;                  ///< Frames
+    int count = 0;                  ///< Frames, Play
+    double seconds = 0.0;           ///< Time
+    std::optional<bool> loop;       ///< Play: loop on or off (none: the session's)
     std::uint32_t seed = 0;         ///< Seed
     bool on = false;                ///< Wind
     float amplitudeDeg = 20.0f, frequencyHz = 0.5f; ///< Wind
@@ -100,7 +110,7 @@ std::vector<ScriptAction> loadScript(const std::filesystem::path& file);
 
 /// What a run measured.
 struct ScriptReport {
-    int strokes = 0, frames = 0;
+    int strokes = 0, frames = 0;         ///< frames: of `frames` and `play`
     double strokeMs = 0.0;               ///< summed dab + field refresh time of the strokes
     double paramMs = 0.0;                ///< summed rebuild time of set / lobe / undo / redo
     std::vector<double> strokeToFrameMs; ///< per stroke: last drag event to its frame's pixels

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
 #include <utility>
 
 #include <sys/resource.h>
@@ -133,7 +136,13 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
     }
     m_camera = m_scene.camera;
     (void)noise::CameraRays(m_camera); // checks the camera
-    m_mesh = noise::loadMeshOrGenerated(m_scene.mesh);
+    // A static OBJ/PLY or generated mesh loads as before (AnimatedMesh::load: a mesh that does
+    // not move); the noise is generated on the rest pose of one that does.
+    m_animation = noise::AnimatedMesh::load(m_scene.mesh, m_scene.animation.clip,
+                                            m_scene.animation.fps, m_scene.animation.restFrame);
+    m_mesh = m_animation.rest();
+    if (m_animation.animated() || m_scene.wind.on())
+        setTime(m_scene.animation.time);
     m_presetFile = options.preset.empty() ? m_scene.preset : options.preset;
     const std::string text = readFileCapped(m_presetFile, 64ull << 20);
     try {
@@ -182,6 +191,8 @@ void Session::setMethod(const std::string& method, const splat::RenderSettings& 
 splat::FrameStats Session::render(noise::Image* out) {
     if (m_windOn)
         applyWind();
+    if (m_frame->animated())
+        m_frame->setTime(m_time);
     const splat::View view{m_camera, m_scene.shading, m_scene.background, m_scene.baseColor};
     return m_frame->render(m_method, view, m_settings, out);
 }
@@ -189,20 +200,60 @@ splat::FrameStats Session::render(noise::Image* out) {
 void Session::exportImage(const std::filesystem::path& file) {
     noise::Image image;
     const splat::FrameStats stats = render(&image);
-    noise::writeImage(file, image,
-                      {{"method", m_method},
-                       {"scene", m_scene.name},
-                       {"kernels", std::to_string(stats.kernelsGenerated)},
-                       {"preset", m_presetJson.dump()}});
+    std::map<std::string, std::string> metadata = {
+        {"method", m_method},
+        {"scene", m_scene.name},
+        {"kernels", std::to_string(stats.kernelsGenerated)},
+        {"preset", m_presetJson.dump()}};
+    if (animated()) {
+        // Which frame of the clip this is.
+        char time[32];
+        std::snprintf(time, sizeof time, "%.9g", m_time);
+        metadata["time"] = time;
+        metadata["frame"] = std::to_string(frameNumber());
+    }
+    noise::writeImage(file, image, metadata);
+}
+
+void Session::poseForPick() const {
+    if (!m_deformer)
+        m_deformer = std::make_unique<noise::Deformer>(m_animation);
+    if (m_posedAt == m_time)
+        return;
+    m_deformer->pose(m_time);
+    m_posedBvh = noise::triangleBvh(m_deformer->posed());
+    m_posedAt = m_time;
+}
+
+const noise::Mesh& Session::shownMesh() const {
+    if (!m_animation.animated())
+        return m_mesh;
+    poseForPick();
+    return m_deformer->posed();
 }
 
 std::optional<Hit> Session::pick(glm::vec2 pixel) const {
     const noise::Ray ray = noise::CameraRays(m_camera).ray(pixel.x, pixel.y);
-    const std::optional<noise::MeshHit> hit = noise::closestHit(m_bvh, m_mesh, ray);
+    // A moving mesh is picked as shown, posed at the time on the CPU (the same pose formula as
+    // the GPU's): the pose keeps the rest's topology, so the hit's triangle and barycentrics
+    // name the same skin point at rest.
+    const bool posed = m_animation.animated();
+    if (posed)
+        poseForPick();
+    const noise::Mesh& shown = posed ? m_deformer->posed() : m_mesh;
+    const std::optional<noise::MeshHit> hit =
+        noise::closestHit(posed ? m_posedBvh : m_bvh, shown, ray);
     if (!hit)
         return std::nullopt;
-    const noise::SurfacePoint sp = noise::surfacePoint(m_mesh, hit->triangle, hit->barycentric);
-    return Hit{sp.position, sp.normal, hit->t, hit->triangle};
+    const noise::SurfacePoint sp = noise::surfacePoint(shown, hit->triangle, hit->barycentric);
+    Hit h{sp.position, sp.normal, hit->t, hit->triangle, hit->barycentric, sp.position, sp.normal};
+    if (posed) {
+        const noise::SurfacePoint rest =
+            noise::surfacePoint(m_mesh, hit->triangle, hit->barycentric);
+        h.restPosition = rest.position;
+        h.restNormal = rest.normal;
+    }
+    return h;
 }
 
 glm::vec3 Session::screenToWorld(glm::vec2 drag) const {
@@ -278,6 +329,10 @@ void Session::rebuild() {
     m_frame.reset();
     m_generator = std::move(generator);
     m_frame = std::make_unique<splat::Frame>(*m_ctx, m_mesh, *m_generator);
+    if (m_animation.animated() || m_scene.wind.on()) {
+        m_frame->animate(m_animation, m_scene.wind);
+        m_frame->setTime(m_time);
+    }
     m_windBase.clear();
 }
 
@@ -672,10 +727,20 @@ void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
         it = std::prev(m_stroke->grids.end());
     }
     Dab d;
-    d.centre = hit->position;
     d.radius = float(m_brush.radiusPx * noise::CameraRays(m_camera).pixelFootprint(hit->distance));
-    d.eye = glm::vec3(m_camera.eye);
-    d.direction = screenToWorld(drag);
+    if (m_animation.animated()) {
+        // The layers live at rest: the dab at the hit's rest point, and the eye and the drag
+        // carried back from the pose by the hit triangle's rotation (pick posed it), so the
+        // front-face test and the comb see at rest what the user sees at the pose.
+        const glm::mat3 back = glm::transpose(m_deformer->rotations()[hit->triangle]);
+        d.centre = hit->restPosition;
+        d.eye = hit->restPosition + back * (glm::vec3(m_camera.eye) - hit->position);
+        d.direction = back * screenToWorld(drag);
+    } else {
+        d.centre = hit->position;
+        d.eye = glm::vec3(m_camera.eye);
+        d.direction = screenToWorld(drag);
+    }
     const BrushSettings brush = strokeBrush();
     m_strokeVoxels +=
         applyDab(brush, d, *m_surface, layer, m_strokeBase.get(), it->second, &m_eventVoxels);
@@ -936,7 +1001,46 @@ void Session::setWind(bool on, float amplitudeDeg, float frequencyHz) {
 }
 
 void Session::setTime(double seconds) {
-    m_time = seconds;
+    if (!std::isfinite(seconds))
+        throw InputError(cat("time ", seconds, " is not finite"));
+    m_time = m_animation.animated() ? m_animation.clampTime(seconds) : seconds;
+}
+
+long Timeline::frame(double t) const {
+    return std::lround(t * fps);
+}
+
+Timeline Session::timeline() const {
+    Timeline t;
+    t.fps = m_scene.animation.fps;
+    if (m_animation.animated()) {
+        t.start = m_animation.clampTime(std::numeric_limits<double>::lowest());
+        t.end = m_animation.clampTime(std::numeric_limits<double>::max());
+    } else {
+        t.end = std::max(Timeline::kNoClipSeconds, m_time);
+    }
+    return t;
+}
+
+bool Session::advance(double seconds) {
+    if (!m_animation.animated()) {
+        setTime(m_time + seconds); // no clip: the time runs on (the wind's gusts never jump)
+        return true;
+    }
+    const Timeline t = timeline();
+    double next = m_time + seconds;
+    bool running = true;
+    // A hair past the end (a sum of frame steps) is the end.
+    if (next > t.end + 1e-9 * std::max(1.0, std::abs(t.end))) {
+        if (m_loop && t.end > t.start) {
+            next = t.start + std::fmod(next - t.start, t.end - t.start);
+        } else {
+            next = t.end;
+            running = false;
+        }
+    }
+    setTime(next);
+    return running;
 }
 
 } // namespace spot::edit

@@ -10,6 +10,13 @@
 /// base's parameters stay editable (set "fields.density.base.frequency"). The dabs refresh the
 /// generator's field data, so the next render() regenerates the impulses and shows them.
 ///
+/// An animated scene (a glTF clip or a mesh cache, or the scene's wind; docs/design.md section 6)
+/// has a time: the noise is generated on the mesh's rest pose, and every render() poses it at
+/// time() on the GPU (splat::Frame::animate). A stroke paints at any time: the brush picks the
+/// posed surface and writes the painted layers (which live in rest space, like everything that
+/// defines the noise) at the rest-pose point of the same triangle and barycentrics, so the paint
+/// stays on the skin.
+///
 /// Undo keeps at least kMinUndoSteps edits within a byte budget: a stroke stores per touched grid
 /// a sparse delta (voxel, value and activity before and after), a parameter edit the JSON before
 /// and after at its key path. Undo restores a bit-identical state (grids and preset).
@@ -28,8 +35,10 @@
 #include <nlohmann/json.hpp>
 
 #include "edit_brush.h"
+#include "noise/animated_mesh.h"
 #include "noise/bvh.h"
 #include "noise/camera.h"
+#include "noise/deform.h"
 #include "noise/image.h"
 #include "noise/impulses.h"
 #include "noise/mesh.h"
@@ -56,12 +65,27 @@ struct SessionOptions {
     bool armBrush = true;
 };
 
-/// Where a window pixel's ray meets the mesh.
+/// Where a window pixel's ray meets the mesh as shown (posed at the session's time when the
+/// mesh is animated), and the same surface point at rest (where the painted layers are written).
 struct Hit {
-    glm::vec3 position{0.0f}; ///< world units
-    glm::vec3 normal{0.0f};   ///< interpolated, unit
+    glm::vec3 position{0.0f}; ///< world units, as shown
+    glm::vec3 normal{0.0f};   ///< interpolated, unit, as shown
     double distance = 0.0;    ///< along the ray, world units
     std::uint32_t triangle = 0;
+    glm::dvec3 barycentric{1.0, 0.0, 0.0}; ///< of `triangle` (the same at rest and posed)
+    glm::vec3 restPosition{0.0f};          ///< the point at rest (equals position when static)
+    glm::vec3 restNormal{0.0f};            ///< its normal at rest
+};
+
+/// The span the timeline scrubs over, seconds, and its frame rate.
+struct Timeline {
+    double start = 0.0, end = 0.0; ///< a clip's first and last key (see kNoClipSeconds)
+    double fps = 24.0;             ///< the scene's animation.fps
+    /// A mesh that does not move (a scene with wind only) has no clip: its timeline spans
+    /// [0, this many seconds], or to the time when playback went past it.
+    static constexpr double kNoClipSeconds = 10.0;
+    /// The frame number of time t (t x fps, rounded).
+    long frame(double t) const;
 };
 
 /// What an edit cost: milliseconds spent rebuilding, and what was rebuilt.
@@ -93,7 +117,8 @@ public:
     const splat::RenderSettings& settings() const { return m_settings; }
     /// One frame through splat::Frame::render; `out` receives the pixels when given.
     splat::FrameStats render(noise::Image* out = nullptr);
-    /// Render and write the view (.png or .exr, noise::writeImage).
+    /// Render and write the view (.png or .exr, noise::writeImage); the metadata names the
+    /// method, the scene and, for an animated scene, the time (seconds) and the frame number.
     void exportImage(const std::filesystem::path& file);
 
     // --- picking and strokes ------------------------------------------------------------------
@@ -158,6 +183,21 @@ public:
     EditCost setSeed(std::uint32_t seed);
     std::uint32_t seed() const { return m_scene.seed; }
 
+    // --- time (an animated scene) -------------------------------------------------------------
+    /// Whether the scene moves: its mesh is a clip or a cache, or the scene has wind.
+    bool animated() const { return m_frame && m_frame->animated(); }
+    const noise::AnimatedMesh& animation() const { return m_animation; }
+    Timeline timeline() const;
+    /// Loop playback (advance): on by default.
+    void setLoop(bool loop) { m_loop = loop; }
+    bool loop() const { return m_loop; }
+    /// Move the time by `seconds` (playback): past a clip's end it wraps to its start when
+    /// looping, else it stops at the end (without a clip it runs on). Returns false when it
+    /// stopped there.
+    bool advance(double seconds);
+    /// The frame number of the time (time() x fps, rounded).
+    long frameNumber() const { return timeline().frame(m_time); }
+
     /// Wind: while on, render() bends the comb directions by a travelling wave, the comb
     /// offset by tan(amplitude) sin(2 pi (f t - x / wavelength)) along world +x (then projected
     /// on the tangent plane by the generator), on the voxels near the surface. Deterministic for
@@ -165,6 +205,8 @@ public:
     /// document's comb; saving writes the document's comb.
     void setWind(bool on, float amplitudeDeg = 20.0f, float frequencyHz = 0.5f);
     bool wind() const { return m_windOn; }
+    /// The time, seconds: the pose of an animated mesh (clamped to its clip: a time outside it
+    /// is stored clamped), the scene's wind's and the comb wind's. Not an edit.
     void setTime(double seconds);
     double time() const { return m_time; }
 
@@ -183,7 +225,11 @@ public:
     const nlohmann::json& presetJson() const { return m_presetJson; }
     const noise::PresetDesc& preset() const { return m_preset; }
     const noise::SceneDesc& scene() const { return m_scene; }
+    /// The mesh at rest (what the noise is generated on and painted in).
     const noise::Mesh& mesh() const { return m_mesh; }
+    /// The mesh as shown at time(): posed on the CPU (the pose the brush picks) when it moves,
+    /// else the rest.
+    const noise::Mesh& shownMesh() const;
     const noise::ImpulseGenerator& generator() const { return *m_generator; }
     splat::Frame& frame() { return *m_frame; }
     splat::Context& context() { return *m_ctx; }
@@ -256,9 +302,13 @@ private:
     /// `slot`'s current field (or the surface tangent for an unset comb) at the surface voxels.
     std::vector<glm::vec3> sampleSlot(Slot slot);
     void applyWind();
+    /// The CPU pose at the session's time and its BVH, for picking (an animated mesh only;
+    /// posed when the time changed since the last pick).
+    void poseForPick() const;
 
     noise::SceneDesc m_scene;
-    noise::Mesh m_mesh;
+    noise::AnimatedMesh m_animation; ///< the scene's mesh; the frame poses it (outlives m_frame)
+    noise::Mesh m_mesh;              ///< its rest pose
     noise::Camera m_camera;
     std::filesystem::path m_presetFile;
     std::string m_vdbName; ///< file name the painted fields reference
@@ -294,6 +344,11 @@ private:
     bool m_windOn = false;
     float m_windAmplitudeDeg = 20.0f, m_windFrequencyHz = 0.5f;
     double m_time = 0.0;
+    bool m_loop = true;
+    /// The pose the brush picks at (an animated mesh): the deformer and its BVH, at m_posedAt.
+    mutable std::unique_ptr<noise::Deformer> m_deformer;
+    mutable noise::Bvh m_posedBvh;
+    mutable std::optional<double> m_posedAt;
     std::vector<SurfaceVoxel> m_surfaceVoxels; ///< cache of surfaceVoxels()
     float m_surfaceVoxelSize = 0.0f;           ///< ... for this voxel size
     std::vector<glm::vec3> m_windBase;         ///< the document's comb at the surface voxels

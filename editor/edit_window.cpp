@@ -119,6 +119,8 @@ struct InputState {
     bool resized = true;          ///< recreate the swapchain
     bool closeRequested = false;  ///< the close button, with unsaved changes (the modal asks)
     bool togglePanels = false;    ///< N: show or hide the panels' column
+    bool playPause = false;       ///< space: play or pause the timeline
+    int stepFrames = 0;           ///< left / right: frames to step the timeline
     /// Where the scene is in the window (the viewport) and where the panels' column is.
     WindowLayout layout;
     Clock::time_point lastMotion; ///< of the camera (for the lower resolution while navigating)
@@ -157,6 +159,9 @@ InputState& state(GLFWwindow* window) {
 
 void frameMesh(InputState& s) {
     const int w = s.layout.viewportWidth, h = s.layout.viewportHeight();
+    // The mesh where it is shown (an animated one moves away from its rest pose).
+    if (s.session->animation().animated())
+        s.sphere = boundingSphere(s.session->shownMesh());
     s.view->frame(s.sphere, h > 0 && w > 0 ? double(w) / double(h) : 1.0);
     s.moved();
 }
@@ -234,6 +239,12 @@ void applyInput(InputState& s, const InputAction& a) {
             break;
         case T::TogglePanels:
             s.togglePanels = true;
+            break;
+        case T::PlayPause:
+            s.playPause = !s.playPause;
+            break;
+        case T::StepFrame:
+            s.stepFrames += a.step;
             break;
         }
     } catch (const InputError& e) {
@@ -364,6 +375,7 @@ struct FrameReport {
     bool scaledUp = false;             ///< rendered smaller while moving or painting
     int refined = 0, refineTarget = 0; ///< refinement steps shown (0: the method's frame)
     bool srgb = true;
+    std::string time; ///< an animated scene's time and frame (empty: static)
 };
 
 /// The Stats section: the last render's passes, timings and counts.
@@ -396,7 +408,10 @@ std::string statusText(const FrameReport& r) {
     char rate[48];
     std::snprintf(rate, sizeof rate, "%.0f ms (%.1f fps)", r.frameMs,
                   r.frameMs > 0 ? 1000.0 / r.frameMs : 0.0);
-    std::string text = cat("method ", r.method, "  last frame ", rate, "\nshown: ");
+    std::string text = cat("method ", r.method, "  last frame ", rate, "\n");
+    if (!r.time.empty())
+        text += r.time + "\n";
+    text += "shown: ";
     if (r.refined > 0)
         text += cat(r.refined < r.refineTarget ? "refining " : "refined ", r.refined, "/",
                     r.refineTarget, ", an average of jittered sorted frames");
@@ -612,7 +627,7 @@ public:
                 continue;
             scriptedNavigation();
             f.scriptPointer = scriptStep(f);
-            advanceWind();
+            advanceTime();
             f.stroking = m_input.drag == Drag::Brush || m_strokePoint > 0;
             const bool navigating =
                 m_input.drag == Drag::Orbit || m_input.drag == Drag::Pan ||
@@ -634,7 +649,8 @@ private:
     /// With --frames, the run waits for the idle refinement's steps too (none while the wind
     /// animates: it never rests).
     bool refinementDone(int steps) const {
-        return m_panel.refineFrames == 0 || steps >= m_panel.refineFrames || m_session.wind();
+        return m_panel.refineFrames == 0 || steps >= m_panel.refineFrames || m_session.wind() ||
+               m_panels.playing;
     }
     const std::string& methodName() const {
         return splat::gpuMethods()[std::size_t(m_panel.method)].name;
@@ -657,7 +673,7 @@ private:
     /// when there is nothing to draw into (minimized, or the swapchain not recreated).
     bool pollEvents(FrameState& f) {
         const bool busy = m_panel.continuous || m_input.drag != Drag::None || !scriptDone() ||
-                          m_session.wind() ||
+                          m_session.wind() || m_panels.playing ||
                           (m_panel.refineFrames > 0 && m_refine.count < m_panel.refineFrames);
         if (busy)
             glfwPollEvents();
@@ -759,14 +775,42 @@ private:
         return a.points[i];
     }
 
-    /// Wind animates: the session's time advances (1/30 s a frame when scripted).
-    void advanceWind() {
-        const double tick = std::chrono::duration<double>(Clock::now() - m_lastTick).count();
-        m_lastTick = Clock::now();
-        if (m_session.wind() && scriptDone()) {
+    /// The time: the timeline plays by the wall-clock time since the last frame (space and the
+    /// Play button toggle it, left and right step a frame); else the comb's wind animates it
+    /// (1/30 s a frame when scripted).
+    void advanceTime() {
+        const Clock::time_point now = Clock::now();
+        const double tick = std::chrono::duration<double>(now - m_lastTick).count();
+        m_lastTick = now;
+        const bool animated = m_session.animated();
+        if (m_input.playPause && animated)
+            m_panels.playing = !m_panels.playing;
+        m_input.playPause = false;
+        if (m_input.stepFrames != 0 && animated) {
+            const edit::Timeline line = m_session.timeline();
+            m_session.setTime(
+                std::clamp(double(m_session.frameNumber() + m_input.stepFrames) / line.fps,
+                           line.start, line.end));
+            m_input.sceneDirty = true;
+        }
+        m_input.stepFrames = 0;
+        if (m_panels.playing && !animated)
+            m_panels.playing = false;
+        if (m_panels.playing && !m_wasPlaying) {
+            // Play from where the time is (from the start when it stopped at the end).
+            const edit::Timeline line = m_session.timeline();
+            if (m_session.animation().animated() && !m_session.loop() &&
+                m_session.time() >= line.end)
+                m_session.setTime(line.start);
+            m_input.sceneDirty = true;
+        } else if (m_panels.playing) {
+            m_panels.playing = m_session.advance(tick);
+            m_input.sceneDirty = true;
+        } else if (m_session.wind() && scriptDone()) {
             m_session.setTime(m_session.time() + (m_options.frames > 0 ? 1.0 / 30.0 : tick));
             m_input.sceneDirty = true;
         }
+        m_wasPlaying = m_panels.playing;
     }
 
     /// The ImGui frame: the column (the Render section, the session's sections, Stats, and the
@@ -815,6 +859,7 @@ private:
                 .y +
             2.0f * ImGui::GetStyle().ItemSpacing.y + 4.0f;
         ImGui::BeginChild("##sections", ImVec2(0.0f, -statusHeight));
+        m_input.sceneDirty |= timelinePanel(m_session, m_panels);
         const int methodShown = m_panel.method;
         m_input.sceneDirty |= methodPanel(m_panel, m_panels);
         if (m_panel.navigationScale != m_navigationScaleChosen || m_panel.method != methodShown) {
@@ -851,6 +896,12 @@ private:
                                                         : m_refine.count;
         r.refineTarget = m_panel.refineFrames;
         r.srgb = m_swapchain.srgb;
+        if (m_session.animated()) {
+            char time[96];
+            std::snprintf(time, sizeof time, "time %.3f s  frame %ld%s", m_session.time(),
+                          m_session.frameNumber(), m_panels.playing ? "  playing" : "");
+            r.time = time;
+        }
         return r;
     }
 
@@ -901,7 +952,7 @@ private:
     /// steps left, the wind off.
     bool refinesNext(const FrameState& f, bool change) const {
         return !change && !f.lowRes && m_panel.refineFrames > 0 &&
-               m_refine.count < m_panel.refineFrames && !m_session.wind();
+               m_refine.count < m_panel.refineFrames && !m_session.wind() && !m_panels.playing;
     }
 
     /// The scene for this frame: one more refinement step when idle, a render when something
@@ -1163,7 +1214,8 @@ private:
     int m_navigationScaleChosen = 0;
     edit::ScriptReport m_scriptReport;
     std::size_t m_scriptNext = 0, m_strokePoint = 0; ///< the next action; a stroke's next point
-    Clock::time_point m_lastTick;                    ///< the wind's last time step
+    Clock::time_point m_lastTick;                    ///< the time's last step
+    bool m_wasPlaying = false;                       ///< the timeline played last frame
     bool m_quit = false;
 };
 

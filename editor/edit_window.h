@@ -5,6 +5,12 @@
 /// panels (render, brush, kernel, distribution, wind, file, stats; edit_panels.h). The session
 /// is built on the window's context, so strokes, undo and panel edits show in the next frame.
 ///
+/// An animated scene has a timeline at the top of the column (edit_panels.h's timelinePanel):
+/// while it plays (space or its Play button) each frame advances the session's time by the
+/// wall-clock time since the frame before, looping at the clip's end unless loop is off (then it
+/// stops there); the slider scrubs, left and right step a frame. No idle refinement while it
+/// plays. Painting works at any time (edit_session.h).
+///
 /// The window is the viewport (the scene, at the top left; the camera's aspect ratio is its) and
 /// a column of panels along the right edge (edit_view.h's WindowLayout): no panel covers the
 /// scene. A frame: splat::Frame::render() renders into the method's result image (RGBA32F,

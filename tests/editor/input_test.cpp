@@ -151,4 +151,25 @@ TEST(EditInput, KeysUndoRedoFrameAndTheBrush) {
     EXPECT_EQ(key(GLFW_KEY_Z, GLFW_MOD_CONTROL, dragging(Drag::Orbit)).drag, Drag::Orbit);
 }
 
+// The timeline's keys: space plays or pauses (once a press), left and right step a frame (held,
+// they repeat); none in the middle of a stroke (the surface would move under the brush) or while
+// a panel's text field has the keys.
+TEST(EditInput, SpacePlaysAndArrowsStepTheTimeline) {
+    EXPECT_EQ(key(GLFW_KEY_SPACE).type, Type::PlayPause);
+    EXPECT_EQ(key(GLFW_KEY_SPACE, 0, idle(), GLFW_REPEAT).type, Type::None);
+    EXPECT_EQ(key(GLFW_KEY_SPACE, GLFW_MOD_CONTROL).type, Type::None);
+    const InputAction forward = key(GLFW_KEY_RIGHT), back = key(GLFW_KEY_LEFT);
+    EXPECT_EQ(forward.type, Type::StepFrame);
+    EXPECT_EQ(forward.step, 1);
+    EXPECT_EQ(back.type, Type::StepFrame);
+    EXPECT_EQ(back.step, -1);
+    EXPECT_EQ(key(GLFW_KEY_RIGHT, 0, idle(), GLFW_REPEAT).type, Type::StepFrame);
+    EXPECT_EQ(key(GLFW_KEY_SPACE, 0, dragging(Drag::Brush)).type, Type::None);
+    EXPECT_EQ(key(GLFW_KEY_RIGHT, 0, dragging(Drag::Brush)).type, Type::None);
+    InputContext typing;
+    typing.panelWantsKeyboard = true;
+    EXPECT_EQ(key(GLFW_KEY_SPACE, 0, typing).type, Type::None);
+    EXPECT_EQ(key(GLFW_KEY_SPACE, 0, dragging(Drag::Orbit)).type, Type::PlayPause);
+}
+
 } // namespace

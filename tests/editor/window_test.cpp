@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -21,6 +22,7 @@
 #include "cli_run.h"
 #include "edit_quit.h"
 #include "edit_view.h"
+#include "editor/spin_clip.h"
 #include "noise/camera.h"
 #include "noise/image.h"
 #include "noise/mesh.h"
@@ -653,6 +655,101 @@ TEST(EditWindowInput, NTogglesThePanelsColumn) {
     EXPECT_EQ(spot::noise::readImage(dir + "/shown.png").width, 500) << log;
     EXPECT_EQ(spot::noise::readImage(dir + "/hidden.png").width, 800) << log;
     EXPECT_EQ(spot::noise::readImage(dir + "/again.png").width, 500) << log;
+}
+
+// The timeline as a user drives it (X events) on an animated scene (a rigid clip written by the
+// test, spin_clip.h: 2 s at 24 fps): space plays by the wall-clock time and space again pauses;
+// a drag on the timeline's slider (the column's top row) to past its right end scrubs to the
+// clip's end; the left arrow steps back a frame at a time. F12 exports the view after each step
+// (its metadata says the time). The scrubbed and stepped frames are those a script's `time`
+// shows in the window, to the 8-bit level.
+TEST(EditWindowInput, SpacePlaysAndTheSliderScrubsTheTimeline) {
+    ASSERT_EQ(std::system("command -v xdotool >/dev/null 2>&1"), 0)
+        << "xdotool is not installed (scripts/install-deps.sh installs it)";
+    const std::string dir = tmp("timeline");
+    std::filesystem::remove_all(dir);
+    const std::string spin = spot::test::writeSpinClip(dir + "/clip").string();
+    ASSERT_FALSE(spin.empty());
+    const std::string exported = "spin-view.png";
+    std::string driver =
+        "set -u\ncd '" + dir + "'\nSPOT_VALIDATION=1 '" + std::string(SPOT_SPOTSHELL) +
+        "' edit --scene '" + spin +
+        "' --size 800x600 --method instanced --refine 0 >edit.log 2>&1 &\n"
+        "pid=$!\ntrap 'kill $pid 2>/dev/null' EXIT\n"
+        "win=$(timeout 120 xdotool search --sync --onlyvisible --name 'spotshell edit' | "
+        "head -n1)\n"
+        "[ -n \"$win\" ] || { echo 'no window'; cat edit.log; exit 3; }\n"
+        "xdotool windowfocus --sync $win\nxdotool mousemove --window $win 250 300\n"
+        "capture() {\n"
+        "  xdotool key F12\n"
+        "  for i in $(seq 1 1200); do [ -f '" +
+        exported +
+        "' ] && break; kill -0 $pid || break; sleep 0.1; done\n"
+        "  mv '" +
+        exported +
+        "' \"$1.png\" || { echo \"no $1\"; cat edit.log; exit 4; }\n"
+        "}\n"
+        "capture start\n"
+        "xdotool key space\nsleep 1\nxdotool key space\ncapture played\n";
+    // The slider: the column starts at x = 500 in an 800-pixel window; its top row is the Play
+    // button, the slider below it, at y = 40. The button is held a moment at the end, as a hand
+    // does (ImGui reads a release in the frame of the last motion as a release where it began),
+    // and F12 waits a moment after the release (until ImGui has seen it, the slider has the keys).
+    std::string drag = xdotoolDrag({{600, 40}, {650, 40}, {700, 40}, {750, 40}, {795, 40}}, 1, "");
+    drag.insert(drag.rfind("xdotool mouseup"), "sleep 1\n");
+    driver += drag + "sleep 1\ncapture scrubbed\n";
+    driver += "xdotool mousemove --window $win 250 300\n";
+    for (int i = 0; i < 12; ++i)
+        driver += "xdotool key Left\n";
+    driver += "capture stepped\nkill $pid\nwait $pid\ncat edit.log\n";
+    std::ofstream(dir + "/drive.sh") << driver;
+    std::string driven;
+    FILE* pipe = popen(
+        ("xvfb-run -a -s '-screen 0 1024x768x24' bash '" + dir + "/drive.sh' 2>&1").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), int(buf.size()), pipe))
+        driven += buf.data();
+    ASSERT_EQ(pclose(pipe), 0) << driven;
+    EXPECT_EQ(driven.find("validation error"), std::string::npos) << driven;
+
+    // The same frames from a script's `time` in the window.
+    const std::string script = writeScript("timeline.script", "time 2\nscreenshot " + dir +
+                                                                  "/script-end.png\ntime 1.5\n"
+                                                                  "screenshot " +
+                                                                  dir + "/script-step.png\n");
+    const Result scripted =
+        run(kXvfb, "edit --scene " + spin + " --size 800x600 --method instanced --refine 0 " +
+                       "--script " + script + " --window --frames 1");
+    ASSERT_EQ(scripted.code, 0) << scripted.err;
+
+    std::map<std::string, std::map<std::string, std::string>> meta;
+    std::map<std::string, spot::noise::Image> shown;
+    for (const char* step : {"start", "played", "scrubbed", "stepped"}) {
+        const std::string file = dir + "/" + step + ".png";
+        ASSERT_TRUE(std::filesystem::exists(file)) << step << "\n" << driven;
+        shown[step] = spot::noise::readImage(file, &meta[step]);
+        ASSERT_EQ(shown[step].width, 500) << step << ": the column is shown";
+    }
+    const auto time = [&](const char* step) { return std::stod(meta[step]["time"]); };
+    std::printf("timeline: start t %s, played t %s (frame %s), scrubbed t %s, stepped t %s "
+                "(frame %s)\n",
+                meta["start"]["time"].c_str(), meta["played"]["time"].c_str(),
+                meta["played"]["frame"].c_str(), meta["scrubbed"]["time"].c_str(),
+                meta["stepped"]["time"].c_str(), meta["stepped"]["frame"].c_str());
+    EXPECT_EQ(time("start"), 0.0);
+    // About a second of play (each frame's wall-clock time), short of the clip's 2 s.
+    EXPECT_GT(time("played"), 0.3);
+    EXPECT_LT(time("played"), 2.0);
+    EXPECT_GT(fractionDiffering(shown["start"], shown["played"], 4), 0.01)
+        << "playing did not move the sphere";
+    EXPECT_EQ(time("scrubbed"), 2.0) << "the slider's right end is the clip's end";
+    EXPECT_EQ(time("stepped"), 1.5) << "12 frames back from frame 48 at 24 fps";
+    EXPECT_EQ(meta["stepped"]["frame"], "36");
+    EXPECT_EQ(
+        maxLevelDifference(shown["scrubbed"], spot::noise::readImage(dir + "/script-end.png")), 0);
+    EXPECT_EQ(
+        maxLevelDifference(shown["stepped"], spot::noise::readImage(dir + "/script-step.png")), 0);
 }
 
 TEST(EditWindowSession, BadScriptLineInTheWindowIsAnInputError) {
