@@ -270,7 +270,7 @@ def make_tuft(path):
         def at(t):
             w = 2.0 * math.pi * t / DURATION
             gust = 0.5 - 0.5 * math.cos(w - 0.5 * k)
-            bend = -(0.2 + 0.15 * k) * gust
+            bend = -(0.3 + 0.2 * k) * gust
             twist = 0.05 * math.sin(w - 0.5 * k)
             return quat_mul(quat_axis_angle((0, 0, 1), bend), quat_axis_angle((1, 0, 0), twist))
         return at

@@ -266,7 +266,8 @@ TEST(EditAnimated, CombAtAPoseFollowsTheStrokeAsShown) {
     const float radius = test::worldRadius(s, *mid, 24.0f);
     noise::Deformer deformer(s.animation());
     deformer.pose(1.0);
-    const std::vector<noise::Impulse> posed = deformer.move(s.generator().generate());
+    const std::vector<noise::Impulse> posed =
+        deformer.move(s.generator().generate(), s.generator().cellSize());
     const glm::dvec3 forward = glm::normalize(s.camera().target - s.camera().eye);
     const glm::vec3 right(glm::normalize(glm::cross(forward, s.camera().up)));
     const glm::vec3 eye(s.camera().eye);
