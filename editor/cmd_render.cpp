@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -67,6 +68,19 @@ Rendered renderCpu(cli::SceneJob& job, const splat::MethodInfo& method,
         r.stats[name] = statValue(value);
     r.summary = f.summary;
     return r;
+}
+
+/// Whether `file` is a complete image (--resume): there, and read without error.
+bool complete(const std::string& file) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec))
+        return false;
+    try {
+        noise::readImage(file);
+        return true;
+    } catch (const std::exception&) {
+        return false;
+    }
 }
 
 /// Median, 90th percentile and minimum of `values` (empty: zeros), as JSON.
@@ -229,8 +243,15 @@ int render(int argc, char** argv) {
     cli::ProgressBar bar(shot.frames.size() > 1 ? "frames" : "");
     Rendered r;
     std::string written;
+    std::size_t skipped = 0, rendered = 0;
     for (std::size_t i = 0; i < shot.frames.size(); ++i) {
         const double t = shot.frames[i].time;
+        if (args.has("resume") && complete(shot.frames[i].file)) {
+            ++skipped;
+            bar.update(long(i + 1), long(shot.frames.size()));
+            continue;
+        }
+        ++rendered;
         if (job.moves() && (i > 0 || t != job.scene.animation.time))
             job.poseAt(t); // the camera; a CPU method's posed impulses
         if (info->gpu()) {
@@ -257,6 +278,10 @@ int render(int argc, char** argv) {
         bar.update(long(i + 1), long(shot.frames.size()));
     }
     bar.finish();
+    if (rendered == 0) {
+        std::printf("all %zu frames are there (--resume): nothing rendered\n", shot.frames.size());
+        return 0;
+    }
     if (args.has("stats")) {
         nlohmann::json j = r.stats;
         j["method"] = method;
@@ -278,7 +303,8 @@ int render(int argc, char** argv) {
     const std::string chosen =
         choice.quality.empty() ? method : cat(method, ", quality ", choice.quality);
     if (shot.frames.size() > 1)
-        std::printf("wrote %zu frames, %s to %s (%s, %dx%d, last: %s)\n", shot.frames.size(),
+        std::printf("wrote %zu frames%s, %s to %s (%s, %dx%d, last: %s)\n", rendered,
+                    skipped > 0 ? cat(" (", skipped, " already there)").c_str() : "",
                     shot.frames.front().file.c_str(), written.c_str(), chosen.c_str(),
                     r.image.width, r.image.height, r.summary.c_str());
     else

@@ -90,6 +90,10 @@ std::vector<OptionSpec> timeOptions() {
             {"frames", "A-B[:STEP]",
              "render frames A to B (every STEP-th; frame f at f / animation.fps seconds) in one "
              "process, to --out's %d pattern",
+             false},
+            {"resume", "",
+             "skip the frames whose output is already there and complete (outputs are written "
+             "atomically: a killed run leaves none half-written)",
              false}};
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
@@ -201,6 +202,17 @@ TEST(DeformGpu, RenderFramesWritesEachFrameAndRefusesBadRanges) {
     EXPECT_EQ(meta0["time"], "0");
     EXPECT_EQ(std::stod(meta4["time"]), 4.0 / 24.0);
     EXPECT_LT(splat::psnr(f0, f4), 40.0) << "the tail moved between frames 0 and 4";
+    // --resume: a frame removed and one cut short (as a killed copy would leave it, were the
+    // writes not atomic) are rendered again, the complete one is skipped; the shot is the same.
+    std::remove(tmp("shot.002.png").c_str());
+    std::filesystem::resize_file(tmp("shot.004.png"), 100);
+    const CliResult resumed = runSpotshell("render --scene " + scene + " --size 48x48 --frames 0-4:2 --resume --out " + tmp("shot.%03d.png"));
+    ASSERT_EQ(resumed.code, 0) << resumed.err;
+    EXPECT_NE(resumed.out.find("wrote 2 frames (1 already there)"), std::string::npos) << resumed.out;
+    EXPECT_TRUE(std::isinf(splat::psnr(f4, noise::readImage(tmp("shot.004.png")))));
+    const CliResult done = runSpotshell("render --scene " + scene + " --size 48x48 --frames 0-4:2 --resume --out " + tmp("shot.%03d.png"));
+    ASSERT_EQ(done.code, 0) << done.err;
+    EXPECT_NE(done.out.find("nothing rendered"), std::string::npos) << done.out;
     // The same frame alone (--time at 4 / 24 s) is the same image: the persistent frame carries
     // nothing from one frame to the next that changes it.
     const CliResult one = runSpotshell("render --scene " + scene + " --size 48x48 --time " +
