@@ -190,8 +190,11 @@ std::vector<float> AnimatedMesh::sample(const std::vector<float>& times,
     return out;
 }
 
-AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std::string& clip,
-                                    const MeshLimits& limits) {
+namespace {
+
+/// The file read by tinygltf (images skipped: spotshell's fields read their own), after the
+/// size check.
+tinygltf::Model readModel(const std::filesystem::path& file, const MeshLimits& limits) {
     const std::string name = file.string();
     std::error_code ec;
     const std::uintmax_t bytes = std::filesystem::file_size(file, ec);
@@ -215,327 +218,304 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
         throw InputError(cat(name, ": not a glTF 2.0 file tinygltf reads (",
                              first.empty() ? "no reason given" : first, ")"));
     }
-    AnimatedMesh out;
-    // Nodes, with their parents.
-    out.m_nodes.resize(model.nodes.size());
-    for (std::size_t i = 0; i < model.nodes.size(); ++i) {
-        const tinygltf::Node& n = model.nodes[i];
-        Node& node = out.m_nodes[i];
-        if (n.matrix.size() == 16) {
-            node.hasMatrix = true;
-            for (int c = 0; c < 16; ++c)
-                glm::value_ptr(node.matrix)[c] = float(n.matrix[std::size_t(c)]);
-        }
-        if (n.translation.size() == 3)
-            node.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
-        if (n.rotation.size() == 4)
-            node.rotation = glm::quat(float(n.rotation[3]), float(n.rotation[0]),
-                                      float(n.rotation[1]), float(n.rotation[2]));
-        if (n.scale.size() == 3)
-            node.scale = glm::vec3(n.scale[0], n.scale[1], n.scale[2]);
-        for (const int c : n.children) {
-            if (c < 0 || c >= int(model.nodes.size()) || out.m_nodes[std::size_t(c)].parent >= 0 ||
-                c == int(i))
-                throw InputError(cat(name, ": node ", i, " has a bad child ", c));
-            out.m_nodes[std::size_t(c)].parent = int(i);
-        }
-    }
-    for (std::size_t i = 0; i < out.m_nodes.size(); ++i) { // no cycles
-        std::size_t steps = 0;
-        for (int p = out.m_nodes[i].parent; p >= 0; p = out.m_nodes[std::size_t(p)].parent)
-            if (++steps > out.m_nodes.size())
-                throw InputError(cat(name, ": its node hierarchy has a cycle"));
-    }
-    // Skins.
-    for (const tinygltf::Skin& s : model.skins) {
-        Skin skin;
-        for (const int j : s.joints) {
-            if (j < 0 || j >= int(model.nodes.size()))
-                throw InputError(
-                    cat(name, ": a skin names joint node ", j, " that does not exist"));
-            skin.joints.push_back(j);
-        }
-        skin.inverseBind.assign(skin.joints.size(), glm::mat4(1.0f));
-        if (s.inverseBindMatrices >= 0) {
-            const auto m =
-                readAccessor(model, s.inverseBindMatrices, 16, name + " inverse bind matrices");
-            if (m.size() != skin.joints.size() * 16)
-                throw InputError(cat(name, ": a skin has ", m.size() / 16,
-                                     " inverse bind matrices for ", skin.joints.size(), " joints"));
-            for (std::size_t j = 0; j < skin.joints.size(); ++j)
-                std::copy(m.begin() + std::ptrdiff_t(16 * j),
-                          m.begin() + std::ptrdiff_t(16 * j + 16),
-                          glm::value_ptr(skin.inverseBind[j]));
-        }
-        out.m_jointCount += skin.joints.size();
-        out.m_skins.push_back(std::move(skin));
-    }
-    for (const tinygltf::Mesh& m : model.meshes) {
-        std::vector<float> w(m.weights.begin(), m.weights.end());
-        out.m_meshWeights.push_back(std::move(w));
-    }
-    // The scene's nodes in depth-first order, their primitives merged.
-    Mesh& mesh = out.m_rest;
-    mesh.name = name;
+    return model;
+}
+
+} // namespace
+
+/// Builds an AnimatedMesh from a glTF model, part by part (friend of AnimatedMesh).
+struct GltfReader {
+    const tinygltf::Model& model;
+    const std::string& name;
+    const MeshLimits& limits;
+    AnimatedMesh& out;
+    std::vector<glm::vec2> uvs; ///< every primitive's, (0, 0) where one has none
     bool anyUv = false, allUv = true;
-    std::vector<int> order;
-    const int sceneIndex = model.defaultScene >= 0 ? model.defaultScene : 0;
-    std::function<void(int)> visit = [&](int n) {
-        order.push_back(n);
-        for (const int c : model.nodes[std::size_t(n)].children)
-            visit(c);
-    };
-    if (sceneIndex < int(model.scenes.size())) {
-        for (const int n : model.scenes[std::size_t(sceneIndex)].nodes) {
-            if (n < 0 || n >= int(model.nodes.size()) || out.m_nodes[std::size_t(n)].parent >= 0)
-                throw InputError(cat(name, ": its scene names node ", n, ", not a root node"));
-            visit(n);
+    std::size_t skipped = 0; ///< point and line primitives
+
+    /// Nodes with their parents (no cycles).
+    void nodes() {
+        out.m_nodes.resize(model.nodes.size());
+        for (std::size_t i = 0; i < model.nodes.size(); ++i) {
+            const tinygltf::Node& n = model.nodes[i];
+            AnimatedMesh::Node& node = out.m_nodes[i];
+            if (n.matrix.size() == 16) {
+                node.hasMatrix = true;
+                for (int c = 0; c < 16; ++c)
+                    glm::value_ptr(node.matrix)[c] = float(n.matrix[std::size_t(c)]);
+            }
+            if (n.translation.size() == 3)
+                node.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
+            if (n.rotation.size() == 4)
+                node.rotation = glm::quat(float(n.rotation[3]), float(n.rotation[0]),
+                                          float(n.rotation[1]), float(n.rotation[2]));
+            if (n.scale.size() == 3)
+                node.scale = glm::vec3(n.scale[0], n.scale[1], n.scale[2]);
+            for (const int c : n.children) {
+                if (c < 0 || c >= int(model.nodes.size()) ||
+                    out.m_nodes[std::size_t(c)].parent >= 0 || c == int(i))
+                    throw InputError(cat(name, ": node ", i, " has a bad child ", c));
+                out.m_nodes[std::size_t(c)].parent = int(i);
+            }
         }
-    } else {
-        for (std::size_t n = 0; n < model.nodes.size(); ++n)
-            if (out.m_nodes[n].parent < 0)
-                visit(int(n));
+        for (std::size_t i = 0; i < out.m_nodes.size(); ++i) { // no cycles
+            std::size_t steps = 0;
+            for (int p = out.m_nodes[i].parent; p >= 0; p = out.m_nodes[std::size_t(p)].parent)
+                if (++steps > out.m_nodes.size())
+                    throw InputError(cat(name, ": its node hierarchy has a cycle"));
+        }
     }
-    std::vector<glm::vec2> uvs;
-    std::size_t skippedPrimitives = 0;
-    for (const int n : order) {
+
+    /// Skins and each mesh's default morph weights.
+    void skins() {
+        for (const tinygltf::Skin& s : model.skins) {
+            AnimatedMesh::Skin skin;
+            for (const int j : s.joints) {
+                if (j < 0 || j >= int(model.nodes.size()))
+                    throw InputError(
+                        cat(name, ": a skin names joint node ", j, " that does not exist"));
+                skin.joints.push_back(j);
+            }
+            skin.inverseBind.assign(skin.joints.size(), glm::mat4(1.0f));
+            if (s.inverseBindMatrices >= 0) {
+                const auto m =
+                    readAccessor(model, s.inverseBindMatrices, 16, name + " inverse bind matrices");
+                if (m.size() != skin.joints.size() * 16)
+                    throw InputError(cat(name, ": a skin has ", m.size() / 16,
+                                         " inverse bind matrices for ", skin.joints.size(),
+                                         " joints"));
+                for (std::size_t j = 0; j < skin.joints.size(); ++j)
+                    std::copy(m.begin() + std::ptrdiff_t(16 * j),
+                              m.begin() + std::ptrdiff_t(16 * j + 16),
+                              glm::value_ptr(skin.inverseBind[j]));
+            }
+            out.m_jointCount += skin.joints.size();
+            out.m_skins.push_back(std::move(skin));
+        }
+        for (const tinygltf::Mesh& m : model.meshes) {
+            std::vector<float> w(m.weights.begin(), m.weights.end());
+            out.m_meshWeights.push_back(std::move(w));
+        }
+    }
+
+    /// The scene's nodes in depth-first order.
+    std::vector<int> sceneOrder() const {
+        std::vector<int> order;
+        const int sceneIndex = model.defaultScene >= 0 ? model.defaultScene : 0;
+        std::function<void(int)> visit = [&](int n) {
+            order.push_back(n);
+            for (const int c : model.nodes[std::size_t(n)].children)
+                visit(c);
+        };
+        if (sceneIndex < int(model.scenes.size())) {
+            for (const int n : model.scenes[std::size_t(sceneIndex)].nodes) {
+                if (n < 0 || n >= int(model.nodes.size()) ||
+                    out.m_nodes[std::size_t(n)].parent >= 0)
+                    throw InputError(cat(name, ": its scene names node ", n, ", not a root node"));
+                visit(n);
+            }
+        } else {
+            for (std::size_t n = 0; n < model.nodes.size(); ++n)
+                if (out.m_nodes[n].parent < 0)
+                    visit(int(n));
+        }
+        return order;
+    }
+
+    /// Primitive p of node n's mesh, appended to the rest mesh as a piece.
+    void primitive(int n, std::size_t p) {
         const tinygltf::Node& node = model.nodes[std::size_t(n)];
-        if (node.mesh < 0)
-            continue;
-        if (node.mesh >= int(model.meshes.size()))
-            throw InputError(
-                cat(name, ": node ", n, " names mesh ", node.mesh, " that does not exist"));
-        if (node.skin >= int(out.m_skins.size()))
-            throw InputError(
-                cat(name, ": node ", n, " names skin ", node.skin, " that does not exist"));
         const tinygltf::Mesh& m = model.meshes[std::size_t(node.mesh)];
-        for (std::size_t p = 0; p < m.primitives.size(); ++p) {
-            const tinygltf::Primitive& prim = m.primitives[p];
-            const std::string what = cat(name, " mesh '", m.name, "' primitive ", p);
-            // Points and lines carry no surface: skipped (a file of nothing else is refused
-            // below). Strips and fans are triangles, unrolled as glTF says.
-            const int mode = prim.mode == -1 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
-            if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE ||
-                mode == TINYGLTF_MODE_LINE_LOOP || mode == TINYGLTF_MODE_LINE_STRIP) {
-                ++skippedPrimitives;
-                continue;
-            }
-            if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
-                mode != TINYGLTF_MODE_TRIANGLE_FAN)
-                throw InputError(cat(what, ": mode ", prim.mode, " is not a glTF primitive mode"));
-            const auto attr = [&](const char* key) {
-                const auto it = prim.attributes.find(key);
-                return it == prim.attributes.end() ? -1 : it->second;
-            };
-            if (attr("POSITION") < 0)
-                throw InputError(cat(what, ": has no POSITION"));
-            Piece piece;
-            piece.node = n;
-            piece.skin = node.skin;
-            piece.mesh = node.mesh;
-            piece.first = mesh.positions.size();
-            piece.base = asVectors<3>(readAccessor(model, attr("POSITION"), 3, what + " POSITION"));
-            piece.count = piece.base.size();
-            if (mesh.positions.size() + piece.count > limits.maxVertices)
-                throw InputError(cat(name, ": more than ", limits.maxVertices, " vertices"));
-            if (attr("TEXCOORD_0") >= 0) {
-                auto uv =
-                    asVectors<2>(readAccessor(model, attr("TEXCOORD_0"), 2, what + " TEXCOORD_0"));
-                if (uv.size() != piece.count)
-                    throw InputError(cat(what, ": TEXCOORD_0 has ", uv.size(), " values for ",
-                                         piece.count, " vertices"));
-                for (glm::vec2& t : uv)
-                    t.y = 1.0f -
-                          t.y; // glTF's uv (0, 0) is the image's top-left; spotshell's bottom-left
-                uvs.insert(uvs.end(), uv.begin(), uv.end());
-                anyUv = true;
-            } else {
-                allUv = false;
-                uvs.resize(uvs.size() + piece.count, glm::vec2(0.0f));
-            }
-            for (int set = 0; set < 2; ++set) {
-                const int j = attr(set == 0 ? "JOINTS_0" : "JOINTS_1");
-                const int w = attr(set == 0 ? "WEIGHTS_0" : "WEIGHTS_1");
-                if ((j < 0) != (w < 0))
-                    throw InputError(
-                        cat(what, ": JOINTS_", set, " and WEIGHTS_", set, " come in pairs"));
-                if (j < 0)
-                    continue;
-                if (node.skin < 0)
-                    throw InputError(cat(what, ": has joints but its node has no skin"));
-                const auto joints = asVectors<4>(readAccessor(model, j, 4, what + " JOINTS"));
-                const auto weights = asVectors<4>(readAccessor(model, w, 4, what + " WEIGHTS"));
-                if (joints.size() != piece.count || weights.size() != piece.count)
-                    throw InputError(
-                        cat(what, ": JOINTS/WEIGHTS do not have one value per vertex"));
-                const std::size_t jointCount = out.m_skins[std::size_t(node.skin)].joints.size();
-                piece.joints[set].resize(piece.count);
-                for (std::size_t v = 0; v < piece.count; ++v)
-                    for (int c = 0; c < 4; ++c) {
-                        if (!(joints[v][c] >= 0.0f) || joints[v][c] >= float(jointCount) ||
-                            joints[v][c] != std::floor(joints[v][c]))
-                            throw InputError(cat(what, ": vertex ", v, " names joint ",
-                                                 joints[v][c], " of a skin with ", jointCount));
-                        if (weights[v][c] < 0.0f)
-                            throw InputError(cat(what, ": vertex ", v, " has a negative weight ",
-                                                 weights[v][c], " (WEIGHTS_", set, ")"));
-                        piece.joints[set][v][c] = std::uint32_t(joints[v][c]);
-                    }
-                piece.weights[set] = weights;
-            }
-            if (node.skin >= 0 && piece.joints[0].empty())
+        const tinygltf::Primitive& prim = m.primitives[p];
+        const std::string what = cat(name, " mesh '", m.name, "' primitive ", p);
+        // Points and lines carry no surface: skipped (a file of nothing else is refused
+        // below). Strips and fans are triangles, unrolled as glTF says.
+        const int mode = prim.mode == -1 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+        if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE ||
+            mode == TINYGLTF_MODE_LINE_LOOP || mode == TINYGLTF_MODE_LINE_STRIP) {
+            ++skipped;
+            return;
+        }
+        if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+            mode != TINYGLTF_MODE_TRIANGLE_FAN)
+            throw InputError(cat(what, ": mode ", prim.mode, " is not a glTF primitive mode"));
+        const auto attr = [&](const char* key) {
+            const auto it = prim.attributes.find(key);
+            return it == prim.attributes.end() ? -1 : it->second;
+        };
+        if (attr("POSITION") < 0)
+            throw InputError(cat(what, ": has no POSITION"));
+        Mesh& mesh = out.m_rest;
+        AnimatedMesh::Piece piece;
+        piece.node = n;
+        piece.skin = node.skin;
+        piece.mesh = node.mesh;
+        piece.first = mesh.positions.size();
+        piece.base = asVectors<3>(readAccessor(model, attr("POSITION"), 3, what + " POSITION"));
+        piece.count = piece.base.size();
+        if (mesh.positions.size() + piece.count > limits.maxVertices)
+            throw InputError(cat(name, ": more than ", limits.maxVertices, " vertices"));
+        uv(attr("TEXCOORD_0"), piece.count, what);
+        joints(prim, node.skin, piece, what);
+        targets(prim, piece, what);
+        triangles(prim, mode, piece, what);
+        mesh.positions.resize(mesh.positions.size() + piece.count);
+        out.m_pieces.push_back(std::move(piece));
+    }
+
+    /// TEXCOORD_0 (accessor `index`, -1: none) of a primitive of `count` vertices.
+    void uv(int index, std::size_t count, const std::string& what) {
+        if (index >= 0) {
+            auto uv = asVectors<2>(readAccessor(model, index, 2, what + " TEXCOORD_0"));
+            if (uv.size() != count)
                 throw InputError(
-                    cat(what, ": its node has a skin but it has no JOINTS_0/WEIGHTS_0"));
-            // The weights of both sets normalised together, as glTF asks (exporters round them);
-            // a skinned vertex that no joint moves is an error, not a vertex left behind.
-            if (node.skin >= 0)
-                for (std::size_t v = 0; v < piece.count; ++v) {
-                    double sum = 0.0;
-                    for (int set = 0; set < 2; ++set)
-                        if (!piece.weights[set].empty())
-                            for (int c = 0; c < 4; ++c)
-                                sum += double(piece.weights[set][v][c]);
-                    if (!(sum > 0.0))
-                        throw InputError(cat(what, ": vertex ", v,
-                                             "'s joint weights sum to 0 (no joint moves it)"));
-                    for (int set = 0; set < 2; ++set)
-                        if (!piece.weights[set].empty())
-                            piece.weights[set][v] =
-                                glm::vec4(glm::dvec4(piece.weights[set][v]) / sum);
-                }
-            for (std::size_t t = 0; t < prim.targets.size(); ++t) {
-                const auto it = prim.targets[t].find("POSITION");
-                std::vector<glm::vec3> delta(piece.count, glm::vec3(0.0f));
-                if (it != prim.targets[t].end()) {
-                    delta =
-                        asVectors<3>(readAccessor(model, it->second, 3, cat(what, " target ", t)));
-                    if (delta.size() != piece.count)
-                        throw InputError(cat(what, ": morph target ", t, " has ", delta.size(),
-                                             " positions for ", piece.count, " vertices"));
-                }
-                piece.targets.push_back(std::move(delta));
-            }
-            out.m_morphTargets = std::max(out.m_morphTargets, piece.targets.size());
-            std::vector<std::uint32_t> indices;
-            if (prim.indices >= 0) {
-                indices = readIndices(model, prim.indices, piece.count, what + " indices");
-            } else {
-                indices.resize(piece.count);
-                for (std::size_t i = 0; i < piece.count; ++i)
-                    indices[i] = std::uint32_t(i);
-            }
-            if (mode == TINYGLTF_MODE_TRIANGLE_STRIP || mode == TINYGLTF_MODE_TRIANGLE_FAN) {
-                std::vector<std::uint32_t> list;
-                for (std::size_t i = 0; i + 2 < indices.size(); ++i) {
-                    if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
-                        list.insert(list.end(),
-                                    {indices[i], indices[i + 1 + i % 2], indices[i + 2 - i % 2]});
-                    else
-                        list.insert(list.end(), {indices[i + 1], indices[i + 2], indices[0]});
-                }
-                indices = std::move(list);
-            }
-            if (indices.size() % 3 != 0)
-                throw InputError(cat(what, ": ", indices.size(), " indices, not a multiple of 3"));
-            if (mesh.triangles.size() + indices.size() / 3 > limits.maxTriangles)
-                throw InputError(cat(name, ": more than ", limits.maxTriangles, " triangles"));
-            for (std::size_t i = 0; i < indices.size(); i += 3)
-                mesh.triangles.emplace_back(std::uint32_t(piece.first) + indices[i],
-                                            std::uint32_t(piece.first) + indices[i + 1],
-                                            std::uint32_t(piece.first) + indices[i + 2]);
-            mesh.positions.resize(mesh.positions.size() + piece.count);
-            out.m_pieces.push_back(std::move(piece));
+                    cat(what, ": TEXCOORD_0 has ", uv.size(), " values for ", count, " vertices"));
+            for (glm::vec2& t : uv)
+                t.y =
+                    1.0f - t.y; // glTF's uv (0, 0) is the image's top-left; spotshell's bottom-left
+            uvs.insert(uvs.end(), uv.begin(), uv.end());
+            anyUv = true;
+        } else {
+            allUv = false;
+            uvs.resize(uvs.size() + count, glm::vec2(0.0f));
         }
     }
-    if (out.m_pieces.empty() && skippedPrimitives > 0)
-        throw InputError(cat(name, ": its scene holds only point or line primitives (",
-                             skippedPrimitives, "), no triangles"));
-    if (out.m_pieces.empty())
-        throw InputError(cat(name, ": its scene holds no triangle mesh"));
-    if (anyUv && allUv)
-        mesh.uvs = std::move(uvs);
-    // The clip.
-    for (const tinygltf::Animation& a : model.animations)
-        out.m_clipNames.push_back(a.name);
-    int chosen = -1;
-    if (!clip.empty()) {
-        for (std::size_t i = 0; i < model.animations.size(); ++i)
-            if (model.animations[i].name == clip)
-                chosen = int(i);
-        if (chosen < 0) {
-            std::string names;
-            for (const std::string& c : out.m_clipNames)
-                names += (names.empty() ? "" : ", ") + (c.empty() ? std::string("(unnamed)") : c);
-            throw InputError(
-                cat(name, ": has no clip '", clip, "' (", names.empty() ? "none" : names, ")"));
+
+    /// JOINTS_0/1 and WEIGHTS_0/1, checked, the weights normalised together.
+    void joints(const tinygltf::Primitive& prim, int skin, AnimatedMesh::Piece& piece,
+                const std::string& what) {
+        const auto attr = [&](const char* key) {
+            const auto it = prim.attributes.find(key);
+            return it == prim.attributes.end() ? -1 : it->second;
+        };
+        for (int set = 0; set < 2; ++set) {
+            const int j = attr(set == 0 ? "JOINTS_0" : "JOINTS_1");
+            const int w = attr(set == 0 ? "WEIGHTS_0" : "WEIGHTS_1");
+            if ((j < 0) != (w < 0))
+                throw InputError(
+                    cat(what, ": JOINTS_", set, " and WEIGHTS_", set, " come in pairs"));
+            if (j < 0)
+                continue;
+            if (skin < 0)
+                throw InputError(cat(what, ": has joints but its node has no skin"));
+            const auto joints = asVectors<4>(readAccessor(model, j, 4, what + " JOINTS"));
+            const auto weights = asVectors<4>(readAccessor(model, w, 4, what + " WEIGHTS"));
+            if (joints.size() != piece.count || weights.size() != piece.count)
+                throw InputError(cat(what, ": JOINTS/WEIGHTS do not have one value per vertex"));
+            const std::size_t jointCount = out.m_skins[std::size_t(skin)].joints.size();
+            piece.joints[set].resize(piece.count);
+            for (std::size_t v = 0; v < piece.count; ++v)
+                for (int c = 0; c < 4; ++c) {
+                    if (!(joints[v][c] >= 0.0f) || joints[v][c] >= float(jointCount) ||
+                        joints[v][c] != std::floor(joints[v][c]))
+                        throw InputError(cat(what, ": vertex ", v, " names joint ", joints[v][c],
+                                             " of a skin with ", jointCount));
+                    if (weights[v][c] < 0.0f)
+                        throw InputError(cat(what, ": vertex ", v, " has a negative weight ",
+                                             weights[v][c], " (WEIGHTS_", set, ")"));
+                    piece.joints[set][v][c] = std::uint32_t(joints[v][c]);
+                }
+            piece.weights[set] = weights;
         }
-    } else if (!model.animations.empty()) {
-        chosen = 0;
+        if (skin >= 0 && piece.joints[0].empty())
+            throw InputError(cat(what, ": its node has a skin but it has no JOINTS_0/WEIGHTS_0"));
+        // The weights of both sets normalised together, as glTF asks (exporters round them);
+        // a skinned vertex that no joint moves is an error, not a vertex left behind.
+        if (skin >= 0)
+            for (std::size_t v = 0; v < piece.count; ++v) {
+                double sum = 0.0;
+                for (int set = 0; set < 2; ++set)
+                    if (!piece.weights[set].empty())
+                        for (int c = 0; c < 4; ++c)
+                            sum += double(piece.weights[set][v][c]);
+                if (!(sum > 0.0))
+                    throw InputError(
+                        cat(what, ": vertex ", v, "'s joint weights sum to 0 (no joint moves it)"));
+                for (int set = 0; set < 2; ++set)
+                    if (!piece.weights[set].empty())
+                        piece.weights[set][v] = glm::vec4(glm::dvec4(piece.weights[set][v]) / sum);
+            }
     }
-    if (chosen >= 0) {
+
+    /// The morph targets' POSITION deltas.
+    void targets(const tinygltf::Primitive& prim, AnimatedMesh::Piece& piece,
+                 const std::string& what) {
+        for (std::size_t t = 0; t < prim.targets.size(); ++t) {
+            const auto it = prim.targets[t].find("POSITION");
+            std::vector<glm::vec3> delta(piece.count, glm::vec3(0.0f));
+            if (it != prim.targets[t].end()) {
+                delta = asVectors<3>(readAccessor(model, it->second, 3, cat(what, " target ", t)));
+                if (delta.size() != piece.count)
+                    throw InputError(cat(what, ": morph target ", t, " has ", delta.size(),
+                                         " positions for ", piece.count, " vertices"));
+            }
+            piece.targets.push_back(std::move(delta));
+        }
+        out.m_morphTargets = std::max(out.m_morphTargets, piece.targets.size());
+    }
+
+    /// The triangles (strips and fans unrolled), offset to the piece's first vertex.
+    void triangles(const tinygltf::Primitive& prim, int mode, const AnimatedMesh::Piece& piece,
+                   const std::string& what) {
+        Mesh& mesh = out.m_rest;
+        std::vector<std::uint32_t> indices;
+        if (prim.indices >= 0) {
+            indices = readIndices(model, prim.indices, piece.count, what + " indices");
+        } else {
+            indices.resize(piece.count);
+            for (std::size_t i = 0; i < piece.count; ++i)
+                indices[i] = std::uint32_t(i);
+        }
+        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP || mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+            std::vector<std::uint32_t> list;
+            for (std::size_t i = 0; i + 2 < indices.size(); ++i) {
+                if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+                    list.insert(list.end(),
+                                {indices[i], indices[i + 1 + i % 2], indices[i + 2 - i % 2]});
+                else
+                    list.insert(list.end(), {indices[i + 1], indices[i + 2], indices[0]});
+            }
+            indices = std::move(list);
+        }
+        if (indices.size() % 3 != 0)
+            throw InputError(cat(what, ": ", indices.size(), " indices, not a multiple of 3"));
+        if (mesh.triangles.size() + indices.size() / 3 > limits.maxTriangles)
+            throw InputError(cat(name, ": more than ", limits.maxTriangles, " triangles"));
+        for (std::size_t i = 0; i < indices.size(); i += 3)
+            mesh.triangles.emplace_back(std::uint32_t(piece.first) + indices[i],
+                                        std::uint32_t(piece.first) + indices[i + 1],
+                                        std::uint32_t(piece.first) + indices[i + 2]);
+    }
+
+    /// The clip named `clip` (empty: the first, or none).
+    void clip(const std::string& clip) {
+        for (const tinygltf::Animation& a : model.animations)
+            out.m_clipNames.push_back(a.name);
+        int chosen = -1;
+        if (!clip.empty()) {
+            for (std::size_t i = 0; i < model.animations.size(); ++i)
+                if (model.animations[i].name == clip)
+                    chosen = int(i);
+            if (chosen < 0) {
+                std::string names;
+                for (const std::string& c : out.m_clipNames)
+                    names +=
+                        (names.empty() ? "" : ", ") + (c.empty() ? std::string("(unnamed)") : c);
+                throw InputError(
+                    cat(name, ": has no clip '", clip, "' (", names.empty() ? "none" : names, ")"));
+            }
+        } else if (!model.animations.empty()) {
+            chosen = 0;
+        }
+        if (chosen < 0)
+            return;
         const tinygltf::Animation& a = model.animations[std::size_t(chosen)];
         out.m_clipName = a.name;
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
         for (const tinygltf::AnimationChannel& c : a.channels) {
-            const std::string what = cat(name, " clip '", a.name, "'");
-            if (c.sampler < 0 || c.sampler >= int(a.samplers.size()))
-                throw InputError(cat(what, ": a channel names sampler ", c.sampler));
-            if (c.target_node < 0 || c.target_node >= int(model.nodes.size()))
-                continue; // a channel without a node (an extension's) moves nothing here
-            const tinygltf::AnimationSampler& s = a.samplers[std::size_t(c.sampler)];
-            Channel ch;
-            ch.node = c.target_node;
-            int width = 0;
-            if (c.target_path == "translation") {
-                ch.path = Channel::Path::Translation;
-                width = 3;
-            } else if (c.target_path == "rotation") {
-                ch.path = Channel::Path::Rotation;
-                width = 4;
-            } else if (c.target_path == "scale") {
-                ch.path = Channel::Path::Scale;
-                width = 3;
-            } else if (c.target_path == "weights") {
-                ch.path = Channel::Path::Weights;
-                const int m = model.nodes[std::size_t(c.target_node)].mesh;
-                if (m < 0 || m >= int(model.meshes.size()) ||
-                    model.meshes[std::size_t(m)].primitives.empty())
-                    continue; // weights of a node without a mesh move nothing
-                width = int(std::max<std::size_t>(
-                    1, model.meshes[std::size_t(m)].primitives.front().targets.size()));
-            } else {
-                continue; // "pointer" and others: nothing of the mesh
-            }
-            ch.interpolation = s.interpolation == "STEP"          ? Interpolation::Step
-                               : s.interpolation == "CUBICSPLINE" ? Interpolation::CubicSpline
-                                                                  : Interpolation::Linear;
-            ch.times = readAccessor(model, s.input, 1, what + " times");
-            for (std::size_t k = 1; k < ch.times.size(); ++k)
-                if (!(ch.times[k] >= ch.times[k - 1]))
-                    throw InputError(cat(what, ": its key times are not ascending"));
-            const int outWidth = ch.path == Channel::Path::Weights ? 1 : width;
-            ch.values = readAccessor(model, s.output, outWidth, what + " values");
-            const std::size_t per =
-                std::size_t(width) * (ch.interpolation == Interpolation::CubicSpline ? 3 : 1);
-            if (ch.values.size() != ch.times.size() * per)
-                throw InputError(cat(what, ": ", ch.values.size(), " values for ", ch.times.size(),
-                                     " keys of ", per));
-            // Rotation keys are unit quaternions (glTF asks it): one that is not is normalised
-            // here, so a key's value (and the clip's ends) are rotations too (one within float
-            // rounding of unit is kept as stored). A spline's tangents are left as they are.
-            if (ch.path == Channel::Path::Rotation)
-                for (std::size_t k = 0; k < ch.times.size(); ++k) {
-                    float* q = ch.values.data() + k * per +
-                               (ch.interpolation == Interpolation::CubicSpline ? 4 : 0);
-                    const float length =
-                        std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-                    if (!(length > 1e-6f))
-                        throw InputError(cat(what, ": rotation key ", k, " is not a rotation (",
-                                             q[0], ", ", q[1], ", ", q[2], ", ", q[3], ")"));
-                    if (std::abs(length - 1.0f) > 1e-6f)
-                        for (int c = 0; c < 4; ++c)
-                            q[c] /= length;
-                }
+            AnimatedMesh::Channel ch;
+            if (!channel(a, c, ch))
+                continue;
             if (!ch.times.empty()) {
                 lo = std::min(lo, double(ch.times.front()));
                 hi = std::max(hi, double(ch.times.back()));
@@ -547,11 +527,109 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
             out.m_duration = hi - lo;
         }
     }
+
+    /// Channel `c` of clip `a`, checked; false for one that moves nothing of the mesh.
+    bool channel(const tinygltf::Animation& a, const tinygltf::AnimationChannel& c,
+                 AnimatedMesh::Channel& ch) const {
+        using Interpolation = AnimatedMesh::Interpolation;
+        using Channel = AnimatedMesh::Channel;
+        const std::string what = cat(name, " clip '", a.name, "'");
+        if (c.sampler < 0 || c.sampler >= int(a.samplers.size()))
+            throw InputError(cat(what, ": a channel names sampler ", c.sampler));
+        if (c.target_node < 0 || c.target_node >= int(model.nodes.size()))
+            return false; // a channel without a node (an extension's) moves nothing here
+        const tinygltf::AnimationSampler& s = a.samplers[std::size_t(c.sampler)];
+        ch.node = c.target_node;
+        int width = 0;
+        if (c.target_path == "translation") {
+            ch.path = Channel::Path::Translation;
+            width = 3;
+        } else if (c.target_path == "rotation") {
+            ch.path = Channel::Path::Rotation;
+            width = 4;
+        } else if (c.target_path == "scale") {
+            ch.path = Channel::Path::Scale;
+            width = 3;
+        } else if (c.target_path == "weights") {
+            ch.path = Channel::Path::Weights;
+            const int m = model.nodes[std::size_t(c.target_node)].mesh;
+            if (m < 0 || m >= int(model.meshes.size()) ||
+                model.meshes[std::size_t(m)].primitives.empty())
+                return false; // weights of a node without a mesh move nothing
+            width = int(std::max<std::size_t>(
+                1, model.meshes[std::size_t(m)].primitives.front().targets.size()));
+        } else {
+            return false; // "pointer" and others: nothing of the mesh
+        }
+        ch.interpolation = s.interpolation == "STEP"          ? Interpolation::Step
+                           : s.interpolation == "CUBICSPLINE" ? Interpolation::CubicSpline
+                                                              : Interpolation::Linear;
+        ch.times = readAccessor(model, s.input, 1, what + " times");
+        for (std::size_t k = 1; k < ch.times.size(); ++k)
+            if (!(ch.times[k] >= ch.times[k - 1]))
+                throw InputError(cat(what, ": its key times are not ascending"));
+        const int outWidth = ch.path == Channel::Path::Weights ? 1 : width;
+        ch.values = readAccessor(model, s.output, outWidth, what + " values");
+        const std::size_t per =
+            std::size_t(width) * (ch.interpolation == Interpolation::CubicSpline ? 3 : 1);
+        if (ch.values.size() != ch.times.size() * per)
+            throw InputError(cat(what, ": ", ch.values.size(), " values for ", ch.times.size(),
+                                 " keys of ", per));
+        // Rotation keys are unit quaternions (glTF asks it): one that is not is normalised
+        // here, so a key's value (and the clip's ends) are rotations too (one within float
+        // rounding of unit is kept as stored). A spline's tangents are left as they are.
+        if (ch.path == Channel::Path::Rotation)
+            for (std::size_t k = 0; k < ch.times.size(); ++k) {
+                float* q = ch.values.data() + k * per +
+                           (ch.interpolation == Interpolation::CubicSpline ? 4 : 0);
+                const float length =
+                    std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+                if (!(length > 1e-6f))
+                    throw InputError(cat(what, ": rotation key ", k, " is not a rotation (", q[0],
+                                         ", ", q[1], ", ", q[2], ", ", q[3], ")"));
+                if (std::abs(length - 1.0f) > 1e-6f)
+                    for (int c = 0; c < 4; ++c)
+                        q[c] /= length;
+            }
+        return true;
+    }
+};
+
+AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std::string& clip,
+                                    const MeshLimits& limits) {
+    const std::string name = file.string();
+    const tinygltf::Model model = readModel(file, limits);
+    AnimatedMesh out;
+    out.m_rest.name = name;
+    GltfReader r{model, name, limits, out, {}};
+    r.nodes();
+    r.skins();
+    // The scene's nodes in depth-first order, their primitives merged.
+    for (const int n : r.sceneOrder()) {
+        const tinygltf::Node& node = model.nodes[std::size_t(n)];
+        if (node.mesh < 0)
+            continue;
+        if (node.mesh >= int(model.meshes.size()))
+            throw InputError(
+                cat(name, ": node ", n, " names mesh ", node.mesh, " that does not exist"));
+        if (node.skin >= int(out.m_skins.size()))
+            throw InputError(
+                cat(name, ": node ", n, " names skin ", node.skin, " that does not exist"));
+        for (std::size_t p = 0; p < model.meshes[std::size_t(node.mesh)].primitives.size(); ++p)
+            r.primitive(n, p);
+    }
+    if (out.m_pieces.empty() && r.skipped > 0)
+        throw InputError(cat(name, ": its scene holds only point or line primitives (", r.skipped,
+                             "), no triangles"));
+    if (out.m_pieces.empty())
+        throw InputError(cat(name, ": its scene holds no triangle mesh"));
+    if (r.anyUv && r.allUv)
+        out.m_rest.uvs = std::move(r.uvs);
+    r.clip(clip);
     // The rest pose.
     out.buildPoseGeometry();
-    const std::vector<glm::vec3> rest = out.positionsAt(0.0, true);
-    mesh.positions = rest;
-    finalizeMesh(mesh);
+    out.m_rest.positions = out.positionsAt(0.0, true);
+    finalizeMesh(out.m_rest);
     return out;
 }
 
@@ -706,8 +784,8 @@ void AnimatedMesh::inputsAt(double t, bool rest, PoseInputs& in) const {
                 in.vertices[v].base = glm::vec4(m_rest.positions[v], glm::uintBitsToFloat(0u));
                 in.vertices[v].weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
             }
-            in.pieces = {gpu::SpotDeformPiece{glm::uvec4(0, m_rest.positions.size(), 0, 0),
-                                              glm::uvec4(0)}};
+            in.pieces = {
+                gpu::SpotDeformPiece{glm::uvec4(0, m_rest.positions.size(), 0, 0), glm::uvec4(0)}};
             in.deltas.clear();
             in.geometry = 0;
         }

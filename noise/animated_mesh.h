@@ -64,6 +64,8 @@ struct PoseInputs {
     }
 };
 
+struct GltfReader;
+
 class AnimatedMesh {
 public:
     /// A glTF file's clip `clip` (by name; empty: the first clip, or none when the file has no
@@ -146,6 +148,7 @@ public:
     };
 
 private:
+    friend struct GltfReader; // builds a glTF file's pieces, skins and clip (animated_mesh.cpp)
     /// Node world matrices at time t (the clip's channels applied; t < start: the rest pose).
     std::vector<glm::mat4> worldMatrices(double t, bool rest) const;
     std::vector<float> morphWeights(int mesh, double t, bool rest) const;
