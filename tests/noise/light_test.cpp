@@ -203,6 +203,11 @@ TEST(LitReference, ALobeBehindAnOpaqueWallOfKernelsGetsAtMostTwoPercent) {
     const double shadowed = scene.seen(empty, wall(0.4f, 0.5f));
     std::printf("behind the wall: %.6f of the light\n", shadowed / alone);
     EXPECT_LE(shadowed, 0.02 * alone);
+    // With the light's shadows off the wall changes nothing.
+    LitLobes unshadowed;
+    unshadowed.shading.lights[0].shadows = false;
+    EXPECT_NEAR(unshadowed.seen(empty, wall(0.4f, 0.5f)), unshadowed.seen(empty, {}),
+                1e-12 * alone);
     // The wall beside it (x from 1 to 2) is not between the lobe and the light: all of it.
     EXPECT_NEAR(scene.seen(empty, wall(0.4f, 0.5f, 1.5f)), alone, 1e-12 * alone);
     // A point light below a wall (at y = 0.3, the wall's support from 0.4 up), so the wall is
@@ -252,6 +257,49 @@ TEST(LitReference, TheMeshCastsShadowsAndIsLit) {
     EXPECT_LT(shadowed.radiance({{0.5, 3.0, 0.0}, {0.0, -1.0, 0.0}}, 1.0).r, 1e-9);
     EXPECT_NEAR(shadowed.radiance({{-0.5, 3.0, 0.0}, {0.0, -1.0, 0.0}}, 1.0).r,
                 0.5 * 2.0 * std::sqrt(0.5), 1e-6);
+}
+
+TEST(LitReference, TheSkyDeliversItsRadianceToAnOpenUpwardSurface) {
+    // A floor facing +y under the sky alone: (1/pi) of the integral of S cos over the
+    // hemisphere is S, so the pixels converge to base x S; sampled, per pixel 256 directions
+    // (stratified) come within a percent. A roof above takes every direction's light away.
+    const noise::Mesh floor = noise::makePlane(2.0f, 2);
+    noise::Shading shading;
+    shading.mode = noise::Shading::Mode::Lit;
+    shading.sky = {glm::vec3(0.5f, 1.0f, 2.0f), 0.8f};
+    const glm::vec3 base(0.5f, 0.5f, 0.25f);
+    const noise::Kernel kernel =
+        oneLobeKernel(glm::vec3(0.1f), glm::vec3(0.0f), 1.0f, glm::vec3(1.0f), 3.0f);
+    const noise::ReferenceRenderer open(floor, kernel, {}, shading, glm::vec3(0.0f), base);
+    noise::Camera cam;
+    cam.projection = noise::Projection::Orthographic;
+    cam.eye = glm::dvec3(0.0, 3.0, 0.0);
+    cam.target = glm::dvec3(0.0);
+    cam.up = glm::dvec3(0.0, 0.0, -1.0);
+    cam.orthoHeight = 1.0;
+    cam.width = cam.height = 4;
+    noise::ReferenceSettings settings;
+    settings.spp = 256;
+    const noise::Image image = open.render(cam, settings);
+    for (const glm::vec3& p : image.pixels)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(p[c], base[c] * shading.sky.color[c] * 0.8f,
+                        0.01 * base[c] * shading.sky.color[c] * 0.8f);
+    noise::Mesh both = floor, roof = floor;
+    transformMesh(roof, glm::mat3(1.0f), glm::vec3(0.0f, 0.5f, 0.0f));
+    for (glm::uvec3 t : roof.triangles)
+        both.triangles.push_back(t + glm::uvec3(std::uint32_t(floor.positions.size())));
+    both.positions.insert(both.positions.end(), roof.positions.begin(), roof.positions.end());
+    both.normals.insert(both.normals.end(), roof.normals.begin(), roof.normals.end());
+    both.uvs.clear(); // not needed here, and no longer one per position
+    both.tangents.clear();
+    const noise::ReferenceRenderer covered(both, kernel, {}, shading, glm::vec3(0.0f), base);
+    // The floor's middle seen from under the roof, lit from a sky direction 37 degrees from the
+    // zenith (u1 = 0.8): the roof at 0.5 above blocks it; an open floor gets 2 S cos.
+    const noise::Ray under{{0.0, 0.25, 0.0}, {0.0, -1.0, 0.0}};
+    EXPECT_EQ(covered.radiance(under, 1.0, nullptr, nullptr, glm::dvec2(0.8, 0.6)).r, 0.0f);
+    EXPECT_NEAR(open.radiance(under, 1.0, nullptr, nullptr, glm::dvec2(0.8, 0.6)).r,
+                2.0 * 0.8 * base.r * 0.5 * 0.8, 1e-6);
 }
 
 /// fur-bunny-lit at `size` pixels and `spp`, its key light turned by `flip` (1 or -1) across
