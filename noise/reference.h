@@ -10,6 +10,13 @@
 /// lobes' colours. The opaque base mesh ends the ray. With Lambert shading every chord takes the
 /// quadrature path (the normal, from the density gradient, varies inside a lobe).
 ///
+/// Lit scenes (Shading::Mode::Lit) take the quadrature path too: at each step's midpoint one
+/// shadow ray per light (when its shadows are on) and one towards the sky give the exact
+/// transmittance through every lobe (erf of each chord, as for primary rays) and the mesh (its
+/// BVH; 0 on a hit); each lobe of the step scatters the arriving light through its model
+/// (shaders/spot_light.h). The sky is integrated by sampling: one direction per camera sample,
+/// stratified over a pixel's samples. The base mesh is diffuse, lit and shadowed the same way.
+///
 /// Pixel filter: a box over the pixel (the mean of the radiance over the pixel's area), sampled
 /// with correlated multi-jittered patterns (Kensler 2013), decorrelated per pixel.
 #pragma once
