@@ -62,6 +62,7 @@ Kernel buildKernel(const KernelDesc& desc) {
                              glm::transpose(rotation);
         lobe.extinction = l.extinction;
         lobe.color = l.color;
+        lobe.shading = l.shading;
         kernel.lobes.push_back(lobe);
     }
     return kernel;

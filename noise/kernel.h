@@ -30,6 +30,7 @@ struct Lobe {
     glm::vec3 sigma{1.0f};      ///< after the floor, kernel units
     float extinction = 1.0f;    ///< peak extinction a, 1/world unit
     glm::vec3 color{1.0f};      ///< linear RGB
+    LobeShading shading;        ///< lit scenes: the lobe's model (preset.h)
 };
 
 struct Kernel {

@@ -40,6 +40,9 @@ constexpr Interval kRotationDeg{-360.0, 360.0};
 constexpr Interval kSigma{0.0, 1e3};
 constexpr Interval kExtinction{0.0, 1e6};
 constexpr Interval kSupportSigma{1.0, 6.0};
+constexpr Interval kHighlightShift{-90.0, 90.0};
+constexpr Interval kHighlightWidth{0.0, 90.0, true, false};
+constexpr Interval kHighlightStrength{0.0, 100.0};
 constexpr Interval kDensityMax{0.0, 1e8, true, false};
 constexpr Interval kHeightOffset{-1e3, 1e3};
 constexpr Interval kHeightJitter{0.0, 1e3};
@@ -213,8 +216,53 @@ FieldDesc constantField(int components, float v) {
     return d;
 }
 
+Highlight parseHighlight(const Reader& rd, const Json& j, const std::string& path, Highlight h) {
+    rd.requireObject(j, path, {"shift_deg", "width_deg", "strength"});
+    if (const Json* v = Reader::find(j, "shift_deg"))
+        h.shiftDeg = rd.real(*v, join(path, "shift_deg"), kHighlightShift);
+    if (const Json* v = Reader::find(j, "width_deg"))
+        h.widthDeg = rd.real(*v, join(path, "width_deg"), kHighlightWidth);
+    if (const Json* v = Reader::find(j, "strength"))
+        h.strength = rd.real(*v, join(path, "strength"), kHighlightStrength);
+    return h;
+}
+
+/// A lobe's `shading`: a model's name, or an object {"model", "primary", "secondary"}.
+LobeShading parseLobeShading(const Reader& rd, const Json& j, const std::string& path) {
+    LobeShading s;
+    const Json* model = &j;
+    if (j.is_object()) {
+        rd.requireObject(j, path, {"model", "primary", "secondary"});
+        model = &rd.require(j, path, "model");
+    }
+    if (!j.is_object() && !j.is_string())
+        rd.fail(cat(path, " must be a model's name or an object, got ", j.type_name()));
+    const std::string modelPath = j.is_object() ? join(path, "model") : path;
+    const std::string name = rd.string(*model, modelPath, false);
+    if (name == "lambert")
+        s.model = LobeShading::Model::Lambert;
+    else if (name == "strand")
+        s.model = LobeShading::Model::Strand;
+    else if (name == "flake")
+        s.model = LobeShading::Model::Flake;
+    else
+        rd.fail(cat(modelPath, " = \"", printable(name),
+                    "\" is not one of \"lambert\", \"strand\", \"flake\""));
+    for (const char* key : {"primary", "secondary"}) {
+        const Json* h = j.is_object() ? Reader::find(j, key) : nullptr;
+        if (!h)
+            continue;
+        if (s.model != LobeShading::Model::Strand)
+            rd.fail(cat(join(path, key), ": highlights belong to the \"strand\" model"));
+        Highlight& target = std::string_view(key) == "primary" ? s.primary : s.secondary;
+        target = parseHighlight(rd, *h, join(path, key), target);
+    }
+    return s;
+}
+
 LobeDesc parseLobe(const Reader& rd, const Json& j, const std::string& path) {
-    rd.requireObject(j, path, {"offset", "rotation_deg", "sigma", "extinction", "color"});
+    rd.requireObject(j, path,
+                     {"offset", "rotation_deg", "sigma", "extinction", "color", "shading"});
     LobeDesc lobe;
     if (const Json* v = Reader::find(j, "offset"))
         lobe.offset = rd.vec3(*v, join(path, "offset"), kKernelOffset);
@@ -226,6 +274,8 @@ LobeDesc parseLobe(const Reader& rd, const Json& j, const std::string& path) {
         lobe.extinction = rd.real(*v, join(path, "extinction"), kExtinction);
     if (const Json* v = Reader::find(j, "color"))
         lobe.color = rd.vec3(*v, join(path, "color"), kUnit);
+    if (const Json* v = Reader::find(j, "shading"))
+        lobe.shading = parseLobeShading(rd, *v, join(path, "shading"));
     return lobe;
 }
 

@@ -22,6 +22,26 @@ namespace spot::noise {
 inline constexpr int kPresetVersion = 1;
 inline constexpr int kMaxLobes = 8;
 
+/// A longitudinal highlight of the strand model (shaders/spot_light.h): its peak's shift from
+/// the mirror direction towards the tip (negative: towards the root), its width and its strength.
+struct Highlight {
+    float shiftDeg = 0.0f;  ///< degrees, [-90, 90]
+    float widthDeg = 10.0f; ///< degrees, (0, 90]
+    float strength = 0.0f;  ///< [0, 100]
+};
+
+/// How a lobe is shaded in a lit scene (scene shading.mode "lit"; other modes ignore it).
+struct LobeShading {
+    enum class Model { Lambert, Strand, Flake };
+    /// Lambert: the normal from the extinction gradient. Strand: the lobe's longest axis is the
+    /// tangent. Flake: its shortest axis is the normal, two-sided.
+    Model model = Model::Lambert;
+    /// Strand: white, shifted towards the root (Marschner's R).
+    Highlight primary{-6.0f, 8.0f, 0.3f};
+    /// Strand: tinted by the lobe's colour, shifted towards the tip (Marschner's TRT).
+    Highlight secondary{9.0f, 16.0f, 0.5f};
+};
+
 /// One anisotropic Gaussian in kernel space (kernel units): g(p) = a exp(-1/2 |T^-1 p|^2) with
 /// T = Translate(offset) * Rotate(rotationDeg, XYZ Euler) * Scale(sigma).
 struct LobeDesc {
@@ -30,6 +50,7 @@ struct LobeDesc {
     glm::vec3 sigma{1.0f};       ///< kernel units, >= 0 (0 is clamped to a tiny floor)
     float extinction = 1.0f;     ///< peak extinction a, 1/world unit, >= 0
     glm::vec3 color{1.0f};       ///< linear RGB in [0,1]
+    LobeShading shading;
 };
 
 struct KernelDesc {

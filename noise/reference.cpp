@@ -10,6 +10,7 @@
 
 #include "error.h"
 #include "mesh.h"
+#include "shaders/spot_light.hpp"
 #include "shaders/spot_shared.hpp"
 #include "surface.h"
 #include "system.h"
@@ -57,6 +58,37 @@ std::uint32_t permute(std::uint32_t i, std::uint32_t l, std::uint32_t p) {
     return (i + p) % l;
 }
 
+/// Optical depth beyond which a shadow ray stops: e^-30 is far below any visible light.
+constexpr double kShadowOpaqueDepth = 30.0;
+
+/// The unit kernel-space direction of a lobe's longest axis (a strand's tangent), turned from
+/// root to tip: towards kernel +z (then +x, then +y where it has no z).
+glm::dvec3 kernelAxis(const Lobe& lobe) {
+    int k = 0;
+    for (int i = 1; i < 3; ++i)
+        if (lobe.sigma[i] > lobe.sigma[k])
+            k = i;
+    glm::dvec3 a = glm::normalize(glm::dvec3(glm::mat3(lobe.transform)[k]));
+    const double lead = a.z != 0.0 ? a.z : a.x != 0.0 ? a.x : a.y;
+    return lead < 0.0 ? -a : a;
+}
+
+std::uint32_t sharedModel(LobeShading::Model m) {
+    switch (m) {
+    case LobeShading::Model::Strand:
+        return sh::kSpotShadeStrand;
+    case LobeShading::Model::Flake:
+        return sh::kSpotShadeFlake;
+    case LobeShading::Model::Lambert:
+        break;
+    }
+    return sh::kSpotShadeLambert;
+}
+
+glm::dvec3 highlight(const Highlight& h) {
+    return {glm::radians(double(h.shiftDeg)), glm::radians(double(h.widthDeg)), double(h.strength)};
+}
+
 double randUnit(std::uint32_t i, std::uint32_t p) {
     return double(sh::spotHash(sh::spotHashCombine(p, i)) >> 8) * (1.0 / 16777216.0);
 }
@@ -98,6 +130,25 @@ ReferenceRenderer::ReferenceRenderer(const Mesh& mesh, const Kernel& kernel,
                       std::uint64_t(mesh.triangles.size()) * (sizeof(Aabb) + 2 * 64 + 8),
                   cat("the reference's ", lobeCount, " lobes"));
     m_lobes.reserve(lobeCount);
+    const bool lit = shading.mode == Shading::Mode::Lit;
+    std::vector<glm::dvec3> axes; // per kernel lobe: a strand's tangent in kernel space
+    std::vector<int> shortest;    // per kernel lobe: its shortest axis (a flake's normal)
+    for (const noise::Lobe& l : kernel.lobes) {
+        LobeModel m;
+        m.model = sharedModel(l.shading.model);
+        m.primary = highlight(l.shading.primary);
+        m.secondary = highlight(l.shading.secondary);
+        m_models.push_back(m);
+        axes.push_back(kernelAxis(l));
+        shortest.push_back(int(std::min_element(&l.sigma[0], &l.sigma[0] + 3) - &l.sigma[0]));
+    }
+    if (lit) {
+        Aabb bounds;
+        for (const glm::vec3& p : mesh.positions)
+            bounds.grow(glm::dvec3(p));
+        m_epsilon =
+            mesh.positions.empty() ? 1e-9 : 1e-6 * (1.0 + glm::length(bounds.hi - bounds.lo));
+    }
     std::vector<Aabb> boxes;
     boxes.reserve(lobeCount);
     for (const Impulse& imp : impulses) {
@@ -113,7 +164,14 @@ ReferenceRenderer::ReferenceRenderer(const Mesh& mesh, const Kernel& kernel,
                 half[i] = m_support * glm::length(glm::dvec3(toWorld[0][i], toWorld[1][i], toWorld[2][i]));
             if (!std::isfinite(half.x + half.y + half.z))
                 continue;
-            m_lobes.push_back({w.centre, w.toLobe, w.extinction, w.color});
+            glm::vec3 axis(0.0f);
+            if (lit && m_models[l].model == sh::kSpotShadeStrand)
+                axis = glm::vec3(sh::spotPlacedAxis(axes[l], glm::dvec3(kernel.lobes[l].centre),
+                                                    glm::dmat3(imp.frame), glm::dvec3(imp.scale),
+                                                    double(imp.bend)));
+            else if (lit && m_models[l].model == sh::kSpotShadeFlake)
+                axis = glm::vec3(sh::spotPlacedNormal(w.toLobe, shortest[l]));
+            m_lobes.push_back({w.centre, w.toLobe, w.extinction, w.color, axis, std::uint32_t(l)});
             boxes.push_back({w.centre - half, w.centre + half});
         }
     }
@@ -136,8 +194,72 @@ glm::vec3 ReferenceRenderer::shade(glm::vec3 color, glm::dvec3 normal) const {
                                                double(m_shading.ambient)));
 }
 
+ReferenceRenderer::Arrival ReferenceRenderer::arrive(const Light& light, glm::dvec3 p) const {
+    const glm::dvec3 power = glm::dvec3(light.color) * double(light.intensity);
+    if (light.type == Light::Type::Directional)
+        return {glm::dvec3(light.direction), std::numeric_limits<double>::infinity(), power};
+    const glm::dvec3 to = glm::dvec3(light.position) - p;
+    const double d = glm::length(to);
+    if (!(d > 0.0))
+        return {glm::dvec3(0.0, 1.0, 0.0), 0.0, glm::dvec3(0.0)};
+    return {to / d, d, power * sh::spotPointFalloff(1.0, d)};
+}
+
+double ReferenceRenderer::transmittance(glm::dvec3 p, glm::dvec3 dir, double distance,
+                                        ReferenceStats* stats) const {
+    if (stats)
+        stats->shadowRays += 1;
+    const Ray ray{p, dir};
+    if (const std::optional<MeshHit> hit = closestHit(m_meshBvh, m_mesh, ray);
+        hit && hit->t < distance)
+        return 0.0;
+    double tau = 0.0;
+    double tMax = distance;
+    m_lobeBvh.traverse(ray, 0.0, tMax, [&](std::uint32_t l, double& stop) {
+        const Lobe& lobe = m_lobes[l];
+        const glm::dvec3 o = lobe.toLobe * (p - lobe.centre);
+        const glm::dvec3 d = lobe.toLobe * dir;
+        double tStar = 0.0, perp2 = 0.0, half = 0.0;
+        if (!sh::spotLobeLine(o, d, m_support, tStar, perp2, half))
+            return;
+        const double ta = std::max(0.0, tStar - half), tb = std::min(distance, tStar + half);
+        if (!(tb > ta))
+            return;
+        const double len = std::sqrt(glm::dot(d, d));
+        const double scale = lobe.extinction * sh::kSqrtTwoPi / len * std::exp(-0.5 * perp2);
+        tau += scale * sh::spotErfDifferenceHalf((ta - tStar) * len * sh::kInvSqrtTwo,
+                                                 (tb - tStar) * len * sh::kInvSqrtTwo);
+        if (tau > kShadowOpaqueDepth)
+            stop = -1.0; // no box is crossed any more: the light is gone
+    });
+    return std::exp(-tau);
+}
+
+glm::dvec3 ReferenceRenderer::shadeMeshLit(glm::dvec3 p, glm::dvec3 n, glm::dvec3 v, glm::dvec3 sky,
+                                           ReferenceStats* stats) const {
+    n = sh::spotTwoSided(n, v);
+    const glm::dvec3 origin = p + m_epsilon * n;
+    glm::dvec3 sum(0.0);
+    for (const Light& light : m_shading.lights) {
+        const Arrival a = arrive(light, p);
+        const double cosine = std::max(0.0, glm::dot(n, a.dir));
+        if (!(cosine > 0.0))
+            continue;
+        const double t = light.shadows ? transmittance(origin, a.dir, a.distance, stats) : 1.0;
+        sum += a.radiance * (cosine * t);
+    }
+    if (m_shading.sky.intensity > 0.0f) {
+        const double cosine = std::max(0.0, glm::dot(n, sky));
+        if (cosine > 0.0)
+            sum += 2.0 * glm::dvec3(m_shading.sky.color) * double(m_shading.sky.intensity) *
+                   cosine *
+                   transmittance(origin, sky, std::numeric_limits<double>::infinity(), stats);
+    }
+    return sum * glm::dvec3(m_baseColor);
+}
+
 glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, ReferenceStats* stats,
-                                      double* coverage) const {
+                                      double* coverage, glm::dvec2 skySample) const {
     glm::vec3 meshNormal(0.0f);
     const double tEnd = hitMesh(ray, meshNormal);
 
@@ -145,6 +267,7 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
     // Per-thread scratch: no allocation per ray once warm.
     thread_local std::vector<Chord> chords;
     thread_local std::vector<double> done; // optical depth of each cluster lobe so far
+    thread_local std::vector<double> stepDepth; // lit: each cluster lobe's optical depth in a step
     chords.clear();
     double tMax = tEnd;
     m_lobeBvh.traverse(ray, 0.0, tMax, [&](std::uint32_t l, double&) {
@@ -165,10 +288,57 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
         return a.ta < b.ta || (a.ta == b.ta && a.lobe < b.lobe);
     });
 
+    // Lambert and Lit shade per step (the normal or the light varies inside a lobe).
+    const bool lit = m_shading.mode != Shading::Mode::Unlit;
+    const bool lights = m_shading.mode == Shading::Mode::Lit;
+    const glm::dvec3 skyDir = sh::spotSkyDirection(skySample.x, skySample.y);
+    const glm::dvec3 skyRadiance =
+        glm::dvec3(m_shading.sky.color) * double(m_shading.sky.intensity);
+    const glm::dvec3 view = -ray.dir;
+
+    // Lit: the light one quadrature step of cluster [i, j) at `mid` sends to the eye per unit of
+    // optical depth: each light through each lobe's model (shaders/spot_light.h), weighted by
+    // the lobe's share of the step's depth `tau`, attenuated by a shadow ray; the sky likewise
+    // from its one direction. `n` is the gradient normal (the lambert model's).
+    const auto lightStep = [&](std::size_t first, std::size_t last, glm::dvec3 mid, glm::dvec3 n,
+                               double tau) {
+        glm::dvec3 sum(0.0);
+        const auto each = [&](const auto& add) {
+            for (std::size_t c = first; c < last; ++c) {
+                const double depth = stepDepth[c - first];
+                if (!(depth > 0.0))
+                    continue;
+                const Lobe& lobe = m_lobes[chords[c].lobe];
+                const LobeModel& m = m_models[lobe.kernelLobe];
+                add(depth, lobe, m, m.model == sh::kSpotShadeLambert ? n : glm::dvec3(lobe.axis));
+            }
+        };
+        for (const Light& light : m_shading.lights) {
+            const Arrival a = arrive(light, mid);
+            const double t = light.shadows ? transmittance(mid, a.dir, a.distance, stats) : 1.0;
+            if (!(t > 0.0))
+                continue;
+            each([&](double depth, const Lobe& lobe, const LobeModel& m, glm::dvec3 axis) {
+                sum += (depth * t) * a.radiance *
+                       sh::spotLobeShade(m.model, axis, a.dir, view, glm::dvec3(lobe.color),
+                                         m.primary, m.secondary);
+            });
+        }
+        if (m_shading.sky.intensity > 0.0f) {
+            const double t =
+                transmittance(mid, skyDir, std::numeric_limits<double>::infinity(), stats);
+            if (t > 0.0)
+                each([&](double depth, const Lobe& lobe, const LobeModel& m, glm::dvec3 axis) {
+                    sum += (2.0 * depth * t * sh::spotLobeDiffuse(m.model, axis, skyDir, view)) *
+                           skyRadiance * glm::dvec3(lobe.color);
+                });
+        }
+        return sum / tau;
+    };
+
     // 2. Front to back over clusters of overlapping chords.
     glm::dvec3 radiance(0.0);
     double transmittance = 1.0;
-    const bool lit = m_shading.mode == Shading::Mode::Lambert;
     std::size_t i = 0;
     while (i < chords.size() && transmittance > kOpaque) {
         std::size_t j = i + 1;
@@ -198,6 +368,7 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
         const int steps = int(std::clamp(std::ceil((clusterEnd - clusterStart) / step), 1.0,
                                          double(kMaxStepsPerCluster)));
         done.assign(j - i, 0.0);
+        stepDepth.assign(j - i, 0.0);
         double t0 = clusterStart;
         for (int s = 1; s <= steps && transmittance > kOpaque; ++s) {
             const double t1 = s == steps ? clusterEnd : clusterStart + (clusterEnd - clusterStart) * s / steps;
@@ -206,11 +377,14 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
             const glm::dvec3 mid = ray.origin + 0.5 * (t0 + t1) * ray.dir;
             for (std::size_t c = i; c < j; ++c) {
                 const Chord& ch = chords[c];
-                if (ch.ta >= t1 || ch.tb <= t0)
+                if (ch.ta >= t1 || ch.tb <= t0) {
+                    stepDepth[c - i] = 0.0;
                     continue;
+                }
                 const double upTo = ch.depthTo(t1);
                 const double dTau = upTo - done[c - i];
                 done[c - i] = upTo;
+                stepDepth[c - i] = dTau;
                 tau += dTau;
                 emitted += dTau * glm::dvec3(m_lobes[ch.lobe].color);
                 if (lit) {
@@ -222,11 +396,14 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
             }
             if (tau > 0.0) {
                 glm::dvec3 color = emitted / tau;
-                if (lit) {
-                    const glm::dvec3 n = sh::spotGradientNormal(
-                        gradient, -ray.dir, std::numeric_limits<double>::infinity());
+                const glm::dvec3 n =
+                    lit ? sh::spotGradientNormal(gradient, view,
+                                                 std::numeric_limits<double>::infinity())
+                        : glm::dvec3(0.0);
+                if (lights)
+                    color = lightStep(i, j, mid, n, tau);
+                else if (lit)
                     color = glm::dvec3(shade(glm::vec3(color), n));
-                }
                 radiance += transmittance * -std::expm1(-tau) * color;
                 transmittance *= std::exp(-tau);
             }
@@ -236,8 +413,14 @@ glm::vec3 ReferenceRenderer::radiance(const Ray& ray, double stepScale, Referenc
             stats->quadratureSteps += std::uint64_t(steps);
         i = j;
     }
-    const glm::vec3 behind = std::isfinite(tEnd) ? shade(m_baseColor, glm::dvec3(meshNormal)) : m_background;
-    radiance += transmittance * glm::dvec3(behind);
+    glm::dvec3 behind(m_background);
+    if (std::isfinite(tEnd) && lights)
+        behind = transmittance > kOpaque ? shadeMeshLit(ray.origin + tEnd * ray.dir,
+                                                        glm::dvec3(meshNormal), view, skyDir, stats)
+                                         : glm::dvec3(0.0);
+    else if (std::isfinite(tEnd))
+        behind = glm::dvec3(shade(m_baseColor, glm::dvec3(meshNormal)));
+    radiance += transmittance * behind;
     if (coverage)
         *coverage = std::isfinite(tEnd) ? 1.0 : 1.0 - transmittance;
     if (stats)
@@ -260,6 +443,7 @@ Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& s
     image.alpha.resize(image.pixels.size());
     image.background = m_background;
     std::atomic<int> rowsDone{0};
+    const bool lit = m_shading.mode == Shading::Mode::Lit;
     std::vector<ReferenceStats> rowStats(std::size_t(camera.height));
     tbb::parallel_for(0, camera.height, [&](int y) {
         ReferenceStats& rs = rowStats[std::size_t(y)];
@@ -267,13 +451,18 @@ Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& s
             const std::uint32_t pattern =
                 sh::spotHashCombine(sh::spotHashCombine(settings.seed ^ 0x2545f491u, std::uint32_t(x)),
                                     std::uint32_t(y));
+            // Lit: the sky's directions, stratified over the pixel's samples like its positions.
+            const std::uint32_t skyPattern = sh::spotHashCombine(pattern, 0x5bd1e995u);
             glm::dvec3 sum(0.0);
             double covered = 0.0;
             for (int s = 0; s < settings.spp; ++s) {
                 const glm::dvec2 u = cmjSample(std::uint32_t(s), std::uint32_t(settings.spp), pattern);
+                const glm::dvec2 sky =
+                    lit ? cmjSample(std::uint32_t(s), std::uint32_t(settings.spp), skyPattern)
+                        : glm::dvec2(0.5);
                 double c = 0.0;
-                sum +=
-                    glm::dvec3(radiance(rays.ray(x + u.x, y + u.y), settings.stepScale, &rs, &c));
+                sum += glm::dvec3(
+                    radiance(rays.ray(x + u.x, y + u.y), settings.stepScale, &rs, &c, sky));
                 covered += c;
             }
             image.at(x, y) = glm::vec3(sum / double(settings.spp));
@@ -290,6 +479,7 @@ Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& s
             stats->chords += rs.chords;
             stats->exactChords += rs.exactChords;
             stats->quadratureSteps += rs.quadratureSteps;
+            stats->shadowRays += rs.shadowRays;
         }
         stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         stats->impulses = m_impulseCount;

@@ -14,6 +14,8 @@ constexpr std::uint64_t kMaxSceneBytes = 1u << 20;
 constexpr json::Interval kCoordinate{-1e6, 1e6};
 constexpr json::Interval kColor{0.0, 1e3};
 constexpr json::Interval kUnit{0.0, 1.0};
+/// A light's or the sky's intensity (it multiplies the colour).
+constexpr json::Interval kIntensity{0.0, 1e6};
 constexpr json::Interval kFov{0.0, 179.0, true, true};
 constexpr json::Interval kOrthoHeight{0.0, 1e6, true, false};
 /// Images larger than this per side are refused: a typo (256000) should not allocate gigabytes.
@@ -56,9 +58,17 @@ Shading parseShading(const json::Reader& rd, const json::Json& j) {
         s.mode = Shading::Mode::Unlit;
     } else if (mode == "lambert") {
         s.mode = Shading::Mode::Lambert;
+    } else if (mode == "lit") {
+        s.mode = Shading::Mode::Lit;
     } else {
-        rd.fail(cat("shading.mode = \"", json::printable(mode), "\" is not one of \"unlit\", \"lambert\""));
+        rd.fail(cat("shading.mode = \"", json::printable(mode),
+                    "\" is not one of \"unlit\", \"lambert\", \"lit\""));
     }
+    if (s.mode == Shading::Mode::Lit)
+        for (const char* key : {"light_dir", "ambient"})
+            if (json::Reader::find(j, key))
+                rd.fail(
+                    cat("shading.", key, " is lambert's; \"lit\" takes \"lights\" and \"sky\""));
     if (const json::Json* l = json::Reader::find(j, "light_dir")) {
         const glm::vec3 d = rd.vec3(*l, "shading.light_dir", kCoordinate);
         if (!(glm::length(d) > 1e-6f))
@@ -91,6 +101,65 @@ std::vector<CameraKey> parseCameraKeys(const json::Reader& rd, const json::Json&
         keys.push_back(k);
     }
     return keys;
+}
+
+bool parseBool(const json::Reader& rd, const json::Json& j, const std::string& path) {
+    if (!j.is_boolean())
+        rd.fail(cat(path, " must be true or false, got ", j.type_name()));
+    return j.get<bool>();
+}
+
+Light parseLight(const json::Reader& rd, const json::Json& j, const std::string& path) {
+    rd.requireObject(j, path, {"type", "direction", "position", "color", "intensity", "shadows"});
+    Light light;
+    const std::string type = rd.string(rd.require(j, path, "type"), path + ".type", false);
+    if (type == "directional")
+        light.type = Light::Type::Directional;
+    else if (type == "point")
+        light.type = Light::Type::Point;
+    else
+        rd.fail(cat(path, ".type = \"", json::printable(type),
+                    "\" is not one of \"directional\", \"point\""));
+    const bool directional = light.type == Light::Type::Directional;
+    const char* wrong = directional ? "position" : "direction";
+    if (json::Reader::find(j, wrong))
+        rd.fail(cat(path, ".", wrong, " does not apply to a ", type, " light"));
+    if (directional) {
+        const glm::vec3 d =
+            rd.vec3(rd.require(j, path, "direction"), path + ".direction", kCoordinate);
+        if (!(glm::length(d) > 1e-6f))
+            rd.fail(cat(path, ".direction must not be zero"));
+        light.direction = glm::normalize(d);
+    } else {
+        light.position = rd.vec3(rd.require(j, path, "position"), path + ".position", kCoordinate);
+    }
+    if (const json::Json* c = json::Reader::find(j, "color"))
+        light.color = rd.vec3(*c, path + ".color", kColor);
+    if (const json::Json* i = json::Reader::find(j, "intensity"))
+        light.intensity = rd.real(*i, path + ".intensity", kIntensity);
+    if (const json::Json* sh = json::Reader::find(j, "shadows"))
+        light.shadows = parseBool(rd, *sh, path + ".shadows");
+    return light;
+}
+
+std::vector<Light> parseLights(const json::Reader& rd, const json::Json& j) {
+    if (!j.is_array())
+        rd.fail(cat("lights must be an array of lights, got ", j.type_name()));
+    if (j.size() > std::size_t(kMaxLights))
+        rd.fail(cat("lights has ", j.size(), " lights, more than the limit of ", kMaxLights));
+    std::vector<Light> lights;
+    for (std::size_t i = 0; i < j.size(); ++i)
+        lights.push_back(parseLight(rd, j[i], json::index("lights", i)));
+    return lights;
+}
+
+Sky parseSky(const json::Reader& rd, const json::Json& j) {
+    rd.requireObject(j, "sky", {"color", "intensity"});
+    Sky sky;
+    if (const json::Json* c = json::Reader::find(j, "color"))
+        sky.color = rd.vec3(*c, "sky.color", kColor);
+    sky.intensity = rd.real(rd.require(j, "sky", "intensity"), "sky.intensity", kIntensity);
+    return sky;
 }
 
 AnimationDesc parseAnimation(const json::Reader& rd, const json::Json& j) {
@@ -140,9 +209,10 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
                              kMaxSceneBytes));
     const json::Json root = json::parse(text, name);
     const json::Reader rd(name);
-    rd.requireObject(root, "", {"version", "name", "description", "mesh", "preset", "seed",
-                                "camera", "image", "background", "base_color", "shading",
-                                "reference", "animation", "wind"});
+    rd.requireObject(root, "",
+                     {"version", "name", "description", "mesh", "preset", "seed", "camera", "image",
+                      "background", "base_color", "shading", "reference", "animation", "wind",
+                      "lights", "sky"});
     rd.requireVersion(root, kSceneVersion);
     SceneDesc s;
     if (const json::Json* n = json::Reader::find(root, "name"))
@@ -172,6 +242,14 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
         s.baseColor = rd.vec3(*b, "base_color", kColor);
     if (const json::Json* sh = json::Reader::find(root, "shading"))
         s.shading = parseShading(rd, *sh);
+    if (const json::Json* l = json::Reader::find(root, "lights"))
+        s.shading.lights = parseLights(rd, *l);
+    if (const json::Json* sky = json::Reader::find(root, "sky"))
+        s.shading.sky = parseSky(rd, *sky);
+    if (s.shading.mode == Shading::Mode::Lit && s.shading.lights.empty() &&
+        !(s.shading.sky.intensity > 0.0f))
+        rd.fail(
+            "shading.mode \"lit\" needs a light (\"lights\") or a sky (\"sky\") with an intensity");
     if (const json::Json* r = json::Reader::find(root, "reference")) {
         rd.requireObject(*r, "reference", {"spp"});
         if (const json::Json* spp = json::Reader::find(*r, "spp"))

@@ -14,10 +14,17 @@
 
 namespace spot::splat {
 
+void requireGpuShading(const noise::Shading& shading) {
+    if (shading.mode == noise::Shading::Mode::Lit)
+        throw InputError("the GPU methods render lit scenes (shading.mode \"lit\") next; use "
+                         "--method reference");
+}
+
 gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
                                          glm::vec3 baseColor, std::uint32_t count,
                                          std::uint32_t lobes, float support,
                                          std::uint32_t kernelSamples, std::uint32_t flags) {
+    requireGpuShading(shading);
     const noise::CameraRays rays(camera); // validates the camera; the one camera basis
     const glm::dvec3 forward = rays.forward(), right = rays.right(), up = rays.up();
     const bool ortho = camera.projection == noise::Projection::Orthographic;

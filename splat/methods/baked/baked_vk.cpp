@@ -278,6 +278,7 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
 }
 
 void requireBakedView(const View& view) {
+    requireGpuShading(view.shading);
     if (view.camera.projection == noise::Projection::Orthographic)
         throw InputError("baked: orthographic cameras are not supported yet");
     if (view.shading.mode == noise::Shading::Mode::Lambert)
