@@ -22,6 +22,7 @@
 #include "splat/context_vk.h"
 #include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
+#include "splat/pass_vk.h"
 
 namespace spot::cmd {
 
@@ -227,6 +228,9 @@ int render(int argc, char** argv) {
 
     // A CPU method renders the impulses generated on the host.
     cli::SceneJob job = cli::prepareScene(args, !info->gpu());
+    if (info->gpu())
+        splat::requireGpuShading(job.scene.shading); // before the device starts, not after
+
     const std::string out = args.str("out");
     const splat::RenderSettings settings = cli::renderSettings(args, choice.settings);
     const cli::Shot shot = cli::shotOf(args, job.scene.animation, out);
