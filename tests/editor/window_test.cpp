@@ -695,8 +695,12 @@ TEST(EditWindowInput, SpacePlaysAndTheSliderScrubsTheTimeline) {
     // button, the slider below it, at y = 40. The button is held a moment at the end, as a hand
     // does (ImGui reads a release in the frame of the last motion as a release where it began),
     // and F12 waits a moment after the release (until ImGui has seen it, the slider has the keys).
-    std::string drag = xdotoolDrag({{600, 40}, {650, 40}, {700, 40}, {750, 40}, {795, 40}}, 1, "");
-    drag.insert(drag.rfind("xdotool mouseup"), "sleep 1\n");
+    // Each step waits a moment, as a hand does: on a loaded machine a frame takes long, and a press
+    // that reaches ImGui in the frame of the move onto the slider can miss it.
+    std::string drag = "xdotool mousemove --window $win 600 40\nsleep 0.5\nxdotool mousedown 1\nsleep 0.5\n";
+    for (const int x : {650, 700, 750, 795})
+        drag += "xdotool mousemove --window $win " + std::to_string(x) + " 40\nsleep 0.3\n";
+    drag += "sleep 1\nxdotool mouseup 1\n";
     driver += drag + "sleep 1\ncapture scrubbed\n";
     driver += "xdotool mousemove --window $win 250 300\n";
     for (int i = 0; i < 12; ++i)
