@@ -10,11 +10,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-// The library is built without image support (noise/animated_mesh.cpp): the same switches.
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#include <tiny_gltf.h>
+#include "gltf_clips.h" // tinygltf, built as the library is, and GltfBuilder
 
 #include <glm/gtc/quaternion.hpp>
 
@@ -31,43 +27,7 @@ std::string tmp(const std::string& name) {
     return std::string(SPOT_TEST_TMP_DIR) + "/anim_" + name;
 }
 
-/// Builds a glTF model's buffer and accessors.
-struct Builder {
-    tinygltf::Model model;
-    Builder() {
-        model.buffers.emplace_back();
-        model.asset.version = "2.0";
-    }
-    int add(const void* data, std::size_t bytes, std::size_t count, int type, int component,
-            bool normalized = false) {
-        auto& buffer = model.buffers[0].data;
-        while (buffer.size() % 4 != 0)
-            buffer.push_back(0);
-        tinygltf::BufferView view;
-        view.buffer = 0;
-        view.byteOffset = buffer.size();
-        view.byteLength = bytes;
-        const auto* p = static_cast<const unsigned char*>(data);
-        buffer.insert(buffer.end(), p, p + bytes);
-        model.bufferViews.push_back(view);
-        tinygltf::Accessor a;
-        a.bufferView = int(model.bufferViews.size()) - 1;
-        a.count = count;
-        a.type = type;
-        a.componentType = component;
-        a.normalized = normalized;
-        if (type == TINYGLTF_TYPE_SCALAR && component == TINYGLTF_COMPONENT_TYPE_FLOAT) {
-            const float* f = static_cast<const float*>(data);
-            a.minValues = {*std::min_element(f, f + count)};
-            a.maxValues = {*std::max_element(f, f + count)};
-        }
-        model.accessors.push_back(a);
-        return int(model.accessors.size()) - 1;
-    }
-    int floats(const std::vector<float>& v, int type, std::size_t per) {
-        return add(v.data(), v.size() * 4, v.size() / per, type, TINYGLTF_COMPONENT_TYPE_FLOAT);
-    }
-};
+using Builder = spot::test::GltfBuilder;
 
 /// A strip of two quads along x (x = 0, 1, 2; y = 0, 1) skinned to two joints (the second at
 /// x = 1, a child of the first), its second joint turned 90 degrees about z from t = 0 to 1

@@ -27,7 +27,8 @@ struct GltfBuilder {
         model.buffers.emplace_back();
         model.asset.version = "2.0";
     }
-    int add(const void* data, std::size_t bytes, std::size_t count, int type, int component) {
+    int add(const void* data, std::size_t bytes, std::size_t count, int type, int component,
+            bool normalized = false) {
         auto& buffer = model.buffers[0].data;
         while (buffer.size() % 4 != 0)
             buffer.push_back(0);
@@ -43,6 +44,7 @@ struct GltfBuilder {
         a.count = count;
         a.type = type;
         a.componentType = component;
+        a.normalized = normalized;
         if (type == TINYGLTF_TYPE_SCALAR && component == TINYGLTF_COMPONENT_TYPE_FLOAT) {
             const float* f = static_cast<const float*>(data);
             a.minValues = {*std::min_element(f, f + count)};
