@@ -11,11 +11,7 @@
 #include <string>
 #include <vector>
 
-// The library is built without image support (noise/animated_mesh.cpp): the same switches.
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#include <tiny_gltf.h>
+#include "noise/gltf_clips.h" // tinygltf, built as the library is, and GltfBuilder
 
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -49,80 +45,35 @@ inline std::filesystem::path writeSpinClip(const std::filesystem::path& dir,
             const std::uint32_t a = std::uint32_t(i * (segments + 1) + j), b = a + segments + 1;
             indices.insert(indices.end(), {a, a + 1, b, a + 1, b + 1, b});
         }
-    tinygltf::Model model;
-    model.asset.version = "2.0";
-    model.buffers.emplace_back();
-    const auto add = [&](const void* data, std::size_t bytes, std::size_t count, int type,
-                         int component, std::vector<double> lo = {}, std::vector<double> hi = {}) {
-        auto& buffer = model.buffers[0].data;
-        while (buffer.size() % 4 != 0)
-            buffer.push_back(0);
-        tinygltf::BufferView view;
-        view.buffer = 0;
-        view.byteOffset = buffer.size();
-        view.byteLength = bytes;
-        const auto* p = static_cast<const unsigned char*>(data);
-        buffer.insert(buffer.end(), p, p + bytes);
-        model.bufferViews.push_back(view);
-        tinygltf::Accessor a;
-        a.bufferView = int(model.bufferViews.size()) - 1;
-        a.count = count;
-        a.type = type;
-        a.componentType = component;
-        a.minValues = std::move(lo);
-        a.maxValues = std::move(hi);
-        model.accessors.push_back(a);
-        return int(model.accessors.size()) - 1;
-    };
-    tinygltf::Primitive sphere;
-    sphere.mode = TINYGLTF_MODE_TRIANGLES;
-    sphere.attributes["POSITION"] =
-        add(positions.data(), positions.size() * 4, positions.size() / 3, TINYGLTF_TYPE_VEC3,
-            TINYGLTF_COMPONENT_TYPE_FLOAT, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5});
-    sphere.indices = add(indices.data(), indices.size() * 4, indices.size(), TINYGLTF_TYPE_SCALAR,
-                         TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
-    tinygltf::Mesh mesh;
-    mesh.name = "sphere";
-    mesh.primitives.push_back(sphere);
-    model.meshes.push_back(mesh);
+    noise::Mesh sphereMesh;
+    for (std::size_t i = 0; i < positions.size(); i += 3)
+        sphereMesh.positions.emplace_back(positions[i], positions[i + 1], positions[i + 2]);
+    for (std::size_t i = 0; i < indices.size(); i += 3)
+        sphereMesh.triangles.emplace_back(indices[i], indices[i + 1], indices[i + 2]);
+    GltfBuilder b;
     tinygltf::Node node;
     node.name = "root";
-    node.mesh = 0;
-    model.nodes.push_back(node);
+    node.mesh = b.meshPrimitive(sphereMesh);
+    b.model.meshes[0].name = "sphere";
+    tinygltf::Accessor& bounds =
+        b.model.accessors[std::size_t(b.model.meshes[0].primitives[0].attributes["POSITION"])];
+    bounds.minValues = {-0.5, -0.5, -0.5};
+    bounds.maxValues = {0.5, 0.5, 0.5};
+    b.model.nodes.push_back(node);
     tinygltf::Scene scene;
     scene.nodes = {0};
-    model.scenes.push_back(scene);
-    model.defaultScene = 0;
-
-    const std::vector<float> times = {0.0f, 2.0f};
+    b.model.scenes.push_back(scene);
+    b.model.defaultScene = 0;
     const glm::quat end = glm::angleAxis(float(M_PI / 2), glm::normalize(axis));
-    const std::vector<float> rotations = {0, 0, 0, 1, end.x, end.y, end.z, end.w};
-    const std::vector<float> translations = {0, 0, 0, 1.5f, 0, 0};
-    const int input = add(times.data(), times.size() * 4, times.size(), TINYGLTF_TYPE_SCALAR,
-                          TINYGLTF_COMPONENT_TYPE_FLOAT, {0.0}, {2.0});
     tinygltf::Animation clip;
     clip.name = "spin";
-    const auto channel = [&](const std::vector<float>& values, int type, int width,
-                             const char* path) {
-        tinygltf::AnimationSampler s;
-        s.input = input;
-        s.output = add(values.data(), values.size() * 4, values.size() / std::size_t(width), type,
-                       TINYGLTF_COMPONENT_TYPE_FLOAT);
-        s.interpolation = "LINEAR";
-        clip.samplers.push_back(s);
-        tinygltf::AnimationChannel c;
-        c.sampler = int(clip.samplers.size()) - 1;
-        c.target_node = 0;
-        c.target_path = path;
-        clip.channels.push_back(c);
-    };
-    channel(rotations, TINYGLTF_TYPE_VEC4, 4, "rotation");
-    channel(translations, TINYGLTF_TYPE_VEC3, 3, "translation");
-    model.animations.push_back(clip);
-
+    b.sampler(clip, {0.0f, 2.0f}, {0, 0, 0, 1, end.x, end.y, end.z, end.w}, TINYGLTF_TYPE_VEC4, 4,
+              0, "rotation");
+    b.sampler(clip, {0.0f, 2.0f}, {0, 0, 0, 1.5f, 0, 0}, TINYGLTF_TYPE_VEC3, 3, 0, "translation");
+    b.model.animations.push_back(clip);
     const std::filesystem::path glb = dir / "spin.glb";
     tinygltf::TinyGLTF writer;
-    if (!writer.WriteGltfSceneToFile(&model, glb.string(), false, true, false, true))
+    if (!writer.WriteGltfSceneToFile(&b.model, glb.string(), false, true, false, true))
         return {};
     const std::filesystem::path sceneFile = dir / "spin.json";
     std::ofstream(sceneFile)
