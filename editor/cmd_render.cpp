@@ -228,8 +228,7 @@ int render(int argc, char** argv) {
 
     // A CPU method renders the impulses generated on the host.
     cli::SceneJob job = cli::prepareScene(args, !info->gpu());
-    if (info->gpu())
-        splat::requireGpuShading(job.scene.shading); // before the device starts, not after
+    splat::requireLitSupport(*info, job.scene.shading); // before the device starts, not after
 
     const std::string out = args.str("out");
     const splat::RenderSettings settings = cli::renderSettings(args, choice.settings);

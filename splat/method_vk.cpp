@@ -110,6 +110,17 @@ const MethodInfo& method(std::string_view name) {
     throw InputError(cat("unknown method '", name, "' (", methodNames(), ")"));
 }
 
+void requireLitSupport(const MethodInfo& method, const noise::Shading& shading) {
+    if (shading.mode != noise::Shading::Mode::Lit || method.rendersLit)
+        return;
+    std::string lit;
+    for (const MethodInfo& m : methods())
+        if (m.rendersLit)
+            lit += (lit.empty() ? "" : ", ") + m.name;
+    throw InputError(cat(method.name, " does not render lit scenes (shading.mode \"lit\") yet; use --method ",
+                         lit));
+}
+
 std::string methodNames() {
     return names(methods());
 }

@@ -179,11 +179,17 @@ struct MethodInfo {
     /// Whether its frames draw the impulses' kernels (render's "N drawn"); `baked` marches its
     /// bake instead.
     bool drawsKernels = true;
+    /// Whether it renders lit scenes (shading.mode "lit"); render refuses the others before the
+    /// device starts (requireLitSupport).
+    bool rendersLit = false;
 
     bool gpu() const { return bool(make); }
     bool takes(const Setting& setting) const;
     bool takes(std::string_view setting) const;
 };
+
+/// InputError unless `method` renders scenes shaded as `shading` (MethodInfo::rendersLit).
+void requireLitSupport(const MethodInfo& method, const noise::Shading& shading);
 
 /// Every method, reference included, in the order `render --help` and the bench list them.
 const std::vector<MethodInfo>& methods();

@@ -427,7 +427,7 @@ TEST(LitScene, GpuMethodsRefuseLitScenesWithOneLine) {
                                          " --size 32x32 --out '" + out + "'");
         EXPECT_EQ(r.code, 2) << method << ": " << r.err;
         EXPECT_NE(
-            r.err.find("render lit scenes (shading.mode \"lit\") next; use --method reference"),
+            r.err.find("does not render lit scenes (shading.mode \"lit\") yet; use --method reference"),
             std::string::npos)
             << method << ": " << r.err;
         EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << method << ": one line, got " << r.err;

@@ -41,6 +41,7 @@ CpuFrame renderReference(const CpuScene& scene, const RenderSettings& s, const P
 
 MethodInfo referenceMethod() {
     MethodInfo m;
+    m.rendersLit = true;
     m.name = "reference";
     m.summary = "converged CPU ground truth: every lobe integrated along each pixel's rays";
     m.settings = {&settings::spp, &settings::stepScale};
