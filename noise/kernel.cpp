@@ -7,6 +7,7 @@
 
 #include "error.h"
 #include "impulses.h"
+#include "shaders/spot_light.hpp"
 #include "shaders/spot_shared.hpp"
 
 namespace spot::noise {
@@ -77,6 +78,37 @@ WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse)
     out.extinction = double(lobe.extinction) * double(impulse.weight);
     out.color = lobe.color * impulse.color;
     return out;
+}
+
+LobeLitModel lobeLitModel(const Lobe& lobe) {
+    namespace sh = shared::f64;
+    LobeLitModel m;
+    switch (lobe.shading.model) {
+    case LobeShading::Model::Strand:
+        m.model = sh::kSpotShadeStrand;
+        break;
+    case LobeShading::Model::Flake:
+        m.model = sh::kSpotShadeFlake;
+        break;
+    case LobeShading::Model::Lambert:
+        m.model = sh::kSpotShadeLambert;
+        break;
+    }
+    int k = 0;
+    for (int i = 1; i < 3; ++i)
+        if (lobe.sigma[i] > lobe.sigma[k])
+            k = i;
+    glm::dvec3 a = glm::normalize(glm::dvec3(glm::mat3(lobe.transform)[k]));
+    const double lead = a.z != 0.0 ? a.z : a.x != 0.0 ? a.x : a.y;
+    m.tangent = lead < 0.0 ? -a : a;
+    m.shortest = int(std::min_element(&lobe.sigma[0], &lobe.sigma[0] + 3) - &lobe.sigma[0]);
+    const auto radians = [](const Highlight& h) {
+        return glm::dvec3(glm::radians(double(h.shiftDeg)), glm::radians(double(h.widthDeg)),
+                          double(h.strength));
+    };
+    m.primary = radians(lobe.shading.primary);
+    m.secondary = radians(lobe.shading.secondary);
+    return m;
 }
 
 } // namespace spot::noise

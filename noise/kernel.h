@@ -56,4 +56,16 @@ struct WorldLobe {
 /// World lobe `lobeIndex` of `kernel` placed by `impulse` (frame, scale, bend, weight, colour).
 WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse);
 
+/// What lit shading takes from a kernel lobe (shaders/spot_light.h), the same for the reference
+/// and the GPU: its model (kSpotShade*), a strand's tangent in kernel space (its longest axis,
+/// turned from root to tip: towards kernel +z, then +x, then +y where it has no z), a flake's
+/// normal (its shortest axis, 0..2), and the highlights as (shift, width in radians, strength).
+struct LobeLitModel {
+    std::uint32_t model = 0;
+    glm::dvec3 tangent{0.0, 0.0, 1.0};
+    int shortest = 0;
+    glm::dvec3 primary{0.0}, secondary{0.0};
+};
+LobeLitModel lobeLitModel(const Lobe& lobe);
+
 } // namespace spot::noise

@@ -61,34 +61,6 @@ std::uint32_t permute(std::uint32_t i, std::uint32_t l, std::uint32_t p) {
 /// Optical depth beyond which a shadow ray stops: e^-30 is far below any visible light.
 constexpr double kShadowOpaqueDepth = 30.0;
 
-/// The unit kernel-space direction of a lobe's longest axis (a strand's tangent), turned from
-/// root to tip: towards kernel +z (then +x, then +y where it has no z).
-glm::dvec3 kernelAxis(const Lobe& lobe) {
-    int k = 0;
-    for (int i = 1; i < 3; ++i)
-        if (lobe.sigma[i] > lobe.sigma[k])
-            k = i;
-    glm::dvec3 a = glm::normalize(glm::dvec3(glm::mat3(lobe.transform)[k]));
-    const double lead = a.z != 0.0 ? a.z : a.x != 0.0 ? a.x : a.y;
-    return lead < 0.0 ? -a : a;
-}
-
-std::uint32_t sharedModel(LobeShading::Model m) {
-    switch (m) {
-    case LobeShading::Model::Strand:
-        return sh::kSpotShadeStrand;
-    case LobeShading::Model::Flake:
-        return sh::kSpotShadeFlake;
-    case LobeShading::Model::Lambert:
-        break;
-    }
-    return sh::kSpotShadeLambert;
-}
-
-glm::dvec3 highlight(const Highlight& h) {
-    return {glm::radians(double(h.shiftDeg)), glm::radians(double(h.widthDeg)), double(h.strength)};
-}
-
 double randUnit(std::uint32_t i, std::uint32_t p) {
     return double(sh::spotHash(sh::spotHashCombine(p, i)) >> 8) * (1.0 / 16777216.0);
 }
@@ -134,13 +106,14 @@ ReferenceRenderer::ReferenceRenderer(const Mesh& mesh, const Kernel& kernel,
     std::vector<glm::dvec3> axes; // per kernel lobe: a strand's tangent in kernel space
     std::vector<int> shortest;    // per kernel lobe: its shortest axis (a flake's normal)
     for (const noise::Lobe& l : kernel.lobes) {
+        const LobeLitModel lm = lobeLitModel(l);
         LobeModel m;
-        m.model = sharedModel(l.shading.model);
-        m.primary = highlight(l.shading.primary);
-        m.secondary = highlight(l.shading.secondary);
+        m.model = lm.model;
+        m.primary = lm.primary;
+        m.secondary = lm.secondary;
         m_models.push_back(m);
-        axes.push_back(kernelAxis(l));
-        shortest.push_back(int(std::min_element(&l.sigma[0], &l.sigma[0] + 3) - &l.sigma[0]));
+        axes.push_back(lm.tangent);
+        shortest.push_back(lm.shortest);
     }
     if (lit) {
         Aabb bounds;
