@@ -141,11 +141,13 @@ float litSelfShadow(mat3 A, float amp, float k, vec3 v, vec3 l, uint rings) {
     float seen = 0.0;
     float lit = 0.0;
     float tPeak;
+    // The rays at +q and -q see the same (the light lies in the plane of p and the rays): one
+    // stands for both.
     for (uint ring = rings > 0u ? 1u : 0u; ring <= rings; ++ring) {
-        for (uint a = 0u; a < (ring == 0u ? 1u : 4u); ++a) {
-            vec3 offset = radii[ring] * (a == 0u ? p : a == 1u ? q : a == 2u ? -p : -q);
+        for (uint a = 0u; a < (ring == 0u ? 1u : 3u); ++a) {
+            vec3 offset = radii[ring] * (a == 0u ? p : a == 1u ? q : -p);
             float tau = amp * spotLobeDepth(offset, dv, -1e30, 1e30, k, tPeak);
-            float emitted = areas[ring] * spotOneMinusExp(tau);
+            float emitted = (a == 1u ? 2.0 : 1.0) * areas[ring] * spotOneMinusExp(tau);
             if (!(emitted > 0.0))
                 continue;
             float own = 0.0;
