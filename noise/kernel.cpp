@@ -7,6 +7,7 @@
 
 #include "error.h"
 #include "impulses.h"
+#include "shaders/spot_light.hpp"
 #include "shaders/spot_shared.hpp"
 
 namespace spot::noise {
@@ -77,6 +78,39 @@ WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse)
     out.extinction = double(lobe.extinction) * double(impulse.weight);
     out.color = lobe.color * impulse.color;
     return out;
+}
+
+glm::dvec3 lobeLongestAxis(const Lobe& lobe) {
+    int k = 0;
+    for (int i = 1; i < 3; ++i)
+        if (lobe.sigma[i] > lobe.sigma[k])
+            k = i;
+    glm::dvec3 a = glm::normalize(glm::dvec3(glm::mat3(lobe.transform)[k]));
+    const double lead = a.z != 0.0 ? a.z : a.x != 0.0 ? a.x : a.y;
+    return lead < 0.0 ? -a : a;
+}
+
+int lobeShortestAxis(const Lobe& lobe) {
+    return int(std::min_element(&lobe.sigma[0], &lobe.sigma[0] + 3) - &lobe.sigma[0]);
+}
+
+glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse& impulse,
+                             const WorldLobe& placed) {
+    namespace sh = shared::f64;
+    const Lobe& lobe = kernel.lobes.at(static_cast<std::size_t>(lobeIndex));
+    switch (lobe.shading.model) {
+    case LobeShading::Model::Strand:
+        return sh::spotPlacedAxis(lobeLongestAxis(lobe), glm::dvec3(lobe.centre),
+                                  glm::dmat3(impulse.frame), glm::dvec3(impulse.scale),
+                                  double(impulse.bend));
+    case LobeShading::Model::Flake: {
+        const glm::dvec3 n = sh::spotPlacedNormal(placed.toLobe, lobeShortestAxis(lobe));
+        return glm::dot(n, glm::dvec3(impulse.normal)) < 0.0 ? -n : n;
+    }
+    case LobeShading::Model::Lambert:
+        break;
+    }
+    return glm::dvec3(0.0);
 }
 
 } // namespace spot::noise

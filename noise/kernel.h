@@ -56,4 +56,18 @@ struct WorldLobe {
 /// World lobe `lobeIndex` of `kernel` placed by `impulse` (frame, scale, bend, weight, colour).
 WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse);
 
+/// The unit kernel-space direction of a lobe's longest axis (a strand's tangent), turned from
+/// root to tip: towards kernel +z (then +x, then +y where it has no z).
+glm::dvec3 lobeLongestAxis(const Lobe& lobe);
+/// The index (0, 1, 2) of a lobe's shortest axis (a flake's normal).
+int lobeShortestAxis(const Lobe& lobe);
+/// Lit shading's axis of lobe `lobeIndex` placed by `impulse` as `placed` (placeLobe's), a unit
+/// world-space vector (docs/design.md, "Lighting"): a strand lobe's tangent (lobeLongestAxis
+/// through spotPlacedAxis: tilt, spin, scale and bend, root to tip); a flake lobe's normal
+/// (spotPlacedNormal of its shortest axis) turned to the side of the impulse's surface normal, so
+/// that the flakes of one surface average to its side (the model is two-sided); zero for a
+/// lambert lobe, whose normal is the extinction gradient.
+glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse& impulse,
+                             const WorldLobe& placed);
+
 } // namespace spot::noise

@@ -61,18 +61,6 @@ std::uint32_t permute(std::uint32_t i, std::uint32_t l, std::uint32_t p) {
 /// Optical depth beyond which a shadow ray stops: e^-30 is far below any visible light.
 constexpr double kShadowOpaqueDepth = 30.0;
 
-/// The unit kernel-space direction of a lobe's longest axis (a strand's tangent), turned from
-/// root to tip: towards kernel +z (then +x, then +y where it has no z).
-glm::dvec3 kernelAxis(const Lobe& lobe) {
-    int k = 0;
-    for (int i = 1; i < 3; ++i)
-        if (lobe.sigma[i] > lobe.sigma[k])
-            k = i;
-    glm::dvec3 a = glm::normalize(glm::dvec3(glm::mat3(lobe.transform)[k]));
-    const double lead = a.z != 0.0 ? a.z : a.x != 0.0 ? a.x : a.y;
-    return lead < 0.0 ? -a : a;
-}
-
 std::uint32_t sharedModel(LobeShading::Model m) {
     switch (m) {
     case LobeShading::Model::Strand:
@@ -139,8 +127,8 @@ ReferenceRenderer::ReferenceRenderer(const Mesh& mesh, const Kernel& kernel,
         m.primary = highlight(l.shading.primary);
         m.secondary = highlight(l.shading.secondary);
         m_models.push_back(m);
-        axes.push_back(kernelAxis(l));
-        shortest.push_back(int(std::min_element(&l.sigma[0], &l.sigma[0] + 3) - &l.sigma[0]));
+        axes.push_back(lobeLongestAxis(l));
+        shortest.push_back(lobeShortestAxis(l));
     }
     if (lit) {
         Aabb bounds;
