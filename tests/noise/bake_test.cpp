@@ -901,6 +901,7 @@ TEST(BakeCli, BakesTheBunnyOnAnyThreadCountAndInfoReadsIt) {
     ASSERT_EQ(info.code, 0) << info.err;
     EXPECT_NE(info.out.find("level 2    voxel 0.048"), std::string::npos) << info.out;
     EXPECT_NE(info.out.find("preset     fur"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("shading    tangent, normal"), std::string::npos) << info.out;
 }
 
 TEST(BakeCli, BadRequestsAndBadFilesExitTwoWithOneLine) {
