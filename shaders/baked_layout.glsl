@@ -51,10 +51,10 @@ SPOT_CONST uint kBakedSkyDirections = 4u;
  * as unobstructed beyond them. */
 SPOT_CONST uint kBakedShadowSteps = 128u;
 /* Optical depth at which a shadow march stops (e^-8: 3e-4 of the light passes). */
-SPOT_CONST float kBakedShadowOpaqueDepth = 8.0f;
+SPOT_CONST float kBakedShadowOpaqueDepth = 5.0f;
 /* A sample is lit only where it adds at least this much of its light to the pixel (its alpha
  * times the transmittance in front of it): below it, the shadow marches cost and show nothing. */
-SPOT_CONST float kBakedLitMinWeight = 1e-4f;
+SPOT_CONST float kBakedLitMinWeight = 1e-3f;
 /* No tetrahedron (the eye test's "the eye is outside the shell"). */
 SPOT_CONST uint kBakedNoTet = 0xffffffffu;
 

@@ -321,8 +321,8 @@ double meanOfColumns(const noise::Image& image, int x0, int x1) {
 
 // Lit scenes (docs/design.md section 5): fur-bunny-lit at 64x64 against the lit reference (16
 // spp), and the same bake unlit against the unlit reference of the same scene. The gate
-// (lit within 1 dB of unlit) does not hold for baked: measured 24.17 dB lit against 30.21 dB
-// unlit here (128x128: 24.34 against 31.72 dB). A bake blurs the strands (a voxel of level 1
+// (lit within 1 dB of unlit) does not hold for baked: measured 24.16 dB lit against 30.21 dB
+// unlit here (128x128: 24.35 against 31.72 dB). A bake blurs the strands (a voxel of level 1
 // is about a strand wide), which the unlit image hardly shows (neighbouring strands have nearly
 // one colour) and the lit one does (each strand's highlight, its own shadowed side and the gaps
 // between strands the light reaches); the images are alike in the large (the key light from the
