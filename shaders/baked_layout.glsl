@@ -69,9 +69,8 @@ SPOT_CONST uint kBakedBindBricks = 6u;      /* uvec2[]: density bricks of every 
 SPOT_CONST uint kBakedBindSolid = 7u;       /* uint[]: lit, the mesh's inside at level
                                                SpotBakedParams::shadow.x: bit (z ny + y) nx + x for
                                                voxel xyz of the level's box of leaves (n = 8 x its
-                                               leaves), 1 where the voxel and its 6 neighbours have
-                                               their centres inside the mesh (the march's modules
-                                               with BAKED_LIT) */
+                                               leaves), 1 where its centre lies inside the mesh
+                                               (the march's modules with BAKED_LIT) */
 SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* rgba32f image: x the depth the next peel's entries
                                                lie behind (the previous layer's entry; 0: none),
                                                y the ray parameter the layers have sampled to */

@@ -254,9 +254,10 @@ bool inSolid(vec3 p) {
 // bake's `level`, one voxel a step from `start` voxels on (a light's from the sample itself at
 // the samples' own level: a left sum, the sample's own extinction weighs a whole step; measured,
 // docs/design.md section 5); a leaf without a brick is crossed in one step. 0 in the mesh's
-// solid (the bake holds only the fur; the reference stops a shadow ray at the mesh). Stops at the
-// box of the level's leaves, at kBakedShadowOpaqueDepth, or after kBakedShadowSteps steps (the
-// rest taken as clear).
+// solid from one voxel on (the bake holds only the fur; the reference stops a shadow ray at the
+// mesh; the first voxel is not tested, since a root's or the mesh's own voxel may have its centre
+// inside). Stops at the box of the level's leaves, at kBakedShadowOpaqueDepth, or after
+// kBakedShadowSteps steps (the rest taken as clear).
 float shadowTransmittance(vec3 x, vec3 l, float distance, uint level, float start) {
     float size = params.grid.x * float(1u << level);
     float inverseSize = 1.0 / size;
@@ -276,7 +277,7 @@ float shadowTransmittance(vec3 x, vec3 l, float distance, uint level, float star
         if (!(t < tEnd) || tau > kBakedShadowOpaqueDepth)
             break;
         vec3 p = x + t * l;
-        if (inSolid(p))
+        if (t >= size && inSolid(p))
             return 0.0;
         ivec3 c = ivec3(floor(p * inverseSize - 0.5));
         if (findBrickIn(c, origin, dims) < 0) {
@@ -608,8 +609,11 @@ void main() {
             tEnd = max(tEnd, tOut); // the farthest the walk reached
             tIn = tOut;
 #ifdef BAKED_LIT
-            if (atMesh && transmittance >= kBakedOpaque) {
-                // The mesh behind this layer, lit (the mesh pass drew its colour unlit).
+            // The mesh behind this layer, lit (the mesh pass drew its colour unlit): where the
+            // walk reaches it, or leaves the shell within half a step of it (through the base
+            // face, which the mesh pass's distance may lie just behind).
+            bool nearMesh = !atMesh && neighbours[tet][exitFace] < 0 && tMesh - tOut < 0.5 * dt;
+            if ((atMesh || nearMesh) && transmittance >= kBakedOpaque) {
                 vec3 x = origin + tMesh * dir;
                 under = vec4(shadeMesh(tet, x, toRest(tet, x), -dir, level), 1.0);
             }

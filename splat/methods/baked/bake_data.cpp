@@ -222,19 +222,9 @@ std::vector<std::uint32_t> solidVoxels(const std::vector<glm::vec3>& positions,
             }
         }
     std::vector<std::uint32_t> bits((nx * ny * nz + 31) / 32 + 1, 0u);
-    const auto at = [&](int x, int y, int z) {
-        return x >= 0 && y >= 0 && z >= 0 && x < int(nx) && y < int(ny) && z < int(nz) &&
-               inside[(std::size_t(z) * ny + std::size_t(y)) * nx + std::size_t(x)] != 0;
-    };
-    for (int z = 0; z < int(nz); ++z)
-        for (int y = 0; y < int(ny); ++y)
-            for (int x = 0; x < int(nx); ++x)
-                if (at(x, y, z) && at(x - 1, y, z) && at(x + 1, y, z) && at(x, y - 1, z) &&
-                    at(x, y + 1, z) && at(x, y, z - 1) && at(x, y, z + 1)) {
-                    const std::size_t bit =
-                        (std::size_t(z) * ny + std::size_t(y)) * nx + std::size_t(x);
-                    bits[bit >> 5] |= 1u << (bit & 31);
-                }
+    for (std::size_t bit = 0; bit < inside.size(); ++bit)
+        if (inside[bit] != 0)
+            bits[bit >> 5] |= 1u << (bit & 31);
     return bits;
 }
 

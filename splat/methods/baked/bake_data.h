@@ -64,9 +64,9 @@ float brickUnit(float largest);
 
 /// The lit march's solid (baked_layout.glsl, kBakedBindSolid): over the voxels [lo, lo + n) of
 /// edge `size` (world units; voxel ijk's centre at (ijk + 1/2) size), a bit per voxel, bit
-/// (z n.y + y) n.x + x of the words, set where the centres of the voxel and of its 6 neighbours
-/// lie inside the mesh (`positions`, `triangles`): an odd number of the triangles lies on the ray
-/// from the centre towards +x. A mesh that is not closed gives what the crossings give.
+/// (z n.y + y) n.x + x of the words, set where the voxel's centre lies inside the mesh
+/// (`positions`, `triangles`): an odd number of the triangles lies on the ray from the centre
+/// towards +x. A mesh that is not closed gives what the crossings give.
 std::vector<std::uint32_t> solidVoxels(const std::vector<glm::vec3>& positions,
                                        const std::vector<glm::uvec3>& triangles, glm::ivec3 lo,
                                        glm::ivec3 n, float size);
