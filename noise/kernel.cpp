@@ -80,35 +80,48 @@ WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse)
     return out;
 }
 
-glm::dvec3 lobeLongestAxis(const Lobe& lobe) {
+LobeLitModel lobeLitModel(const Lobe& lobe) {
+    namespace sh = shared::f64;
+    LobeLitModel m;
+    switch (lobe.shading.model) {
+    case LobeShading::Model::Strand:
+        m.model = sh::kSpotShadeStrand;
+        break;
+    case LobeShading::Model::Flake:
+        m.model = sh::kSpotShadeFlake;
+        break;
+    case LobeShading::Model::Lambert:
+        m.model = sh::kSpotShadeLambert;
+        break;
+    }
     int k = 0;
     for (int i = 1; i < 3; ++i)
         if (lobe.sigma[i] > lobe.sigma[k])
             k = i;
     glm::dvec3 a = glm::normalize(glm::dvec3(glm::mat3(lobe.transform)[k]));
     const double lead = a.z != 0.0 ? a.z : a.x != 0.0 ? a.x : a.y;
-    return lead < 0.0 ? -a : a;
-}
-
-int lobeShortestAxis(const Lobe& lobe) {
-    return int(std::min_element(&lobe.sigma[0], &lobe.sigma[0] + 3) - &lobe.sigma[0]);
+    m.tangent = lead < 0.0 ? -a : a;
+    m.shortest = int(std::min_element(&lobe.sigma[0], &lobe.sigma[0] + 3) - &lobe.sigma[0]);
+    const auto radians = [](const Highlight& h) {
+        return glm::dvec3(glm::radians(double(h.shiftDeg)), glm::radians(double(h.widthDeg)),
+                          double(h.strength));
+    };
+    m.primary = radians(lobe.shading.primary);
+    m.secondary = radians(lobe.shading.secondary);
+    return m;
 }
 
 glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse& impulse,
                              const WorldLobe& placed) {
     namespace sh = shared::f64;
     const Lobe& lobe = kernel.lobes.at(static_cast<std::size_t>(lobeIndex));
-    switch (lobe.shading.model) {
-    case LobeShading::Model::Strand:
-        return sh::spotPlacedAxis(lobeLongestAxis(lobe), glm::dvec3(lobe.centre),
-                                  glm::dmat3(impulse.frame), glm::dvec3(impulse.scale),
-                                  double(impulse.bend));
-    case LobeShading::Model::Flake: {
-        const glm::dvec3 n = sh::spotPlacedNormal(placed.toLobe, lobeShortestAxis(lobe));
+    const LobeLitModel m = lobeLitModel(lobe);
+    if (m.model == sh::kSpotShadeStrand)
+        return sh::spotPlacedAxis(m.tangent, glm::dvec3(lobe.centre), glm::dmat3(impulse.frame),
+                                  glm::dvec3(impulse.scale), double(impulse.bend));
+    if (m.model == sh::kSpotShadeFlake) {
+        const glm::dvec3 n = sh::spotPlacedNormal(placed.toLobe, m.shortest);
         return glm::dot(n, glm::dvec3(impulse.normal)) < 0.0 ? -n : n;
-    }
-    case LobeShading::Model::Lambert:
-        break;
     }
     return glm::dvec3(0.0);
 }

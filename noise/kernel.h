@@ -56,17 +56,23 @@ struct WorldLobe {
 /// World lobe `lobeIndex` of `kernel` placed by `impulse` (frame, scale, bend, weight, colour).
 WorldLobe placeLobe(const Kernel& kernel, int lobeIndex, const Impulse& impulse);
 
-/// The unit kernel-space direction of a lobe's longest axis (a strand's tangent), turned from
-/// root to tip: towards kernel +z (then +x, then +y where it has no z).
-glm::dvec3 lobeLongestAxis(const Lobe& lobe);
-/// The index (0, 1, 2) of a lobe's shortest axis (a flake's normal).
-int lobeShortestAxis(const Lobe& lobe);
+/// What lit shading takes from a kernel lobe (shaders/spot_light.h), the same for the reference
+/// and the GPU: its model (kSpotShade*), a strand's tangent in kernel space (its longest axis,
+/// turned from root to tip: towards kernel +z, then +x, then +y where it has no z), a flake's
+/// normal (its shortest axis, 0..2), and the highlights as (shift, width in radians, strength).
+struct LobeLitModel {
+    std::uint32_t model = 0;
+    glm::dvec3 tangent{0.0, 0.0, 1.0};
+    int shortest = 0;
+    glm::dvec3 primary{0.0}, secondary{0.0};
+};
+LobeLitModel lobeLitModel(const Lobe& lobe);
 /// Lit shading's axis of lobe `lobeIndex` placed by `impulse` as `placed` (placeLobe's), a unit
-/// world-space vector (docs/design.md, "Lighting"): a strand lobe's tangent (lobeLongestAxis
+/// world-space vector (docs/design.md, "Lighting"): a strand lobe's tangent (lobeLitModel's,
 /// through spotPlacedAxis: tilt, spin, scale and bend, root to tip); a flake lobe's normal
 /// (spotPlacedNormal of its shortest axis) turned to the side of the impulse's surface normal, so
 /// that the flakes of one surface average to its side (the model is two-sided); zero for a
-/// lambert lobe, whose normal is the extinction gradient.
+/// lambert lobe, whose normal is the extinction gradient. What the bake's shading grids hold.
 glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse& impulse,
                              const WorldLobe& placed);
 

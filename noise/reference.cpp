@@ -61,22 +61,6 @@ std::uint32_t permute(std::uint32_t i, std::uint32_t l, std::uint32_t p) {
 /// Optical depth beyond which a shadow ray stops: e^-30 is far below any visible light.
 constexpr double kShadowOpaqueDepth = 30.0;
 
-std::uint32_t sharedModel(LobeShading::Model m) {
-    switch (m) {
-    case LobeShading::Model::Strand:
-        return sh::kSpotShadeStrand;
-    case LobeShading::Model::Flake:
-        return sh::kSpotShadeFlake;
-    case LobeShading::Model::Lambert:
-        break;
-    }
-    return sh::kSpotShadeLambert;
-}
-
-glm::dvec3 highlight(const Highlight& h) {
-    return {glm::radians(double(h.shiftDeg)), glm::radians(double(h.widthDeg)), double(h.strength)};
-}
-
 double randUnit(std::uint32_t i, std::uint32_t p) {
     return double(sh::spotHash(sh::spotHashCombine(p, i)) >> 8) * (1.0 / 16777216.0);
 }
@@ -122,13 +106,14 @@ ReferenceRenderer::ReferenceRenderer(const Mesh& mesh, const Kernel& kernel,
     std::vector<glm::dvec3> axes; // per kernel lobe: a strand's tangent in kernel space
     std::vector<int> shortest;    // per kernel lobe: its shortest axis (a flake's normal)
     for (const noise::Lobe& l : kernel.lobes) {
+        const LobeLitModel lm = lobeLitModel(l);
         LobeModel m;
-        m.model = sharedModel(l.shading.model);
-        m.primary = highlight(l.shading.primary);
-        m.secondary = highlight(l.shading.secondary);
+        m.model = lm.model;
+        m.primary = lm.primary;
+        m.secondary = lm.secondary;
         m_models.push_back(m);
-        axes.push_back(lobeLongestAxis(l));
-        shortest.push_back(lobeShortestAxis(l));
+        axes.push_back(lm.tangent);
+        shortest.push_back(lm.shortest);
     }
     if (lit) {
         Aabb bounds;

@@ -24,6 +24,7 @@ layout(constant_id = kSplatSpecCount) const bool kCount = false;
 layout(constant_id = kSplatSpecScreen) const bool kScreen = true;
 layout(constant_id = kSplatSpecSmallPixels) const uint kSmallPixels = 0u;
 layout(constant_id = kSplatSpecResolveList) const bool kResolveList = false;
+layout(constant_id = kSplatSpecLit) const bool kLit = false;
 // Lambert's gradient terms as varyings (splatShadeLobes; spot_splat.h
 // kSplatMaxShadeVaryingLobes), and the size of their arrays (1 when unused).
 const bool kShadeVaryings = kLambert && kLobes <= kSplatMaxShadeVaryingLobes;
@@ -349,7 +350,8 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
         vec3 v = kOrthographic ? vLobeB[l].xyz : vLobeA[l];
         vec3 ol = kOrthographic ? vLobeA[l] : vLobeB[l].xyz;
         vec4 wo = vec4(cross(ol, v), dot(ol, v));
-        vec4 c = vec4(splatLobeColor(l) * vColor, vLobeB[l].w);
+        vec4 c = vec4(kLit ? splatWorldLobe(first, l).color.rgb : splatLobeColor(l) * vColor,
+                      vLobeB[l].w);
 #else
 #ifdef SPLAT_CACHED_LOBES
         SpotScreenLobe s = splatCachedLobes[l];
@@ -358,7 +360,9 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
 #endif
         vec3 v, ol;
         vec4 wo = splatScreenLobeAt(s, p, v, ol);
-        vec4 c = vec4(splatLobeColor(l) * splatKernelColor(kernel), s.ay.w);
+        vec4 c = vec4(kLit ? splatWorldLobe(first, l).color.rgb
+                           : splatLobeColor(l) * splatKernelColor(kernel),
+                      s.ay.w);
 #endif
         float tPeak;
         float tau = c.w * scale * spotScreenLobeDepth(wo.xyz, v, wo.w, tEnd, k, tPeak);

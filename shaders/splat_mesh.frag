@@ -3,6 +3,12 @@
 // the surface (what kernels integrate up to) and the reversed depth.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
+#ifdef SPLAT_MESH_LIT
+// Lit (a variant: it binds the lit frame's parameters and the light-space structure): diffuse,
+// every light and the sky, shadowed (light_common.glsl).
+#include "spot_light.h"
+#include "light_common.glsl"
+#endif
 
 layout(location = 0) in vec3 vWorld;
 layout(location = 1) in vec3 vNormal;
@@ -16,6 +22,14 @@ void main() {
     if (!(z > 0.0))
         discard; // behind the orthographic camera's plane: rays start at t = 0
     vec3 color = frame.base.rgb;
+#ifdef SPLAT_MESH_LIT
+    {
+        float len = length(vNormal);
+        vec3 n = len > 0.0 ? vNormal / len : -frame.forward.xyz;
+        vec3 v = frame.eye.w > 0.5 ? -frame.forward.xyz : normalize(frame.eye.xyz - vWorld);
+        color = litSurfaceColor(vWorld, dot(n, v) < 0.0 ? -n : n, color);
+    }
+#endif
     if ((frame.counts.w & kSplatFlagLambert) != 0u) {
         float len = length(vNormal);
         vec3 n = len > 0.0 ? vNormal / len : -frame.forward.xyz;

@@ -15,8 +15,15 @@
 // and a second, indirect, over that list (kClipped true) computes their bounds again in full.
 // World lobes are stored only where something reads them (kWorldLobes: Lambert shading, N
 // samples, the ray-march): they are 4 of a lobe's 8 stored vectors.
+// With SPLAT_PREPARE_LIT (a lit frame), each world lobe's colour is its lit colour instead
+// (litLobeColor: every light and the sky through the lobe's model at its centre, shadowed by the
+// light-space structure), which every lit method reads in place of the unlit one.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
+#ifdef SPLAT_PREPARE_LIT
+#include "spot_light.h"
+#include "light_common.glsl"
+#endif
 
 layout(local_size_x = 64) in;
 
@@ -311,6 +318,23 @@ void main() {
         mat3 A = spotPlaceLobe(inv, kernelCentre, kernelFrame, imp.scale.xyz, imp.normal.w,
                                imp.position.xyz, centre);
         float amplitude = lobe.color.w * imp.position.w;
+        vec3 color = lobe.color.rgb * imp.color.rgb;
+#ifdef SPLAT_PREPARE_LIT
+        {
+            SpotLitLobe model = lit.lobes[l];
+            vec3 axis = normalize(imp.normal.xyz); // lambert: the surface's normal on the GPU
+            if (model.model.x == kSpotShadeStrand)
+                axis = spotPlacedAxis(model.axis.xyz, kernelCentre, kernelFrame, imp.scale.xyz,
+                                      imp.normal.w);
+            else if (model.model.x == kSpotShadeFlake)
+                axis = spotPlacedNormal(A, int(model.model.y));
+            vec3 v = kOrthographic ? -frame.forward.xyz : normalize(frame.eye.xyz - centre);
+            color = litLobeColor(model.model.x, axis, A, centre, amplitude, frame.size.w, v, color,
+                                 model.primary.xyz, model.secondary.xyz);
+            if (any(isnan(color)) || any(isinf(color)))
+                color = vec3(0.0);
+        }
+#endif
         if (kEwa) {
             // Box pixel filter of one footprint: variance footprint^2 / 12 per image axis.
             float z = max(splatViewDepth(centre), 0.0);
@@ -323,7 +347,6 @@ void main() {
         mat3 M = inverse(A);
         bool ok = amplitude > 0.0 && !isinf(amplitude) && finite3(A[0]) && finite3(A[1]) &&
                   finite3(A[2]) && finite3(centre) && finite3(M[0]) && finite3(M[1]) && finite3(M[2]);
-        vec3 color = lobe.color.rgb * imp.color.rgb;
         SpotWorldLobe w;
         w.a0 = ok ? vec4(A[0], centre.x) : vec4(0.0);
         w.a1 = ok ? vec4(A[1], centre.y) : vec4(0.0);

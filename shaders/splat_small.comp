@@ -67,7 +67,7 @@ void main() {
     splatCachedColor = b.color.rgb;
     for (uint l = 0u; l < kLobes; ++l) {
         splatCachedLobes[l] = screenLobes[kernel * kLobes + l];
-        if (kLambert || kSamples > 0u)
+        if (kLambert || kSamples > 0u || kLit)
             splatCachedWorldLobes[l] = worldLobes[kernel * kLobes + l];
     }
     for (int y = lo.y; y <= hi.y; ++y) {

@@ -161,6 +161,8 @@ SPOT_CONST uint kSplatSpecWorldLobes = 12u;  /* bool: prepare stores the world l
 SPOT_CONST uint kSplatSpecClipped = 13u;     /* bool: prepare's second dispatch, over the kernels
                                                 its first listed (SpotSplatList): those with a
                                                 lobe that projects to no ellipse */
+SPOT_CONST uint kSplatSpecLit = 14u;         /* bool: lit (each lobe's colour is its world lobe's,
+                                                which prepare lit: light_common.glsl) */
 SPOT_CONST uint kSplatSpecLobeColor = 16u;   /* float x 24: the kernel lobes' colours, lobe l's
                                                 r, g, b at ids 16 + 3 l + 0, 1, 2 (constants in
                                                 the fragment shaders: llvmpipe pays dearly for

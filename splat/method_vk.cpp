@@ -56,7 +56,7 @@ void ImpulseSet::require(const char* who, std::uint32_t most, const char* verb) 
 }
 
 SceneGpu::SceneGpu(Context& ctx, const noise::Mesh& mesh, const noise::Kernel& kernel)
-    : m_ctx(&ctx), m_meshHash(noise::meshHash(mesh)), m_kernel(kernel),
+    : m_ctx(&ctx), m_meshHash(noise::meshHash(mesh)), m_meshBounds(mesh.bounds()), m_kernel(kernel),
       m_meshPass(ctx, mesh, "scene"), m_lobes(uploadKernelLobes(ctx, kernel, "scene")) {}
 
 // The registry: each method's module makes its entry (splat/methods/registry.h lists them).

@@ -27,6 +27,7 @@
 
 #include "noise/camera.h"
 #include "noise/cells.h"
+#include "noise/mesh.h"
 #include "noise/image.h"
 #include "noise/impulses.h"
 #include "noise/kernel.h"
@@ -108,12 +109,15 @@ public:
     const noise::Kernel& kernel() const { return m_kernel; }
     std::uint32_t lobeCount() const { return std::uint32_t(m_kernel.lobes.size()); }
     float support() const { return m_kernel.supportSigma; }
+    /// The mesh's bounds as handed in (at rest).
+    const noise::Bounds& meshBounds() const { return m_meshBounds; }
     /// noise::meshHash of the mesh as handed in (a bake is checked against it).
     std::uint64_t meshHash() const { return m_meshHash; }
 
 private:
     Context* m_ctx;
     std::uint64_t m_meshHash = 0;
+    noise::Bounds m_meshBounds;
     noise::Kernel m_kernel;
     MeshPass m_meshPass;
     Buffer m_lobes;

@@ -8,9 +8,12 @@
 #include "noise/mesh.h"
 #include "splat/layout.h"
 
+#include "splat/passes/light_space_vk.h"
 #include "splat_mesh.frag.h"
-#include "splat_prepare.comp.h"
 #include "splat_mesh.vert.h"
+#include "splat_mesh_lit.frag.h"
+#include "splat_prepare.comp.h"
+#include "splat_prepare_lit.comp.h"
 
 namespace spot::splat {
 
@@ -24,7 +27,6 @@ gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const nois
                                          glm::vec3 baseColor, std::uint32_t count,
                                          std::uint32_t lobes, float support,
                                          std::uint32_t kernelSamples, std::uint32_t flags) {
-    requireGpuShading(shading);
     const noise::CameraRays rays(camera); // validates the camera; the one camera basis
     const glm::dvec3 forward = rays.forward(), right = rays.right(), up = rays.up();
     const bool ortho = camera.projection == noise::Projection::Orthographic;
@@ -83,14 +85,17 @@ MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_c
     desc.depthWrite = true;
     desc.depthCompare = VK_COMPARE_OP_GREATER;
     m_pipeline = makeGraphicsPipeline(ctx, desc);
+    m_desc = desc;
     // The test sorts 3 edges of 8 bytes per triangle: above 2 million triangles (48 MB, about
     // half a second) the pass draws both faces rather than spend that at every start.
     constexpr std::size_t kMaxTestedTriangles = 2'000'000;
     m_closed = mesh.triangles.size() <= kMaxTestedTriangles && noise::closedOutward(mesh);
-    if (m_closed) {
+    {
         const noise::Bounds b = mesh.bounds();
         m_lo = b.lo;
         m_hi = b.hi;
+    }
+    if (m_closed) {
         // Counter-clockwise seen from outside stays so in the framebuffer: the vertex shader
         // flips y, so that NDC y points down, as framebuffer rows do.
         desc.cull = VK_CULL_MODE_BACK_BIT;
@@ -115,7 +120,8 @@ bool MeshPass::cullsBackFaces(const gpu_splat::SpotSplatFrame& frame) const {
 void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame,
                       const Image& base, const Image& distance, const Image& depth,
                       glm::vec3 background,
-                      const std::function<void(VkCommandBuffer)>& after) const {
+                      const std::function<void(VkCommandBuffer)>& after,
+                      const LightSpace* light) const {
     const VkRenderingAttachmentInfo depthInfo = depthAttachment(depth, VK_ATTACHMENT_LOAD_OP_CLEAR);
     beginRendering(cmd, base.width(), base.height(),
                    {colorAttachment(base, VK_ATTACHMENT_LOAD_OP_CLEAR, glm::vec4(background, 0.0f)),
@@ -123,10 +129,27 @@ void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& fram
                                     glm::vec4(gpu_splat::kSplatNoMesh))},
                    &depthInfo);
     if (m_indexCount > 0) {
-        const Pipeline& pipeline = cullsBackFaces(frame) ? m_culled : m_pipeline;
+        const bool culled = cullsBackFaces(frame);
+        if (light && !m_lit.handle()) {
+            GraphicsPipelineDesc desc = m_desc;
+            desc.fragment = spirv(spv_splat_mesh_lit_frag);
+            const Bindings lookup = LightSpace::lookupBindings();
+            desc.bindings.insert(desc.bindings.end(), lookup.begin(), lookup.end());
+            m_lit = makeGraphicsPipeline(*m_ctx, desc);
+            if (m_closed) {
+                desc.cull = VK_CULL_MODE_BACK_BIT;
+                m_litCulled = makeGraphicsPipeline(*m_ctx, desc);
+            }
+        }
+        const Pipeline& pipeline =
+            light ? (culled ? m_litCulled : m_lit) : (culled ? m_culled : m_pipeline);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle());
         pushFrame(cmd, pipeline, frame);
-        Descriptors().buffer(gpu_splat::kSplatBindVertices, m_vertices).push(*m_ctx, cmd, pipeline);
+        Descriptors d;
+        d.buffer(gpu_splat::kSplatBindVertices, m_vertices);
+        if (light)
+            light->bindLookup(d);
+        d.push(*m_ctx, cmd, pipeline);
         vkCmdBindIndexBuffer(cmd, m_indices.handle(), 0, VK_INDEX_TYPE_UINT32);
         vkCmdDrawIndexed(cmd, m_indexCount, 1, 0, 0, 0);
     }
@@ -246,7 +269,7 @@ void recordListReset(VkCommandBuffer cmd, const Buffer& list) {
 }
 
 Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, bool ewa,
-                             bool orthographic, bool worldLobes, bool clipped) {
+                             bool orthographic, bool worldLobes, bool clipped, bool lit) {
     using namespace gpu_splat;
     Specialization spec;
     spec.set(kSplatSpecLobes, lobes)
@@ -255,12 +278,16 @@ Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, boo
         .set(kSplatSpecOrthographic, orthographic)
         .set(kSplatSpecWorldLobes, worldLobes || !screen)
         .set(kSplatSpecClipped, clipped && screen);
+    Bindings bindings = {storageBuffer(kSplatBindImpulses),    storageBuffer(kSplatBindLobes),
+                         storageBuffer(kSplatBindWorldLobes),  storageBuffer(kSplatBindScreenLobes),
+                         storageBuffer(kSplatBindBounds),      storageBuffer(kSplatBindCount),
+                         storageBuffer(kSplatBindClipList)};
+    if (lit) {
+        const Bindings lookup = LightSpace::lookupBindings();
+        bindings.insert(bindings.end(), lookup.begin(), lookup.end());
+    }
     return makeComputePipeline(
-        ctx, spirv(spv_splat_prepare_comp),
-        {storageBuffer(kSplatBindImpulses), storageBuffer(kSplatBindLobes),
-         storageBuffer(kSplatBindWorldLobes), storageBuffer(kSplatBindScreenLobes),
-         storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindCount),
-         storageBuffer(kSplatBindClipList)},
+        ctx, lit ? spirv(spv_splat_prepare_lit_comp) : spirv(spv_splat_prepare_comp), bindings,
         sizeof(SpotSplatFrame), spec);
 }
 
@@ -282,6 +309,8 @@ void recordPrepare(Context& ctx, VkCommandBuffer cmd, const Pipeline& prepare,
         .buffer(kSplatBindScreenLobes, *b.screenLobes)
         .buffer(kSplatBindBounds, *b.bounds)
         .buffer(kSplatBindClipList, clip ? *b.clipList : *b.bounds); // unread without `screen`
+    if (b.light)
+        b.light->bindLookup(descriptors);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, prepare.handle());
     pushFrame(cmd, prepare, frame);
     descriptors.push(ctx, cmd, prepare);

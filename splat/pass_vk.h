@@ -14,6 +14,7 @@
 #include "context_vk.h"
 #include "noise/camera.h"
 #include "noise/kernel.h"
+#include "noise/mesh.h"
 #include "noise/reference.h"
 
 namespace spot::noise {
@@ -21,6 +22,8 @@ struct Mesh;
 }
 
 namespace spot::splat {
+
+class LightSpace;
 
 namespace gpu_splat {
 using glm::uvec4;
@@ -91,9 +94,12 @@ public:
     /// (kDepthFormat), all in attachment layouts, cleared first. Nothing else changes layout.
     /// `after`, if given, records more draws into the same rendering after the mesh's (their
     /// pipelines made for those three formats; the mesh's depth is written by then).
+    /// With `light` (a lit frame), the mesh is shaded by its lights and sky, shadowed
+    /// (splat_mesh_lit.frag).
     void record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& frame, const Image& base,
                 const Image& distance, const Image& depth, glm::vec3 background,
-                const std::function<void(VkCommandBuffer)>& after = {}) const;
+                const std::function<void(VkCommandBuffer)>& after = {},
+                const LightSpace* light = nullptr) const;
     /// Whether `record` culls back faces for this frame: when the mesh bounds solids facing out
     /// (noise::closedOutward) and its bounds lie wholly beyond the near plane (so every ray starts
     /// outside them, and meets a front face first). Half the triangles are then dropped at setup,
@@ -114,6 +120,8 @@ public:
         m_lo = lo;
         m_hi = hi;
     }
+    /// The mesh's bounds as drawn: at rest, or the pose's (setBounds).
+    noise::Bounds bounds() const { return {m_lo, m_hi}; }
     /// uint32[3 x triangles], usable as a storage buffer too.
     const Buffer& indices() const { return m_indices; }
     std::uint32_t indexCount() const { return m_indexCount; }
@@ -125,6 +133,8 @@ private:
     bool m_closed = false;
     glm::vec3 m_lo{0.0f}, m_hi{0.0f};
     Pipeline m_pipeline, m_culled; ///< m_culled only for a closed mesh
+    GraphicsPipelineDesc m_desc;   ///< the unlit pipeline's, for the lit ones
+    mutable Pipeline m_lit, m_litCulled; ///< made at the first lit frame
 };
 /// The kernel's lobes (gpu::SpotLobe[]); InputError for 0 or more than 8 lobes or a bad support.
 Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who);
@@ -149,8 +159,11 @@ void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::S
 /// the splatting methods (screen lobes and kernel bounds too), `ewa` widening, the projection,
 /// `worldLobes` whether the world lobes are stored (always without `screen`), and `clipped` for
 /// its second dispatch (the kernels the first listed, with a lobe that projects to no ellipse).
+/// `lit`: the variant that lights each world lobe (splat_prepare_lit.comp; it also reads the
+/// light-space structure, PrepareBuffers::light).
 Pipeline makePreparePipeline(Context& ctx, std::uint32_t lobes, bool screen, bool ewa,
-                             bool orthographic, bool worldLobes = true, bool clipped = false);
+                             bool orthographic, bool worldLobes = true, bool clipped = false,
+                             bool lit = false);
 
 /// What the prepare pass reads and writes. Without `screen`, screenLobes and bounds may be any
 /// storage buffer: nothing is written there.
@@ -165,6 +178,8 @@ struct PrepareBuffers {
     const Buffer* clipList = nullptr;
     /// With `screen`: the second dispatch's pipeline (makePreparePipeline with `clipped`).
     const Pipeline* clipped = nullptr;
+    /// A lit pipeline's light-space structure.
+    const LightSpace* light = nullptr;
 };
 
 /// Reset a SpotSplatList (count 0, no groups) for a first dispatch to append to and a second,

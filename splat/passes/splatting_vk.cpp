@@ -130,7 +130,8 @@ Specialization SplattingRenderer::specialization(const Spec& s) const {
         .set(kSplatSpecWeight, s.weight)
         .set(kSplatSpecCount, s.count)
         .set(kSplatSpecScreen, true)
-        .set(kSplatSpecSmallPixels, s.smallPixels);
+        .set(kSplatSpecSmallPixels, s.smallPixels)
+        .set(kSplatSpecLit, s.lit);
     const noise::Kernel& kernel = m_scene.kernel();
     for (std::uint32_t l = 0; l < kernel.lobes.size(); ++l)
         for (std::uint32_t c = 0; c < 3; ++c)
@@ -238,6 +239,7 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
     s = Spec{};
     s.samples = std::uint32_t(settings.kernelSamples);
     s.lambert = view.shading.mode == noise::Shading::Mode::Lambert;
+    s.lit = view.shading.mode == noise::Shading::Mode::Lit;
     s.orthographic = view.camera.projection == noise::Projection::Orthographic;
     s.ewa = settings.ewa;
     s.smallPixels = smallPixels(settings, Extent{width, height});
@@ -247,12 +249,13 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
     auto it = m_common.find(s);
     if (it == m_common.end()) {
         Common c;
-        // World lobes are read by Lambert shading and by N samples only.
-        const bool world = s.lambert || s.samples > 0;
+        // World lobes are read by Lambert shading, by N samples and for their lit colours.
+        const bool world = s.lambert || s.samples > 0 || s.lit;
         const std::uint32_t lobes = m_scene.lobeCount();
-        c.prepare = makePreparePipeline(m_ctx, lobes, true, s.ewa, s.orthographic, world);
+        c.prepare = makePreparePipeline(m_ctx, lobes, true, s.ewa, s.orthographic, world, false,
+                                        s.lit);
         c.prepareClipped =
-            makePreparePipeline(m_ctx, lobes, true, s.ewa, s.orthographic, world, true);
+            makePreparePipeline(m_ctx, lobes, true, s.ewa, s.orthographic, world, true, s.lit);
         Bindings compact = {storageBuffer(kSplatBindBounds), storageBuffer(kSplatBindVisible),
                             storageBuffer(kSplatBindDraw), storageBuffer(kSplatBindCount)};
         if (m_smallPath)
@@ -264,16 +267,24 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
         it = m_common.emplace(s, std::move(c)).first;
     }
     m_commonPipelines = &it->second;
+    if (s.lit) {
+        if (!m_light)
+            m_light = std::make_unique<LightSpace>(m_scene);
+        m_light->prepare(view.shading, impulses);
+    }
     f.frame = makeSplatFrame(view.camera, view.shading, view.baseColor, impulses.capacity,
                              m_scene.lobeCount(), m_scene.support(),
                              std::uint32_t(settings.kernelSamples), 0);
     preparePasses();
 }
 
-void SplattingRenderer::recordPrepareAndCompact(VkCommandBuffer cmd) {
+void SplattingRenderer::recordPrepareAndCompact(VkCommandBuffer cmd, PassTimer& timer) {
     using namespace passes;
     const Frame& f = m_frame;
     const Common& p = *m_commonPipelines;
+    const LightSpace* light = f.spec.lit ? m_light.get() : nullptr;
+    if (light)
+        m_light->record(cmd, timer);
     // Prepare: world and screen lobes and bounds, then the kept kernels in order and the draw.
     PrepareBuffers pb;
     pb.impulses = f.impulses.impulses;
@@ -284,6 +295,7 @@ void SplattingRenderer::recordPrepareAndCompact(VkCommandBuffer cmd) {
     pb.bounds = &m_bounds;
     pb.clipList = &m_clipList;
     pb.clipped = &p.prepareClipped;
+    pb.light = light;
     recordPrepare(m_ctx, cmd, p.prepare, f.frame, pb, f.impulses.capacity);
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRead);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.compact.handle());
@@ -316,7 +328,8 @@ void SplattingRenderer::recordMesh(VkCommandBuffer cmd) {
     transitionImage(cmd, m_depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0, kTests,
                     kDepthRW);
-    m_scene.meshPass().record(cmd, f.frame, m_base, m_distance, m_depth, f.view.background);
+    m_scene.meshPass().record(cmd, f.frame, m_base, m_distance, m_depth, f.view.background, {},
+                              f.spec.lit ? m_light.get() : nullptr);
     transitionImage(cmd, m_distance.handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kFragment | kCompute, kStorageRead);
     // Base colour and depth stay attachments: the instanced and sorted passes draw over them.
@@ -433,6 +446,7 @@ MethodInfo splattingMethod(std::string name, std::string summary,
     m.name = std::move(name);
     m.summary = std::move(summary);
     m.settings = std::move(settings);
+    m.rendersLit = true;
     return m;
 }
 

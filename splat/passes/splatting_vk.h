@@ -42,6 +42,7 @@
 #include "splat/context_vk.h"
 #include "splat/method_vk.h"
 #include "splat/pass_vk.h"
+#include "splat/passes/light_space_vk.h"
 #include "splat/passes/resources_vk.h"
 
 namespace spot::splat {
@@ -76,11 +77,11 @@ protected:
     /// What a pipeline is specialized for.
     struct Spec {
         std::uint32_t samples = 0;
-        bool lambert = false, orthographic = false, ewa = true, count = false;
+        bool lambert = false, orthographic = false, ewa = true, count = false, lit = false;
         std::uint32_t weight = 0;
         std::uint32_t smallPixels = 0; ///< the compute path's threshold (0: off)
         auto tie() const {
-            return std::tie(samples, lambert, orthographic, ewa, count, weight, smallPixels);
+            return std::tie(samples, lambert, orthographic, ewa, count, weight, smallPixels, lit);
         }
         bool operator<(const Spec& o) const { return tie() < o.tie(); }
     };
@@ -125,8 +126,9 @@ protected:
                              Bindings bindings, bool listed) const;
 
     // ---- The passes ------------------------------------------------------------------------
-    /// 1. Prepare and compaction, the clears the frame's atomics need (recordClears).
-    void recordPrepareAndCompact(VkCommandBuffer cmd);
+    /// 1. Prepare and compaction, the clears the frame's atomics need (recordClears). A lit
+    /// frame first builds its light-space structure (marked "light" on `timer`).
+    void recordPrepareAndCompact(VkCommandBuffer cmd, PassTimer& timer);
     /// 2. The base mesh (base colour and depth stay attachments for a pass drawing over them).
     void recordMesh(VkCommandBuffer cmd);
     /// Pushes the quads' bindings plus `extra` for `pipeline` (from quadPipeline).
@@ -159,6 +161,8 @@ protected:
     Buffer m_small; ///< the compute path's list (methods with one)
     Buffer m_draw;  ///< the quads' indirect draw, the small kernels' dispatch and their count
     Buffer m_counters;
+    /// A lit frame's light-space structure (made at the first lit frame).
+    std::unique_ptr<LightSpace> m_light;
 
     /// The frame prepared last.
     struct Frame {

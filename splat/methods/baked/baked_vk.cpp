@@ -524,11 +524,9 @@ void BakedRenderer::litParams(const noise::Shading& shading, SpotBakedParams& pa
     glm::vec3 primary(0.0f), secondary(0.0f);
     for (const noise::Lobe& l : kernel.lobes)
         if (l.shading.model == model) {
-            const auto h = [](const noise::Highlight& x) {
-                return glm::vec3(glm::radians(x.shiftDeg), glm::radians(x.widthDeg), x.strength);
-            };
-            primary += h(l.shading.primary) / float(count(model));
-            secondary += h(l.shading.secondary) / float(count(model));
+            const noise::LobeLitModel m = noise::lobeLitModel(l);
+            primary += glm::vec3(m.primary) / float(count(model));
+            secondary += glm::vec3(m.secondary) / float(count(model));
         }
     params.lit = glm::uvec4(std::uint32_t(shading.lights.size()), code,
                             std::uint32_t(count(model)) == kernel.lobes.size() ? 1u : 0u, 0u);

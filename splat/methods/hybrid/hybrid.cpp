@@ -54,7 +54,7 @@ public:
 
     void record(VkCommandBuffer cmd, PassTimer& timer) override {
         const bool atomics = atomic(m_frame.settings);
-        recordPrepareAndCompact(cmd);
+        recordPrepareAndCompact(cmd, timer);
         timer.mark(cmd, "prepare");
         recordMesh(cmd);
         timer.mark(cmd, "mesh");

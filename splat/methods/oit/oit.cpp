@@ -33,7 +33,7 @@ public:
           }) {}
 
     void record(VkCommandBuffer cmd, PassTimer& timer) override {
-        recordPrepareAndCompact(cmd);
+        recordPrepareAndCompact(cmd, timer);
         timer.mark(cmd, "prepare");
         recordMesh(cmd);
         timer.mark(cmd, "mesh");

@@ -929,12 +929,43 @@ void RaymarchRenderer::prepare(const View& view, const ImpulseSet& impulses,
     p.size = glm::vec4(glm::vec2(f.meshFrame.size), 0.0f, 0.0f);
     p.light = glm::vec4(view.shading.lightDir, view.shading.ambient);
     p.range = glm::uvec4(0u, 0u, steps, n);
+    f.lit = view.shading.mode == noise::Shading::Mode::Lit;
+    f.impulses = impulses;
+    if (f.lit) {
+        if (!m_light)
+            m_light = std::make_unique<LightSpace>(m_scene);
+        m_light->prepare(view.shading, impulses);
+        if (!m_prepareLit.handle())
+            m_prepareLit = makePreparePipeline(m_ctx, m_scene.lobeCount(), false, false, false,
+                                               true, false, true);
+        f.prepareFrame = makeSplatFrame(marchCamera, view.shading, view.baseColor,
+                                        impulses.capacity, m_scene.lobeCount(), m_scene.support(),
+                                        0, 0);
+    }
 }
 
 void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     using namespace passes;
     const Prepared& f = m_frame;
     const std::uint32_t width = m_width * m_n, height = m_height * m_n;
+
+    // A lit frame: the light-space structure, then every world lobe's lit colour (its geometry
+    // is the bins' own, unchanged).
+    if (f.lit && f.impulses.capacity > 0) {
+        m_light->record(cmd, timer);
+        memoryBarrier(cmd, kCompute, kStorageRead, kCompute, kStorageRW);
+        PrepareBuffers pb;
+        pb.impulses = f.impulses.impulses;
+        pb.count = f.impulses.count;
+        pb.lobes = &m_scene.lobes();
+        pb.worldLobes = &m_worldLobes;
+        pb.screenLobes = &m_prepareUnused;
+        pb.bounds = &m_prepareUnused;
+        pb.light = m_light.get();
+        recordPrepare(m_ctx, cmd, m_prepareLit, f.prepareFrame, pb, f.impulses.capacity);
+        memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute, kStorageRead);
+        timer.mark(cmd, "prepare");
+    }
 
     // The base mesh at the march's resolution.
     for (const Image* image : {&m_base, &m_distance})
@@ -943,7 +974,8 @@ void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
     transitionImage(cmd, m_depth.handle(), VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0, kTests,
                     kDepthRW);
-    m_scene.meshPass().record(cmd, f.meshFrame, m_base, m_distance, m_depth, f.background);
+    m_scene.meshPass().record(cmd, f.meshFrame, m_base, m_distance, m_depth, f.background, {},
+                              f.lit ? m_light.get() : nullptr);
     for (const Image* image : {&m_base, &m_distance})
         transitionImage(cmd, image->handle(), kColorAspect, kAttachment, kGeneral, kColorOut,
                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, kCompute | kTransfer,
@@ -1168,6 +1200,7 @@ MethodInfo raymarchMethod() {
     m.summary = "the baseline: each pixel's ray marched through the shell, the neighbouring "
                 "kernels summed at every step (paper eq. 7-9)";
     m.settings = {&settings::steps, &settings::supersample, &settings::lod};
+    m.rendersLit = true;
     m.make = [](const SceneGpu& scene) -> std::unique_ptr<Renderer> {
         return std::make_unique<RaymarchRenderer>(scene);
     };

@@ -95,6 +95,7 @@
 #include "splat/context_vk.h"
 #include "splat/method_vk.h"
 #include "splat/pass_vk.h"
+#include "splat/passes/light_space_vk.h"
 
 namespace spot::splat {
 
@@ -239,6 +240,10 @@ private:
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_prepare, m_bin;
+    /// A lit frame: its light-space structure and the prepare that lights the world lobes anew
+    /// each frame (the bins keep their geometry).
+    std::unique_ptr<LightSpace> m_light;
+    Pipeline m_prepareLit;
     std::map<std::tuple<bool, bool, bool, bool>, Pipelines> m_pipelines;
     bool m_countLoops = false, m_walkByHash = false;
     std::shared_ptr<Shell> m_shell;
@@ -271,6 +276,9 @@ private:
         noise::Camera camera;
         bool lambert = false, cull = true, count = false, walkBits = false;
         bool binned = false;
+        bool lit = false;
+        ImpulseSet impulses;
+        gpu_splat::SpotSplatFrame prepareFrame{};
     } m_frame;
 };
 

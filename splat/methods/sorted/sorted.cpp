@@ -35,7 +35,7 @@ public:
     }
 
     void record(VkCommandBuffer cmd, PassTimer& timer) override {
-        recordPrepareAndCompact(cmd);
+        recordPrepareAndCompact(cmd, timer);
         timer.mark(cmd, "prepare");
         recordSort(cmd);
         timer.mark(cmd, "sort");

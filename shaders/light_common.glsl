@@ -1,0 +1,237 @@
+// light_common.glsl: the light-space structure's GLSL side (spot_shadow.h): the lit frame's
+// parameters, the light-space coordinates of a view, the lookup of the transmittance from a point
+// towards a light, and a lobe's or the mesh's lit colour. Included after spot_shared.h,
+// spot_layout.h and spot_light.h.
+#include "spot_shadow.h"
+
+layout(std430, binding = kShadowBindParams) readonly buffer LitParamsBuffer { SpotLitParams lit; };
+layout(std430, binding = kShadowBindExtents) buffer ShadowExtents { SpotShadowExtent extents[]; };
+#ifdef SHADOW_LAYERS_WRITE
+layout(std430, binding = kShadowBindLayers) buffer ShadowLayers { uint layers[]; };
+layout(std430, binding = kShadowBindFirst) buffer ShadowFirst { uint firstDepth[]; };
+#else
+layout(std430, binding = kShadowBindLayers) readonly buffer ShadowLayers { uint layers[]; };
+layout(std430, binding = kShadowBindFirst) readonly buffer ShadowFirst { uint firstDepth[]; };
+#endif
+
+// The texel square of view v: lower corner (x, y) and texel size (z), in light-space units.
+vec3 shadowSquare(uint v) {
+    SpotShadowExtent e = extents[v];
+    vec2 lo = vec2(uintBitsToFloat(spotOrderedToBits(e.lo.x)), uintBitsToFloat(spotOrderedToBits(e.lo.y)));
+    vec2 hi = vec2(uintBitsToFloat(spotOrderedToBits(e.hi.x)), uintBitsToFloat(spotOrderedToBits(e.hi.y)));
+    return spotShadowSquare(lo, hi, lit.views[v].axisU.w);
+}
+
+// Light-space (x, y, s) of world point p in view v; `ok` false behind a perspective view's eye.
+vec3 shadowCoords(uint v, vec3 p, out bool ok) {
+    SpotShadowView view = lit.views[v];
+    ok = true;
+    if (view.origin.w < 0.5)
+        return vec3(dot(p, view.axisU.xyz), dot(p, view.axisW.xyz), dot(p, view.axisD.xyz));
+    vec3 q = p - view.origin.xyz;
+    float z = dot(q, view.axisD.xyz);
+    ok = z > 1e-6 * length(q);
+    float iz = ok ? 1.0 / z : 0.0;
+    return vec3(dot(q, view.axisU.xyz) * iz, dot(q, view.axisW.xyz) * iz, length(q));
+}
+
+// The ray of texel (i, j) of view v (square from shadowSquare): origin and unit direction, s
+// along it being the light-space s of its points.
+void shadowTexelRay(uint v, vec3 square, uint i, uint j, out vec3 o, out vec3 d) {
+    SpotShadowView view = lit.views[v];
+    vec2 xy = square.xy + (vec2(float(i), float(j)) + 0.5) * square.z;
+    if (view.origin.w < 0.5) {
+        o = xy.x * view.axisU.xyz + xy.y * view.axisW.xyz;
+        d = view.axisD.xyz;
+    } else {
+        o = view.origin.xyz;
+        d = normalize(view.axisD.xyz + xy.x * view.axisU.xyz + xy.y * view.axisW.xyz);
+    }
+}
+
+// The tile of texel (x, y) in a view of r texels a side.
+uint shadowTileOf(uint x, uint y, uint r) {
+    uint tiles = (r + kShadowTile - 1u) / kShadowTile;
+    return (y / kShadowTile) * tiles + x / kShadowTile;
+}
+
+#ifndef SHADOW_LAYERS_WRITE
+// Optical depth from the light to s along texel (x, y) = t of view v: the layers cumulative
+// below s's layer, and within it the layer's own part as a uniform step over its box (the
+// moments the deposit kept), so a point in front of an opaque lobe in the same layer is not
+// shadowed by it.
+float shadowTexelDepth(SpotShadowView view, uint x, uint y, uint t, float s) {
+    uint tile = shadowTileOf(x, y, view.offsets.w);
+    float first = uintBitsToFloat(spotOrderedToBits(firstDepth[view.offsets.y + tile]));
+    if (!(s > first))
+        return 0.0;
+    uint layerCount = uint(view.axisW.w);
+    float f = (s - first) / view.axisD.w;
+    uint base = view.offsets.x + t * layerCount * 3u;
+    if (f >= float(layerCount))
+        return uintBitsToFloat(layers[base + 3u * (layerCount - 1u)]);
+    uint k = uint(f);
+    float below = k == 0u ? 0.0 : uintBitsToFloat(layers[base + 3u * (k - 1u)]);
+    float above = uintBitsToFloat(layers[base + 3u * k]);
+    vec2 box = unpackUnorm2x16(layers[base + 3u * k + 1u]);
+    float u = f - float(k);
+    float step = box.y > box.x ? clamp((u - box.x) / (box.y - box.x), 0.0, 1.0) : (u >= box.x ? 1.0 : 0.0);
+    return mix(below, above, step);
+}
+
+// Transmittance from world point p towards view v's light: the kernels' optical depth and the
+// mesh, bilinear over the four nearest texels (one outside the map has nothing in front). The
+// mesh hides p where its depth is nearer than p's by more than `biasTexels` texels (a texel's
+// world size at p), which keeps a surface from shadowing itself.
+float shadowTransmittance(uint v, vec3 p, float biasTexels) {
+    bool ok;
+    vec3 c = shadowCoords(v, p, ok);
+    if (!ok)
+        return 1.0;
+    SpotShadowView view = lit.views[v];
+    vec3 square = shadowSquare(v);
+    uint r = view.offsets.w;
+    float bias = biasTexels * square.z * (view.origin.w < 0.5 ? 1.0 : c.z);
+    vec2 f = (c.xy - square.xy) / square.z - 0.5;
+    vec2 fl = floor(f);
+    vec2 w = f - fl;
+    float sum = 0.0;
+    for (int dy = 0; dy < 2; ++dy) {
+        for (int dx = 0; dx < 2; ++dx) {
+            ivec2 t = ivec2(fl) + ivec2(dx, dy);
+            float weight = (dx == 0 ? 1.0 - w.x : w.x) * (dy == 0 ? 1.0 - w.y : w.y);
+            if (t.x < 0 || t.y < 0 || t.x >= int(r) || t.y >= int(r)) {
+                sum += weight;
+                continue;
+            }
+            uint texel = uint(t.y) * r + uint(t.x);
+            float mesh = uintBitsToFloat(spotOrderedToBits(firstDepth[view.offsets.z + texel]));
+            if (c.z - bias > mesh)
+                continue; // the mesh lies between
+            sum += weight * exp(-shadowTexelDepth(view, uint(t.x), uint(t.y), texel, c.z));
+        }
+    }
+    return sum;
+}
+
+// How much of a lobe's own light it lets the eye see: what it emits towards the eye, weighted
+// by exp(-its own optical depth towards l) at the emitting point, over what it emits. Lobe space
+// makes the lobe a unit Gaussian; the eye's rays cross it at offsets r from its centre, on three
+// rings (r = 0.5, 1.25, 2 sigmas, each standing for its annulus) at four angles from the side the
+// light comes from; along each, 2 points that split what the ray sees it emit into equal shares.
+// `rings`: how many of the three rings (fewer is cheaper; 0 for the ray through the centre
+// alone).
+// An opaque strand shows its lit side to an eye beside the light and mostly its thin, less
+// shadowed fringe to an eye across from it. v: towards the eye; k: the support.
+float litSelfShadow(mat3 A, float amp, float k, vec3 v, vec3 l, uint rings) {
+    vec3 dv = -(A * v); // the view rays' direction in lobe space
+    vec3 dl = A * l;
+    float vv = dot(dv, dv);
+    if (!(vv > 0.0) || !(amp > 0.0))
+        return 1.0;
+    vec3 n = dv * inversesqrt(vv);
+    vec3 p = dl - dot(dl, n) * n; // across the rays, towards the light
+    if (!(dot(p, p) > 1e-12 * max(dot(dl, dl), 1e-30)))
+        p = abs(n.x) < 0.9 ? cross(n, vec3(1.0, 0.0, 0.0)) : cross(n, vec3(0.0, 1.0, 0.0));
+    p = normalize(p);
+    vec3 q = cross(n, p);
+    const float radii[4] = float[4](0.0, 0.5, 1.25, 2.0);
+    // annuli [0, .9], [.9, 1.6], [1.6, 2.5] / pi, a quarter each way; the centre alone: 1
+    const float areas[4] = float[4](1.0, 0.2025, 0.4375, 0.9225);
+    float seen = 0.0;
+    float lit = 0.0;
+    float tPeak;
+    for (uint ring = rings > 0u ? 1u : 0u; ring <= rings; ++ring) {
+        for (uint a = 0u; a < (ring == 0u ? 1u : 4u); ++a) {
+            vec3 offset = radii[ring] * (a == 0u ? p : a == 1u ? q : a == 2u ? -p : -q);
+            float tau = amp * spotLobeDepth(offset, dv, -1e30, 1e30, k, tPeak);
+            float emitted = areas[ring] * spotOneMinusExp(tau);
+            if (!(emitted > 0.0))
+                continue;
+            float own = 0.0;
+            for (uint i = 0u; i < 2u; ++i) {
+                float f = spotEmissionQuantileFraction(tau, (float(i) + 0.5) * 0.5);
+                float t = spotLobeDepthQuantile(offset, dv, -1e30, 1e30, k, f);
+                own += 0.5 * exp(-amp * spotLobeDepth(offset + t * dv, dl, 0.0, 1e30, k, tPeak));
+            }
+            seen += emitted;
+            lit += emitted * own;
+        }
+    }
+    return seen > 0.0 ? lit / seen : 1.0;
+}
+
+// Transmittance from a lobe towards view v's light (direction l): the structure's where the
+// light's ray through its centre enters its support (what lies between the lobe and the light),
+// times the lobe's own as the eye sees it (litSelfShadow).
+float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l,
+                           uint rings) {
+    float enter = 1.1 * k / max(length(A * l), 1e-30);
+    return shadowTransmittance(v, c + enter * l, 1.0) * litSelfShadow(A, amp, k, eye, l, rings);
+}
+
+// A lobe's lit colour (docs/design.md, "Lighting on the GPU"): every light through its model
+// and the sky's directions through its diffuse part, each shadowed (litLobeTransmittance).
+// (A, c, amp: the lobe placed, unwidened; k: the support; v: towards the eye.)
+vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec3 v, vec3 color,
+                  vec3 primary, vec3 secondary) {
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < lit.counts.x; ++i) {
+        SpotLitLight light = lit.lights[i];
+        vec3 radiance = light.radiance.rgb;
+        vec3 l = light.where.xyz;
+        if (light.where.w > 0.5) {
+            vec3 q = light.where.xyz - c;
+            float d = length(q);
+            l = d > 0.0 ? q / d : vec3(0.0, 1.0, 0.0);
+            radiance *= spotPointFalloff(1.0, d);
+        }
+        uint view = uint(light.radiance.w);
+        if (view > 0u)
+            radiance *= litLobeTransmittance(view - 1u, A, c, amp, k, v, l, 3u);
+        sum += radiance * spotLobeShade(model, axis, l, v, color, primary, secondary);
+    }
+    for (uint j = 0u; j < lit.counts.y; ++j) {
+        vec3 w = lit.skyDirs[j].xyz;
+        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w, 0u);
+        sum += (t * spotLobeDiffuse(model, axis, w, v)) * lit.sky.rgb * color;
+    }
+    return sum;
+}
+
+// What arrives at p from light i: its direction l (towards the light) and radiance, shadowed.
+vec3 litArrival(uint i, vec3 p, float biasTexels, out vec3 l) {
+    SpotLitLight light = lit.lights[i];
+    vec3 radiance = light.radiance.rgb;
+    if (light.where.w > 0.5) {
+        vec3 q = light.where.xyz - p;
+        float d = length(q);
+        l = d > 0.0 ? q / d : vec3(0.0, 1.0, 0.0);
+        radiance *= spotPointFalloff(1.0, d);
+    } else {
+        l = light.where.xyz;
+    }
+    uint view = uint(light.radiance.w);
+    if (view > 0u)
+        radiance *= shadowTransmittance(view - 1u, p, biasTexels);
+    return radiance;
+}
+
+// The base mesh's lit colour at p with unit normal n facing the eye: diffuse, every light and
+// the sky, shadowed (the mesh's own depth biased by 2 texels).
+vec3 litSurfaceColor(vec3 p, vec3 n, vec3 base) {
+    vec3 sum = vec3(0.0);
+    vec3 q = p;
+    for (uint i = 0u; i < lit.counts.x; ++i) {
+        vec3 l;
+        vec3 radiance = litArrival(i, q, 2.0, l);
+        sum += radiance * max(0.0, dot(n, l));
+    }
+    for (uint k = 0u; k < lit.counts.y; ++k) {
+        vec3 w = lit.skyDirs[k].xyz;
+        float t = shadowTransmittance(uint(lit.skyDirs[k].w), q, 2.0);
+        sum += (t * max(0.0, dot(n, w))) * lit.sky.rgb;
+    }
+    return sum * base;
+}
+#endif
