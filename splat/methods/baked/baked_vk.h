@@ -47,9 +47,11 @@
 /// frame above the budget (kBakedLoopBudget by default).
 ///
 /// Lit scenes (docs/design.md section 5): the bake's shading grids (noise/bake.h) as shading
-/// bricks after the density bricks, each sample shaded by spot_light.h's models for every light
-/// and the sky with shadow marches through the bake's coarsest level, and the mesh where a walk
-/// reaches it shaded diffuse (baked_march.comp).
+/// bricks in buffers of their own (density brick b's at the same place), each sample shaded by
+/// spot_light.h's models for every light and the sky, with shadow marches through the bake (a
+/// light's at the samples' level, the sky's at the coarsest) stopped by the mesh's solid (its
+/// inside voxelized on the host), and the mesh shaded diffuse where a walk reaches it
+/// (baked_march.comp's BAKED_LIT modules).
 ///
 /// Limits: perspective cameras, unlit and lit shading (not Lambert: no normals); a passage
 /// longer than the per-layer caps, or a walk stopped by a degenerate tetrahedron, leaves the
