@@ -45,6 +45,9 @@ int info(int argc, char** argv) {
         for (int l = 0; l < bake.levels(); ++l)
             std::printf("  level %d    voxel %g, %llu voxels\n", l, double(bake.voxelSize(l)),
                         static_cast<unsigned long long>(bake.activeCount(l)));
+        std::printf("  shading    %s\n",
+                    bake.hasShading() ? "tangent, normal (lit scenes render)"
+                                      : "none (an older bake: unlit scenes only; bake it again)");
         std::printf("  distance   %llu voxels (level-0 voxels, capped at %g)\n",
                     static_cast<unsigned long long>(bake.distanceCount()),
                     double(noise::kBakeDistanceCap));

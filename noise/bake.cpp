@@ -42,12 +42,12 @@ namespace {
 using FloatGrid = openvdb::FloatGrid;
 using Vec3Grid = openvdb::Vec3SGrid;
 
-/// Bytes per non-empty voxel: level 0's density and colour (16), the per-cell list that carries
-/// it from a worker into the trees (28), the coarser levels (at most 16/7 more) and slack for
-/// OpenVDB's partly filled leaves.
-constexpr std::uint64_t kBytesPerVoxel = 56;
-/// Bytes of a level-0 grid's voxel: density and colour.
-constexpr std::uint64_t kBytesPerGridVoxel = 16;
+/// Bytes per non-empty voxel: level 0's density, colour, tangent and normal (40), the per-cell
+/// list that carries it from a worker into the trees (52), the coarser levels (at most 40/7 more)
+/// and slack for OpenVDB's partly filled leaves.
+constexpr std::uint64_t kBytesPerVoxel = 104;
+/// Bytes of a level-0 grid's voxel: density, colour, tangent and normal.
+constexpr std::uint64_t kBytesPerGridVoxel = 40;
 /// Bytes per voxel of the distance grid: its float and the bit masks of the dilation.
 constexpr std::uint64_t kBytesPerDistanceVoxel = 6;
 
@@ -110,6 +110,8 @@ struct BakeLobe {
     glm::dmat3 toLobe;
     double extinction;
     glm::dvec3 color;
+    glm::dvec3 tangent; ///< a strand lobe's (placedShadingAxis), else 0
+    glm::dvec3 normal;  ///< a flake lobe's, else 0
     glm::dvec3 lo, hi;
 };
 
@@ -118,6 +120,7 @@ struct BakedVoxel {
     glm::ivec3 ijk;
     float density;
     glm::vec3 color;
+    glm::vec3 tangent, normal; ///< the shading grids' (bake.h)
 };
 
 template <typename GridT>
@@ -133,11 +136,14 @@ void tagGrid(GridT& grid, const std::string& name, int level, int levels, double
     grid.insertMeta("spotshell_version", openvdb::StringMetadata(version));
 }
 
-/// The coarser level of (density, colour): the mean extinction of the 2x2x2 children (empty
-/// ones count 0) and their extinction-weighted mean colour. Deterministic: coarse voxels are
-/// listed in tree order, each sums its children in a fixed order.
-void downsample(const FloatGrid& fineDensity, const Vec3Grid& fineColor, FloatGrid& density,
-                Vec3Grid& color) {
+/// The coarser level of (density, colour and the vector grids `fineVectors`, the shading
+/// grids): the mean extinction of the 2x2x2 children (empty ones count 0) and their
+/// extinction-weighted mean colour and vectors (a vector grid stores only non-zero ones).
+/// Deterministic: coarse voxels are listed in tree order, each sums its children in a fixed
+/// order.
+void downsample(const FloatGrid& fineDensity, const Vec3Grid& fineColor,
+                const std::vector<const Vec3Grid*>& fineVectors, FloatGrid& density,
+                Vec3Grid& color, const std::vector<Vec3Grid*>& vectors) {
     openvdb::BoolTree parents(false);
     {
         openvdb::tree::ValueAccessor<openvdb::BoolTree> acc(parents);
@@ -150,17 +156,24 @@ void downsample(const FloatGrid& fineDensity, const Vec3Grid& fineColor, FloatGr
     coords.reserve(std::size_t(parents.activeVoxelCount()));
     for (auto it = parents.cbeginValueOn(); it; ++it)
         coords.push_back(it.getCoord());
+    const std::size_t nv = fineVectors.size();
     std::vector<float> sigma(coords.size());
     std::vector<openvdb::Vec3s> rgb(coords.size());
+    std::vector<openvdb::Vec3s> vec(coords.size() * nv);
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, coords.size(), 4096),
         [&](const tbb::blocked_range<std::size_t>& range) {
             auto dAcc = fineDensity.getConstAccessor();
             auto cAcc = fineColor.getConstAccessor();
+            std::vector<Vec3Grid::ConstAccessor> vAcc;
+            for (const Vec3Grid* g : fineVectors)
+                vAcc.push_back(g->getConstAccessor());
+            std::vector<openvdb::Vec3d> weightedVectors(nv);
             for (std::size_t n = range.begin(); n != range.end(); ++n) {
                 const openvdb::Coord base(coords[n].x() * 2, coords[n].y() * 2, coords[n].z() * 2);
                 double sum = 0.0;
                 openvdb::Vec3d weighted(0.0);
+                std::fill(weightedVectors.begin(), weightedVectors.end(), openvdb::Vec3d(0.0));
                 for (int dz = 0; dz < 2; ++dz)
                     for (int dy = 0; dy < 2; ++dy)
                         for (int dx = 0; dx < 2; ++dx) {
@@ -170,18 +183,29 @@ void downsample(const FloatGrid& fineDensity, const Vec3Grid& fineColor, FloatGr
                             const double s = double(dAcc.getValue(c));
                             sum += s;
                             weighted += s * openvdb::Vec3d(cAcc.getValue(c));
+                            for (std::size_t v = 0; v < nv; ++v)
+                                weightedVectors[v] += s * openvdb::Vec3d(vAcc[v].getValue(c));
                         }
                 sigma[n] = float(sum / 8.0);
                 rgb[n] = sum > 0.0 ? openvdb::Vec3s(weighted / sum) : openvdb::Vec3s(0.0f);
+                for (std::size_t v = 0; v < nv; ++v)
+                    vec[n * nv + v] =
+                        sum > 0.0 ? openvdb::Vec3s(weightedVectors[v] / sum) : openvdb::Vec3s(0.0f);
             }
         });
     auto dOut = density.getAccessor();
     auto cOut = color.getAccessor();
+    std::vector<Vec3Grid::Accessor> vOut;
+    for (Vec3Grid* g : vectors)
+        vOut.push_back(g->getAccessor());
     for (std::size_t n = 0; n < coords.size(); ++n) {
         if (!(sigma[n] > 0.0f))
             continue;
         dOut.setValueOn(coords[n], sigma[n]);
         cOut.setValueOn(coords[n], rgb[n]);
+        for (std::size_t v = 0; v < nv; ++v)
+            if (vec[n * nv + v] != openvdb::Vec3s(0.0f))
+                vOut[v].setValueOn(coords[n], vec[n * nv + v]);
     }
 }
 
@@ -256,11 +280,19 @@ std::string bakedDensityName(int level) {
 std::string bakedColorName(int level) {
     return level == 0 ? "color" : cat("color_lod", level);
 }
+std::string bakedTangentName(int level) {
+    return level == 0 ? "tangent" : cat("tangent_lod", level);
+}
+std::string bakedNormalName(int level) {
+    return level == 0 ? "normal" : cat("normal_lod", level);
+}
 
 struct BakedVolume::Impl {
     double voxel0 = 1.0;
     std::vector<FloatGrid::Ptr> density;
     std::vector<Vec3Grid::Ptr> color;
+    /// The shading grids per level (bake.h); empty in a bake written before them.
+    std::vector<Vec3Grid::Ptr> tangent, normal;
     FloatGrid::Ptr distance;
     std::uint64_t presetHash = 0;
     std::string presetName;
@@ -297,6 +329,23 @@ glm::vec3 BakedVolume::color(int level, glm::ivec3 ijk) const {
     const openvdb::Vec3s c = m_impl->color[std::size_t(level)]->tree().getValue(coord(ijk));
     return glm::vec3(c.x(), c.y(), c.z());
 }
+bool BakedVolume::hasShading() const {
+    return !m_impl->tangent.empty();
+}
+glm::vec3 BakedVolume::tangent(int level, glm::ivec3 ijk) const {
+    m_impl->checkLevel(level);
+    if (!hasShading())
+        return glm::vec3(0.0f);
+    const openvdb::Vec3s v = m_impl->tangent[std::size_t(level)]->tree().getValue(coord(ijk));
+    return glm::vec3(v.x(), v.y(), v.z());
+}
+glm::vec3 BakedVolume::normal(int level, glm::ivec3 ijk) const {
+    m_impl->checkLevel(level);
+    if (!hasShading())
+        return glm::vec3(0.0f);
+    const openvdb::Vec3s v = m_impl->normal[std::size_t(level)]->tree().getValue(coord(ijk));
+    return glm::vec3(v.x(), v.y(), v.z());
+}
 float BakedVolume::distance(glm::ivec3 ijk) const {
     return m_impl->distance->tree().getValue(coord(ijk));
 }
@@ -314,6 +363,21 @@ void BakedVolume::forEachActive(int level,
     for (auto it = m_impl->density[std::size_t(level)]->tree().cbeginValueOn(); it; ++it) {
         const openvdb::Vec3s c = cAcc.getValue(it.getCoord());
         f(ivec(it.getCoord()), *it, glm::vec3(c.x(), c.y(), c.z()));
+    }
+}
+void BakedVolume::forEachActiveShaded(
+    int level,
+    const std::function<void(glm::ivec3, float, glm::vec3, glm::vec3, glm::vec3)>& f) const {
+    m_impl->checkLevel(level);
+    const auto l = std::size_t(level);
+    const auto cAcc = m_impl->color[l]->getConstAccessor();
+    const Vec3Grid::Ptr none = Vec3Grid::create(openvdb::Vec3s(0.0f));
+    const auto tAcc = (hasShading() ? m_impl->tangent[l] : none)->getConstAccessor();
+    const auto nAcc = (hasShading() ? m_impl->normal[l] : none)->getConstAccessor();
+    const auto v3 = [](const openvdb::Vec3s& v) { return glm::vec3(v.x(), v.y(), v.z()); };
+    for (auto it = m_impl->density[l]->tree().cbeginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        f(ivec(c), *it, v3(cAcc.getValue(c)), v3(tAcc.getValue(c)), v3(nAcc.getValue(c)));
     }
 }
 void BakedVolume::activeBounds(int level, glm::ivec3& lo, glm::ivec3& hi) const {
@@ -340,6 +404,9 @@ std::uint64_t BakedVolume::memoryBytes() const {
     for (int l = 0; l < levels(); ++l)
         bytes +=
             m_impl->density[std::size_t(l)]->memUsage() + m_impl->color[std::size_t(l)]->memUsage();
+    for (const auto* grids : {&m_impl->tangent, &m_impl->normal})
+        for (const Vec3Grid::Ptr& g : *grids)
+            bytes += g->memUsage();
     return bytes;
 }
 
@@ -376,7 +443,7 @@ BakeEstimate estimateBake(const SurfaceCells& cells, const BakeOptions& options)
     const std::uint64_t threads =
         std::uint64_t(std::max(1, tbb::this_task_arena::max_concurrency()));
     e.scratchBytes =
-        threads * std::uint64_t(perAxis * perAxis * perAxis) * (sizeof(double) * 4 + 1);
+        threads * std::uint64_t(perAxis * perAxis * perAxis) * (sizeof(double) * 10 + 1);
     e.bytes = e.shellVoxels * kBytesPerVoxel + e.scratchBytes;
     return e;
 }
@@ -433,8 +500,16 @@ std::vector<BakeLobe> placeBakeLobes(const Kernel& kernel, const std::vector<Imp
                 half[a] = k * glm::length(glm::dvec3(toWorld[0][a], toWorld[1][a], toWorld[2][a]));
             if (!(w.extinction > 0.0) || !std::isfinite(half.x + half.y + half.z))
                 continue;
-            out = {w.centre,        w.toLobe,       w.extinction, glm::dvec3(w.color),
-                   w.centre - half, w.centre + half};
+            const glm::dvec3 axis = placedShadingAxis(kernel, int(l), imp, w);
+            const bool strand = kernel.lobes[l].shading.model == LobeShading::Model::Strand;
+            out = {w.centre,
+                   w.toLobe,
+                   w.extinction,
+                   glm::dvec3(w.color),
+                   strand ? axis : glm::dvec3(0.0),
+                   strand ? glm::dvec3(0.0) : axis,
+                   w.centre - half,
+                   w.centre + half};
         }
     });
     return lobes;
@@ -566,7 +641,7 @@ std::vector<std::vector<BakedVoxel>> evaluateLevel0(const ShellVoxels& voxels, d
     evaluated.assign(voxels.size(), 0);
     struct Scratch {
         std::vector<double> sigma;
-        std::vector<glm::dvec3> weighted;
+        std::vector<glm::dvec3> weighted, tangent, normal;
     };
     tbb::enumerable_thread_specific<Scratch> scratch;
     tbb::parallel_for(std::size_t(0), voxels.size(), [&](std::size_t s) {
@@ -577,6 +652,8 @@ std::vector<std::vector<BakedVoxel>> evaluateLevel0(const ShellVoxels& voxels, d
             Scratch& sc = scratch.local();
             sc.sigma.assign(count, 0.0);
             sc.weighted.assign(count, glm::dvec3(0.0));
+            sc.tangent.assign(count, glm::dvec3(0.0));
+            sc.normal.assign(count, glm::dvec3(0.0));
             voxels.forLobeVoxels(s, lo, end,
                                  [&](const BakeLobe& lobe, std::size_t at, glm::dvec3 u) {
                                      const double g = sh::spotLobeDensity(u, k);
@@ -585,6 +662,8 @@ std::vector<std::vector<BakedVoxel>> evaluateLevel0(const ShellVoxels& voxels, d
                                      const double sigma = lobe.extinction * g;
                                      sc.sigma[at] += sigma;
                                      sc.weighted[at] += sigma * lobe.color;
+                                     sc.tangent[at] += sigma * lobe.tangent;
+                                     sc.normal[at] += sigma * lobe.normal;
                                  });
             perCell[s].reserve(std::size_t(nonEmpty[s]));
             std::vector<BakedVoxel>& out = perCell[s];
@@ -599,7 +678,9 @@ std::vector<std::vector<BakedVoxel>> evaluateLevel0(const ShellVoxels& voxels, d
                         if (!(sigma > 0.0f))
                             continue;
                         out.push_back({lo + glm::ivec3(x, y, z), sigma,
-                                       glm::vec3(sc.weighted[at] / sc.sigma[at])});
+                                       glm::vec3(sc.weighted[at] / sc.sigma[at]),
+                                       glm::vec3(sc.tangent[at] / sc.sigma[at]),
+                                       glm::vec3(sc.normal[at] / sc.sigma[at])});
                     }
             evaluated[s] = count;
         }
@@ -620,25 +701,43 @@ std::unique_ptr<BakedVolume::Impl> buildGrids(std::vector<std::vector<BakedVoxel
     impl->meshHash = options.meshHash;
     FloatGrid::Ptr density0 = FloatGrid::create(0.0f);
     Vec3Grid::Ptr color0 = Vec3Grid::create(openvdb::Vec3s(0.0f));
+    Vec3Grid::Ptr tangent0 = Vec3Grid::create(openvdb::Vec3s(0.0f));
+    Vec3Grid::Ptr normal0 = Vec3Grid::create(openvdb::Vec3s(0.0f));
     {
         auto dAcc = density0->getAccessor();
         auto cAcc = color0->getAccessor();
+        auto tAcc = tangent0->getAccessor();
+        auto nAcc = normal0->getAccessor();
         for (std::vector<BakedVoxel>& list : perCell) {
             for (const BakedVoxel& b : list) {
                 dAcc.setValueOn(coord(b.ijk), b.density);
                 cAcc.setValueOn(coord(b.ijk), openvdb::Vec3s(b.color.x, b.color.y, b.color.z));
+                if (b.tangent != glm::vec3(0.0f))
+                    tAcc.setValueOn(coord(b.ijk),
+                                    openvdb::Vec3s(b.tangent.x, b.tangent.y, b.tangent.z));
+                if (b.normal != glm::vec3(0.0f))
+                    nAcc.setValueOn(coord(b.ijk),
+                                    openvdb::Vec3s(b.normal.x, b.normal.y, b.normal.z));
             }
             std::vector<BakedVoxel>().swap(list);
         }
     }
     impl->density.push_back(density0);
     impl->color.push_back(color0);
+    impl->tangent.push_back(tangent0);
+    impl->normal.push_back(normal0);
     for (int level = 1; level < options.levels; ++level) {
         FloatGrid::Ptr d = FloatGrid::create(0.0f);
         Vec3Grid::Ptr c = Vec3Grid::create(openvdb::Vec3s(0.0f));
-        downsample(*impl->density.back(), *impl->color.back(), *d, *c);
+        Vec3Grid::Ptr t = Vec3Grid::create(openvdb::Vec3s(0.0f));
+        Vec3Grid::Ptr n = Vec3Grid::create(openvdb::Vec3s(0.0f));
+        downsample(*impl->density.back(), *impl->color.back(),
+                   {impl->tangent.back().get(), impl->normal.back().get()}, *d, *c,
+                   {t.get(), n.get()});
         impl->density.push_back(d);
         impl->color.push_back(c);
+        impl->tangent.push_back(t);
+        impl->normal.push_back(n);
     }
     impl->distance = distanceGrid(*density0);
 
@@ -650,6 +749,18 @@ std::unique_ptr<BakedVolume::Impl> buildGrids(std::vector<std::vector<BakedVoxel
         impl->density[std::size_t(level)]->setGridClass(openvdb::GRID_FOG_VOLUME);
         tagGrid(*impl->color[std::size_t(level)], bakedColorName(level), level, levels, vl,
                 impl->presetHash, impl->presetName, impl->version);
+        tagGrid(*impl->tangent[std::size_t(level)], bakedTangentName(level), level, levels, vl,
+                impl->presetHash, impl->presetName, impl->version);
+        tagGrid(*impl->normal[std::size_t(level)], bakedNormalName(level), level, levels, vl,
+                impl->presetHash, impl->presetName, impl->version);
+        impl->tangent[std::size_t(level)]->insertMeta(
+            "spotshell_meaning",
+            openvdb::StringMetadata("sum over strand lobes of extinction x unit tangent (world, "
+                                    "root to tip) / the voxel's extinction"));
+        impl->normal[std::size_t(level)]->insertMeta(
+            "spotshell_meaning",
+            openvdb::StringMetadata("sum over flake lobes of extinction x unit normal (world, "
+                                    "the surface's side) / the voxel's extinction"));
     }
     tagGrid(*impl->distance, kBakedDistanceName, 0, levels, v, impl->presetHash, impl->presetName,
             impl->version);
@@ -658,6 +769,8 @@ std::unique_ptr<BakedVolume::Impl> buildGrids(std::vector<std::vector<BakedVoxel
         for (int level = 0; level < levels; ++level) {
             impl->density[std::size_t(level)]->insertMeta("spotshell_mesh_hash", hash);
             impl->color[std::size_t(level)]->insertMeta("spotshell_mesh_hash", hash);
+            impl->tangent[std::size_t(level)]->insertMeta("spotshell_mesh_hash", hash);
+            impl->normal[std::size_t(level)]->insertMeta("spotshell_mesh_hash", hash);
         }
         impl->distance->insertMeta("spotshell_mesh_hash", hash);
     }
@@ -763,6 +876,10 @@ void writeBakedGrids(const std::filesystem::path& file, const BakedVolume& volum
     for (int level = 0; level < m.levels(); ++level) {
         grids.push_back(m.density[std::size_t(level)]);
         grids.push_back(m.color[std::size_t(level)]);
+    }
+    for (int level = 0; level < int(m.tangent.size()); ++level) {
+        grids.push_back(m.tangent[std::size_t(level)]);
+        grids.push_back(m.normal[std::size_t(level)]);
     }
     grids.push_back(m.distance);
     openvdb::MetaMap meta;
@@ -986,6 +1103,15 @@ BakedVolume readBakedGrids(const std::filesystem::path& file) {
             impl->color.push_back(
                 readBakedGrid<Vec3Grid>(in, file, names, bakedColorName(level), vl));
         }
+        // The shading grids: all or none (a bake written before them has none).
+        if (std::find(names.begin(), names.end(), bakedTangentName(0)) != names.end())
+            for (int level = 0; level < levels; ++level) {
+                const double vl = levelVoxel(voxel, level);
+                impl->tangent.push_back(
+                    readBakedGrid<Vec3Grid>(in, file, names, bakedTangentName(level), vl));
+                impl->normal.push_back(
+                    readBakedGrid<Vec3Grid>(in, file, names, bakedNormalName(level), vl));
+            }
         impl->distance = readBakedGrid<FloatGrid>(in, file, names, kBakedDistanceName, voxel);
         in.close();
     } catch (const InputError&) {

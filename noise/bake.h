@@ -19,6 +19,14 @@
 /// ray from anywhere in a voxel of distance d may advance (d - 1) voxel widths without entering a
 /// non-empty voxel's box.
 ///
+/// The shading grids (lit scenes, docs/design.md "Lighting"), per level: `tangent`, the strand
+/// lobes' tangents (placedShadingAxis: unit, world space, root to tip) summed weighted by their
+/// extinction over the voxel's whole extinction, sum_strand sigma_i t_i / sum_all sigma_i, and
+/// `normal`, the same over the flake lobes' normals (turned to their surface's side). A voxel
+/// of one strand holds its unit tangent; strands that cross, or lobes of other models, shorten
+/// it. Coarser levels take their children's extinction-weighted mean, as the colour does. Only
+/// non-zero vectors are stored (a bake of strands has an empty `normal` grid).
+///
 /// OpenVDB's headers stay inside bake.cpp.
 #pragma once
 
@@ -117,6 +125,13 @@ public:
     float density(int level, glm::ivec3 ijk) const;
     /// Colour of voxel `ijk` of `level`, linear RGB (black when empty).
     glm::vec3 color(int level, glm::ivec3 ijk) const;
+    /// Whether the bake holds the shading grids (tangent, normal); a bake written before them
+    /// does not, and renders unlit scenes only.
+    bool hasShading() const;
+    /// The shading grids' vectors at voxel `ijk` of `level` (zero when not stored, or without
+    /// shading grids): the strand tangent and the flake normal, weighted as the file comment says.
+    glm::vec3 tangent(int level, glm::ivec3 ijk) const;
+    glm::vec3 normal(int level, glm::ivec3 ijk) const;
     /// Distance of level-0 voxel `ijk` to the nearest non-empty one, level-0 voxels, capped.
     float distance(glm::ivec3 ijk) const;
     /// Non-empty voxels of `level`.
@@ -125,6 +140,11 @@ public:
     /// Calls `f` on every non-empty voxel of `level` in OpenVDB's tree order (deterministic for
     /// the grids' content).
     void forEachActive(int level, const std::function<void(glm::ivec3, float, glm::vec3)>& f) const;
+    /// forEachActive with the shading grids' vectors at each voxel (tangent, then normal; zero
+    /// without shading grids).
+    void forEachActiveShaded(
+        int level,
+        const std::function<void(glm::ivec3, float, glm::vec3, glm::vec3, glm::vec3)>& f) const;
     /// The bounds, in voxels of `level`, of its non-empty voxels (lo > hi when there are none).
     void activeBounds(int level, glm::ivec3& lo, glm::ivec3& hi) const;
     std::uint64_t presetHash() const;
@@ -173,10 +193,13 @@ BakedVolume bakeNoise(const ImpulseGenerator& generator, const BakeOptions& opti
                       const std::function<void(long, long)>& progress = {},
                       BakeStats* stats = nullptr);
 
-/// Grid names in a bake file: "density", "color" for level 0, "density_lod1", "color_lod1", ...
-/// for the coarser ones, and "distance".
+/// Grid names in a bake file: "density", "color", "tangent", "normal" for level 0,
+/// "density_lod1", "color_lod1", "tangent_lod1", "normal_lod1", ... for the coarser ones, and
+/// "distance".
 std::string bakedDensityName(int level);
 std::string bakedColorName(int level);
+std::string bakedTangentName(int level);
+std::string bakedNormalName(int level);
 inline constexpr const char* kBakedDistanceName = "distance";
 
 /// Write `volume` to `file` (one OpenVDB file) atomically: a temporary file in the same folder,
@@ -193,7 +216,8 @@ void writeBakedGrids(const std::filesystem::path& file, const BakedVolume& volum
 /// transform or voxel size that does not match the level; NaN or infinite values. Each grid's
 /// byte range (its descriptor's offsets) is checked against the file's size before OpenVDB
 /// reads it (requireVdbGridsInFile). A file without spotshell_mesh_hash (older) reads without
-/// one (meshHash() empty).
+/// one (meshHash() empty); a file without a "tangent" grid (older) reads without shading grids
+/// (hasShading() false); one with it must hold every level's tangent and normal grids.
 BakedVolume readBakedGrids(const std::filesystem::path& file);
 
 /// Reads the grid descriptors of the .vdb `file` (as openvdb::io::File::open does) and throws

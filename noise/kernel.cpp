@@ -111,4 +111,19 @@ LobeLitModel lobeLitModel(const Lobe& lobe) {
     return m;
 }
 
+glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse& impulse,
+                             const WorldLobe& placed) {
+    namespace sh = shared::f64;
+    const Lobe& lobe = kernel.lobes.at(static_cast<std::size_t>(lobeIndex));
+    const LobeLitModel m = lobeLitModel(lobe);
+    if (m.model == sh::kSpotShadeStrand)
+        return sh::spotPlacedAxis(m.tangent, glm::dvec3(lobe.centre), glm::dmat3(impulse.frame),
+                                  glm::dvec3(impulse.scale), double(impulse.bend));
+    if (m.model == sh::kSpotShadeFlake) {
+        const glm::dvec3 n = sh::spotPlacedNormal(placed.toLobe, m.shortest);
+        return glm::dot(n, glm::dvec3(impulse.normal)) < 0.0 ? -n : n;
+    }
+    return glm::dvec3(0.0);
+}
+
 } // namespace spot::noise

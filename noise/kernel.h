@@ -67,5 +67,13 @@ struct LobeLitModel {
     glm::dvec3 primary{0.0}, secondary{0.0};
 };
 LobeLitModel lobeLitModel(const Lobe& lobe);
+/// Lit shading's axis of lobe `lobeIndex` placed by `impulse` as `placed` (placeLobe's), a unit
+/// world-space vector (docs/design.md, "Lighting"): a strand lobe's tangent (lobeLitModel's,
+/// through spotPlacedAxis: tilt, spin, scale and bend, root to tip); a flake lobe's normal
+/// (spotPlacedNormal of its shortest axis) turned to the side of the impulse's surface normal, so
+/// that the flakes of one surface average to its side (the model is two-sided); zero for a
+/// lambert lobe, whose normal is the extinction gradient. What the bake's shading grids hold.
+glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse& impulse,
+                             const WorldLobe& placed);
 
 } // namespace spot::noise

@@ -41,6 +41,20 @@ SPOT_CONST uint kBakedMaxLayerTets = 2048u;
 SPOT_CONST uint kBakedMaxLayerSamples = 4096u;
 /* A transmittance below this ends the walk, and the pixel counts as opaque (no later layer). */
 SPOT_CONST float kBakedOpaque = 1e-4f;
+/* Lit scenes (docs/design.md, "Lighting"; baked_march.comp's lit march). Lights at most (the
+ * scene's bound, noise::kMaxLights). */
+SPOT_CONST uint kBakedMaxLights = 8u;
+/* The sky's directions, fixed on the upper hemisphere (baked_march.comp's skyDirection), each
+ * with its own shadow march. */
+SPOT_CONST uint kBakedSkyDirections = 4u;
+/* A shadow march's steps at most (a step or a skip over an empty leaf each); the light is taken
+ * as unobstructed beyond them. */
+SPOT_CONST uint kBakedShadowSteps = 128u;
+/* Optical depth at which a shadow march stops (e^-8: 3e-4 of the light passes). */
+SPOT_CONST float kBakedShadowOpaqueDepth = 5.0f;
+/* A sample is lit only where it adds at least this much of its light to the pixel (its alpha
+ * times the transmittance in front of it): below it, the shadow marches cost and show nothing. */
+SPOT_CONST float kBakedLitMinWeight = 1e-3f;
 /* No tetrahedron (the eye test's "the eye is outside the shell"). */
 SPOT_CONST uint kBakedNoTet = 0xffffffffu;
 
@@ -52,7 +66,11 @@ SPOT_CONST uint kBakedBindIndices = 3u;     /* uint[3 x triangles] */
 SPOT_CONST uint kBakedBindTets = 4u;        /* SpotBakedTet[3 x triangles] */
 SPOT_CONST uint kBakedBindTable = 5u;       /* int[]: the leaf tables */
 SPOT_CONST uint kBakedBindBricks = 6u;      /* uvec2[]: density bricks of every level (the first buffer's) */
-/* 7: free (was the distance bricks, which no pass reads) */
+SPOT_CONST uint kBakedBindSolid = 7u;       /* uint[]: lit, the mesh's inside at level
+                                               SpotBakedParams::shadow.x: bit (z ny + y) nx + x for
+                                               voxel xyz of the level's box of leaves (n = 8 x its
+                                               leaves), 1 where its centre lies inside the mesh
+                                               (the march's modules with BAKED_LIT) */
 SPOT_CONST uint kBakedBindPrevDepth = 8u;   /* rgba32f image: x the depth the next peel's entries
                                                lie behind (the previous layer's entry; 0: none),
                                                y the ray parameter the layers have sampled to */
@@ -72,6 +90,11 @@ SPOT_CONST uint kBakedBindExitDepth = 18u;  /* rgba32f image: the same, as the m
 SPOT_CONST uint kBakedBindBricks1 = 20u;    /* uvec2[]: the second to fourth buffers of density bricks */
 SPOT_CONST uint kBakedBindBricks2 = 21u;
 SPOT_CONST uint kBakedBindBricks3 = 22u;
+SPOT_CONST uint kBakedBindShading = 25u;    /* uvec2[]: lit, the shading bricks (BakeData), density
+                                               brick b's at the same place in the same split */
+SPOT_CONST uint kBakedBindShading1 = 26u;
+SPOT_CONST uint kBakedBindShading2 = 27u;
+SPOT_CONST uint kBakedBindShading3 = 28u;
 SPOT_CONST uint kBakedBindEntryMasks = 16u; /* uint[triangles]: bit 4 k + f where face f of the
                                                triangle's tetrahedron k is an entry face (host) */
 SPOT_CONST uint kBakedBindPeelDraw = 23u;   /* VkDrawIndirectCommand (16 bytes), then uint[]: the
@@ -95,6 +118,14 @@ struct SpotBakedTet {
                        coordinate): rest[j] = dot(toRest[j].xyz, x) + toRest[j].w */
 };
 
+/* A light of a lit scene, as the lit march reads it. */
+struct SpotBakedLight {
+    vec4 position; /* w 0: directional, xyz the unit direction towards it; w 1: point, xyz its
+                      position (world) */
+    vec4 radiance; /* rgb: colour x intensity (a point light's at unit distance); w: 1 when it
+                      casts shadows */
+};
+
 struct SpotBakedParams {
     vec4 grid;     /* x: level 0's voxel size; y: its inverse; z: distance cap (level-0 voxels); w: shell thickness */
     uvec4 counts;  /* x: triangles; y: levels; z: tetrahedra; w: bricks per brick buffer */
@@ -102,6 +133,17 @@ struct SpotBakedParams {
                       half floats' range, and their relative precision of 2^-11 everywhere) */
     ivec4 leafOrigin[kBakedSections]; /* per section: xyz its lowest leaf; w its first table entry */
     ivec4 leafDims[kBakedSections];   /* per section: xyz the leaves of its box (0 when empty) */
+    /* Lit scenes (zero otherwise). */
+    uvec4 lit;     /* x: lights; y: the axis model (kSpotShadeStrand, kSpotShadeFlake or
+                      kSpotShadeLambert: the kernel's, strand where it has any); z: 1 when every
+                      lobe has that model (the axis shades the whole sample), 0 when it shades
+                      |axis| of it and the gradient normal the rest */
+    uvec4 shadow;  /* x: the level of the mesh's solid (kBakedBindSolid): 1, or 0 in a bake of
+                      one level */
+    vec4 sky;      /* rgb: the sky's radiance (colour x intensity) */
+    vec4 primary;  /* xyz: the axis model's highlights (shift, width in radians, strength): the */
+    vec4 secondary; /* mean of its lobes' */
+    SpotBakedLight lights[kBakedMaxLights];
 };
 
 /* The pixels a layer's march walks (listed by its peel, baked_peel.frag; kBakedBindListPixels). */

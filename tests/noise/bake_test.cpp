@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -20,6 +21,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
@@ -32,6 +34,7 @@
 #include "noise/kernel.h"
 #include "noise/mesh.h"
 #include "noise/painted.h"
+#include "shaders/spot_shared.hpp"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -75,6 +78,15 @@ void expectSameGrids(const BakedVolume& a, const BakedVolume& b) {
         const VoxelList va = voxels(a, l), vb = voxels(b, l);
         ASSERT_EQ(va.size(), vb.size()) << "level " << l;
         EXPECT_TRUE(va == vb) << "level " << l << " differs";
+    }
+    EXPECT_EQ(a.hasShading(), b.hasShading());
+    for (int l = 0; l < a.levels(); ++l) {
+        std::size_t differ = 0;
+        a.forEachActive(l, [&](glm::ivec3 ijk, float, glm::vec3) {
+            differ +=
+                a.tangent(l, ijk) != b.tangent(l, ijk) || a.normal(l, ijk) != b.normal(l, ijk);
+        });
+        EXPECT_EQ(differ, 0u) << "level " << l << "'s shading grids differ";
     }
     EXPECT_EQ(a.distanceCount(), b.distanceCount());
     std::size_t checked = 0, differ = 0;
@@ -390,7 +402,9 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
     for (auto it = in.beginName(); it != in.endName(); ++it)
         names.push_back(*it);
     const std::vector<std::string> want = {
-        "density", "color", "density_lod1", "color_lod1", "density_lod2", "color_lod2", "distance"};
+        "density",      "color",        "tangent",     "normal",       "density_lod1",
+        "color_lod1",   "tangent_lod1", "normal_lod1", "density_lod2", "color_lod2",
+        "tangent_lod2", "normal_lod2",  "distance"};
     std::vector<std::string> sortedNames = names, sortedWant = want;
     std::sort(sortedNames.begin(), sortedNames.end());
     std::sort(sortedWant.begin(), sortedWant.end());
@@ -405,7 +419,8 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
     EXPECT_EQ(fileMeta->metaValue<std::string>("spotshell_preset_hash"), hash);
     for (const std::string& name : names) {
         const openvdb::GridBase::Ptr grid = in.readGrid(name);
-        const bool isColor = name.rfind("color", 0) == 0;
+        const bool isColor = name.rfind("color", 0) == 0 || name.rfind("tangent", 0) == 0 ||
+                             name.rfind("normal", 0) == 0; // the Vec3 grids
         const int level = name == "distance"                       ? 0
                           : name.find("_lod") != std::string::npos ? name.back() - '0'
                                                                    : 0;
@@ -428,6 +443,8 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
         EXPECT_EQ(grid->metaValue<std::string>("spotshell_preset"), "test");
         if (!isColor && name != "distance")
             EXPECT_EQ(std::uint64_t(grid->activeVoxelCount()), bake.activeCount(level));
+        if (name.rfind("tangent", 0) == 0 || name.rfind("normal", 0) == 0)
+            EXPECT_FALSE(grid->metaValue<std::string>("spotshell_meaning").empty());
     }
     in.close();
 
@@ -446,6 +463,134 @@ TEST(Bake, FileHasTheGridsClassesAndMetadataOpenVdbReads) {
     for (const std::string& name : want)
         EXPECT_NE(printed.find(name), std::string::npos) << name << " in:\n" << printed;
     EXPECT_NE(printed.find("class: fog volume"), std::string::npos) << printed;
+}
+
+// The shading grids (noise/bake.h): one strand lobe's voxels hold its tangent as placed
+// (placedShadingAxis: unit, root to tip), one flake lobe's its normal turned to the surface's
+// side, on every level (the extinction-weighted mean of one direction is that direction), and
+// the other grid stays empty; a lambert lobe has neither. Two strand lobes crossing at a right
+// angle hold their extinction-weighted sum. Read back from the file unchanged.
+TEST(Bake, ShadingGridsHoldTheLobesAxesWeightedByExtinction) {
+    const auto bakeOne = [](LobeShading::Model model, const Impulse* extra, OneCell& one,
+                            std::vector<Impulse>& impulses) {
+        impulses = {one.impulse()};
+        if (extra)
+            impulses.push_back(*extra);
+        return bakeImpulses(one.generator->cells(), one.generator->kernel(), impulses,
+                            options(0.002f, 3));
+    };
+    for (const auto model :
+         {LobeShading::Model::Strand, LobeShading::Model::Flake, LobeShading::Model::Lambert}) {
+        PresetDesc p = test::uniformPreset(1000.0f, 0.01f);
+        p.kernel.lobes[0].sigma = glm::vec3(0.5f, 1.0f, 2.0f);
+        p.kernel.lobes[0].shading.model = model;
+        OneCell one(p);
+        std::vector<Impulse> impulses;
+        const BakedVolume bake = bakeOne(model, nullptr, one, impulses);
+        ASSERT_TRUE(bake.hasShading());
+        const WorldLobe placed = placeLobe(one.generator->kernel(), 0, impulses[0]);
+        const glm::vec3 axis(placedShadingAxis(one.generator->kernel(), 0, impulses[0], placed));
+        if (model == LobeShading::Model::Lambert)
+            EXPECT_EQ(axis, glm::vec3(0.0f));
+        else
+            EXPECT_NEAR(glm::length(axis), 1.0f, 1e-6f);
+        if (model == LobeShading::Model::Flake)
+            EXPECT_GE(glm::dot(axis, impulses[0].normal), 0.0f) << "turned to the surface's side";
+        const glm::vec3 wantTangent = model == LobeShading::Model::Strand ? axis : glm::vec3(0.0f);
+        const glm::vec3 wantNormal = model == LobeShading::Model::Flake ? axis : glm::vec3(0.0f);
+        for (int l = 0; l < bake.levels(); ++l) {
+            float worst = 0.0f;
+            std::size_t count = 0;
+            bake.forEachActive(l, [&](glm::ivec3 ijk, float, glm::vec3) {
+                worst = std::max({worst, glm::length(bake.tangent(l, ijk) - wantTangent),
+                                  glm::length(bake.normal(l, ijk) - wantNormal)});
+                ++count;
+            });
+            EXPECT_GT(count, 0u);
+            EXPECT_LT(worst, 2e-6f) << "model " << int(model) << ", level " << l;
+        }
+        const fs::path file = tmpDir() / ("shading-" + std::to_string(int(model)) + ".vdb");
+        writeBakedGrids(file, bake);
+        expectSameGrids(bake, readBakedGrids(file));
+    }
+
+    // Two strands at a right angle through one point: sum_i sigma_i t_i / sum_i sigma_i.
+    PresetDesc p = test::uniformPreset(1000.0f, 0.01f);
+    p.kernel.lobes[0].sigma = glm::vec3(0.5f, 0.5f, 2.0f);
+    p.kernel.lobes[0].shading.model = LobeShading::Model::Strand;
+    OneCell one(p);
+    Impulse crossing = one.impulse();
+    crossing.frame = crossing.frame * glm::mat3(glm::rotate(glm::mat4(1.0f), 1.5707964f,
+                                                            glm::vec3(1.0f, 0.0f, 0.0f)));
+    crossing.weight = 0.3f;
+    std::vector<Impulse> impulses;
+    const BakedVolume bake = bakeOne(LobeShading::Model::Strand, &crossing, one, impulses);
+    const Kernel& kernel = one.generator->kernel();
+    const WorldLobe a = placeLobe(kernel, 0, impulses[0]), b = placeLobe(kernel, 0, impulses[1]);
+    const glm::dvec3 ta = placedShadingAxis(kernel, 0, impulses[0], a);
+    const glm::dvec3 tb = placedShadingAxis(kernel, 0, impulses[1], b);
+    EXPECT_NEAR(glm::dot(ta, tb), 0.0, 1e-6);
+    const float support = kernel.supportSigma;
+    double worst = 0.0;
+    std::size_t both = 0;
+    bake.forEachActive(0, [&](glm::ivec3 ijk, float, glm::vec3) {
+        const glm::dvec3 x = bake.voxelCentre(0, ijk);
+        const auto sigma = [&](const WorldLobe& w) {
+            return w.extinction *
+                   shared::f64::spotLobeDensity(w.toLobe * (x - w.centre), double(support));
+        };
+        const double sa = sigma(a), sb = sigma(b);
+        both += sa > 0.0 && sb > 0.0;
+        const glm::dvec3 want = (sa * ta + sb * tb) / (sa + sb);
+        worst = std::max(worst, glm::length(glm::dvec3(bake.tangent(0, ijk)) - want));
+    });
+    EXPECT_GT(both, 0u) << "voxels where the strands cross";
+    EXPECT_LT(worst, 1e-5);
+}
+
+// A bake written before the shading grids (none of them) reads without them: hasShading() false,
+// zero vectors, the other grids as they were. One with the tangent grids but a missing normal
+// grid is refused with one line naming the grid.
+TEST(Bake, OlderFilesWithoutShadingGridsReadWithoutThem) {
+    PresetDesc p = test::uniformPreset(4000.0f, 0.01f);
+    p.kernel.lobes[0].shading.model = LobeShading::Model::Strand;
+    OneCell one(p);
+    const BakedVolume bake = bakeImpulses(one.generator->cells(), one.generator->kernel(),
+                                          one.generator->generate(), options(0.004f, 2));
+    const fs::path dir = tmpDir();
+    const fs::path good = dir / "with-shading.vdb";
+    writeBakedGrids(good, bake);
+    openvdb::initialize();
+    const auto rewrite = [&](const fs::path& out,
+                             const std::function<bool(const std::string&)>& drop) {
+        openvdb::io::File f(good.string());
+        f.open();
+        const openvdb::GridPtrVecPtr all = f.getGrids();
+        openvdb::GridPtrVec grids;
+        for (const openvdb::GridBase::Ptr& g : *all)
+            if (!drop(g->getName()))
+                grids.push_back(g);
+        const openvdb::MetaMap::Ptr meta = f.getMetadata();
+        f.close();
+        openvdb::io::File(out.string()).write(grids, *meta);
+    };
+    const fs::path older = dir / "older.vdb";
+    rewrite(older, [](const std::string& name) {
+        return name.rfind("tangent", 0) == 0 || name.rfind("normal", 0) == 0;
+    });
+    const BakedVolume back = readBakedGrids(older);
+    EXPECT_TRUE(bake.hasShading());
+    EXPECT_FALSE(back.hasShading());
+    for (int l = 0; l < back.levels(); ++l) {
+        EXPECT_TRUE(voxels(bake, l) == voxels(back, l)) << "level " << l;
+        back.forEachActiveShaded(l, [&](glm::ivec3, float, glm::vec3, glm::vec3 t, glm::vec3 n) {
+            EXPECT_EQ(t, glm::vec3(0.0f));
+            EXPECT_EQ(n, glm::vec3(0.0f));
+        });
+    }
+    const fs::path partial = dir / "partial.vdb";
+    rewrite(partial, [](const std::string& name) { return name == "normal_lod1"; });
+    expectBadFile(partial, "no grid \"normal_lod1\"");
 }
 
 TEST(Bake, BadFilesGiveOneClearError) {
@@ -756,6 +901,7 @@ TEST(BakeCli, BakesTheBunnyOnAnyThreadCountAndInfoReadsIt) {
     ASSERT_EQ(info.code, 0) << info.err;
     EXPECT_NE(info.out.find("level 2    voxel 0.048"), std::string::npos) << info.out;
     EXPECT_NE(info.out.find("preset     fur"), std::string::npos) << info.out;
+    EXPECT_NE(info.out.find("shading    tangent, normal"), std::string::npos) << info.out;
 }
 
 TEST(BakeCli, BadRequestsAndBadFilesExitTwoWithOneLine) {

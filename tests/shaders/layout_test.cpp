@@ -65,6 +65,7 @@ using uint = std::uint32_t;
 #include "baked_march_2.comp.h"
 #include "baked_march_3.comp.h"
 #include "baked_march_4.comp.h"
+#include "baked_march_lit.comp.h"
 #include "baked_peel.frag.h"
 #include "baked_shell.comp.h"
 #include "baked_tet.vert.h"
@@ -196,6 +197,14 @@ namespace {
     X(layout_baked, SpotBakedParams, unit, 32)                                                     \
     X(layout_baked, SpotBakedParams, leafOrigin, 48)                                               \
     X(layout_baked, SpotBakedParams, leafDims, 48 + 16 * 12)                                       \
+    X(layout_baked, SpotBakedParams, lit, 48 + 2 * 16 * 12)                                        \
+    X(layout_baked, SpotBakedParams, shadow, 48 + 2 * 16 * 12 + 16)                                \
+    X(layout_baked, SpotBakedParams, sky, 48 + 2 * 16 * 12 + 32)                                   \
+    X(layout_baked, SpotBakedParams, primary, 48 + 2 * 16 * 12 + 48)                               \
+    X(layout_baked, SpotBakedParams, secondary, 48 + 2 * 16 * 12 + 64)                             \
+    X(layout_baked, SpotBakedParams, lights, 48 + 2 * 16 * 12 + 80)                                \
+    X(layout_baked, SpotBakedLight, position, 0)                                                   \
+    X(layout_baked, SpotBakedLight, radiance, 16)                                                  \
     X(layout_baked, SpotBakedList, groups, 0)                                                      \
     X(layout_baked, SpotBakedList, count, 12)
 
@@ -220,7 +229,8 @@ namespace {
     X(layout_march, SpotMarchCell, 16)                                                             \
     X(layout_march, SpotMarchBox, 32)                                                              \
     X(layout_baked, SpotBakedTet, 176)                                                             \
-    X(layout_baked, SpotBakedParams, 48 + 2 * 16 * 12)                                             \
+    X(layout_baked, SpotBakedParams, 48 + 2 * 16 * 12 + 5 * 16 + 8 * 32)                           \
+    X(layout_baked, SpotBakedLight, 32)                                                            \
     X(layout_baked, SpotBakedList, 16)
 
 #define SPOT_ASSERT_OFFSET(ns, type, field, offset)                                                \
@@ -334,7 +344,8 @@ TEST(SharedLayout, EveryFieldOffsetTheShadersUseIsTheHosts) {
                               SPOT_MODULE(spv_generate_jittered_partial_comp),
                               SPOT_MODULE(spv_baked_march_2_comp),
                               SPOT_MODULE(spv_baked_march_3_comp),
-                              SPOT_MODULE(spv_baked_march_4_comp)};
+                              SPOT_MODULE(spv_baked_march_4_comp),
+                              SPOT_MODULE(spv_baked_march_lit_comp)};
     const auto host = hostOffsets();
     std::map<std::string, int> checked; // fields compared, per struct
     for (const Module& m : modules) {

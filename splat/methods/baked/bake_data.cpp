@@ -52,15 +52,25 @@ void packDensity(const noise::BakedVolume& volume, BakeData& out,
     const int levels = out.levels;
     std::vector<Leaves> leaves(static_cast<std::size_t>(levels));
     std::vector<std::vector<glm::vec4>> bricks(static_cast<std::size_t>(levels));
+    std::vector<std::vector<glm::vec4>> shading(static_cast<std::size_t>(levels));
+    out.shaded = volume.hasShading();
     for (int l = 0; l < levels; ++l) {
-        volume.forEachActive(l, [&](glm::ivec3 ijk, float density, glm::vec3 color) {
+        volume.forEachActiveShaded(l, [&](glm::ivec3 ijk, float density, glm::vec3 color,
+                                          glm::vec3 tangent, glm::vec3 normal) {
             const std::uint32_t b = leaves[std::size_t(l)].brick(ijk >> int(kBakedLeafBits));
             auto& data = bricks[std::size_t(l)];
-            if (data.size() < std::size_t(b + 1) * kBakedLeafVoxels)
+            auto& axes = shading[std::size_t(l)];
+            if (data.size() < std::size_t(b + 1) * kBakedLeafVoxels) {
                 data.resize(std::size_t(b + 1) * kBakedLeafVoxels, glm::vec4(0.0f));
+                if (out.shaded)
+                    axes.resize(data.size(), glm::vec4(0.0f));
+            }
             const glm::ivec3 o = ijk & 7;
-            data[std::size_t(b) * kBakedLeafVoxels + std::size_t(o.x << 6 | o.y << 3 | o.z)] =
-                glm::vec4(density * color, density);
+            const std::size_t at =
+                std::size_t(b) * kBakedLeafVoxels + std::size_t(o.x << 6 | o.y << 3 | o.z);
+            data[at] = glm::vec4(density * color, density);
+            if (out.shaded)
+                axes[at] = glm::vec4(density * (tangent + normal), 0.0f);
         });
     }
     float largest = 0.0f;
@@ -74,6 +84,12 @@ void packDensity(const noise::BakedVolume& volume, BakeData& out,
         ApronBricks level =
             packApronBricks(leaves[std::size_t(l)].keys, bricks[std::size_t(l)], out.unit);
         out.brickCount += level.leaves.size();
+        if (out.shaded) {
+            // The same leaves in the same order: the same bricks, the same apron layout.
+            ApronBricks axes =
+                packApronBricks(leaves[std::size_t(l)].keys, shading[std::size_t(l)], out.unit);
+            out.shadingPacked.push_back(std::move(axes.voxels));
+        }
         sections[std::size_t(l)] = std::move(level.leaves);
         out.packed[std::size_t(l)] = std::move(level.voxels);
     }
@@ -160,6 +176,57 @@ void buildTables(const std::vector<std::vector<glm::ivec3>>& sections, BakeData&
 }
 
 } // namespace
+
+std::vector<std::uint32_t> solidVoxels(const std::vector<glm::vec3>& positions,
+                                       const std::vector<glm::uvec3>& triangles, glm::ivec3 lo,
+                                       glm::ivec3 n, float size) {
+    const std::size_t nx = std::size_t(std::max(n.x, 0)), ny = std::size_t(std::max(n.y, 0)),
+                      nz = std::size_t(std::max(n.z, 0));
+    // Per column (y, z) of voxel centres, the x where a triangle crosses it.
+    std::vector<std::vector<double>> crossings(ny * nz);
+    const double h = double(size);
+    for (const glm::uvec3& t : triangles) {
+        const glm::dvec3 a(positions[t.x]), b(positions[t.y]), c(positions[t.z]);
+        const glm::dvec3 mn = glm::min(a, glm::min(b, c)), mx = glm::max(a, glm::max(b, c));
+        const int y0 = std::max(0, int(std::ceil(mn.y / h - 0.5)) - lo.y);
+        const int y1 = std::min(int(ny) - 1, int(std::floor(mx.y / h - 0.5)) - lo.y);
+        const int z0 = std::max(0, int(std::ceil(mn.z / h - 0.5)) - lo.z);
+        const int z1 = std::min(int(nz) - 1, int(std::floor(mx.z / h - 0.5)) - lo.z);
+        // The triangle projected on yz: edge functions, and x from the barycentrics.
+        const double area = (b.y - a.y) * (c.z - a.z) - (c.y - a.y) * (b.z - a.z);
+        if (area == 0.0)
+            continue;
+        for (int z = z0; z <= z1; ++z)
+            for (int y = y0; y <= y1; ++y) {
+                const double py = (double(y + lo.y) + 0.5) * h, pz = (double(z + lo.z) + 0.5) * h;
+                const double wa = ((b.y - py) * (c.z - pz) - (c.y - py) * (b.z - pz)) / area;
+                const double wb = ((c.y - py) * (a.z - pz) - (a.y - py) * (c.z - pz)) / area;
+                const double wc = 1.0 - wa - wb;
+                if (wa < 0.0 || wb < 0.0 || wc < 0.0)
+                    continue;
+                crossings[std::size_t(z) * ny + std::size_t(y)].push_back(wa * a.x + wb * b.x +
+                                                                          wc * c.x);
+            }
+    }
+    std::vector<unsigned char> inside(nx * ny * nz, 0);
+    for (std::size_t z = 0; z < nz; ++z)
+        for (std::size_t y = 0; y < ny; ++y) {
+            std::vector<double>& xs = crossings[z * ny + y];
+            std::sort(xs.begin(), xs.end());
+            std::size_t passed = 0; // crossings at or before the centre
+            for (std::size_t x = 0; x < nx; ++x) {
+                const double px = (double(int(x) + lo.x) + 0.5) * h;
+                while (passed < xs.size() && xs[passed] <= px)
+                    ++passed;
+                inside[(z * ny + y) * nx + x] = (xs.size() - passed) % 2 == 1 ? 1 : 0;
+            }
+        }
+    std::vector<std::uint32_t> bits((nx * ny * nz + 31) / 32 + 1, 0u);
+    for (std::size_t bit = 0; bit < inside.size(); ++bit)
+        if (inside[bit] != 0)
+            bits[bit >> 5] |= 1u << (bit & 31);
+    return bits;
+}
 
 float brickUnit(float largest) {
     if (!(largest > 0.0f) || !std::isfinite(largest))

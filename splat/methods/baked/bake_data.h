@@ -36,7 +36,8 @@ using uint = std::uint32_t;
 #undef SPOT_CONST
 #undef SPOT_FN
 static_assert(sizeof(SpotBakedTet) == 176);
-static_assert(sizeof(SpotBakedParams) == 432);
+static_assert(sizeof(SpotBakedLight) == 32);
+static_assert(sizeof(SpotBakedParams) == 432 + 5 * 16 + kBakedMaxLights * 32);
 } // namespace gpu_baked
 
 /// Loop iterations one march invocation may need by default (baked_march.comp).
@@ -61,6 +62,15 @@ ApronBricks packApronBricks(const std::vector<glm::ivec3>& leaves,
 /// room to spare), never below the smallest normal float; 1 for an empty bake.
 float brickUnit(float largest);
 
+/// The lit march's solid (baked_layout.glsl, kBakedBindSolid): over the voxels [lo, lo + n) of
+/// edge `size` (world units; voxel ijk's centre at (ijk + 1/2) size), a bit per voxel, bit
+/// (z n.y + y) n.x + x of the words, set where the voxel's centre lies inside the mesh
+/// (`positions`, `triangles`): an odd number of the triangles lies on the ray from the centre
+/// towards +x. A mesh that is not closed gives what the crossings give.
+std::vector<std::uint32_t> solidVoxels(const std::vector<glm::vec3>& positions,
+                                       const std::vector<glm::uvec3>& triangles, glm::ivec3 lo,
+                                       glm::ivec3 n, float size);
+
 /// A bake packed for the march, read from one file.
 class BakeData {
 public:
@@ -76,6 +86,13 @@ public:
     /// Per level, its bricks (packApronBricks' voxels), in brick order; level l's are bricks
     /// [firstBrick[l], + packed[l].size() / kBakedBrickVoxels) of the whole.
     std::vector<std::vector<glm::uvec2>> packed;
+    /// Whether the bake holds the shading grids (noise::BakedVolume::hasShading): lit scenes
+    /// need them.
+    bool shaded = false;
+    /// Per level, the shading bricks, one per density brick in the same order and layout:
+    /// vec4(extinction x (tangent + normal), 0) / unit per voxel (the shading grids of
+    /// noise/bake.h; a kernel of one model has one of the two). Empty when not `shaded`.
+    std::vector<std::vector<glm::uvec2>> shadingPacked;
     std::vector<std::uint32_t> firstBrick;
     std::uint64_t brickCount = 0; ///< over every level
     /// The distance grid's leaves (kBakedLeafVoxels floats each) and their count.

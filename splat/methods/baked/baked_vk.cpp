@@ -16,12 +16,20 @@
 
 #include "noise/bake.h"
 #include "noise/error.h"
+#include "noise/kernel.h"
+#include "noise/preset.h"
+#include "noise/reference.h"
 #include "noise/shell.h"
+#include "shaders/spot_light.hpp"
 
 #include "baked_march.comp.h"
 #include "baked_march_2.comp.h"
 #include "baked_march_3.comp.h"
 #include "baked_march_4.comp.h"
+#include "baked_march_lit.comp.h"
+#include "baked_march_lit_2.comp.h"
+#include "baked_march_lit_3.comp.h"
+#include "baked_march_lit_4.comp.h"
 #include "baked_peel.frag.h"
 #include "baked_shell.comp.h"
 #include "baked_tet.vert.h"
@@ -108,18 +116,24 @@ BakedRenderer::BakedRenderer(const SceneGpu& scene) : m_scene(scene), m_ctx(scen
 
 BakedRenderer::~BakedRenderer() = default;
 
-const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, std::uint32_t buffers) {
+const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, bool lit,
+                                             std::uint32_t buffers) {
     SPOT_CHECK(buffers >= 1 && buffers <= kBakedBrickBuffers);
-    if (const auto it = m_march.find({count, first, buffers}); it != m_march.end())
+    if (const auto it = m_march.find({count, first, lit, buffers}); it != m_march.end())
         return it->second;
     Specialization spec;
     spec.set(kBakedSpecCount, count);
     spec.set(kBakedSpecFirstLayer, first);
-    // One module per count of brick buffers, each declaring those it reads.
+    // One module per count of brick buffers, each declaring those it reads, and its lit variant
+    // (BAKED_LIT), which also declares the mesh's and the solid's bindings.
     const std::span<const std::uint32_t> modules[] = {
         spirv(spv_baked_march_comp), spirv(spv_baked_march_2_comp), spirv(spv_baked_march_3_comp),
         spirv(spv_baked_march_4_comp)};
+    const std::span<const std::uint32_t> litModules[] = {
+        spirv(spv_baked_march_lit_comp), spirv(spv_baked_march_lit_2_comp),
+        spirv(spv_baked_march_lit_3_comp), spirv(spv_baked_march_lit_4_comp)};
     static_assert(std::size(modules) == kBakedBrickBuffers);
+    static_assert(std::size(litModules) == kBakedBrickBuffers);
     Bindings bindings = {storageBuffer(kBakedBindParams),      storageBuffer(kBakedBindTets),
                          storageBuffer(kBakedBindNeighbours),  storageBuffer(kBakedBindEyeTet),
                          storageBuffer(kBakedBindTable),       storageBuffer(kBakedBindLayerEntry),
@@ -127,16 +141,23 @@ const Pipeline& BakedRenderer::marchPipeline(bool count, bool first, std::uint32
                          storageImage(kBakedBindBase),         storageImage(kBakedBindBaseKept),
                          storageImage(kBakedBindExitDepth),    storageBuffer(kBakedBindLoops),
                          storageBuffer(kBakedBindList),        storageBuffer(kBakedBindListPixels)};
+    if (lit)
+        for (const std::uint32_t b : {kBakedBindVertices, kBakedBindIndices, kBakedBindSolid})
+            bindings.push_back(storageBuffer(b));
+    const std::uint32_t shadingBindings[] = {kBakedBindShading, kBakedBindShading1,
+                                             kBakedBindShading2, kBakedBindShading3};
+    for (std::uint32_t i = 0; lit && i < buffers; ++i)
+        bindings.push_back(storageBuffer(shadingBindings[i]));
     const std::uint32_t brickBindings[] = {kBakedBindBricks, kBakedBindBricks1, kBakedBindBricks2,
                                            kBakedBindBricks3};
     for (std::uint32_t i = 0; i < buffers; ++i)
         bindings.push_back(storageBuffer(brickBindings[i]));
-    Pipeline p = makeComputePipeline(m_ctx, modules[buffers - 1], bindings,
+    Pipeline p = makeComputePipeline(m_ctx, (lit ? litModules : modules)[buffers - 1], bindings,
                                      sizeof(gpu_splat::SpotSplatFrame), spec);
-    return m_march.emplace(std::tuple{count, first, buffers}, std::move(p)).first->second;
+    return m_march.emplace(std::tuple{count, first, lit, buffers}, std::move(p)).first->second;
 }
 
-void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer) const {
+void BakedRenderer::checkBakeFits(const BakeData& bake, bool lit, std::uint64_t perBuffer) const {
     const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
     for (std::size_t s = 0; s < bake.tableEnd.size(); ++s)
         if (bake.tableEnd[s] * sizeof(std::int32_t) > range) {
@@ -148,7 +169,9 @@ void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer)
                                  range >> 20, " MiB)"));
         }
     const std::uint64_t brickBytesEach = std::uint64_t(kBakedBrickVoxels) * sizeof(glm::uvec2);
-    const std::uint64_t brickBytes = std::max<std::uint64_t>(bake.brickCount, 1) * brickBytesEach;
+    // Lit: as many bytes again of shading bricks, in buffers of their own split alike.
+    const std::uint64_t brickBytes =
+        (lit ? 2 : 1) * std::max<std::uint64_t>(bake.brickCount, 1) * brickBytesEach;
     const std::uint64_t tableBytes = bake.table.size() * sizeof(std::int32_t);
     const std::uint64_t bufferCount =
         std::max<std::uint64_t>((bake.brickCount + perBuffer - 1) / perBuffer, 1);
@@ -157,8 +180,10 @@ void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer)
                              brickBytes >> 20, " MiB of bricks), more than ", kBakedBrickBuffers,
                              " storage buffers of this device take (", range >> 20,
                              " MiB each); bake it at a larger voxel size"));
-    std::uint64_t held = m_table.reservedBytes();
+    std::uint64_t held = m_table.reservedBytes() + m_solid.reservedBytes();
     for (const Buffer& b : m_bricks)
+        held += b.reservedBytes();
+    for (const Buffer& b : m_shadingBricks)
         held += b.reservedBytes();
     if (m_ctx.allocatedBytes() - held + brickBytes + tableBytes > m_ctx.memoryBudget())
         throw InputError(cat("baked: ", bake.file, " needs ", (brickBytes + tableBytes) >> 20,
@@ -167,21 +192,25 @@ void BakedRenderer::checkBakeFits(const BakeData& bake, std::uint64_t perBuffer)
                              " MiB; bake it at a larger voxel size"));
 }
 
-void BakedRenderer::uploadBake(const BakeData& bake) {
+void BakedRenderer::uploadBake(const BakeData& bake, bool lit) {
     const std::uint64_t range = m_ctx.properties().limits.maxStorageBufferRange;
     const std::uint64_t brickBytesEach = std::uint64_t(kBakedBrickVoxels) * sizeof(glm::uvec2);
     // The density bricks over up to kBakedBrickBuffers buffers of one storage buffer's range.
     const std::uint64_t fits = range / brickBytesEach;
     const std::uint64_t perBuffer =
         m_brickSplit > 0 ? std::min<std::uint64_t>(m_brickSplit, fits) : fits;
-    checkBakeFits(bake, perBuffer);
+    checkBakeFits(bake, lit, perBuffer);
     const std::uint64_t brickCount = bake.brickCount;
     const std::uint64_t bufferCount =
         std::max<std::uint64_t>((brickCount + perBuffer - 1) / perBuffer, 1);
-    const std::uint64_t brickBytes = std::max<std::uint64_t>(brickCount, 1) * brickBytesEach;
+    const std::uint64_t brickBytes =
+        (lit ? 2 : 1) * std::max<std::uint64_t>(brickCount, 1) * brickBytesEach;
     const std::uint64_t tableBytes = bake.table.size() * sizeof(std::int32_t);
     m_table = Buffer();
+    m_solid = Buffer();
     for (Buffer& b : m_bricks)
+        b = Buffer();
+    for (Buffer& b : m_shadingBricks)
         b = Buffer();
     m_table = Buffer(m_ctx, tableBytes, kStorage, kHost, "baked leaf tables");
     m_table.upload(std::span<const std::int32_t>(bake.table));
@@ -190,19 +219,52 @@ void BakedRenderer::uploadBake(const BakeData& bake) {
             perBuffer, std::max<std::uint64_t>(brickCount, 1) - i * perBuffer);
         m_bricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
                              cat("baked bricks (", n, ", buffer ", i, ")"));
+        // Lit: density brick b's shading brick at the same place in the shading buffers.
+        if (lit)
+            m_shadingBricks[i] = Buffer(m_ctx, n * brickBytesEach, kStorage, kHost,
+                                        cat("baked shading bricks (", n, ", buffer ", i, ")"));
     }
     // Level l's bricks are [firstBrick[l], + its leaves), uploaded in pieces at buffer bounds.
-    for (int l = 0; l < bake.levels; ++l) {
-        const auto& data = bake.packed[std::size_t(l)];
-        const std::uint64_t count = data.size() / kBakedBrickVoxels;
-        for (std::uint64_t done = 0; done < count;) {
-            const std::uint64_t b = bake.firstBrick[std::size_t(l)] + done;
-            const std::uint64_t buffer = b / perBuffer, local = b % perBuffer;
-            const std::uint64_t n = std::min(count - done, perBuffer - local);
-            m_bricks[buffer].upload(data.data() + done * kBakedBrickVoxels, n * brickBytesEach,
-                                    local * brickBytesEach);
-            done += n;
+    for (const bool shading : {false, true}) {
+        if (shading && !lit)
+            break;
+        auto& buffers = shading ? m_shadingBricks : m_bricks;
+        for (std::size_t level = 0; level < std::size_t(bake.levels); ++level) {
+            const auto& data = shading ? bake.shadingPacked[level] : bake.packed[level];
+            const std::uint64_t count = data.size() / kBakedBrickVoxels;
+            for (std::uint64_t done = 0; done < count;) {
+                const std::uint64_t b = bake.firstBrick[level] + done;
+                const std::uint64_t buffer = b / perBuffer, local = b % perBuffer;
+                const std::uint64_t n = std::min(count - done, perBuffer - local);
+                buffers[buffer].upload(data.data() + done * kBakedBrickVoxels, n * brickBytesEach,
+                                       local * brickBytesEach);
+                done += n;
+            }
         }
+    }
+    if (lit) {
+        // The mesh's inside at level 1 (level 0 in a bake of one level), over the box of its
+        // leaves: the shadow marches stop there (the bake holds only the fur).
+        const int level = std::min(1, bake.levels - 1);
+        m_solidLevel = std::uint32_t(level);
+        const glm::ivec3 lo = glm::ivec3(bake.leafOrigin[std::size_t(level)]) * 8;
+        const glm::ivec3 n = glm::ivec3(bake.leafDims[std::size_t(level)]) * 8;
+        const MeshPass& mesh = m_scene.meshPass();
+        const auto* vertices =
+            static_cast<const gpu_splat::SpotMeshVertex*>(mesh.restVertices().mapped());
+        const auto* indices = static_cast<const std::uint32_t*>(mesh.indices().mapped());
+        std::vector<glm::vec3> positions(mesh.restVertices().size() /
+                                         sizeof(gpu_splat::SpotMeshVertex));
+        for (std::size_t i = 0; i < positions.size(); ++i)
+            positions[i] = glm::vec3(vertices[i].position);
+        std::vector<glm::uvec3> triangles(mesh.indexCount() / 3);
+        for (std::size_t t = 0; t < triangles.size(); ++t)
+            triangles[t] = glm::uvec3(indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]);
+        const std::vector<std::uint32_t> bits =
+            solidVoxels(positions, triangles, lo, n, bake.voxelSize * float(1 << level));
+        m_solid = Buffer(m_ctx, bits.size() * sizeof(std::uint32_t), kStorage, kHost,
+                         "baked solid (the mesh's inside)");
+        m_solid.upload(std::span<const std::uint32_t>(bits));
     }
     m_bricksPerBuffer = std::uint32_t(perBuffer);
     m_leafOrigin = bake.leafOrigin;
@@ -211,11 +273,11 @@ void BakedRenderer::uploadBake(const BakeData& bake) {
     m_brickUnit = bake.unit;
     m_bakeStats.voxelSize = bake.voxelSize;
     m_bakeStats.levels = std::uint32_t(bake.levels);
-    m_bakeStats.bricks = std::uint32_t(brickCount);
+    m_bakeStats.bricks = std::uint32_t(bake.brickCount);
     m_bakeStats.brickBuffers = std::uint32_t(bufferCount);
     m_bakeStats.distanceBricks = bake.distanceBricks;
     m_bakeStats.tableEntries = std::uint32_t(bake.table.size());
-    m_bakeStats.gpuBytes = brickBytes + tableBytes;
+    m_bakeStats.gpuBytes = brickBytes + tableBytes + (lit ? m_solid.size() : 0);
 }
 
 void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
@@ -278,7 +340,6 @@ void BakedRenderer::ensureTargets(std::uint32_t width, std::uint32_t height) {
 }
 
 void requireBakedView(const View& view) {
-    requireGpuShading(view.shading);
     if (view.camera.projection == noise::Projection::Orthographic)
         throw InputError("baked: orthographic cameras are not supported yet");
     if (view.shading.mode == noise::Shading::Mode::Lambert)
@@ -286,7 +347,7 @@ void requireBakedView(const View& view) {
                          "unlit shading");
 }
 
-void BakedRenderer::useBake(const RenderSettings& settings, float cellSize) {
+void BakedRenderer::useBake(const RenderSettings& settings, float cellSize, bool lit) {
     // The bake's voxels are the noise in the rest pose of the shell it was baked on (the mesh and
     // the cell size, the shell's thickness): on another shell they land in the wrong places.
     const std::uint64_t shell = noise::shellHash(m_scene.meshHash(), cellSize);
@@ -301,15 +362,21 @@ void BakedRenderer::useBake(const RenderSettings& settings, float cellSize) {
                              hex(*recorded), ", this scene's is ", hex(shell),
                              " (another mesh or cell size): bake this scene, or pass "
                              "--allow-mismatch to render it anyway"));
-    if (settings.bake != m_bake) { // a new bake: uploaded once, kept while it is handed again
+    if (lit && !settings.bake->shaded)
+        throw InputError(cat("baked: ", settings.bake->file,
+                             " has no shading grids (tangent, normal: a bake written before them);"
+                             " bake it again to render lit scenes"));
+    if (settings.bake != m_bake ||
+        (lit && !m_bakeLit)) { // a new bake: uploaded once, kept while it is handed again
         if (!recorded)
             std::fprintf(stderr,
                          "warning: %s records no mesh hash (an older bake): not checked "
                          "against the scene\n",
                          settings.bake->file.c_str());
         m_bake.reset();
-        uploadBake(*settings.bake);
+        uploadBake(*settings.bake, lit);
         m_bake = settings.bake;
+        m_bakeLit = lit;
     }
 }
 
@@ -382,7 +449,8 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
                              kBakedMaxPeelPasses, " are accepted"));
     if (!impulses.cells)
         throw InputError("baked: the shell's thickness needs the impulses' cells");
-    useBake(settings, impulses.cells->cellSize);
+    const bool lit = view.shading.mode == noise::Shading::Mode::Lit;
+    useBake(settings, impulses.cells->cellSize, lit);
     const float thickness = impulses.cells->cellSize;
     const std::uint32_t triangles = m_scene.meshPass().indexCount() / 3;
     ensureShell(triangles);
@@ -414,16 +482,66 @@ void BakedRenderer::prepare(const View& view, const ImpulseSet& impulses,
         params.leafOrigin[s] = m_leafOrigin[s];
         params.leafDims[s] = m_leafDims[s];
     }
+    if (lit)
+        litParams(view.shading, params);
     m_params.upload(&params, sizeof(params));
 
     ensureTargets(std::uint32_t(view.camera.width), std::uint32_t(view.camera.height));
-    m_frame.frame = makeSplatFrame(view.camera, view.shading, view.baseColor, 0, 1, 1.0f, 0, 0);
+    // Lit: the mesh pass draws the mesh's colour unlit; the march lights it where a walk reaches
+    // it (baked_march.comp).
+    noise::Shading frameShading = view.shading;
+    if (lit)
+        frameShading = noise::Shading{};
+    m_frame.frame = makeSplatFrame(view.camera, frameShading, view.baseColor, 0, 1, 1.0f, 0, 0);
     m_frame.background = view.background;
     m_frame.peelPasses = std::uint32_t(settings.peelPasses);
     m_frame.count = m_countLoops;
     m_frame.brickBuffers = m_bakeStats.brickBuffers;
-    marchPipeline(m_frame.count, false, m_frame.brickBuffers);
-    marchPipeline(m_frame.count, true, m_frame.brickBuffers);
+    m_frame.lit = lit;
+    marchPipeline(m_frame.count, false, lit, m_frame.brickBuffers);
+    marchPipeline(m_frame.count, true, lit, m_frame.brickBuffers);
+}
+
+void BakedRenderer::litParams(const noise::Shading& shading, SpotBakedParams& params) const {
+    if (shading.lights.size() > kBakedMaxLights)
+        throw InputError(cat("baked: ", shading.lights.size(), " lights; at most ", kBakedMaxLights,
+                             " are rendered"));
+    static_assert(kBakedMaxLights == std::uint32_t(noise::kMaxLights));
+    // The axis model: strand where the kernel has strand lobes, else flake where it has flakes,
+    // else lambert (the gradient normal alone); its highlights the mean of its lobes'.
+    const noise::Kernel& kernel = m_scene.kernel();
+    using Model = noise::LobeShading::Model;
+    const auto count = [&](Model m) {
+        return std::count_if(kernel.lobes.begin(), kernel.lobes.end(),
+                             [&](const noise::Lobe& l) { return l.shading.model == m; });
+    };
+    const Model model = count(Model::Strand) > 0  ? Model::Strand
+                        : count(Model::Flake) > 0 ? Model::Flake
+                                                  : Model::Lambert;
+    const std::uint32_t code = model == Model::Strand  ? shared::f32::kSpotShadeStrand
+                               : model == Model::Flake ? shared::f32::kSpotShadeFlake
+                                                       : shared::f32::kSpotShadeLambert;
+    glm::vec3 primary(0.0f), secondary(0.0f);
+    for (const noise::Lobe& l : kernel.lobes)
+        if (l.shading.model == model) {
+            const noise::LobeLitModel m = noise::lobeLitModel(l);
+            primary += glm::vec3(m.primary) / float(count(model));
+            secondary += glm::vec3(m.secondary) / float(count(model));
+        }
+    params.lit = glm::uvec4(std::uint32_t(shading.lights.size()), code,
+                            std::uint32_t(count(model)) == kernel.lobes.size() ? 1u : 0u, 0u);
+    params.shadow = glm::uvec4(m_solidLevel, 0u, 0u, 0u);
+    params.sky = glm::vec4(shading.sky.color * shading.sky.intensity, 0.0f);
+    params.primary = glm::vec4(primary, 0.0f);
+    params.secondary = glm::vec4(secondary, 0.0f);
+    for (std::size_t i = 0; i < shading.lights.size(); ++i) {
+        const noise::Light& light = shading.lights[i];
+        const bool point = light.type == noise::Light::Type::Point;
+        params.lights[i].position =
+            glm::vec4(point ? light.position : light.direction, point ? 1.0f : 0.0f);
+        params.lights[i].radiance =
+            glm::vec4(light.color * light.intensity, light.shadows ? 1.0f : 0.0f);
+    }
 }
 
 void BakedRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
@@ -557,7 +675,7 @@ void BakedRenderer::recordMarch(VkCommandBuffer cmd, std::uint32_t k) {
     using namespace passes;
     const Prepared& f = m_frame;
     const bool first = k == 0;
-    const Pipeline& march = m_march.at({f.count, first, f.brickBuffers});
+    const Pipeline& march = m_march.at({f.count, first, f.lit, f.brickBuffers});
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, march.handle());
     pushFrame(cmd, march, f.frame);
     Descriptors d;
@@ -574,10 +692,19 @@ void BakedRenderer::recordMarch(VkCommandBuffer cmd, std::uint32_t k) {
         .image(kBakedBindExitDepth, m_exitDepth, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .buffer(kBakedBindLoops, m_loops)
         .buffer(kBakedBindListPixels, m_listPixels);
+    if (f.lit)
+        d.buffer(kBakedBindVertices, m_scene.meshPass().vertices())
+            .buffer(kBakedBindIndices, m_scene.meshPass().indices())
+            .buffer(kBakedBindSolid, m_solid);
     const std::uint32_t brickBindings[] = {kBakedBindBricks, kBakedBindBricks1, kBakedBindBricks2,
                                            kBakedBindBricks3};
-    for (std::uint32_t i = 0; i < f.brickBuffers; ++i) // the march module reads these alone
+    const std::uint32_t shadingBindings[] = {kBakedBindShading, kBakedBindShading1,
+                                             kBakedBindShading2, kBakedBindShading3};
+    for (std::uint32_t i = 0; i < f.brickBuffers; ++i) { // the march module reads these alone
         d.buffer(brickBindings[i], m_bricks[i]);
+        if (f.lit)
+            d.buffer(shadingBindings[i], m_shadingBricks[i]);
+    }
     bindList(d, k).push(m_ctx, cmd, march);
     vkCmdDispatchIndirect(cmd, m_lists.handle(), k * m_listStride);
     fullBarrier(cmd);
@@ -629,6 +756,7 @@ MethodInfo bakedMethod() {
         return cat(s.peelPasses, s.peelPasses == 1 ? " peel pass, " : " peel passes, ");
     };
     m.drawsKernels = false;
+    m.rendersLit = true;
     return m;
 }
 

@@ -46,7 +46,14 @@
 /// computes the bound one march invocation can run (baked_march.comp's formula) and refuses a
 /// frame above the budget (kBakedLoopBudget by default).
 ///
-/// Limits: perspective cameras and unlit shading only (the bake stores no normals); a passage
+/// Lit scenes (docs/design.md section 5): the bake's shading grids (noise/bake.h) as shading
+/// bricks in buffers of their own (density brick b's at the same place), each sample shaded by
+/// spot_light.h's models for every light and the sky, with shadow marches through the bake (a
+/// light's at the samples' level, the sky's at the coarsest) stopped by the mesh's solid (its
+/// inside voxelized on the host), and the mesh shaded diffuse where a walk reaches it
+/// (baked_march.comp's BAKED_LIT modules).
+///
+/// Limits: perspective cameras, unlit and lit shading (not Lambert: no normals); a passage
 /// longer than the per-layer caps, or a walk stopped by a degenerate tetrahedron, leaves the
 /// rest of that passage out (the next layer starts at the next entry face behind it); faces of
 /// non-manifold edges are boundary (the walk stops there). More layers never make the image
@@ -89,11 +96,13 @@ struct BakedStats {
     std::uint32_t maxLoopIterations = 0; ///< counted (countLoops) in the last frame
     std::uint32_t peelPasses = 0;
     std::int64_t eyeTetrahedron = -1; ///< the one holding the eye in the last frame, -1: none
-    std::uint64_t gpuBytes = 0;       ///< the bake's bricks and tables
+    std::uint64_t gpuBytes =
+        0; ///< the bake's bricks and tables (lit: its shading bricks, the solid)
 };
 
 /// Throws InputError, with the reason, when `baked` cannot render `view` (an orthographic camera;
-/// Lambert shading, which needs normals the bake does not store).
+/// Lambert shading, which needs normals the bake does not store). Lit scenes it renders (a bake
+/// without shading grids is refused by prepare()).
 void requireBakedView(const View& view);
 
 class BakedRenderer final : public Renderer {
@@ -131,12 +140,18 @@ private:
     struct Bake;
     /// InputError when `bake` does not fit the device (a leaf table or the bricks beyond its
     /// storage buffers, or the memory budget) split `perBuffer` bricks a buffer.
-    void checkBakeFits(const BakeData& bake, std::uint64_t perBuffer) const;
-    /// Replace the bake on the GPU by `bake`.
-    void uploadBake(const BakeData& bake);
+    /// `lit`: its shading bricks too (as many bytes again).
+    void checkBakeFits(const BakeData& bake, bool lit, std::uint64_t perBuffer) const;
+    /// Replace the bake on the GPU by `bake`; `lit`: its shading bricks too, in buffers of their
+    /// own split as the density bricks are, and the mesh's solid.
+    void uploadBake(const BakeData& bake, bool lit);
     /// Checks the bake handed in `settings` against the scene's shell (the mesh's hash with
-    /// `cellSize`, its thickness) and uploads it when it is not the one uploaded last.
-    void useBake(const RenderSettings& settings, float cellSize);
+    /// `cellSize`, its thickness) and uploads it when it is not the one uploaded last (or was
+    /// uploaded without the shading bricks a lit frame needs). InputError for a lit frame of a
+    /// bake without shading grids.
+    void useBake(const RenderSettings& settings, float cellSize, bool lit);
+    /// Lit: the lights, the sky and the kernel's models into `params`.
+    void litParams(const noise::Shading& shading, gpu_baked::SpotBakedParams& params) const;
     /// The tetrahedra's buffer for `triangles` prisms, and per mesh their neighbours, entry
     /// faces and the peel's indirect draw.
     void ensureShell(std::uint32_t triangles);
@@ -151,21 +166,27 @@ private:
     void recordMarch(VkCommandBuffer cmd, std::uint32_t k);
     /// Layer `layer`'s list header, bound at its offset.
     Descriptors& bindList(Descriptors& d, std::uint32_t layer) const;
-    const Pipeline& marchPipeline(bool count, bool first, std::uint32_t brickBuffers);
+    const Pipeline& marchPipeline(bool count, bool first, bool lit, std::uint32_t brickBuffers);
 
     const SceneGpu& m_scene;
     Context& m_ctx;
     Pipeline m_shell;
     std::array<Pipeline, 2> m_peel; ///< later layers, the first
-    std::map<std::tuple<bool, bool, std::uint32_t>, Pipeline>
-        m_march; ///< by (count loops, first layer, brick buffers)
+    std::map<std::tuple<bool, bool, bool, std::uint32_t>, Pipeline>
+        m_march; ///< by (count loops, first layer, lit, brick buffers)
     bool m_countLoops = false;
 
     // Per bake (RenderSettings::bake): the one on the GPU.
     std::shared_ptr<const BakeData> m_bake;
+    bool m_bakeLit = false; ///< its shading bricks are uploaded too
     BakedStats m_bakeStats;
     Buffer m_table;
     std::array<Buffer, gpu_baked::kBakedBrickBuffers> m_bricks; ///< the density bricks' buffers
+    /// Lit: the shading bricks' buffers (density brick b's at the same place) and the mesh's
+    /// inside at level m_solidLevel (solidVoxels; kBakedBindSolid).
+    std::array<Buffer, gpu_baked::kBakedBrickBuffers> m_shadingBricks;
+    Buffer m_solid;
+    std::uint32_t m_solidLevel = 0;
     std::uint32_t m_bricksPerBuffer = 0, m_brickSplit = 0;
     float m_brickUnit = 1.0f; ///< what a stored 1 in the density bricks is (SpotBakedParams::unit)
     std::vector<glm::ivec4> m_leafOrigin, m_leafDims;
@@ -190,6 +211,7 @@ private:
         std::uint32_t peelPasses = 1;
         bool count = false;
         std::uint32_t brickBuffers = 1; ///< the storage buffers the bricks span
+        bool lit = false;               ///< a lit scene: the lit march
     } m_frame;
 };
 
