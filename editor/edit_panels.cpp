@@ -269,6 +269,31 @@ bool windPanel(edit::Session& session, SessionPanels& st) {
     return changed;
 }
 
+bool lightPanel(edit::Session& session, SessionPanels& st) {
+    if (!beginSection("Light", st))
+        return false;
+    ImGui::PushItemWidth(kLabelWidth);
+    bool changed = false;
+    bool lit = session.lit();
+    if (ImGui::Checkbox("lit (key light, sky, shadows)", &lit))
+        changed |= attempt(st, [&] { session.setLit(lit); });
+    if (session.lit()) {
+        edit::Session::KeyLight k = session.keyLight();
+        bool edited = ImGui::SliderFloat("azimuth deg", &k.azimuthDeg, -180.0f, 180.0f, "%.0f");
+        edited |= ImGui::SliderFloat("elevation deg", &k.elevationDeg, -10.0f, 90.0f, "%.0f");
+        edited |= ImGui::SliderFloat("intensity", &k.intensity, 0.0f, 10.0f, "%.2f");
+        edited |= ImGui::Checkbox("shadows", &k.shadows);
+        if (edited)
+            changed |= attempt(st, [&] {
+                session.setKeyLight(k.azimuthDeg, k.elevationDeg, k.intensity, k.shadows);
+            });
+        hint("the key light: drag azimuth and elevation to move it; a lit frame costs several "
+             "unlit ones on a CPU device");
+    }
+    ImGui::PopItemWidth();
+    return changed;
+}
+
 bool filePanel(edit::Session& session, SessionPanels& st) {
     bool changed = false;
     if (!beginSection("File", st))
@@ -379,6 +404,7 @@ bool sessionPanels(edit::Session& session, SessionPanels& state) {
     changed |= kernelPanel(session, state);
     changed |= distributionPanel(session, state);
     changed |= windPanel(session, state);
+    changed |= lightPanel(session, state);
     changed |= filePanel(session, state);
     return changed;
 }

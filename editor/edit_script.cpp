@@ -284,6 +284,31 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
             else
                 line.fail(cat("unknown wind option '", key, "' (amplitude, frequency)"));
         }
+    } else if (verb == "light") {
+        a.type = T::Light;
+        const std::string state = line.word("on or off");
+        if (state != "on" && state != "off")
+            line.fail(cat("light '", state, "' must be on or off"));
+        a.on = state == "on";
+        while (!line.done()) {
+            const std::string key = line.word("light option");
+            if (key == "azimuth")
+                a.azimuthDeg = float(line.number("azimuth", -360.0, 360.0));
+            else if (key == "elevation")
+                a.elevationDeg = float(line.number("elevation", -90.0, 90.0));
+            else if (key == "intensity")
+                a.intensity = float(line.number("intensity", 0.0, 10000.0));
+            else if (key == "shadows") {
+                const std::string s = line.word("on or off");
+                if (s != "on" && s != "off")
+                    line.fail(cat("shadows '", s, "' must be on or off"));
+                a.shadows = s == "on";
+            } else
+                line.fail(cat("unknown light option '", key,
+                              "' (azimuth, elevation, intensity, shadows)"));
+        }
+        if (!a.on && (a.azimuthDeg || a.elevationDeg || a.intensity || a.shadows))
+            line.fail("'light off' takes no options");
     } else if (verb == "frames") {
         a.type = T::Frames;
         a.count = line.integer("frame count", 1, 100000);
@@ -312,7 +337,7 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
     } else {
         line.fail(
             cat("unknown action '", verb,
-                "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, frames, "
+                "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, light, frames, "
                 "time, play, save, screenshot)"));
     }
     line.end();
@@ -490,6 +515,17 @@ void runScriptAction(Session& session, const ScriptAction& a, const std::string&
             case T::Wind:
                 session.setWind(a.on, a.amplitudeDeg, a.frequencyHz);
                 break;
+            case T::Light: {
+                session.setLit(a.on);
+                if (a.on && (a.azimuthDeg || a.elevationDeg || a.intensity || a.shadows)) {
+                    const Session::KeyLight k = session.keyLight();
+                    session.setKeyLight(a.azimuthDeg.value_or(k.azimuthDeg),
+                                        a.elevationDeg.value_or(k.elevationDeg),
+                                        a.intensity.value_or(k.intensity),
+                                        a.shadows.value_or(k.shadows));
+                }
+                break;
+            }
             case T::Frames:
                 for (int i = 0; i < a.count; ++i) {
                     session.setTime(session.time() + 1.0 / 30.0);

@@ -64,6 +64,7 @@ struct ScriptAction {
         Set,
         Seed,
         Wind,
+        Light,
         Frames,
         Time,
         Play,
@@ -89,7 +90,10 @@ struct ScriptAction {
     double seconds = 0.0;           ///< Time
     std::optional<bool> loop;       ///< Play: loop on or off (none: the session's)
     std::uint32_t seed = 0;         ///< Seed
-    bool on = false;                ///< Wind
+    bool on = false;                ///< Wind, Light
+    /// Light: the key light's azimuth, elevation (degrees), intensity and shadows, where given.
+    std::optional<float> azimuthDeg, elevationDeg, intensity;
+    std::optional<bool> shadows;
     float amplitudeDeg = 20.0f, frequencyHz = 0.5f; ///< Wind
     std::filesystem::path file;                     ///< Save, Screenshot
 };

@@ -135,6 +135,7 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
         m_scene.camera.height = options.height;
     }
     m_camera = m_scene.camera;
+    m_sceneShading = m_scene.shading;
     (void)noise::CameraRays(m_camera); // checks the camera
     // A static OBJ/PLY or generated mesh loads as before (AnimatedMesh::load: a mesh that does
     // not move); the noise is generated on the rest pose of one that does.
@@ -998,6 +999,70 @@ void Session::setWind(bool on, float amplitudeDeg, float frequencyHz) {
     m_windBase.clear();
     if (wasOn && !on)
         rebuild(); // the document's comb again
+}
+
+void Session::setLit(bool lit) {
+    if (lit == this->lit())
+        return; // a lit session keeps its lights as set
+    if (!lit) {
+        if (m_sceneShading.mode == noise::Shading::Mode::Lit) {
+            m_sceneShading = m_scene.shading; // keeps the lights as set here
+            m_scene.shading.mode = noise::Shading::Mode::Unlit;
+        } else {
+            m_scene.shading = m_sceneShading;
+        }
+        return;
+    }
+    noise::Shading asked;
+    asked.mode = noise::Shading::Mode::Lit;
+    splat::requireLitSupport(splat::method(m_method), asked);
+    noise::Shading shading = m_sceneShading;
+    if (shading.mode != noise::Shading::Mode::Lit || shading.lights.empty()) {
+        if (shading.lights.empty()) {
+            noise::Light key;
+            key.direction = glm::normalize(glm::vec3(-0.6f, 0.8f, 0.45f));
+            key.color = glm::vec3(1.0f, 0.95f, 0.88f);
+            key.intensity = 3.0f;
+            key.shadows = true;
+            shading.lights = {key};
+        }
+        if (!(shading.sky.intensity > 0.0f)) {
+            shading.sky.color = glm::vec3(0.55f, 0.65f, 0.85f);
+            shading.sky.intensity = 0.5f;
+        }
+    }
+    shading.mode = noise::Shading::Mode::Lit;
+    m_scene.shading = shading;
+}
+
+void Session::setKeyLight(float azimuthDeg, float elevationDeg, float intensity, bool shadows) {
+    if (!std::isfinite(azimuthDeg) || !(elevationDeg >= -90.0f && elevationDeg <= 90.0f) ||
+        !(intensity >= 0.0f && intensity <= 1e4f))
+        throw InputError(cat("key light: azimuth ", azimuthDeg, ", elevation ", elevationDeg,
+                             " (in [-90, 90]), intensity ", intensity, " (in [0, 10000])"));
+    if (!lit())
+        setLit(true);
+    noise::Light& key = m_scene.shading.lights.front();
+    const float a = glm::radians(azimuthDeg), e = glm::radians(elevationDeg);
+    key.type = noise::Light::Type::Directional;
+    key.direction = glm::vec3(std::cos(e) * std::sin(a), std::sin(e), std::cos(e) * std::cos(a));
+    key.intensity = intensity;
+    key.shadows = shadows;
+}
+
+Session::KeyLight Session::keyLight() const {
+    KeyLight k;
+    if (m_scene.shading.lights.empty())
+        return k;
+    const noise::Light& key = m_scene.shading.lights.front();
+    const glm::vec3 d = key.type == noise::Light::Type::Directional
+                            ? glm::normalize(key.direction)
+                            : glm::vec3(0.0f, 1.0f, 0.0f);
+    k.azimuthDeg = glm::degrees(std::atan2(d.x, d.z));
+    k.elevationDeg = glm::degrees(std::asin(std::clamp(d.y, -1.0f, 1.0f)));
+    k.intensity = key.intensity;
+    k.shadows = key.shadows;
+    return k;
 }
 
 void Session::setTime(double seconds) {

@@ -205,6 +205,22 @@ public:
     /// document's comb; saving writes the document's comb.
     void setWind(bool on, float amplitudeDeg = 20.0f, float frequencyHz = 0.5f);
     bool wind() const { return m_windOn; }
+    /// Lighting as the frames show it (docs/design.md section 9): lit shows the scene's lights
+    /// and sky, or, where the scene has none, a key light from the upper left with shadows and a
+    /// pale sky; unlit shows the scene's colours as they are. Not an edit: the document is the
+    /// preset, and the scene file keeps its shading. Throws InputError when the method cannot
+    /// render lit scenes (MethodInfo::rendersLit; the frame is left unlit).
+    void setLit(bool lit);
+    bool lit() const { return m_scene.shading.mode == noise::Shading::Mode::Lit; }
+    /// The key light (the first light; a lit session has one): its direction as azimuth about
+    /// +y from +z and elevation above the horizon (degrees), its intensity and its shadows.
+    void setKeyLight(float azimuthDeg, float elevationDeg, float intensity, bool shadows);
+    struct KeyLight {
+        float azimuthDeg = 0.0f, elevationDeg = 0.0f, intensity = 0.0f;
+        bool shadows = false;
+    };
+    /// The key light now (zeros when the session has no light).
+    KeyLight keyLight() const;
     /// The time, seconds: the pose of an animated mesh (clamped to its clip: a time outside it
     /// is stored clamped), the scene's wind's and the comb wind's. Not an edit.
     void setTime(double seconds);
@@ -307,6 +323,7 @@ private:
     void poseForPick() const;
 
     noise::SceneDesc m_scene;
+    noise::Shading m_sceneShading; ///< the scene file's, what setLit(false) restores
     noise::AnimatedMesh m_animation; ///< the scene's mesh; the frame poses it (outlives m_frame)
     noise::Mesh m_mesh;              ///< its rest pose
     noise::Camera m_camera;

@@ -2,6 +2,8 @@
 // writes anything, on a malformed script and on a corrupt or mismatched .vdb; a good script runs
 // and writes its files.
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -258,36 +260,52 @@ TEST(EditScript, RunsAndSavesAndRejectsBadGrids) {
                 "density");
 }
 
-} // namespace
-
-// The window's options without --window: one line, exit 2, nothing run.
-TEST(EditScript, WindowOptionsNeedTheWindow) {
-    const fs::path script = test::tmpPath("edit_window_options.script");
-    test::writeText(script, "frames 1\n");
-    for (const std::string option :
-         {"--frames 3", "--orbit 5", "--resize 100x100", "--cycle-methods",
-          "--window-screenshot w.png", "--render-scale 2", "--refine 4", "--panels all"}) {
-        std::string err;
-        EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --script " +
-                                      script.string() + " " + option,
-                                  &err),
-                  2)
-            << option;
-        const std::string name = option.substr(0, option.find(' '));
-        EXPECT_NE(err.find(name + " needs the window"), std::string::npos) << err;
-        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-    }
-}
-
-// A stroke to a point 1e9 pixels away ends (clipped to the window) and the script goes on.
-TEST(EditScript, StrokeFarOutsideTheWindowEnds) {
-    const fs::path script = test::tmpPath("edit_far_stroke.script");
-    test::writeText(script, "brush density-erase radius 10\nstroke 64,64 1000000000,64\n"
-                            "stroke 1000000000,1000000000 -1000000000,64\nframes 1\n");
+TEST(EditScript, LightTurnsTheSessionLitAndMovesTheKeyLight) {
+    const fs::path dir = test::tmpPath("edit_light");
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path script = dir / "light.script";
+    test::writeText(script, "method hybrid\n"
+                            "screenshot " + (dir / "unlit.exr").string() + "\n"
+                            "light on azimuth -60 elevation 45 intensity 3 shadows on\n"
+                            "screenshot " + (dir / "shadowed.exr").string() + "\n"
+                            "light on shadows off\n"
+                            "screenshot " + (dir / "open.exr").string() + "\n"
+                            "light on azimuth 120\n"
+                            "screenshot " + (dir / "moved.exr").string() + "\n"
+                            "light off\n"
+                            "screenshot " + (dir / "off.exr").string() + "\n");
     std::string err;
-    EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() +
-                                  " --size 128x128 --script " + script.string(),
+    ASSERT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() +
+                                  " --size 64x64 --script " + script.string(),
                               &err),
               0)
         << err;
+    const auto mean = [&](const char* name) {
+        const noise::Image image = noise::readImage(dir / name);
+        double sum = 0.0;
+        for (const glm::vec3& p : image.pixels) {
+            EXPECT_TRUE(std::isfinite(p.r + p.g + p.b)) << name;
+            sum += p.r + p.g + p.b;
+        }
+        return sum / double(image.pixels.size());
+    };
+    const double shadowed = mean("shadowed.exr"), open = mean("open.exr");
+    std::printf("mean unlit %.4f, lit %.4f, lit without shadows %.4f, light moved %.4f, off %.4f\n",
+                mean("unlit.exr"), shadowed, open, mean("moved.exr"), mean("off.exr"));
+    EXPECT_LT(shadowed, 0.8 * open); // its shadows take light away
+    EXPECT_GT(shadowed, 0.0);
+    // Moving the light changes the picture; turning it off gives the unlit one back.
+    EXPECT_GT(splat::psnr(noise::readImage(dir / "open.exr"), noise::readImage(dir / "moved.exr")),
+              0.0);
+    EXPECT_LT(splat::psnr(noise::readImage(dir / "open.exr"), noise::readImage(dir / "moved.exr")),
+              40.0);
+    EXPECT_EQ(noise::readImage(dir / "unlit.exr").pixels, noise::readImage(dir / "off.exr").pixels);
+    // Bad lines name their line.
+    EXPECT_THROW(edit::parseScript("light bright\n", "s"), InputError);
+    EXPECT_THROW(edit::parseScript("light on elevation 120\n", "s"), InputError);
+    EXPECT_THROW(edit::parseScript("light off intensity 2\n", "s"), InputError);
+    EXPECT_THROW(edit::parseScript("light on shadows maybe\n", "s"), InputError);
 }
+
+} // namespace
