@@ -195,7 +195,7 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
     }
     for (uint j = 0u; j < lit.counts.y; ++j) {
         vec3 w = lit.skyDirs[j].xyz;
-        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w, 0u);
+        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w, 1u);
         sum += (t * spotLobeDiffuse(model, axis, w, v)) * lit.sky.rgb * color;
     }
     return sum;
