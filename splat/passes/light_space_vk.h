@@ -27,7 +27,7 @@ namespace spot::splat {
 /// The defaults, measured on fur-bunny-lit (docs/design.md, "Lighting on the GPU"): a light's
 /// view at 512 texels shadows its lobes to 0.028 of the exact transmittance (mean), at 256 to
 /// 0.049, and the images at 96x96 do not tell the two apart; the sky at 3 directions against 6
-/// loses 1.4 dB on a sky-only image and saves half the structure's cost.
+/// loses about 2 dB on a sky-only image and about 40% of the structure's cost.
 struct LightSpaceSettings {
     std::uint32_t lightTexels = 256;
     std::uint32_t skyTexels = 48;

@@ -309,3 +309,35 @@ TEST(EditScript, LightTurnsTheSessionLitAndMovesTheKeyLight) {
 }
 
 } // namespace
+
+// The window's options without --window: one line, exit 2, nothing run.
+TEST(EditScript, WindowOptionsNeedTheWindow) {
+    const fs::path script = test::tmpPath("edit_window_options.script");
+    test::writeText(script, "frames 1\n");
+    for (const std::string option :
+         {"--frames 3", "--orbit 5", "--resize 100x100", "--cycle-methods",
+          "--window-screenshot w.png", "--render-scale 2", "--refine 4", "--panels all"}) {
+        std::string err;
+        EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() + " --script " +
+                                      script.string() + " " + option,
+                                  &err),
+                  2)
+            << option;
+        const std::string name = option.substr(0, option.find(' '));
+        EXPECT_NE(err.find(name + " needs the window"), std::string::npos) << err;
+        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    }
+}
+
+// A stroke to a point 1e9 pixels away ends (clipped to the window) and the script goes on.
+TEST(EditScript, StrokeFarOutsideTheWindowEnds) {
+    const fs::path script = test::tmpPath("edit_far_stroke.script");
+    test::writeText(script, "brush density-erase radius 10\nstroke 64,64 1000000000,64\n"
+                            "stroke 1000000000,1000000000 -1000000000,64\nframes 1\n");
+    std::string err;
+    EXPECT_EQ(test::spotshell("edit --scene " + test::bunnyScene().string() +
+                                  " --size 128x128 --script " + script.string(),
+                              &err),
+              0)
+        << err;
+}
