@@ -163,6 +163,19 @@ float litSelfShadow(mat3 A, float amp, float k, vec3 v, vec3 l, uint rings) {
     return seen > 0.0 ? lit / seen : 1.0;
 }
 
+// What arrives at p from `light` before any shadow: its direction l (towards the light) and
+// radiance (a point light's falls off as 1 / d^2).
+vec3 litIncoming(SpotLitLight light, vec3 p, out vec3 l) {
+    if (light.where.w < 0.5) {
+        l = light.where.xyz;
+        return light.radiance.rgb;
+    }
+    vec3 q = light.where.xyz - p;
+    float d = length(q);
+    l = d > 0.0 ? q / d : vec3(0.0, 1.0, 0.0);
+    return light.radiance.rgb * spotPointFalloff(1.0, d);
+}
+
 // Transmittance from a lobe towards view v's light (direction l): the structure's where the
 // light's ray through its centre enters its support (what lies between the lobe and the light),
 // times the lobe's own as the eye sees it (litSelfShadow).
@@ -180,14 +193,8 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
     vec3 sum = vec3(0.0);
     for (uint i = 0u; i < lit.counts.x; ++i) {
         SpotLitLight light = lit.lights[i];
-        vec3 radiance = light.radiance.rgb;
-        vec3 l = light.where.xyz;
-        if (light.where.w > 0.5) {
-            vec3 q = light.where.xyz - c;
-            float d = length(q);
-            l = d > 0.0 ? q / d : vec3(0.0, 1.0, 0.0);
-            radiance *= spotPointFalloff(1.0, d);
-        }
+        vec3 l;
+        vec3 radiance = litIncoming(light, c, l);
         uint view = uint(light.radiance.w);
         if (view > 0u)
             radiance *= litLobeTransmittance(view - 1u, A, c, amp, k, v, l, 3u);
@@ -204,15 +211,7 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
 // What arrives at p from light i: its direction l (towards the light) and radiance, shadowed.
 vec3 litArrival(uint i, vec3 p, float biasTexels, out vec3 l) {
     SpotLitLight light = lit.lights[i];
-    vec3 radiance = light.radiance.rgb;
-    if (light.where.w > 0.5) {
-        vec3 q = light.where.xyz - p;
-        float d = length(q);
-        l = d > 0.0 ? q / d : vec3(0.0, 1.0, 0.0);
-        radiance *= spotPointFalloff(1.0, d);
-    } else {
-        l = light.where.xyz;
-    }
+    vec3 radiance = litIncoming(light, p, l);
     uint view = uint(light.radiance.w);
     if (view > 0u)
         radiance *= shadowTransmittance(view - 1u, p, biasTexels);
