@@ -17,12 +17,6 @@
 
 namespace spot::splat {
 
-void requireGpuShading(const noise::Shading& shading) {
-    if (shading.mode == noise::Shading::Mode::Lit)
-        throw InputError("the GPU methods render lit scenes (shading.mode \"lit\") next; use "
-                         "--method reference");
-}
-
 gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
                                          glm::vec3 baseColor, std::uint32_t count,
                                          std::uint32_t lobes, float support,

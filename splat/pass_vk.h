@@ -71,13 +71,9 @@ template <std::size_t N> std::span<const std::uint32_t> spirv(const std::uint32_
     return {code, N};
 }
 
-/// InputError unless the GPU methods can shade with `shading`: they render unlit and Lambert
-/// scenes; a lit one (shading.mode "lit") only the reference renders, for now.
-void requireGpuShading(const noise::Shading& shading);
-
 /// The frame constants for a camera (units: world; image size in pixels). `flags` are the
-/// method's kSplatFlag* bits (Lambert is added from `shading`). Refuses a lit `shading`
-/// (requireGpuShading): every GPU method's frame passes through here.
+/// method's kSplatFlag* bits (Lambert is added from `shading`; a lit frame's lights are the
+/// light-space structure's, splat/passes/light_space_vk.h).
 gpu_splat::SpotSplatFrame makeSplatFrame(const noise::Camera& camera, const noise::Shading& shading,
                                          glm::vec3 baseColor, std::uint32_t count,
                                          std::uint32_t lobes, float support,

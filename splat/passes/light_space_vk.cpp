@@ -184,7 +184,6 @@ void LightSpace::prepare(const noise::Shading& shading, const ImpulseSet& impuls
     }
     if (layerWords > 0xffffffffull || firstWords > 0xffffffffull)
         throw InputError("light space: the views' texels exceed 32-bit offsets");
-    m_params = p;
     m_views = views;
     m_texels = std::uint32_t(texels);
     m_impulses = impulses;
@@ -299,7 +298,7 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
         bindLookup(d).push(m_ctx, cmd, p);
         vkCmdDispatchIndirect(cmd, list.handle(), 0);
     };
-    // 1. Place the lobes; the extents over them and the mesh.
+    // 1. Place the lobes (the views' extents come from the host, prepare()).
     {
         Descriptors d;
         d.buffer(kShadowBindImpulses, *m_impulses.impulses)
@@ -318,23 +317,23 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
             .buffer(kShadowBindPlaced, m_placed);
         run(m_tiles, m_capacity * lobes, m_itemCapacity, d);
     }
-    if (triangles > 0) {
-        Descriptors d;
-        d.buffer(kShadowBindItems, m_meshItems)
+    // The triangles' passes read their list and the posed mesh.
+    const auto meshItems = [&](Descriptors& d) -> Descriptors& {
+        return d.buffer(kShadowBindItems, m_meshItems)
             .buffer(kShadowBindVertices, mesh.vertices())
             .buffer(kShadowBindIndices, mesh.indices());
-        run(m_tilesMesh, triangles, m_meshItemCapacity, d);
+    };
+    if (triangles > 0) {
+        Descriptors d;
+        run(m_tilesMesh, triangles, m_meshItemCapacity, meshItems(d));
     }
     between();
     timer.mark(cmd, "light tiles");
-    // 3. The mesh's depth; the optical depth per layer.
+    // 3. The mesh's depth and the optical depth per layer: independent, so no barrier between
+    // them, and one mark (a mark between them would split their time arbitrarily).
     if (triangles > 0) {
         Descriptors d;
-        d.buffer(kShadowBindItems, m_meshItems)
-            .buffer(kShadowBindVertices, mesh.vertices())
-            .buffer(kShadowBindIndices, mesh.indices());
-        indirect(m_meshPass, m_meshItems, m_meshItemCapacity, d);
-        timer.mark(cmd, "light mesh");
+        indirect(m_meshPass, m_meshItems, m_meshItemCapacity, meshItems(d));
     }
     {
         Descriptors d;
@@ -342,7 +341,7 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
         indirect(m_deposit, m_items, m_itemCapacity, d);
     }
     between();
-    timer.mark(cmd, "light deposit");
+    timer.mark(cmd, "light mesh and deposit");
     // 5. Summed front to back.
     {
         Descriptors d;

@@ -55,22 +55,13 @@ public:
     /// descriptors.
     static Bindings lookupBindings();
     Descriptors& bindLookup(Descriptors& d) const;
-    std::uint32_t views() const { return m_views; }
     /// After the frame completed: the work items it needed. More than it had room for leaves
     /// this frame's shadows incomplete (a warning says so) and grows the list for the next.
     std::uint64_t itemsNeeded();
-    /// The shadow views' parameters (tests).
-    const gpu::SpotLitParams& params() const { return m_params; }
-    /// The structure's buffers (tests read them back).
-    const Buffer& extents() const { return m_extents; }
-    const Buffer& layers() const { return m_layers; }
-    const Buffer& first() const { return m_first; }
-    const Buffer& paramsBuffer() const { return m_paramsBuffer; }
 
 private:
     const SceneGpu& m_scene;
     Context& m_ctx;
-    gpu::SpotLitParams m_params{};
     std::uint32_t m_views = 0, m_texels = 0, m_capacity = 0, m_itemCapacity = 0,
                   m_meshItemCapacity = 0;
     ImpulseSet m_impulses;
