@@ -24,6 +24,8 @@ std::vector<OptionSpec> sceneOptions() {
 }
 
 bool SceneJob::cellVisible(const noise::SurfaceCell& cell) const {
+    if (scene.shading.castsShadows())
+        return true; // a cell out of view may shadow one in view
     const double h = generator->cellSize();
     if (deformer) {
         glm::vec3 lo, hi;

@@ -35,7 +35,8 @@ struct SceneJob {
     SceneJob& operator=(SceneJob&&) = delete;
 
     /// Cells whose kernels may reach the view (a cell's kernels reach at most h beyond it; at a
-    /// pose, from the cell's posed box).
+    /// pose, from the cell's posed box); every cell when kernels cast shadows
+    /// (Shading::castsShadows): one out of view may shadow one in view.
     bool cellVisible(const noise::SurfaceCell& cell) const;
 
     /// Whether the scene's surface moves: an animated mesh, or wind (docs/design.md section 6).

@@ -71,6 +71,17 @@ struct Shading {
     float ambient = 0.3f;                 ///< Lambert: [0,1]
     std::vector<Light> lights;            ///< Lit (the other modes ignore them), at most kMaxLights
     Sky sky;                              ///< Lit
+
+    /// Whether kernels shadow one another: lit, with a shadowed light or a sky. Then a kernel
+    /// the camera does not see may still darken one it sees, so the camera culls no cell.
+    bool castsShadows() const {
+        if (mode != Mode::Lit)
+            return false;
+        bool any = sky.intensity > 0.0f;
+        for (const Light& l : lights)
+            any = any || (l.shadows && l.intensity > 0.0f);
+        return any;
+    }
 };
 
 /// Lights a scene may have: a bound for the GPU's light table.

@@ -88,7 +88,8 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
         m_deformer->prepare(m_time);
     const bool regenerate = m_generator.prepare(
         [&](const noise::SurfaceCell& cell) {
-            const bool visible = cellVisible(rays, cell);
+            // Lit with shadows, a cell out of view may shadow one in view: none is culled.
+            const bool visible = view.shading.castsShadows() || cellVisible(rays, cell);
             stats.visibleCells += visible;
             return visible;
         },

@@ -39,7 +39,8 @@ struct FrameStats {
     std::uint32_t kernelsGenerated = 0;  ///< impulses drawn from (this frame's or the last)
     std::uint32_t candidates = 0;        ///< examined before the density test
     std::uint32_t cellsGenerated = 0;    ///< cells the impulses came from (after culling)
-    std::uint32_t visibleCells = 0;      ///< cells the camera may see
+    /// Cells the camera may see; every cell when kernels cast shadows (Shading::castsShadows)
+    std::uint32_t visibleCells = 0;
     FrameCounters counters;
     std::uint64_t gpuMemoryBytes = 0; ///< the context's peak allocation so far
 };

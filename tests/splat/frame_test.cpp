@@ -87,6 +87,35 @@ TEST(Frame, RegeneratesOnlyWhenTheVisibleCellsOrTheLevelOfDetailChange) {
     expectNoValidationErrors(ctx);
 }
 
+// Lit with shadows, a kernel out of view may shadow one in view (a close-up's neighbours, lit
+// from beside the frame), so the camera culls no cell; unlit, or with no shadow, it culls.
+TEST(Frame, WhenKernelsCastShadowsCellsOutOfViewAreGenerated) {
+    const FrameSetup s = loadFrameSetup("fur-bunny-close", 48);
+    const std::uint32_t cells = std::uint32_t(s.generator->cells().cells.size());
+    splat::Context ctx(validated());
+    splat::Frame frame(ctx, s.mesh, *s.generator);
+    splat::RenderSettings settings;
+    splat::View view = s.view();
+    const splat::FrameStats unlit = frame.render("hybrid", view, settings);
+    EXPECT_LT(unlit.visibleCells, cells * 3 / 4) << "the close-up sees part of the bunny";
+    view.shading.mode = noise::Shading::Mode::Lit;
+    view.shading.lights = {noise::Light{}};
+    view.shading.lights[0].direction = glm::normalize(glm::vec3(-0.6f, 0.8f, 0.45f));
+    view.shading.lights[0].shadows = false;
+    view.shading.sky.intensity = 0.0f;
+    ASSERT_FALSE(view.shading.castsShadows());
+    EXPECT_EQ(frame.render("hybrid", view, settings).visibleCells, unlit.visibleCells);
+    view.shading.lights[0].shadows = true;
+    const splat::FrameStats shadowed = frame.render("hybrid", view, settings);
+    EXPECT_TRUE(shadowed.regenerated);
+    EXPECT_EQ(shadowed.visibleCells, cells);
+    EXPECT_GT(shadowed.kernelsGenerated, unlit.kernelsGenerated);
+    view.shading.lights[0].shadows = false;
+    view.shading.sky.intensity = 0.5f; // the sky is always shadowed
+    EXPECT_EQ(frame.render("hybrid", view, settings).visibleCells, cells);
+    expectNoValidationErrors(ctx);
+}
+
 TEST(Frame, ReadsThePixelsBackOnlyWhenAsked) {
     const FrameSetup s = loadFrameSetup("fur-bunny", 64);
     splat::Context ctx(validated());
