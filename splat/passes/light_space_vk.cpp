@@ -254,12 +254,45 @@ void LightSpace::prepare(const noise::Shading& shading, const ImpulseSet& impuls
     room(m_itemCapacity, std::uint64_t(m_capacity) * lobes, m_items, "light space lobe items");
     room(m_meshItemCapacity, m_scene.meshPass().indexCount() / 3, m_meshItems,
          "light space triangle items");
+
+    // What the structure is built from: the views and lights, the impulses (their version
+    // changes with them and with the pose; 0 says unknown) and where it lives. The same as the
+    // last build's: record() keeps it (the camera alone moved, or nothing did).
+    struct Sources {
+        VkBuffer impulses, count, layers, first, placed, items, meshItems, vertices;
+        std::uint64_t version;
+        std::uint32_t capacity, itemCapacity, meshItemCapacity;
+    } sources{};
+    sources.impulses = impulses.impulses->handle();
+    sources.count = impulses.count->handle();
+    sources.layers = m_layers.handle();
+    sources.first = m_first.handle();
+    sources.placed = m_placed.handle();
+    sources.items = m_items.handle();
+    sources.meshItems = m_meshItems.handle();
+    sources.vertices = m_scene.meshPass().vertices().handle();
+    sources.version = impulses.version;
+    sources.capacity = m_capacity;
+    sources.itemCapacity = m_itemCapacity;
+    sources.meshItemCapacity = m_meshItemCapacity;
+    std::vector<std::byte> key(sizeof(p) + sizeof(SpotShadowExtent) * views + sizeof(sources));
+    std::memcpy(key.data(), &p, sizeof(p));
+    std::memcpy(key.data() + sizeof(p), extents, sizeof(SpotShadowExtent) * views);
+    std::memcpy(key.data() + key.size() - sizeof(sources), &sources, sizeof(sources));
+    m_current = impulses.version != 0 && key == m_built;
+    m_key = std::move(key);
 }
 
 void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
     using namespace passes;
     if (m_views == 0 || !m_impulses.impulses)
         return; // no shadows: nothing is looked up
+    m_reused = m_current;
+    if (m_current) { // built from the same sources by an earlier frame: made visible again
+        memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kFragment, kStorageRead);
+        return;
+    }
+    m_built = m_key;
     memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT, kTransfer,
                   VK_ACCESS_2_TRANSFER_WRITE_BIT);
     vkCmdFillBuffer(cmd, m_layers.handle(), 0, VK_WHOLE_SIZE, 0u);

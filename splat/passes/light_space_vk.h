@@ -13,7 +13,9 @@
 /// kernel's reach. The same impulses give the same structure, bit for bit, in any order.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "noise/reference.h"
 #include "shaders/spot_shadow.hpp"
@@ -58,6 +60,9 @@ public:
     /// After the frame completed: the work items it needed. More than it had room for leaves
     /// this frame's shadows incomplete (a warning says so) and grows the list for the next.
     std::uint64_t itemsNeeded();
+    /// Whether the last record() kept the structure an earlier frame built from the same
+    /// sources (the same impulses, version and pose, lights and views) rather than building it.
+    bool reused() const { return m_reused; }
 
 private:
     const SceneGpu& m_scene;
@@ -68,6 +73,10 @@ private:
     Pipeline m_place, m_tiles, m_tilesMesh, m_meshPass, m_deposit, m_prefix;
     Buffer m_paramsBuffer, m_extents, m_layers, m_first, m_placed, m_items, m_meshItems;
     bool m_warned = false;
+    /// prepare()'s sources (the parameters, extents, buffers and impulse version), and those of
+    /// the last build; m_current when they match.
+    std::vector<std::byte> m_key, m_built;
+    bool m_current = false, m_reused = false;
 };
 
 } // namespace spot::splat

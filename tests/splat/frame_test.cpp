@@ -116,6 +116,45 @@ TEST(Frame, WhenKernelsCastShadowsCellsOutOfViewAreGenerated) {
     expectNoValidationErrors(ctx);
 }
 
+bool builtLightSpace(const splat::FrameStats& stats) {
+    for (const auto& [pass, ms] : stats.passMs)
+        if (pass == "light place")
+            return true;
+    return false;
+}
+
+// The light-space structure depends on the impulses, the pose and the lights, not on the
+// camera: a frame that changes none of them keeps the last one (the editor's orbit), with the
+// image a fresh frame makes; a light that moves builds it again.
+TEST(Frame, TheLightSpaceIsKeptWhileOnlyTheCameraMoves) {
+    FrameSetup s = loadFrameSetup("fur-bunny", 40);
+    const noise::SceneDesc lit =
+        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json");
+    s.scene.shading = lit.shading;
+    ASSERT_TRUE(s.scene.shading.castsShadows());
+    splat::Context ctx(validated());
+    splat::RenderSettings settings;
+    for (const char* method : {"hybrid", "raymarch"}) {
+        SCOPED_TRACE(method);
+        splat::Frame frame(ctx, s.mesh, *s.generator);
+        splat::View view = s.view();
+        noise::Image first, again, orbited;
+        EXPECT_TRUE(builtLightSpace(frame.render(method, view, settings, &first)));
+        EXPECT_FALSE(builtLightSpace(frame.render(method, view, settings, &again)));
+        EXPECT_TRUE(sameBytes(first, again));
+        view.camera.eye = glm::vec3(-1.6f, 1.0f, 1.9f); // another side of the bunny
+        EXPECT_FALSE(builtLightSpace(frame.render(method, view, settings, &orbited)));
+        splat::Frame fresh(ctx, s.mesh, *s.generator);
+        noise::Image expected;
+        EXPECT_TRUE(builtLightSpace(fresh.render(method, view, settings, &expected)));
+        EXPECT_TRUE(sameBytes(orbited, expected)) << "a kept structure changed the image";
+        EXPECT_FALSE(sameBytes(orbited, first));
+        view.shading.lights[0].direction = glm::normalize(glm::vec3(0.7f, 0.5f, -0.5f));
+        EXPECT_TRUE(builtLightSpace(frame.render(method, view, settings)));
+    }
+    expectNoValidationErrors(ctx);
+}
+
 TEST(Frame, ReadsThePixelsBackOnlyWhenAsked) {
     const FrameSetup s = loadFrameSetup("fur-bunny", 64);
     splat::Context ctx(validated());
