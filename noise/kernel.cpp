@@ -2,12 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <tbb/parallel_for.h>
 
 #include "error.h"
 #include "impulses.h"
 #include "shaders/spot_light.hpp"
+#include "shaders/spot_shadow.hpp"
 #include "shaders/spot_shared.hpp"
 
 namespace spot::noise {
@@ -124,6 +128,40 @@ glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse&
         return glm::dot(n, glm::dvec3(impulse.normal)) < 0.0 ? -n : n;
     }
     return glm::dvec3(0.0);
+}
+
+const std::vector<float>& ownShadowTable(float support) {
+    static std::mutex mutex;
+    static std::map<float, std::vector<float>> tables;
+    const std::lock_guard<std::mutex> lock(mutex);
+    std::vector<float>& table = tables[support];
+    if (!table.empty())
+        return table;
+    using namespace gpu;
+    table.resize(std::size_t(kOwnShadowA) * kOwnShadowB * kOwnShadowC);
+    // Float, as the shaders evaluate it; one slice of c per task.
+    tbb::parallel_for(std::uint32_t(0), kOwnShadowC, [&](std::uint32_t ic) {
+        const float c = -1.0f + 2.0f * float(ic) / float(kOwnShadowC - 1);
+        for (std::uint32_t ib = 0; ib < kOwnShadowB; ++ib)
+            for (std::uint32_t ia = 0; ia < kOwnShadowA; ++ia)
+                table[(std::size_t(ic) * kOwnShadowB + ib) * kOwnShadowA + ia] =
+                    shared::f32::spotOwnShadow(spotOwnShadowNode(ia, kOwnShadowA),
+                                               spotOwnShadowNode(ib, kOwnShadowB), c, support, 3u);
+    });
+    return table;
+}
+
+float ownShadowLookup(const std::vector<float>& table, float a, float b, float c) {
+    using namespace gpu;
+    glm::vec3 w;
+    const std::uint32_t base = spotOwnShadowCell(a, b, c, w);
+    float sum = 0.0f;
+    for (std::uint32_t z = 0; z < 2; ++z)
+        for (std::uint32_t y = 0; y < 2; ++y)
+            for (std::uint32_t x = 0; x < 2; ++x)
+                sum += (x ? w.x : 1.0f - w.x) * (y ? w.y : 1.0f - w.y) * (z ? w.z : 1.0f - w.z) *
+                       table.at(base + (z * kOwnShadowB + y) * kOwnShadowA + x);
+    return sum;
 }
 
 } // namespace spot::noise

@@ -76,4 +76,13 @@ LobeLitModel lobeLitModel(const Lobe& lobe);
 glm::dvec3 placedShadingAxis(const Kernel& kernel, int lobeIndex, const Impulse& impulse,
                              const WorldLobe& placed);
 
+/// A lobe's own shadow (spot_shared.h's spotOwnShadow, three rings) tabulated for lobes truncated
+/// at `support` sigmas, laid out as shaders/spot_shadow.h says (kOwnShadowA x kOwnShadowB x
+/// kOwnShadowC floats): what the GPU's lit lobes look up. Made once per support in a process
+/// (about 50 ms on two cores), then shared.
+const std::vector<float>& ownShadowTable(float support);
+/// The table's trilinear lookup (what light_common.glsl's litOwnShadow does): within 0.006 of
+/// spotOwnShadow over a and b in [e^-5, e^4].
+float ownShadowLookup(const std::vector<float>& table, float a, float b, float c);
+
 } // namespace spot::noise

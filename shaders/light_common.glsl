@@ -4,7 +4,10 @@
 // spot_layout.h and spot_light.h.
 #include "spot_shadow.h"
 
-layout(std430, binding = kShadowBindParams) readonly buffer LitParamsBuffer { SpotLitParams lit; };
+layout(std430, binding = kShadowBindParams) readonly buffer LitParamsBuffer {
+    SpotLitParams lit;
+    float ownShadow[]; // spot_shadow.h's table of spotOwnShadow
+};
 layout(std430, binding = kShadowBindExtents) buffer ShadowExtents { SpotShadowExtent extents[]; };
 #ifdef SHADOW_LAYERS_WRITE
 layout(std430, binding = kShadowBindLayers) buffer ShadowLayers { uint layers[]; };
@@ -114,53 +117,26 @@ float shadowTransmittance(uint v, vec3 p, float biasTexels) {
     return sum;
 }
 
-// How much of a lobe's own light it lets the eye see: what it emits towards the eye, weighted
-// by exp(-its own optical depth towards l) at the emitting point, over what it emits. Lobe space
-// makes the lobe a unit Gaussian; the eye's rays cross it at offsets r from its centre, on three
-// rings (r = 0.5, 1.25, 2 sigmas, each standing for its annulus) at four angles from the side the
-// light comes from; along each, 2 points that split what the ray sees it emit into equal shares.
-// `rings`: how many of the three rings (fewer is cheaper; 0 for the ray through the centre
-// alone).
-// An opaque strand shows its lit side to an eye beside the light and mostly its thin, less
-// shadowed fringe to an eye across from it. v: towards the eye; k: the support.
-float litSelfShadow(mat3 A, float amp, float k, vec3 v, vec3 l, uint rings) {
+// How much of a lobe's own light it lets the eye see (spot_shared.h's spotOwnShadow, three
+// rings), from the table: its depth scales along the eye's rays and the light's in lobe space and
+// the cosine between them. v: towards the eye; l: towards the light.
+float litOwnShadow(mat3 A, float amp, vec3 v, vec3 l) {
     vec3 dv = -(A * v); // the view rays' direction in lobe space
     vec3 dl = A * l;
-    float vv = dot(dv, dv);
-    if (!(vv > 0.0) || !(amp > 0.0))
+    float lv = length(dv);
+    float ll = length(dl);
+    if (!(lv > 0.0) || !(ll > 0.0) || !(amp > 0.0))
         return 1.0;
-    vec3 n = dv * inversesqrt(vv);
-    vec3 p = dl - dot(dl, n) * n; // across the rays, towards the light
-    if (!(dot(p, p) > 1e-12 * max(dot(dl, dl), 1e-30)))
-        p = abs(n.x) < 0.9 ? cross(n, vec3(1.0, 0.0, 0.0)) : cross(n, vec3(0.0, 1.0, 0.0));
-    p = normalize(p);
-    vec3 q = cross(n, p);
-    const float radii[4] = float[4](0.0, 0.5, 1.25, 2.0);
-    // annuli [0, .9], [.9, 1.6], [1.6, 2.5] / pi, a quarter each way; the centre alone: 1
-    const float areas[4] = float[4](1.0, 0.2025, 0.4375, 0.9225);
-    float seen = 0.0;
-    float lit = 0.0;
-    float tPeak;
-    // The rays at +q and -q see the same (the light lies in the plane of p and the rays): one
-    // stands for both.
-    for (uint ring = rings > 0u ? 1u : 0u; ring <= rings; ++ring) {
-        for (uint a = 0u; a < (ring == 0u ? 1u : 3u); ++a) {
-            vec3 offset = radii[ring] * (a == 0u ? p : a == 1u ? q : -p);
-            float tau = amp * spotLobeDepth(offset, dv, -1e30, 1e30, k, tPeak);
-            float emitted = (a == 1u ? 2.0 : 1.0) * areas[ring] * spotOneMinusExp(tau);
-            if (!(emitted > 0.0))
-                continue;
-            float own = 0.0;
-            for (uint i = 0u; i < 2u; ++i) {
-                float f = spotEmissionQuantileFraction(tau, (float(i) + 0.5) * 0.5);
-                float t = spotLobeDepthQuantile(offset, dv, -1e30, 1e30, k, f);
-                own += 0.5 * exp(-amp * spotLobeDepth(offset + t * dv, dl, 0.0, 1e30, k, tPeak));
-            }
-            seen += emitted;
-            lit += emitted * own;
-        }
-    }
-    return seen > 0.0 ? lit / seen : 1.0;
+    vec3 w;
+    uint base = spotOwnShadowCell(amp / lv, amp / ll, dot(dv, dl) / (lv * ll), w);
+    uint up = kOwnShadowB * kOwnShadowA;
+    vec4 near = vec4(ownShadow[base], ownShadow[base + 1u], ownShadow[base + kOwnShadowA],
+                     ownShadow[base + kOwnShadowA + 1u]);
+    vec4 far = vec4(ownShadow[base + up], ownShadow[base + up + 1u],
+                    ownShadow[base + up + kOwnShadowA], ownShadow[base + up + kOwnShadowA + 1u]);
+    vec4 c = mix(near, far, w.z);
+    vec2 b = mix(c.xy, c.zw, w.y);
+    return mix(b.x, b.y, w.x);
 }
 
 // What arrives at p from `light` before any shadow: its direction l (towards the light) and
@@ -178,11 +154,10 @@ vec3 litIncoming(SpotLitLight light, vec3 p, out vec3 l) {
 
 // Transmittance from a lobe towards view v's light (direction l): the structure's where the
 // light's ray through its centre enters its support (what lies between the lobe and the light),
-// times the lobe's own as the eye sees it (litSelfShadow).
-float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l,
-                           uint rings) {
+// times the lobe's own as the eye sees it (litOwnShadow).
+float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l) {
     float enter = 1.1 * k / max(length(A * l), 1e-30);
-    return shadowTransmittance(v, c + enter * l, 1.0) * litSelfShadow(A, amp, k, eye, l, rings);
+    return shadowTransmittance(v, c + enter * l, 1.0) * litOwnShadow(A, amp, eye, l);
 }
 
 // A lobe's lit colour (docs/design.md, "Lighting on the GPU"): every light through its model
@@ -197,12 +172,12 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
         vec3 radiance = litIncoming(light, c, l);
         uint view = uint(light.radiance.w);
         if (view > 0u)
-            radiance *= litLobeTransmittance(view - 1u, A, c, amp, k, v, l, 3u);
+            radiance *= litLobeTransmittance(view - 1u, A, c, amp, k, v, l);
         sum += radiance * spotLobeShade(model, axis, l, v, color, primary, secondary);
     }
     for (uint j = 0u; j < lit.counts.y; ++j) {
         vec3 w = lit.skyDirs[j].xyz;
-        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w, 1u);
+        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w);
         sum += (t * spotLobeDiffuse(model, axis, w, v)) * lit.sky.rgb * color;
     }
     return sum;

@@ -4,6 +4,7 @@
 /// checked (std430: every member a 16-byte vector).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include <glm/glm.hpp>
@@ -14,12 +15,18 @@ using uint = std::uint32_t;
 using real = float;
 using rvec2 = glm::vec2;
 using rvec3 = glm::vec3;
+using glm::clamp;
 using glm::max;
+using glm::min;
+using std::exp;
+using std::log;
+#define SPOT_OUT(T) T&
 using glm::uvec4;
 using glm::vec4;
 #define SPOT_CONST inline constexpr
 #define SPOT_FN inline
 #include "spot_shadow.h"
+#undef SPOT_OUT
 #undef SPOT_CONST
 #undef SPOT_FN
 } // namespace shadow_detail

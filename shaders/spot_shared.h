@@ -654,3 +654,54 @@ SPOT_FN real spotEmissionQuantileFraction(real tau, real q) {
     real s = x < real(1e-3) ? x * (real(1.0) + x * (real(0.5) + x * real(1.0 / 3.0))) : -log(real(1.0) - x);
     return min(s / tau, real(1.0));
 }
+
+/* How much of a lobe's own light it lets the eye see (docs/design.md, "Lighting on the GPU"): what
+ * it emits towards the eye, weighted by exp(-its own optical depth towards the light) at the
+ * emitting point, over what it emits. In lobe space the lobe is a unit Gaussian (truncated at k
+ * sigmas), so this depends on three numbers only: a = amp / |A v| and b = amp / |A l|, its optical
+ * depth scales along the eye's rays and the light's, and c, the cosine between the two directions
+ * in lobe space. The eye's rays cross the lobe at offsets r from its centre, on three rings
+ * (r = 0.5, 1.25, 2 sigmas, each standing for its annulus) at angles 0, 90 and 180 degrees from
+ * the side the light comes from (the ray at -90 sees what the one at +90 sees); along each, 2
+ * points split what the ray sees it emit into equal shares. `rings`: how many of the three (0:
+ * the ray through the centre alone). An opaque strand shows its lit side to an eye beside the
+ * light and mostly its thin, less shadowed fringe to an eye across from it. */
+SPOT_FN real spotOwnShadow(real a, real b, real c, real k, uint rings) {
+    if (!(a > real(0.0)) || !(b >= real(0.0)))
+        return real(1.0);
+    rvec3 n = rvec3(real(0.0), real(0.0), real(1.0));                       // the eye's rays
+    rvec3 m = rvec3(sqrt(max(real(1.0) - c * c, real(0.0))), real(0.0), c); // towards the light
+    real seen = real(0.0);
+    real lit = real(0.0);
+    real tPeak;
+    for (uint ring = rings > 0u ? 1u : 0u; ring <= rings; ++ring) {
+        // annuli [0, .9], [.9, 1.6], [1.6, 2.5] / pi, a quarter each way; the centre alone: 1
+        real radius = ring == 0u   ? real(0.0)
+                      : ring == 1u ? real(0.5)
+                      : ring == 2u ? real(1.25)
+                                   : real(2.0);
+        real area = ring == 0u   ? real(1.0)
+                    : ring == 1u ? real(0.2025)
+                    : ring == 2u ? real(0.4375)
+                                 : real(0.9225);
+        for (uint i = 0u; i < (ring == 0u ? 1u : 3u); ++i) {
+            rvec3 offset = radius * (i == 0u   ? rvec3(real(1.0), real(0.0), real(0.0))
+                                     : i == 1u ? rvec3(real(0.0), real(1.0), real(0.0))
+                                               : rvec3(real(-1.0), real(0.0), real(0.0)));
+            real tau = a * spotLobeDepth(offset, n, real(-1e30), real(1e30), k, tPeak);
+            real emitted = (i == 1u ? real(2.0) : real(1.0)) * area * spotOneMinusExp(tau);
+            if (!(emitted > real(0.0)))
+                continue;
+            real own = real(0.0);
+            for (uint j = 0u; j < 2u; ++j) {
+                real f = spotEmissionQuantileFraction(tau, (real(j) + real(0.5)) * real(0.5));
+                real t = spotLobeDepthQuantile(offset, n, real(-1e30), real(1e30), k, f);
+                own += real(0.5) *
+                       exp(-b * spotLobeDepth(offset + t * n, m, real(0.0), real(1e30), k, tPeak));
+            }
+            seen += emitted;
+            lit += emitted * own;
+        }
+    }
+    return seen > real(0.0) ? lit / seen : real(1.0);
+}

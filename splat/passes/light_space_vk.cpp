@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <iostream>
 #include <limits>
@@ -14,6 +15,7 @@
 #include "light_tiles.comp.h"
 #include "light_tiles_mesh.comp.h"
 #include "noise/error.h"
+#include "noise/kernel.h"
 #include "shaders/spot_layout.hpp"
 #include "splat/pass_vk.h"
 
@@ -89,8 +91,12 @@ LightSpace::LightSpace(const SceneGpu& scene) : m_scene(scene), m_ctx(scene.cont
         m_ctx, spirv(spv_light_deposit_comp),
         with({storageBuffer(kShadowBindItems), storageBuffer(kShadowBindPlaced)}), push);
     m_prefix = makeComputePipeline(m_ctx, spirv(spv_light_prefix_comp), common, push);
-    m_paramsBuffer = Buffer(m_ctx, sizeof(SpotLitParams), kStorage, Buffer::Memory::HostVisible,
-                            "light space parameters");
+    // The parameters (each frame's), then the own-shadow table (the kernel's support's).
+    const std::vector<float>& table = noise::ownShadowTable(m_scene.support());
+    m_paramsBuffer = Buffer(m_ctx, sizeof(SpotLitParams) + sizeof(float) * table.size(), kStorage,
+                            Buffer::Memory::HostVisible, "light space parameters");
+    std::memcpy(static_cast<std::byte*>(m_paramsBuffer.mapped()) + sizeof(SpotLitParams),
+                table.data(), sizeof(float) * table.size());
 }
 
 Bindings LightSpace::lookupBindings() {

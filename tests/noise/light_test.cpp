@@ -5,6 +5,7 @@
 // methods refuse lit scenes with one line.
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -13,10 +14,12 @@
 #include "noise/camera.h"
 #include "noise/error.h"
 #include "noise/impulses.h"
+#include "noise/kernel.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
 #include "noise/reference.h"
 #include "noise/scene.h"
+#include "shaders/spot_shared.hpp"
 #include "splat/image_compare.h"
 #include "splat/methods/baked/baked_vk.h"
 #include "test_support.h"
@@ -192,6 +195,36 @@ std::vector<glm::vec3> wall(float y, float half, float x0 = 0.0f) {
         for (float z = -half; z <= half + 1e-6f; z += 0.05f)
             out.emplace_back(x0 + x, y, z);
     return out;
+}
+
+// A lobe's own shadow: the GPU looks it up in a table (noise::ownShadowTable) rather than
+// integrating it; the lookup stays within 0.01 of the function (0.002 mean) over the depth
+// scales fur and flakes have, and keeps its limits: no depth towards the light lets it all
+// through, and a thick lobe lit from behind shows almost none of it.
+TEST(LitOwnShadow, TheTableFollowsTheFunction) {
+    namespace sh = shared::f32;
+    for (const float support : {3.0f, 2.5f}) {
+        const std::vector<float>& table = noise::ownShadowTable(support);
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<float> u(0.0f, 1.0f);
+        double sum = 0.0, worst = 0.0;
+        const int n = 4000;
+        for (int i = 0; i < n; ++i) {
+            const float a = std::exp(-5.0f + 9.0f * u(rng)), b = std::exp(-5.0f + 9.0f * u(rng));
+            const float c = -1.0f + 2.0f * u(rng);
+            const double e = std::abs(noise::ownShadowLookup(table, a, b, c) -
+                                      sh::spotOwnShadow(a, b, c, support, 3u));
+            sum += e;
+            worst = std::max(worst, e);
+        }
+        std::printf("support %.1f: own shadow table against the function: mean %.5f, max %.5f\n",
+                    double(support), sum / n, worst);
+        EXPECT_LT(sum / n, 0.002) << support;
+        EXPECT_LT(worst, 0.01) << support;
+        EXPECT_NEAR(noise::ownShadowLookup(table, 1.0f, 1e-6f, 0.3f), 1.0f, 1e-3f);
+        EXPECT_LT(noise::ownShadowLookup(table, 50.0f, 50.0f, 1.0f), 0.01f);
+        EXPECT_GT(noise::ownShadowLookup(table, 50.0f, 50.0f, -1.0f), 0.3f);
+    }
 }
 
 TEST(LitReference, ALobeBehindAnOpaqueWallOfKernelsGetsAtMostTwoPercent) {
