@@ -96,6 +96,7 @@ server.listen(0, '127.0.0.1', () => {
     fs.rmSync(profile, { recursive: true, force: true });
     browser = spawn(args.chromium || 'chromium', [
         '--headless=new', '--no-sandbox', '--no-first-run', '--disable-extensions',
+        '--disable-dev-shm-usage',
         '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist',
         `--user-data-dir=${profile}`, `--window-size=${w},${h}`,
         `http://127.0.0.1:${server.address().port}/?bg=${bg}`], { stdio: ['ignore', 'ignore', 'pipe'] });
