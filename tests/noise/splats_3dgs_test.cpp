@@ -312,14 +312,14 @@ TEST(Splats3dgs, CamerasJsonIsTheReferenceLayout) {
 
 /// The exported splats seen as a 3DGS viewer sees them (the CPU twin, antialiased) against the
 /// reference at the scene camera; measured at 128x128 (spotshell export --preview): fur-bunny
-/// 33.7 dB with the coverage mapping, 30.2 with peak; ring-sphere 25.1 and 21.9. The floors sit
-/// 1.5 dB below; coverage must beat peak by 2 dB on both, which is why it is the default.
+/// 33.7 dB with the coverage mapping, 30.0 with peak; ring-sphere 25.9 and 23.9. The floors sit
+/// 1.5 dB below; coverage must beat peak by 1.5 dB on both, which is why it is the default.
 TEST(Splats3dgs, SplatImageMatchesTheReference) {
     struct Case {
         const char* scene;
         double floor;
     };
-    for (const Case& c : {Case{"fur-bunny", 32.2}, Case{"ring-sphere", 23.6}}) {
+    for (const Case& c : {Case{"fur-bunny", 32.2}, Case{"ring-sphere", 24.4}}) {
         const std::string scene =
             std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + c.scene + ".json";
         const std::string ref = tmp(std::string("splats_ref_") + c.scene + ".exr");
@@ -339,7 +339,7 @@ TEST(Splats3dgs, SplatImageMatchesTheReference) {
             psnr[m] = splat::psnr(noise::readImage(ref), noise::readImage(preview));
         }
         EXPECT_GE(psnr[0], c.floor) << c.scene;
-        EXPECT_GE(psnr[0], psnr[1] + 2.0)
+        EXPECT_GE(psnr[0], psnr[1] + 1.5)
             << c.scene << " coverage " << psnr[0] << " peak " << psnr[1];
     }
 }
