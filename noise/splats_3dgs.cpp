@@ -26,6 +26,9 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kEulerGamma = 0.57721566490153286061;
 constexpr double kMinSigma = 1e-30;
 constexpr double kMinOpacity = 1e-6;
+/// The twin's near plane (world units from the eye's plane): splats nearer are culled, as
+/// viewers cull at their near plane (the viewer test's three.js camera: 0.01).
+constexpr double kNearPlane = 0.01;
 
 /// The property names of an SH degree-0 file in order, without the f_rest_* block that would
 /// follow f_dc_2.
@@ -420,7 +423,7 @@ Image renderSplats(const std::vector<Splat3dgs>& splats, const Camera& camera, g
     projected.reserve(splats.size());
     for (const Splat3dgs& s : splats) {
         const glm::dvec3 t = view * (glm::dvec3(s.position) - camera.eye);
-        if (!ortho && t.z <= 1e-6)
+        if (!ortho && t.z < kNearPlane)
             continue;
         const glm::dquat q =
             glm::normalize(glm::dquat(s.rotation[0], s.rotation[1], s.rotation[2], s.rotation[3]));
@@ -456,9 +459,13 @@ Image renderSplats(const std::vector<Splat3dgs>& splats, const Camera& camera, g
         p.conic = glm::inverse(cov);
         const double mid = 0.5 * (cov[0][0] + cov[1][1]);
         const double radius = 3.0 * std::sqrt(mid + std::sqrt(std::max(0.1, mid * mid - det)));
-        p.lo = glm::ivec2(glm::max(glm::floor(p.mean - radius), glm::dvec2(0.0)));
-        p.hi = glm::ivec2(
-            glm::min(glm::ceil(p.mean + radius), glm::dvec2(camera.width, camera.height)));
+        // Clamped to the image before the conversion to int (a splat near the eye's plane
+        // projects arbitrarily far).
+        const glm::dvec2 size(camera.width, camera.height);
+        if (!std::isfinite(radius) || !std::isfinite(p.mean.x) || !std::isfinite(p.mean.y))
+            continue;
+        p.lo = glm::ivec2(glm::clamp(glm::floor(p.mean - radius), glm::dvec2(0.0), size));
+        p.hi = glm::ivec2(glm::clamp(glm::ceil(p.mean + radius), glm::dvec2(0.0), size));
         if (p.lo.x >= p.hi.x || p.lo.y >= p.hi.y)
             continue;
         p.opacity = 1.0f / (1.0f + std::exp(-s.opacityLogit));

@@ -108,7 +108,8 @@ Splats3dgsFile readSplats3dgs(const std::filesystem::path& file);
 std::string camerasJson(const Camera& camera, const std::string& imageName);
 
 /// A CPU twin of a 3DGS rasteriser: each splat's covariance projected with the perspective
-/// Jacobian at its centre, widened by 0.3 px^2, sorted by view depth, alpha = min(0.99, opacity
+/// Jacobian at its centre (culled nearer than 0.01 to the eye's plane, as viewers cull at their
+/// near plane), widened by 0.3 px^2, sorted by view depth, alpha = min(0.99, opacity
 /// exp(-1/2 d^T Sigma2D^-1 d)) at pixel centres (skipped below 1/255, beyond 3 sigma),
 /// composited front to back in display values over `background` (linear RGB), as viewers do.
 /// `antialiased`: the opacity is scaled by sqrt(det Sigma2D / det(Sigma2D + 0.3 I)), as

@@ -310,6 +310,33 @@ TEST(Splats3dgs, CamerasJsonIsTheReferenceLayout) {
     EXPECT_THROW(noise::camerasJson(camera, "fur"), InputError);
 }
 
+TEST(Splats3dgs, RasteriserTwinComposites) {
+    noise::Camera camera;
+    camera.eye = glm::dvec3(0, 0, 3);
+    camera.width = camera.height = 32;
+    // One splat at the target, sigma 0.3 (v0 = (0.3 fy / 3)^2 px^2), opacity 0.5, colour 0.8
+    // (display), over black: at the centre pixel's centre, half a pixel off the splat's in x and
+    // y, alpha = 0.5 exp(-1/2 0.5 / v) (v0 / v), v = v0 + 0.3, the last factor the antialiased
+    // mode's sqrt(det Sigma2D / det(Sigma2D + 0.3 I)).
+    noise::Splat3dgs s;
+    s.logScale = glm::vec3(std::log(0.3f));
+    s.dc = glm::vec3(float((0.8 - 0.5) / noise::kShC0));
+    s.opacityLogit = 0.0f;
+    // Splats nearer than the near plane (0.01) and behind the eye are culled.
+    noise::Splat3dgs near = s, behind = s;
+    near.position = glm::vec3(0.5f, 0.0f, 3.0f - 1e-3f);
+    behind.position = glm::vec3(0, 0, 4);
+    const noise::Image image = noise::renderSplats({near, behind, s}, camera, glm::vec3(0.0f));
+    const double fy = 16.0 / std::tan(glm::radians(20.0)), v0 = std::pow(0.3 * fy / 3.0, 2.0);
+    const double v = v0 + 0.3;
+    const double alpha = 0.5 * std::exp(-0.5 * 0.5 / v) * v0 / v;
+    EXPECT_NEAR(noise::srgbEncode(image.at(16, 16).g), 0.8 * alpha, 1e-5);
+    const noise::Image classic =
+        noise::renderSplats({near, behind, s}, camera, glm::vec3(0.0f), false);
+    EXPECT_NEAR(noise::srgbEncode(classic.at(16, 16).g), 0.8 * alpha * v / v0, 1e-5);
+    EXPECT_LT(noise::srgbEncode(image.at(0, 16).g), 0.05f); // 15.5 px = 3.5 sigma out
+}
+
 /// The exported splats seen as a 3DGS viewer sees them (the CPU twin, antialiased) against the
 /// reference at the scene camera; measured at 128x128 (spotshell export --preview): fur-bunny
 /// 33.7 dB with the coverage mapping, 30.0 with peak; ring-sphere 25.9 and 23.9. The floors sit
