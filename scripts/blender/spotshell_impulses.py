@@ -21,6 +21,9 @@ stores, per point (a mesh of vertices only; attribute domain POINT):
   anchor_uv        FLOAT2        its barycentrics (b1, b2); b0 = 1 - b1 - b2
 
 Any other float/int property of the PLY is kept too, under its own name (FLOAT or INT).
+Coordinates are taken as written, with no axis conversion, as Blender's PLY importer takes the
+mesh (spotshell's presets are y-up): import the mesh the same way and the two line up. The
+impulse colour multiplies the preset's lobe colours (white: the preset's own).
 
 As an add-on: Edit > Preferences > Add-ons > Install... this file; then File > Import >
 spotshell impulses (.ply). From the command line:
@@ -53,6 +56,9 @@ _TYPES = {"char": "b", "int8": "b", "uchar": "B", "uint8": "B", "short": "h", "i
 # PLY property triples stored as one vector attribute: (attribute, properties, type).
 _VECTORS = [("surface_normal", ("nx", "ny", "nz")), ("comb", ("tx", "ty", "tz")),
             ("scale", ("sx", "sy", "sz"))]
+# The example strand's radius in kernel units (the instance's scale makes it world units).
+_STRAND_RADIUS = 0.05
+
 _GROUPED = {"x", "y", "z", "nx", "ny", "nz", "tx", "ty", "tz", "sx", "sy", "sz", "red", "green",
             "blue", "face", "u", "v", "qw", "qx", "qy", "qz"}
 
@@ -163,9 +169,10 @@ def import_impulses(path, name=None, strand_length=None, collection=None):
 
 
 def strand_node_group(strand_length=None):
-    """Geometry Nodes: a line along the kernel's +z (a strand rises along the surface normal)
-    instanced on every point, turned by `rotation`, sized by `scale` (kernel units -> world) and
-    coloured by `color` (kept on the instances); the points stay beside them."""
+    """Geometry Nodes: a line along the kernel's +z (a strand rises along the surface normal),
+    `strand_length` kernel units long, made a four-sided tube _STRAND_RADIUS thick, instanced on every point, turned
+    by `rotation`, sized by `scale` (kernel units -> world), with the "spotshell strand" material
+    (the instances keep the points' `color`); the points stay beside them."""
     name = "spotshell strands"
     group = bpy.data.node_groups.get(name)
     if group is not None:
@@ -178,6 +185,12 @@ def strand_node_group(strand_length=None):
     out = nodes.new("NodeGroupOutput")
     line = nodes.new("GeometryNodeCurvePrimitiveLine")
     line.inputs["End"].default_value = (0.0, 0.0, strand_length or 1.0)
+    profile = nodes.new("GeometryNodeCurvePrimitiveCircle")
+    profile.inputs["Resolution"].default_value = 4
+    profile.inputs["Radius"].default_value = _STRAND_RADIUS
+    tube = nodes.new("GeometryNodeCurveToMesh")
+    material = nodes.new("GeometryNodeSetMaterial")
+    material.inputs["Material"].default_value = strand_material()
     instance = nodes.new("GeometryNodeInstanceOnPoints")
     rotation = nodes.new("GeometryNodeInputNamedAttribute")
     rotation.data_type = "FLOAT_VECTOR"
@@ -187,15 +200,41 @@ def strand_node_group(strand_length=None):
     scale.inputs["Name"].default_value = "scale"
     join = nodes.new("GeometryNodeJoinGeometry")
     links.new(inp.outputs["Geometry"], instance.inputs["Points"])
-    links.new(line.outputs["Curve"], instance.inputs["Instance"])
+    links.new(line.outputs["Curve"], tube.inputs["Curve"])
+    links.new(profile.outputs["Curve"], tube.inputs["Profile Curve"])
+    links.new(tube.outputs["Mesh"], material.inputs["Geometry"])
+    links.new(material.outputs["Geometry"], instance.inputs["Instance"])
     links.new(rotation.outputs["Attribute"], instance.inputs["Rotation"])
     links.new(scale.outputs["Attribute"], instance.inputs["Scale"])
     links.new(instance.outputs["Instances"], join.inputs["Geometry"])
     links.new(inp.outputs["Geometry"], join.inputs["Geometry"])
     links.new(join.outputs["Geometry"], out.inputs["Geometry"])
-    for i, node in enumerate((inp, line, rotation, scale, instance, join, out)):
+    for i, node in enumerate((inp, line, profile, tube, material, rotation, scale, instance, join,
+                               out)):
         node.location = (200 * i, 0)
     return group
+
+
+def strand_material():
+    """A material for the strands: the impulse's colour (the instancer's `color`), diffuse."""
+    name = "spotshell strand"
+    mat = bpy.data.materials.get(name)
+    if mat is not None:
+        return mat
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.clear()
+    attribute = nodes.new("ShaderNodeAttribute")
+    attribute.attribute_type = "INSTANCER"
+    attribute.attribute_name = "color"
+    bsdf = nodes.new("ShaderNodeBsdfPrincipled")
+    output = nodes.new("ShaderNodeOutputMaterial")
+    links.new(attribute.outputs["Color"], bsdf.inputs["Base Color"])
+    links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
+    for i, node in enumerate((attribute, bsdf, output)):
+        node.location = (300 * i, 0)
+    return mat
 
 
 class ImportSpotshellImpulses(bpy.types.Operator):
