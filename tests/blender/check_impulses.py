@@ -37,7 +37,14 @@ record = struct.Struct("<15fi9f")
 rows = list(record.iter_unpack(body))
 check(len(rows) == count and len(body) == count * record.size, "PLY body size")
 
-obj = spotshell_impulses.import_impulses(ply)
+# Through the add-on's operator, as File > Import runs it.
+spotshell_impulses.register()
+before = set(bpy.data.objects)
+result = bpy.ops.import_scene.spotshell_impulses(filepath=ply)
+check(result == {"FINISHED"}, f"the import operator returned {result}")
+created = [o for o in bpy.data.objects if o not in before]
+check(len(created) == 1, f"{len(created)} objects imported")
+obj = created[0]
 mesh = obj.data
 check(len(mesh.vertices) == count, f"{len(mesh.vertices)} points, {count} impulses")
 attrs = mesh.attributes
