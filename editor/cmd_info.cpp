@@ -6,6 +6,7 @@
 #include "noise/bake.h"
 #include "noise/error.h"
 #include "noise/mesh.h"
+#include "noise/splats_3dgs.h"
 
 namespace spot::cmd {
 
@@ -13,8 +14,9 @@ int info(int argc, char** argv) {
     cli::Args args(
         "info",
         "Load and validate a mesh (OBJ or PLY, a glTF 2.0 clip or a numbered mesh cache) "
-        "and print its counts and bounds (an animated one's at --time), or read a bake "
-        "(spotshell bake) and print its levels.",
+        "and print its counts and bounds (an animated one's at --time), read a bake "
+        "(spotshell bake) and print its levels, or read a 3D Gaussian splatting PLY "
+        "(spotshell export) and print its count, bounds and SH degree.",
         {{"mesh", "FILE",
           "mesh to inspect (.obj, .ply, .gltf, .glb, a cache walk.%04d.ply, or "
           "generated:NAME as scenes take)",
@@ -22,14 +24,26 @@ int info(int argc, char** argv) {
          {"clip", "NAME", "a glTF file's clip (default: its first)", false},
          {"fps", "N", "a mesh cache's frames per second (default 24)", false},
          {"time", "T", "an animated mesh's pose at T seconds (default: the rest pose)", false},
-         {"bake", "FILE", "bake to inspect (.vdb written by spotshell bake)", false}},
+         {"bake", "FILE", "bake to inspect (.vdb written by spotshell bake)", false},
+         {"splats", "FILE", "3DGS PLY to read back and check (spotshell export --format 3dgs)",
+          false}},
         argc, argv);
     if (args.helpRequested()) {
         std::fputs(args.usage().c_str(), stdout);
         return 0;
     }
-    if (args.has("mesh") == args.has("bake"))
-        throw InputError("spotshell info: give --mesh FILE or --bake FILE (one of them)");
+    if (int(args.has("mesh")) + int(args.has("bake")) + int(args.has("splats")) != 1)
+        throw InputError(
+            "spotshell info: give --mesh FILE, --bake FILE or --splats FILE (one of them)");
+    if (args.has("splats")) {
+        const noise::Splats3dgsFile file = noise::readSplats3dgs(args.str("splats"));
+        std::printf("splats %s\n", args.str("splats").c_str());
+        std::printf("  count      %zu\n", file.splats.size());
+        std::printf("  bounds     [%g %g %g] .. [%g %g %g]\n", file.lo.x, file.lo.y, file.lo.z,
+                    file.hi.x, file.hi.y, file.hi.z);
+        std::printf("  sh degree  %d\n", file.shDegree);
+        return 0;
+    }
     if (args.has("bake")) {
         const noise::BakedVolume bake = noise::readBakedGrids(args.str("bake"));
         std::printf("bake %s\n", args.str("bake").c_str());

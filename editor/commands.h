@@ -12,5 +12,6 @@ int bake(int argc, char** argv); ///< the noise into OpenVDB voxel mip levels (c
 int compare(int argc, char** argv);
 int bench(int argc, char** argv);
 int edit(int argc, char** argv); ///< the editor: its window, or a script headless (cmd_edit.cpp)
+int exportScene(int argc, char** argv); ///< the noise as 3D Gaussian splats (cmd_export.cpp)
 
 } // namespace spot::cmd

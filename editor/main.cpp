@@ -26,6 +26,7 @@ const Command kCommands[] = {
     {"compare", spot::cmd::compare, "PSNR, SSIM and FLIP of an image against a reference"},
     {"edit", spot::cmd::edit, "paint and edit a preset on a scene: a window, or --script without one"},
     {"bench", spot::cmd::bench, "speed against accuracy of every method, with charts"},
+    {"export", spot::cmd::exportScene, "write a scene's noise as 3D Gaussian splats (3DGS PLY)"},
     {"info", spot::cmd::info, "print a mesh's counts, bounds and dropped triangles"},
 };
 

@@ -25,7 +25,13 @@ packages=(
   xdotool
   # the benchmark's charts
   python3 python3-matplotlib
+  # real clients of the exports (tests/interop, scripts/blender): Node.js for the npm packages
+  # (3DGS converter and web viewer, Node >= 18), headless Chromium for the viewer (software WebGL),
+  # Blender (3.4) for the impulses importer's test
+  nodejs chromium blender
 )
+# npm: Debian's package, unless the installed Node.js bundles its own (nodesource's does)
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 
 missing=()
 for p in "${packages[@]}"; do
