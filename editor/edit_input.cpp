@@ -32,6 +32,8 @@ InputAction mapButton(const InputEvent& e, const InputContext& c) {
     const bool shift = e.mods & GLFW_MOD_SHIFT, alt = e.mods & GLFW_MOD_ALT;
     if (e.code == GLFW_MOUSE_BUTTON_MIDDLE || (e.code == GLFW_MOUSE_BUTTON_LEFT && alt))
         return action(Type::Navigate, shift ? Drag::Pan : Drag::Orbit);
+    if (e.code == GLFW_MOUSE_BUTTON_RIGHT)
+        return action(Type::Navigate, Drag::Light);
     if (e.code != GLFW_MOUSE_BUTTON_LEFT)
         return action(Type::None, c.drag);
     InputAction a = action(Type::BrushPress, Drag::Brush);
@@ -57,6 +59,9 @@ InputAction mapCursor(const InputEvent& e, const InputContext& c) {
         break;
     case Drag::Brush:
         a.type = Type::BrushDrag;
+        break;
+    case Drag::Light:
+        a.type = Type::TurnLight;
         break;
     case Drag::None:
         break;

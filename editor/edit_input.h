@@ -11,6 +11,8 @@
 ///     left drag            paint (shift or ctrl at the press: inverted, e.g. density-add erases)
 ///     middle drag          orbit (alt+left too); shift+middle pans
 ///     wheel                dolly
+///     right drag           turn the key light: left-right its azimuth, up-down its elevation
+///                          (an unlit session turns lit first)
 ///     ctrl+z, ctrl+shift+z, ctrl+y   undo, redo, redo
 ///     F or Home            frame the mesh
 ///     [ ]                  brush radius down / up; shift+[ ] strength down / up
@@ -26,7 +28,7 @@
 namespace spot::editor {
 
 /// The pointer drag in progress, from the press that began it to a release.
-enum class Drag { None, Orbit, Pan, Brush };
+enum class Drag { None, Orbit, Pan, Brush, Light };
 
 struct InputEvent {
     enum class Kind { Button, Cursor, Scroll, Key };
@@ -57,8 +59,9 @@ struct InputContext {
 struct InputAction {
     enum class Type {
         None,
-        Navigate,     ///< a press that begins an orbit or a pan (`drag` says which)
+        Navigate,     ///< a press that begins an orbit, a pan or a light drag (`drag` says which)
         Orbit,        ///< turn by (dx, dy) pixels of pointer motion
+        TurnLight,    ///< turn the key light by (dx, dy) pixels of pointer motion
         Pan,          ///< move the view by (dx, dy) pixels
         Dolly,        ///< dy wheel steps towards the target
         BrushPress,   ///< begin a stroke at (x, y); `invert` for the whole stroke

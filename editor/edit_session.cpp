@@ -1050,6 +1050,17 @@ void Session::setKeyLight(float azimuthDeg, float elevationDeg, float intensity,
     key.shadows = shadows;
 }
 
+void Session::turnKeyLight(float dAzimuthDeg, float dElevationDeg) {
+    if (!std::isfinite(dAzimuthDeg) || !std::isfinite(dElevationDeg))
+        throw InputError(cat("key light: turn by ", dAzimuthDeg, ", ", dElevationDeg, " degrees"));
+    if (!lit())
+        setLit(true);
+    const KeyLight k = keyLight();
+    const float azimuth = std::remainder(k.azimuthDeg + dAzimuthDeg, 360.0f);
+    setKeyLight(azimuth, std::clamp(k.elevationDeg + dElevationDeg, -89.0f, 89.0f), k.intensity,
+                k.shadows);
+}
+
 Session::KeyLight Session::keyLight() const {
     KeyLight k;
     if (m_scene.shading.lights.empty())

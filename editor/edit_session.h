@@ -215,6 +215,10 @@ public:
     /// The key light (the first light; a lit session has one): its direction as azimuth about
     /// +y from +z and elevation above the horizon (degrees), its intensity and its shadows.
     void setKeyLight(float azimuthDeg, float elevationDeg, float intensity, bool shadows);
+    /// Turn the key light by `dAzimuthDeg` about +y and `dElevationDeg` up (the elevation kept
+    /// within [-89, 89]), its intensity and shadows as they are: the viewport's right drag. An
+    /// unlit session turns lit first (setLit). Not an edit of the document.
+    void turnKeyLight(float dAzimuthDeg, float dElevationDeg);
     struct KeyLight {
         float azimuthDeg = 0.0f, elevationDeg = 0.0f, intensity = 0.0f;
         bool shadows = false;

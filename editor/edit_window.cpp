@@ -211,6 +211,12 @@ void applyInput(InputState& s, const InputAction& a) {
             s.view->dolly(a.dy);
             s.moved();
             break;
+        case T::TurnLight: {
+            // A quarter degree a pixel: across an 800-pixel viewport, 200 degrees of azimuth.
+            s.session->turnKeyLight(0.25f * float(a.dx), -0.25f * float(a.dy));
+            s.moved();
+            break;
+        }
         case T::BrushPress:
         case T::BrushDrag:
         case T::BrushRelease:
@@ -631,6 +637,7 @@ public:
             f.stroking = m_input.drag == Drag::Brush || m_strokePoint > 0;
             const bool navigating =
                 m_input.drag == Drag::Orbit || m_input.drag == Drag::Pan ||
+                m_input.drag == Drag::Light ||
                 std::chrono::duration<double>(Clock::now() - m_input.lastMotion).count() < 0.3;
             f.lowRes = navigating || f.stroking;
             buildOverlay(f);
@@ -927,7 +934,8 @@ private:
         const bool overScene = !ImGui::GetIO().WantCaptureMouse && ImGui::IsMousePosValid() &&
                                f.layout.inViewport(mouse.x, mouse.y);
         if (f.scriptPointer ||
-            (overScene && m_input.drag != Drag::Orbit && m_input.drag != Drag::Pan)) {
+            (overScene && m_input.drag != Drag::Orbit && m_input.drag != Drag::Pan &&
+             m_input.drag != Drag::Light)) {
             const ImVec2 at =
                 f.scriptPointer ? ImVec2(f.scriptPointer->x, f.scriptPointer->y) : mouse;
             // Clipped to the viewport: the circle never reaches into the column.

@@ -66,7 +66,7 @@ TEST(EditInput, LeftDragPaintsAndShiftOrCtrlInvertsTheStroke) {
     EXPECT_EQ(other.drag, Drag::None);
 }
 
-TEST(EditInput, MiddleDragOrbitsShiftMiddlePansAltLeftOrbits) {
+TEST(EditInput, MiddleDragOrbitsShiftMiddlePansAltLeftOrbitsRightTurnsTheLight) {
     const InputAction orbit = press(GLFW_MOUSE_BUTTON_MIDDLE, 0);
     EXPECT_EQ(orbit.type, Type::Navigate);
     EXPECT_EQ(orbit.drag, Drag::Orbit);
@@ -84,9 +84,24 @@ TEST(EditInput, MiddleDragOrbitsShiftMiddlePansAltLeftOrbits) {
     EXPECT_EQ(pan.type, Type::Pan);
     EXPECT_EQ(pan.dx, -10.0);
     EXPECT_EQ(pan.dy, 10.0);
-    // Motion without a drag does nothing; the right button does nothing.
+    // Motion without a drag does nothing.
     EXPECT_EQ(mapInput(InputEvent::cursor(5, 5), idle()).type, Type::None);
-    EXPECT_EQ(press(GLFW_MOUSE_BUTTON_RIGHT, 0).type, Type::None);
+    // The right button turns the key light by the motion; its release ends the drag.
+    const InputAction light = press(GLFW_MOUSE_BUTTON_RIGHT, 0);
+    EXPECT_EQ(light.type, Type::Navigate);
+    EXPECT_EQ(light.drag, Drag::Light);
+    const InputAction turnLight =
+        mapInput(InputEvent::cursor(80.0, 120.0), dragging(Drag::Light, 100, 100));
+    EXPECT_EQ(turnLight.type, Type::TurnLight);
+    EXPECT_EQ(turnLight.dx, -20.0);
+    EXPECT_EQ(turnLight.dy, 20.0);
+    EXPECT_EQ(mapInput(InputEvent::button(GLFW_MOUSE_BUTTON_RIGHT, GLFW_RELEASE, 0, 80, 120),
+                       dragging(Drag::Light))
+                  .drag,
+              Drag::None);
+    InputContext overPanel;
+    overPanel.panelWantsMouse = true;
+    EXPECT_EQ(press(GLFW_MOUSE_BUTTON_RIGHT, 0, overPanel).type, Type::None);
     // The wheel dollies.
     const InputAction wheel = mapInput(InputEvent::scroll(0.0, -2.0), idle());
     EXPECT_EQ(wheel.type, Type::Dolly);

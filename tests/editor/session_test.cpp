@@ -214,6 +214,28 @@ TEST(EditSession, SaveAndLoadRoundTrip) {
 }
 
 // A lobe edit changes the rendered image (and undoing it restores the image).
+// The viewport's right drag: the key light turns by the drag, its elevation kept off the poles,
+// and an unlit session turns lit first with the default key light; the document is not edited.
+TEST(EditSession, TurningTheKeyLightLightsTheSessionAndMovesTheLight) {
+    edit::Session s(test::bunnyScene(), editOptions(64));
+    ASSERT_FALSE(s.lit());
+    s.turnKeyLight(10.0f, 5.0f);
+    ASSERT_TRUE(s.lit());
+    s.setKeyLight(30.0f, 40.0f, 2.0f, true);
+    s.turnKeyLight(-50.0f, 20.0f);
+    edit::Session::KeyLight k = s.keyLight();
+    EXPECT_NEAR(k.azimuthDeg, -20.0f, 1e-3f);
+    EXPECT_NEAR(k.elevationDeg, 60.0f, 1e-3f);
+    EXPECT_EQ(k.intensity, 2.0f);
+    EXPECT_TRUE(k.shadows);
+    s.turnKeyLight(350.0f, 100.0f); // azimuth wraps, elevation stops short of the pole
+    k = s.keyLight();
+    EXPECT_NEAR(k.azimuthDeg, -30.0f, 1e-3f);
+    EXPECT_NEAR(k.elevationDeg, 89.0f, 1e-3f);
+    EXPECT_THROW(s.turnKeyLight(std::nanf(""), 0.0f), InputError);
+    EXPECT_FALSE(s.dirty());
+}
+
 TEST(EditSession, LobeEditChangesTheImage) {
     edit::Session s(test::bunnyScene(), editOptions(128));
     noise::Image before, after, undone;
