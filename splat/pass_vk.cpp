@@ -228,6 +228,26 @@ VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp
     return a;
 }
 
+namespace {
+/// PixelScissor's window and the size it applies to (empty: none).
+thread_local noise::PixelRect t_scissor;
+thread_local std::uint32_t t_scissorWidth = 0, t_scissorHeight = 0;
+} // namespace
+
+PixelScissor::PixelScissor(noise::PixelRect window, std::uint32_t fullWidth,
+                           std::uint32_t fullHeight)
+    : m_previous(t_scissor), m_previousWidth(t_scissorWidth), m_previousHeight(t_scissorHeight) {
+    t_scissor = window;
+    t_scissorWidth = fullWidth;
+    t_scissorHeight = fullHeight;
+}
+
+PixelScissor::~PixelScissor() {
+    t_scissor = m_previous;
+    t_scissorWidth = m_previousWidth;
+    t_scissorHeight = m_previousHeight;
+}
+
 void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
                     const std::vector<VkRenderingAttachmentInfo>& colors,
                     const VkRenderingAttachmentInfo* depth) {
@@ -239,7 +259,10 @@ void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t heig
     info.pDepthAttachment = depth;
     vkCmdBeginRendering(cmd, &info);
     const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
-    const VkRect2D scissor{{0, 0}, {width, height}};
+    VkRect2D scissor{{0, 0}, {width, height}};
+    if (!t_scissor.empty() && width == t_scissorWidth && height == t_scissorHeight)
+        scissor = {{t_scissor.x0, t_scissor.y0},
+                   {std::uint32_t(t_scissor.width()), std::uint32_t(t_scissor.height())}};
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     vkCmdSetScissor(cmd, 0, 1, &scissor);
 }
