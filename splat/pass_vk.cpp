@@ -248,6 +248,23 @@ PixelScissor::~PixelScissor() {
     t_scissorHeight = m_previousHeight;
 }
 
+void dispatchPixels(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    std::uint32_t group, std::uint32_t scale) {
+    std::uint32_t x0 = 0, y0 = 0, x1 = (width + group - 1) / group,
+                  y1 = (height + group - 1) / group;
+    if (!t_scissor.empty() && width == t_scissorWidth * scale &&
+        height == t_scissorHeight * scale) {
+        x0 = std::uint32_t(t_scissor.x0) * scale / group;
+        y0 = std::uint32_t(t_scissor.y0) * scale / group;
+        x1 = (std::uint32_t(t_scissor.x1) * scale + group - 1) / group;
+        y1 = (std::uint32_t(t_scissor.y1) * scale + group - 1) / group;
+    }
+    if (x0 == 0 && y0 == 0)
+        vkCmdDispatch(cmd, x1, y1, 1);
+    else
+        vkCmdDispatchBase(cmd, x0, y0, 0, x1 - x0, y1 - y0, 1);
+}
+
 void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
                     const std::vector<VkRenderingAttachmentInfo>& colors,
                     const VkRenderingAttachmentInfo* depth) {

@@ -153,9 +153,19 @@ void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t heig
 void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame);
 
 /// While alive (on this thread), every beginRendering into a target of `fullWidth` x `fullHeight`
-/// sets its scissor to `window`: a tile's frame (View::window) rasterizes only the tile's pixels,
-/// each exactly as in the whole image (the viewport, and so every fragment's coordinates and
-/// values, stay the whole image's). An empty window scissors nothing.
+/// sets its scissor to `window`, and dispatchPixels over that image dispatches only the
+/// workgroups that cover it: a tile's frame (RenderSettings::window) computes only the tile's
+/// pixels, each exactly as in the whole image (the viewport and the invocation ids, and so every
+/// fragment's and invocation's values, stay the whole image's). An empty window restricts
+/// nothing.
+/// A compute pass with one invocation per element of a `width` x `height` grid (`scale` x
+/// `scale` elements a pixel: a pass over rays), in `group` x `group` workgroups: vkCmdDispatch,
+/// or under a live PixelScissor for the grid's image, the workgroups that cover the window
+/// alone (vkCmdDispatchBase). The shader must index by gl_GlobalInvocationID (or the workgroup
+/// id) only, never by gl_NumWorkGroups, and bound-check the grid itself.
+void dispatchPixels(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    std::uint32_t group, std::uint32_t scale = 1);
+
 class PixelScissor {
 public:
     PixelScissor(noise::PixelRect window, std::uint32_t fullWidth, std::uint32_t fullHeight);

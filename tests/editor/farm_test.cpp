@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -128,6 +129,40 @@ TEST(FarmCli, RefusesBadInputWritingNothing) {
         test::runSpotshell(base + tail + " --time 100 --out '" + (dir / "t.png").string() + "'")
             .code,
         0);
+}
+
+/// Without a clip, camera keys alone bound --frames to their span (0.5 s to 1 s at 24 fps: frames
+/// 12 to 24); a turntable turns forever, so it bounds nothing.
+TEST(FarmCli, CameraKeysBoundTheFrames) {
+    const fs::path dir = freshDir("farm-keys");
+    const std::string common = std::string(R"("version": 1, "name": "keys", "mesh": ")") +
+                               SPOT_SOURCE_DIR + R"(/presets/meshes/bunny.ply", "preset": ")" +
+                               SPOT_SOURCE_DIR +
+                               R"(/presets/fur.json", "image": {"width": 32, "height": 24},)";
+    const fs::path keys = dir / "keys.json", turntable = dir / "turntable.json";
+    std::ofstream(keys)
+        << "{" << common
+        << R"("camera": {"eye": [1.1, 0.75, 2.3], "target": [0, 0.45, 0], "keys": [)"
+           R"({"time": 0.5, "eye": [1.1, 0.75, 2.3], "target": [0, 0.45, 0]},)"
+           R"({"time": 1.0, "eye": [-1.1, 0.75, 2.3], "target": [0, 0.45, 0]}]}})";
+    std::ofstream(turntable) << "{" << common
+                             << R"("camera": {"eye": [1.1, 0.75, 2.3], "target": [0, 0.45, 0],)"
+                                R"("turntable_deg_per_s": 30}})";
+    const auto render = [&](const fs::path& scene, const std::string& frames) {
+        return test::runSpotshell("render --method instanced --scene '" + scene.string() +
+                                      "' --frames " + frames + " --out '" +
+                                      (dir / "f.%04d.png").string() + "'",
+                                  "LP_NUM_THREADS=2");
+    };
+    for (const char* outside : {"11-24", "12-25", "0-3"}) {
+        const test::CliResult r = render(keys, outside);
+        EXPECT_EQ(r.code, 2) << outside << "\n" << r.err;
+        EXPECT_NE(r.err.find("the camera keys: frames 12-24"), std::string::npos) << r.err;
+    }
+    EXPECT_FALSE(fs::exists(dir / "f.0012.png"));
+    EXPECT_EQ(render(keys, "12-24:12").code, 0);
+    EXPECT_TRUE(fs::exists(dir / "f.0012.png") && fs::exists(dir / "f.0024.png"));
+    EXPECT_EQ(render(turntable, "500-500").code, 0);
 }
 
 /// render --tile I/N for every I, assembled in a shuffled order, holds the whole render's stored
