@@ -2,7 +2,8 @@
 # The shot's last job (after every task of the array succeeded): the tiles assembled into
 # OUT_DIR/frames (spotshell assemble; frames already there are kept), a contact sheet
 # OUT_DIR/contact.png (oiiotool --mosaic, at most 64 frames spread over the shot) and, when ffmpeg
-# is there, OUT_DIR/shot.mp4. Every output is written to a temporary name, then renamed.
+# is there, OUT_DIR/shot.mp4 (both from 8-bit sRGB previews over black). Every output is written
+# to a temporary name, then renamed.
 #
 #   finish.sh SPOTSHELL FRAMES TILES OUT_DIR EXT FPS
 set -euo pipefail
@@ -31,32 +32,42 @@ for ((f = first; f <= last; f += step)); do
 done
 echo "finish: ${#made[@]} frames in $out/frames"
 
-# The contact sheet: up to 64 frames, evenly spread, 8 to a row, each at most 256 pixels wide.
-n=${#made[@]}
+command -v oiiotool >/dev/null || {
+  echo "finish: no oiiotool (apt-get install openimageio-tools): no contact sheet, no MP4"
+  exit 0
+}
+# Previews: each frame as 8-bit sRGB colour over black (an EXR's premultiplied colour; a PNG's
+# colour premultiplied on reading), what the sheet and the MP4 are made of (ffmpeg's own EXR
+# reader is not trusted with every EXR).
+rm -rf "$out/.previews" && mkdir -p "$out/.previews"
+previews=()
+for frame in "${made[@]}"; do
+  preview=$out/.previews/$(basename "${frame%.*}").png
+  convert=()
+  [ "$ext" = exr ] && convert=(--colorconvert linear sRGB)
+  oiiotool "$frame" "${convert[@]}" --ch R,G,B -d uint8 -o "$preview"
+  previews+=("$preview")
+done
+
+# The contact sheet: up to 64 frames, evenly spread, 8 to a row, each fit in 256x256.
+n=${#previews[@]}
 pick=$((n > 64 ? 64 : n))
 sheet=()
 for ((i = 0; i < pick; ++i)); do
-  sheet+=("${made[$((i * n / pick))]}" --fit 256x256)
-  [ "$ext" = exr ] && sheet+=(--colorconvert linear sRGB)
+  sheet+=("${previews[$((i * n / pick))]}" --fit 256x256)
 done
 columns=$((pick < 8 ? pick : 8))
 rows=$(((pick + columns - 1) / columns))
-if command -v oiiotool >/dev/null; then
-  oiiotool "${sheet[@]}" --mosaic:pad=2 "${columns}x${rows}" -d uint8 -o "$out/.contact.tmp.png"
-  mv -f "$out/.contact.tmp.png" "$out/contact.png"
-  echo "finish: wrote $out/contact.png ($pick frames)"
-else
-  echo "finish: no oiiotool (apt-get install openimageio-tools): no contact sheet"
-fi
+oiiotool "${sheet[@]}" --mosaic:pad=2 "${columns}x${rows}" -d uint8 -o "$out/.contact.tmp.png"
+mv -f "$out/.contact.tmp.png" "$out/contact.png"
+echo "finish: wrote $out/contact.png ($pick frames)"
 
 if command -v ffmpeg >/dev/null; then
-  input=()
-  [ "$ext" = exr ] && input=(-apply_trc iec61966_2_1)
-  ffmpeg -loglevel error -y -framerate "$fps" -pattern_type glob "${input[@]}" \
-    -i "$out/frames/shot.*.$ext" -vf "pad=ceil(iw/2)*2:ceil(ih/2)*2" -pix_fmt yuv420p \
-    -f mp4 "$out/.shot.tmp.mp4"
+  ffmpeg -loglevel error -y -framerate "$fps" -pattern_type glob -i "$out/.previews/shot.*.png" \
+    -vf "pad=ceil(iw/2)*2:ceil(ih/2)*2" -c:v libx264 -pix_fmt yuv420p -f mp4 "$out/.shot.tmp.mp4"
   mv -f "$out/.shot.tmp.mp4" "$out/shot.mp4"
-  echo "finish: wrote $out/shot.mp4"
+  echo "finish: wrote $out/shot.mp4 ($n frames at $fps fps)"
 else
   echo "finish: no ffmpeg: no MP4"
 fi
+rm -rf "$out/.previews"

@@ -7,7 +7,8 @@
 #   2. One local process renders the shot (8 frames of an animated scene, whole).
 #   3. scripts/farm/submit.sh: 4 tasks over 8 frames and 4 tiles (each task one tile of the 8
 #      frames), then the finish job assembles the tiles and writes the contact sheet. Every frame
-#      must be the local one's pixels exactly (idiff with zero tolerance), the sheet there.
+#      must be the local one's pixels exactly (idiff with zero tolerance), the sheet there, and
+#      the MP4 of 8 frames where ffmpeg is installed (scripts/install-deps.sh installs it).
 #   4. The same shot into a fresh folder, its frames slowed (--repeat: warm frames that change no
 #      pixel); task 1 is cancelled (scancel) after its first tile and before its last: no file
 #      it left under a final name is partial, the finish job never runs. Submitted again: only
@@ -100,6 +101,11 @@ wait_jobs 150 "$array" "$finish"
 [ "$(ls "$work/farm1/tiles" | wc -l)" = 32 ] || fail "farm1: $(ls "$work/farm1/tiles" | wc -l) tiles, not 32"
 expect_shot "$work/farm1"
 [ -f "$work/farm1/contact.png" ] || fail "farm1: no contact sheet"
+if command -v ffmpeg >/dev/null; then
+  frames=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames \
+    -of csv=p=0 "$work/farm1/shot.mp4" 2>&1) || fail "farm1: no readable MP4 ($frames)"
+  [ "$frames" = 8 ] || fail "farm1: the MP4 has $frames frames, not 8"
+fi
 echo "ok: farm1 in $(($(date +%s) - start)) s"
 
 # 4. A task cancelled mid-render, then the shot submitted again.
