@@ -167,9 +167,10 @@ TEST(FarmCli, CameraKeysBoundTheFrames) {
 
 /// render --tile I/N for every I, assembled in a shuffled order, holds the whole render's stored
 /// pixels byte for byte; a --crop tile holds the same pixels as the whole image's rect.
-void expectTilesAssembleToWhole(const std::string& method, const std::string& ext) {
-    const fs::path dir = freshDir("farm-" + method + ext);
-    const std::string base = "render --scene " + bunny() + " --size 96x64 --method " + method +
+void expectTilesAssembleToWhole(const std::string& method, const std::string& ext,
+                                const std::string& scene = bunny()) {
+    const fs::path dir = freshDir("farm-" + method + ext + fs::path(scene).stem().string());
+    const std::string base = "render --scene " + scene + " --size 96x64 --method " + method +
                              (method == "reference" ? " --spp 2" : "") + " ";
     const std::string env = "LP_NUM_THREADS=2";
     const fs::path whole = dir / ("whole" + ext);
@@ -233,6 +234,12 @@ TEST(FarmCli, TilesAssembleToTheWholeImageOit) {
 }
 TEST(FarmCli, TilesAssembleToTheWholeImageHybrid) {
     expectTilesAssembleToWhole("hybrid", ".exr");
+}
+/// Lit: the light-space passes and the shadows, the same in every tile.
+TEST(FarmCli, TilesAssembleToTheWholeImageLit) {
+    const std::string lit = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json";
+    expectTilesAssembleToWhole("sorted", ".exr", lit);
+    expectTilesAssembleToWhole("raymarch", ".exr", lit);
 }
 
 /// Missing, overlapping and mismatched tiles: exit 2, one line, no output.
