@@ -3,7 +3,7 @@
 # OUT_DIR/frames (spotshell assemble; frames already there are kept), a contact sheet
 # OUT_DIR/contact.png (oiiotool --mosaic, at most 64 frames spread over the shot) and, when ffmpeg
 # is there, OUT_DIR/shot.mp4 (both from 8-bit sRGB previews over black). Every output is written
-# to a temporary name, then renamed.
+# to a temporary name, then renamed; the temporaries killed tasks left are deleted.
 #
 #   finish.sh SPOTSHELL FRAMES TILES OUT_DIR EXT FPS
 set -euo pipefail
@@ -31,6 +31,9 @@ for ((f = first; f <= last; f += step)); do
   made+=("$frame")
 done
 echo "finish: ${#made[@]} frames in $out/frames"
+# A task killed while writing (SIGKILL) leaves its hidden temporary beside the file it never
+# renamed; every task of the shot has ended now, so none is being written.
+find "$out/frames" "$out/tiles" -maxdepth 1 -name '.*.tmp*' -delete 2>/dev/null || true
 
 command -v oiiotool >/dev/null || {
   echo "finish: no oiiotool (apt-get install openimageio-tools): no contact sheet, no MP4"

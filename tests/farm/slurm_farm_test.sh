@@ -12,7 +12,8 @@
 #   4. The same shot into a fresh folder, its frames slowed (--repeat: warm frames that change no
 #      pixel); task 1 is cancelled (scancel) after its first tile and before its last: no file
 #      it left under a final name is partial, the finish job never runs. Submitted again: only
-#      the missing tiles render, and every frame is again the local one's.
+#      the missing tiles render, every frame is again the local one's, and the finish job
+#      deleted the temporary a killed writer leaves.
 # It cannot skip: without root or Slurm it fails, saying what is missing.
 #   slurm_farm_test.sh SPOTSHELL SOURCE_DIR
 set -euo pipefail
@@ -128,9 +129,13 @@ wait_jobs 120 "$array"
 scancel "$finish" 2>/dev/null || true
 [ ! -e "$work/farm2/frames/shot.0000.exr" ] || fail "the finish job ran although task 1 was cancelled"
 echo "ok: task 1 cancelled after $done_before of 8 tiles; every file it left is whole"
+# What a task killed while writing (SIGKILL) leaves: its hidden temporary, never under a final
+# name; the finish job deletes it.
+head -c 1000 /dev/urandom >"$work/farm2/tiles/.shot.0003.tile1.tmp5eed.exr"
 submit "$work/farm2" "${slow[@]}"
 wait_jobs 150 "$array" "$finish"
 grep -q "already there" "$work/farm2/logs/task-${array}_1.log" ||
   fail "the resubmitted task 1 rendered everything again: $(cat "$work/farm2/logs/task-${array}_1.log")"
 expect_shot "$work/farm2"
+[ -z "$(find "$work/farm2/tiles" -name '.*.tmp*')" ] || fail "farm2: temporaries left in tiles/"
 echo "ok: the farm test passed in $(($(date +%s) - start)) s"
