@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # A one-node Slurm cluster on loopback for the farm test, sourced by slurm_farm_test.sh:
 # munged with its own key and socket, slurmctld and slurmd with their own slurm.conf, state and
 # logs, all in one temporary folder (proctrack/linuxproc, task/none: no cgroups). Needs root

@@ -112,8 +112,8 @@ echo "ok: farm1 in $(($(date +%s) - start)) s"
 # 4. A task cancelled mid-render, then the shot submitted again.
 slow=(--repeat 12) # warm frames after each frame: slower tasks, the same pixels
 submit "$work/farm2" "${slow[@]}"
-tile1() { ls "$work/farm2/tiles" 2>/dev/null | grep -c '^shot\.[0-9]*\.tile1\.exr$' || true; }
-timeout 120 bash -c "until [ \$(ls '$work/farm2/tiles' 2>/dev/null | grep -c '^shot\.[0-9]*\.tile1\.exr\$') -ge 1 ]; do sleep 0.05; done" ||
+tile1() { find "$work/farm2/tiles" -maxdepth 1 -name 'shot.*.tile1.exr' 2>/dev/null | wc -l; }
+timeout 120 bash -c "until [ -n \"\$(find '$work/farm2/tiles' -maxdepth 1 -name 'shot.*.tile1.exr' 2>/dev/null)\" ]; do sleep 0.05; done" ||
   fail "task 1 wrote no tile in 120 s"
 scancel "${array}_1"
 timeout 60 bash -c "while squeue -h -j '${array}_1' 2>/dev/null | grep -q .; do sleep 0.2; done" ||
