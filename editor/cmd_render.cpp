@@ -23,6 +23,7 @@
 #include "splat/frame_vk.h"
 #include "splat/generate_vk.h"
 #include "splat/pass_vk.h"
+#include "tiles.h"
 
 namespace spot::cmd {
 
@@ -199,6 +200,13 @@ int render(int argc, char** argv) {
                    "output image: .exr (linear float) or .png (sRGB 8-bit); with --frames, a "
                    "pattern with one %d (shot.%04d.exr) numbered by frame",
                    true},
+                  {"tile", "I/N",
+                   "render tile I (from 0) of N: band I of N full-width bands of rows (rows "
+                   "floor(I H / N) to floor((I + 1) H / N)); each pixel as in the whole image, "
+                   "written with its place in it (spotshell assemble joins the tiles)",
+                   false},
+                  {"crop", "X0,Y0,X1,Y1",
+                   "render only pixels [X0, X1) x [Y0, Y1) of the image, as --tile does", false},
                   {"stats", "FILE", "also write timings and counts as JSON", false},
                   cli::threadsOption()});
     for (const cli::OptionSpec& o : cli::timeOptions())
@@ -231,8 +239,20 @@ int render(int argc, char** argv) {
     splat::requireLitSupport(*info, job.scene.shading); // before the device starts, not after
 
     const std::string out = args.str("out");
-    const splat::RenderSettings settings = cli::renderSettings(args, choice.settings);
-    const cli::Shot shot = cli::shotOf(args, job.scene.animation, out);
+    splat::RenderSettings settings = cli::renderSettings(args, choice.settings);
+    const cli::Shot shot = cli::shotOf(args, job.scene.animation, out, cli::frameSpan(job));
+    if (args.has("tile") && args.has("crop"))
+        throw InputError("spotshell render: give --tile or --crop, not both");
+    const int width = job.scene.camera.width, height = job.scene.camera.height;
+    noise::PixelRect window;
+    if (args.has("tile"))
+        window = cli::parseTile(args.str("tile"), width, height);
+    else if (args.has("crop"))
+        window = cli::parseCrop(args.str("crop"), width, height);
+    if (window == noise::PixelRect{0, 0, width, height})
+        window = {}; // the whole image: written as one
+    settings.window = window;
+
     if (!info->gpu() && shot.frames.size() > 1 && args.has("stats"))
         throw InputError("spotshell render: --stats describes one frame; give --time, not --frames");
     std::optional<splat::Context> ctx;
@@ -276,6 +296,8 @@ int render(int argc, char** argv) {
         }
         if (r.stats.contains("spp"))
             metadata["spp"] = r.stats["spp"].dump();
+        if (args.has("tile"))
+            metadata["tile"] = args.str("tile");
         written = shot.frames[i].file;
         noise::writeImage(written, r.image, metadata);
         bar.update(long(i + 1), long(shot.frames.size()));
@@ -305,14 +327,18 @@ int render(int argc, char** argv) {
     }
     const std::string chosen =
         choice.quality.empty() ? method : cat(method, ", quality ", choice.quality);
+    const std::string size = window.empty()
+                                 ? cat(r.image.width, "x", r.image.height)
+                                 : cat("pixels ", window.x0, ",", window.y0, "-", window.x1, ",",
+                                       window.y1, " of ", width, "x", height);
     if (shot.frames.size() > 1)
-        std::printf("wrote %zu frames%s, %s to %s (%s, %dx%d, last: %s)\n", rendered,
+        std::printf("wrote %zu frames%s, %s to %s (%s, %s, last: %s)\n", rendered,
                     skipped > 0 ? cat(" (", skipped, " already there)").c_str() : "",
-                    shot.frames.front().file.c_str(), written.c_str(), chosen.c_str(),
-                    r.image.width, r.image.height, r.summary.c_str());
+                    shot.frames.front().file.c_str(), written.c_str(), chosen.c_str(), size.c_str(),
+                    r.summary.c_str());
     else
-        std::printf("wrote %s (%s, %dx%d, %s)\n", written.c_str(), chosen.c_str(),
-                    r.image.width, r.image.height, r.summary.c_str());
+        std::printf("wrote %s (%s, %s, %s)\n", written.c_str(), chosen.c_str(), size.c_str(),
+                    r.summary.c_str());
     return 0;
 }
 

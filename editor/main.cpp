@@ -23,6 +23,7 @@ const Command kCommands[] = {
     {"impulses", spot::cmd::impulses, "generate the impulses of a preset on a mesh, write a PLY"},
     {"render", spot::cmd::render, "render a scene (reference: the converged CPU ground truth)"},
     {"bake", spot::cmd::bake, "evaluate a scene's noise into OpenVDB voxel mip levels (.vdb)"},
+    {"assemble", spot::cmd::assemble, "join the tiles of render --tile into the whole image"},
     {"compare", spot::cmd::compare, "PSNR, SSIM and FLIP of an image against a reference"},
     {"edit", spot::cmd::edit, "paint and edit a preset on a scene: a window, or --script without one"},
     {"bench", spot::cmd::bench, "speed against accuracy of every method, with charts"},

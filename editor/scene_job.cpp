@@ -91,7 +91,8 @@ std::vector<OptionSpec> timeOptions() {
              false},
             {"frames", "A-B[:STEP]",
              "render frames A to B (every STEP-th; frame f at f / animation.fps seconds) in one "
-             "process, to --out's %d pattern",
+             "process, to --out's %d pattern; refused outside the mesh's clip (or the camera "
+             "keys' span when they alone move), unlike --time, which is clamped",
              false},
             {"resume", "",
              "skip the frames whose output is already there and complete (outputs are written "
@@ -120,7 +121,25 @@ std::string frameFile(const std::string& pattern, long frame) {
 
 } // namespace
 
-Shot shotOf(const Args& args, const noise::AnimationDesc& animation, const std::string& out) {
+std::optional<FrameSpan> frameSpan(const SceneJob& job) {
+    const double fps = job.scene.animation.fps;
+    const double eps = 1e-9;
+    if (job.animation.animated()) {
+        const std::string& clip = job.animation.clipName();
+        return FrameSpan{0, long(std::floor(job.animation.duration() * fps + eps)),
+                         clip.empty() ? std::string("the mesh's clip")
+                                      : cat("the clip '", clip, "'")};
+    }
+    const auto& keys = job.scene.cameraKeys;
+    if (keys.size() < 2 || job.scene.wind.on() || job.scene.turntableDegPerSecond != 0.0 ||
+        !(keys.back().time > keys.front().time))
+        return std::nullopt;
+    return FrameSpan{long(std::ceil(keys.front().time * fps - eps)),
+                     long(std::floor(keys.back().time * fps + eps)), "the camera keys"};
+}
+
+Shot shotOf(const Args& args, const noise::AnimationDesc& animation, const std::string& out,
+            const std::optional<FrameSpan>& span) {
     Shot shot;
     if (args.has("time") && args.has("frames"))
         throw InputError("give --time or --frames, not both");
@@ -139,6 +158,9 @@ Shot shotOf(const Args& args, const noise::AnimationDesc& animation, const std::
     const bool ok = (n == 3 && dash == '-') || (n == 5 && dash == '-' && colon == ':');
     if (!ok || step < 1 || b < a)
         throw InputError(cat("--frames '", range, "' must be A-B or A-B:STEP with A <= B, STEP >= 1"));
+    if (span && (a < span->first || b > span->last))
+        throw InputError(cat("--frames '", range, "' reaches outside ", span->what, ": frames ",
+                             span->first, "-", span->last, " at ", animation.fps, " fps"));
     if ((b - a) / step + 1 > 100000)
         throw InputError(cat("--frames '", range, "' is more than 100000 frames"));
     for (long f = a; f <= b; f += step)

@@ -76,11 +76,22 @@ struct ShotFrame {
 struct Shot {
     std::vector<ShotFrame> frames; ///< in order; one without --frames
 };
+/// The frames a scene's animation spans, first to last inclusive, at its fps.
+struct FrameSpan {
+    long first = 0, last = 0;
+    std::string what; ///< what bounds it, for messages ("the clip 'sway'")
+};
+/// A scene's frame span: a mesh clip's [0, duration x fps]; without a clip, the camera keys'
+/// times when they are all that moves (at least two keys apart in time); otherwise none (the wind
+/// and a turntable go on forever).
+std::optional<FrameSpan> frameSpan(const SceneJob& job);
 /// The frames `args` asks for: --frames A-B[:STEP] (frame f at f / fps, `out` a pattern with one
 /// printf integer conversion), --time T, or the scene's time (`out` as given). InputError for a
-/// malformed range, both options, a pattern without (or with more than) one conversion, or more
-/// than 100,000 frames.
-Shot shotOf(const Args& args, const noise::AnimationDesc& animation, const std::string& out);
+/// malformed range (reversed, a step of 0), frames outside `span` when given (--time is clamped
+/// instead, never refused), both options, a pattern without (or with more than) one conversion,
+/// or more than 100,000 frames.
+Shot shotOf(const Args& args, const noise::AnimationDesc& animation, const std::string& out,
+            const std::optional<FrameSpan>& span = std::nullopt);
 
 /// Load a scene file with an optional image size override; mesh, preset and surface cells, and
 /// with `cpuImpulses` the impulses of the visible cells generated on the CPU.

@@ -22,6 +22,15 @@
 
 namespace spot::noise {
 
+/// A rectangle of pixels, [x0, x1) x [y0, y1), in an image's pixel grid (top-left origin).
+struct PixelRect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    int width() const { return x1 - x0; }
+    int height() const { return y1 - y0; }
+    bool empty() const { return x1 <= x0 || y1 <= y0; }
+    bool operator==(const PixelRect&) const = default;
+};
+
 struct Image {
     int width = 0;
     int height = 0;
@@ -30,6 +39,12 @@ struct Image {
     /// over `background` where it is below 1.
     std::vector<float> alpha;
     glm::vec3 background{0.0f};
+    /// A tile of a larger image (render --tile, --crop): where this image's pixels sit in it, and
+    /// its size. Empty `crop` (the default): the image is whole. writeImage records both (an
+    /// EXR's data and display windows; the spotshell:crop and spotshell:full_size attributes in
+    /// every format), readImage reads them back.
+    PixelRect crop;
+    int fullWidth = 0, fullHeight = 0;
 
     Image() = default;
     Image(int w, int h, glm::vec3 fill = glm::vec3(0.0f))
@@ -56,5 +71,19 @@ void writeImage(const std::filesystem::path& file, const Image& image,
 /// files spotshell did not write). Throws
 /// InputError naming the file when it is missing, corrupt or absurdly large.
 Image readImage(const std::filesystem::path& file, std::map<std::string, std::string>* metadata = nullptr);
+
+/// What assembleTiles joined.
+struct AssembledImage {
+    int width = 0, height = 0;
+    std::size_t tiles = 0;
+};
+/// Join tiles that writeImage wrote with a crop (render --tile, --crop) into the whole image at
+/// `out`, written atomically in the tiles' own format: every pixel's stored bytes are the tile's,
+/// unconverted, so the result is the whole image's pixels byte for byte. The metadata is the
+/// first tile's (less the crop). InputError naming the file for a tile that is not one, a format
+/// other than `out`'s, tiles of different images (size, channels, scene, method, time, seed,
+/// background), tiles that overlap, or pixels no tile covers.
+AssembledImage assembleTiles(const std::vector<std::filesystem::path>& tiles,
+                             const std::filesystem::path& out);
 
 } // namespace spot::noise

@@ -412,15 +412,25 @@ Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& s
                   cat("a ", camera.width, "x", camera.height, " image"));
     const CameraRays rays(camera);
     const auto start = std::chrono::steady_clock::now();
-    Image image(camera.width, camera.height);
+    const PixelRect full{0, 0, camera.width, camera.height};
+    const PixelRect w = settings.window.empty() ? full : settings.window;
+    if (w.x0 < 0 || w.y0 < 0 || w.x1 > camera.width || w.y1 > camera.height)
+        throw InputError(cat("pixels ", w.x0, ",", w.y0, ",", w.x1, ",", w.y1, " are outside the ",
+                             camera.width, "x", camera.height, " image"));
+    Image image(w.width(), w.height());
+    if (w != full) {
+        image.crop = w;
+        image.fullWidth = camera.width;
+        image.fullHeight = camera.height;
+    }
     image.alpha.resize(image.pixels.size());
     image.background = m_background;
     std::atomic<int> rowsDone{0};
     const bool lit = m_shading.mode == Shading::Mode::Lit;
-    std::vector<ReferenceStats> rowStats(std::size_t(camera.height));
-    tbb::parallel_for(0, camera.height, [&](int y) {
-        ReferenceStats& rs = rowStats[std::size_t(y)];
-        for (int x = 0; x < camera.width; ++x) {
+    std::vector<ReferenceStats> rowStats(std::size_t(w.height()));
+    tbb::parallel_for(w.y0, w.y1, [&](int y) {
+        ReferenceStats& rs = rowStats[std::size_t(y - w.y0)];
+        for (int x = w.x0; x < w.x1; ++x) {
             const std::uint32_t pattern =
                 sh::spotHashCombine(sh::spotHashCombine(settings.seed ^ 0x2545f491u, std::uint32_t(x)),
                                     std::uint32_t(y));
@@ -438,13 +448,13 @@ Image ReferenceRenderer::render(const Camera& camera, const ReferenceSettings& s
                     radiance(rays.ray(x + u.x, y + u.y), settings.stepScale, &rs, &c, sky));
                 covered += c;
             }
-            image.at(x, y) = glm::vec3(sum / double(settings.spp));
-            image.alpha[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)] =
+            image.at(x - w.x0, y - w.y0) = glm::vec3(sum / double(settings.spp));
+            image.alpha[std::size_t(y - w.y0) * std::size_t(w.width()) + std::size_t(x - w.x0)] =
                 float(covered / double(settings.spp));
         }
         const int finished = ++rowsDone;
         if (progress)
-            progress(finished, camera.height);
+            progress(finished, w.height());
     });
     if (stats) {
         for (const ReferenceStats& rs : rowStats) {

@@ -91,6 +91,9 @@ struct ReferenceSettings {
     int spp = 16;            ///< samples per pixel, [1, 65536]
     double stepScale = 1.0;  ///< quadrature step multiplier; 0.5 halves every step
     std::uint32_t seed = 0;  ///< sample pattern seed
+    /// Only these pixels of the camera's image (a tile: render --tile); empty: all of them. Each
+    /// pixel is the same as in the whole image.
+    PixelRect window;
 };
 
 struct ReferenceStats {
@@ -125,8 +128,9 @@ public:
     double transmittance(glm::dvec3 p, glm::dvec3 dir, double distance,
                          ReferenceStats* stats = nullptr) const;
 
-    /// Render the camera's image. `progress(done, total)` is called from worker threads as rows
-    /// finish (may be empty).
+    /// Render the camera's image, or its `settings.window` alone (an image of the window's size,
+    /// its `crop` set). `progress(done, total)` is called from worker threads as rows finish (may
+    /// be empty).
     Image render(const Camera& camera, const ReferenceSettings& settings,
                  const std::function<void(int, int)>& progress = {},
                  ReferenceStats* stats = nullptr) const;

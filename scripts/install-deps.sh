@@ -23,6 +23,8 @@ packages=(
   libglfw3-dev libimgui-dev xvfb xauth
   # X events for the window test that drives the real window (tests/editor/window_test.cpp)
   xdotool
+  # the farm test: a one-node Slurm on loopback (tests/farm/), and the shot's MP4
+  slurm-wlm munge ffmpeg
   # the benchmark's charts
   python3 python3-matplotlib
   # real clients of the exports (tests/interop, scripts/blender): Node.js for the npm packages

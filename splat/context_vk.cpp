@@ -837,6 +837,7 @@ Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
     makeLayout(ctx, bindings, pushBytes, VK_SHADER_STAGE_COMPUTE_BIT, p.m_setLayout, p.m_layout);
     VkShaderModule module = makeModule(ctx, spirv);
     VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    ci.flags = VK_PIPELINE_CREATE_DISPATCH_BASE_BIT; // a tile's passes: dispatchPixels (pass_vk.h)
     ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
     ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     ci.stage.module = module;

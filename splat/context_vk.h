@@ -332,7 +332,8 @@ private:
 };
 
 /// Compute pipeline: one SPIR-V module (entry "main"), the given bindings, push constants of
-/// `pushBytes` (<= 128), specialized by `spec`.
+/// `pushBytes` (<= 128), specialized by `spec`. Dispatches may have a base workgroup
+/// (vkCmdDispatchBase: dispatchPixels in pass_vk.h).
 Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
                              const Bindings& bindings, std::uint32_t pushBytes,
                              const Specialization& spec = {});

@@ -6,15 +6,24 @@
 
 namespace spot::splat {
 
-void ResultReadback::record(Context& ctx, VkCommandBuffer cmd, const Image& result) {
-    const std::uint64_t bytes = std::uint64_t(result.width()) * result.height() * sizeof(glm::vec4);
+void ResultReadback::record(Context& ctx, VkCommandBuffer cmd, const Image& result,
+                            noise::PixelRect rect) {
+    fullWidth = result.width();
+    fullHeight = result.height();
+    const noise::PixelRect all{0, 0, int(fullWidth), int(fullHeight)};
+    window = rect.empty() ? all : rect;
+    if (window.x0 < 0 || window.y0 < 0 || window.x1 > all.x1 || window.y1 > all.y1)
+        throw InputError(cat("pixels ", window.x0, ",", window.y0, ",", window.x1, ",", window.y1,
+                             " are outside the ", fullWidth, "x", fullHeight, " image"));
+    width = std::uint32_t(window.width());
+    height = std::uint32_t(window.height());
+    const std::uint64_t bytes = std::uint64_t(width) * height * sizeof(glm::vec4);
     if (buffer.size() < bytes)
         buffer = Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Memory::HostVisible,
                         "frame readback");
-    width = result.width();
-    height = result.height();
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageOffset = {window.x0, window.y0, 0};
     region.imageExtent = {width, height, 1};
     vkCmdCopyImageToBuffer(cmd, result.handle(), VK_IMAGE_LAYOUT_GENERAL, buffer.handle(), 1, &region);
     memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
@@ -25,6 +34,11 @@ noise::Image ResultReadback::read(glm::vec3 background) const {
     noise::Image image(static_cast<int>(width), static_cast<int>(height));
     image.alpha.resize(image.pixels.size());
     image.background = background;
+    if (width != fullWidth || height != fullHeight) {
+        image.crop = window;
+        image.fullWidth = int(fullWidth);
+        image.fullHeight = int(fullHeight);
+    }
     const auto* rgba = static_cast<const glm::vec4*>(buffer.mapped());
     for (std::size_t i = 0; i < image.pixels.size(); ++i) {
         image.pixels[i] = glm::vec3(rgba[i]);
@@ -128,9 +142,13 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
     m_timer.begin(cmd);
     if (impulsesInFrame)
         recordImpulses(cmd, regenerate);
-    r.record(cmd, m_timer);
+    {
+        const PixelScissor scissor(settings.window, std::uint32_t(view.camera.width),
+                                   std::uint32_t(view.camera.height));
+        r.record(cmd, m_timer);
+    }
     if (image)
-        m_readback.record(m_ctx, cmd, r.result());
+        m_readback.record(m_ctx, cmd, r.result(), settings.window);
     m_commands.submitAndWait();
     double earlierMs = 0.0; // the passes of a submit of their own
     for (const auto& pass : stats.passMs)

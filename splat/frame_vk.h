@@ -48,12 +48,17 @@ struct FrameStats {
 /// Copy `renderer`'s result into `readback` (grown to fit) and read it back after the submit:
 /// record() before the submit, read() after.
 struct ResultReadback {
-    void record(Context& ctx, VkCommandBuffer cmd, const Image& result);
+    /// `window`: those pixels alone (empty: all); read() then gives an image of the window's
+    /// size with its crop set.
+    void record(Context& ctx, VkCommandBuffer cmd, const Image& result,
+                noise::PixelRect window = {});
     /// The result's colour and coverage alpha; `background`: what the colour is composited over
     /// where the coverage is below 1 (the frame's View::background).
     noise::Image read(glm::vec3 background) const;
     Buffer buffer;
     std::uint32_t width = 0, height = 0;
+    noise::PixelRect window;
+    std::uint32_t fullWidth = 0, fullHeight = 0;
 };
 
 class Frame {
@@ -66,7 +71,8 @@ public:
     ~Frame();
 
     /// Render one frame with the registry's method `method` and wait for it. `image`, when given,
-    /// receives the pixels (linear RGB, top-left origin). Throws InputError for an unknown
+    /// receives the pixels (linear RGB, top-left origin): settings.window's alone when it is set
+    /// (InputError when it is outside the image). Throws InputError for an unknown
     /// method, a bad setting, or a frame beyond the memory budget.
     FrameStats render(std::string_view method, const View& view, const RenderSettings& settings,
                       noise::Image* image = nullptr);

@@ -228,6 +228,43 @@ VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp
     return a;
 }
 
+namespace {
+/// PixelScissor's window and the size it applies to (empty: none).
+thread_local noise::PixelRect t_scissor;
+thread_local std::uint32_t t_scissorWidth = 0, t_scissorHeight = 0;
+} // namespace
+
+PixelScissor::PixelScissor(noise::PixelRect window, std::uint32_t fullWidth,
+                           std::uint32_t fullHeight)
+    : m_previous(t_scissor), m_previousWidth(t_scissorWidth), m_previousHeight(t_scissorHeight) {
+    t_scissor = window;
+    t_scissorWidth = fullWidth;
+    t_scissorHeight = fullHeight;
+}
+
+PixelScissor::~PixelScissor() {
+    t_scissor = m_previous;
+    t_scissorWidth = m_previousWidth;
+    t_scissorHeight = m_previousHeight;
+}
+
+void dispatchPixels(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    std::uint32_t group, std::uint32_t scale) {
+    std::uint32_t x0 = 0, y0 = 0, x1 = (width + group - 1) / group,
+                  y1 = (height + group - 1) / group;
+    if (!t_scissor.empty() && width == t_scissorWidth * scale &&
+        height == t_scissorHeight * scale) {
+        x0 = std::uint32_t(t_scissor.x0) * scale / group;
+        y0 = std::uint32_t(t_scissor.y0) * scale / group;
+        x1 = (std::uint32_t(t_scissor.x1) * scale + group - 1) / group;
+        y1 = (std::uint32_t(t_scissor.y1) * scale + group - 1) / group;
+    }
+    if (x0 == 0 && y0 == 0)
+        vkCmdDispatch(cmd, x1, y1, 1);
+    else
+        vkCmdDispatchBase(cmd, x0, y0, 0, x1 - x0, y1 - y0, 1);
+}
+
 void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
                     const std::vector<VkRenderingAttachmentInfo>& colors,
                     const VkRenderingAttachmentInfo* depth) {
@@ -239,7 +276,10 @@ void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t heig
     info.pDepthAttachment = depth;
     vkCmdBeginRendering(cmd, &info);
     const VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
-    const VkRect2D scissor{{0, 0}, {width, height}};
+    VkRect2D scissor{{0, 0}, {width, height}};
+    if (!t_scissor.empty() && width == t_scissorWidth && height == t_scissorHeight)
+        scissor = {{t_scissor.x0, t_scissor.y0},
+                   {std::uint32_t(t_scissor.width()), std::uint32_t(t_scissor.height())}};
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     vkCmdSetScissor(cmd, 0, 1, &scissor);
 }

@@ -145,11 +145,38 @@ VkRenderingAttachmentInfo colorAttachment(const Image& image, VkAttachmentLoadOp
                                           glm::vec4 clear = glm::vec4(0.0f));
 /// Reversed depth: cleared to 0, infinitely far.
 VkRenderingAttachmentInfo depthAttachment(const Image& image, VkAttachmentLoadOp load);
-/// vkCmdBeginRendering over the whole image, with viewport and scissor set.
+/// vkCmdBeginRendering over the whole image, with viewport and scissor set (the scissor to the
+/// window of a live PixelScissor when the image has its full size).
 void beginRendering(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
                     const std::vector<VkRenderingAttachmentInfo>& colors,
                     const VkRenderingAttachmentInfo* depth);
 void pushFrame(VkCommandBuffer cmd, const Pipeline& pipeline, const gpu_splat::SpotSplatFrame& frame);
+
+/// While alive (on this thread), every beginRendering into a target of `fullWidth` x `fullHeight`
+/// sets its scissor to `window`, and dispatchPixels over that image dispatches only the
+/// workgroups that cover it: a tile's frame (RenderSettings::window) computes only the tile's
+/// pixels, each exactly as in the whole image (the viewport and the invocation ids, and so every
+/// fragment's and invocation's values, stay the whole image's). An empty window restricts
+/// nothing.
+/// A compute pass with one invocation per element of a `width` x `height` grid (`scale` x
+/// `scale` elements a pixel: a pass over rays), in `group` x `group` workgroups: vkCmdDispatch,
+/// or under a live PixelScissor for the grid's image, the workgroups that cover the window
+/// alone (vkCmdDispatchBase). The shader must index by gl_GlobalInvocationID (or the workgroup
+/// id) only, never by gl_NumWorkGroups, and bound-check the grid itself.
+void dispatchPixels(VkCommandBuffer cmd, std::uint32_t width, std::uint32_t height,
+                    std::uint32_t group, std::uint32_t scale = 1);
+
+class PixelScissor {
+public:
+    PixelScissor(noise::PixelRect window, std::uint32_t fullWidth, std::uint32_t fullHeight);
+    ~PixelScissor();
+    PixelScissor(const PixelScissor&) = delete;
+    PixelScissor& operator=(const PixelScissor&) = delete;
+
+private:
+    noise::PixelRect m_previous;
+    std::uint32_t m_previousWidth, m_previousHeight;
+};
 
 /// The prepare pass (splat_prepare.comp) specialized for a kernel of `lobes` lobes: `screen` for
 /// the splatting methods (screen lobes and kernel bounds too), `ewa` widening, the projection,

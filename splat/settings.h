@@ -14,6 +14,8 @@
 #include <string_view>
 #include <vector>
 
+#include "noise/image.h"
+
 namespace spot::splat {
 
 class BakeData;
@@ -77,6 +79,12 @@ struct RenderSettings {
     int peelPasses = 4; ///< depth-peeling layers of tetrahedra, [1, kBakedMaxPeelPasses]
     /// Render a bake whose recorded mesh hash is not the scene's (else InputError).
     bool allowMismatch = false;
+
+    // Every method (not a descriptor: render's --tile and --crop set it).
+    /// A tile: only these pixels of the camera's image are wanted, each the same as in the whole
+    /// image; empty: the whole image. The GPU methods render the whole view with the raster
+    /// passes scissored to it (PixelScissor) and read back the window alone (Frame::render).
+    noise::PixelRect window;
 
     // The CPU reference (noise/reference.h).
     int spp = 0;            ///< samples per pixel; 0: the scene's (SceneDesc::referenceSpp)

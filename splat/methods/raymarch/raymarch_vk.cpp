@@ -1012,7 +1012,7 @@ void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
             memoryBarrier(cmd, kCompute, kStorageRW, kCompute, kStorageRW);
         vkCmdPushConstants(cmd, p.march.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push),
                            &push);
-        vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
+        dispatchPixels(cmd, width, height, 8, m_n);
     }
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute | kHostStage,
                   kStorageRead | VK_ACCESS_2_HOST_READ_BIT);
@@ -1029,7 +1029,7 @@ void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
         .buffer(kMarchBindState, m_state)
         .image(kMarchBindResult, m_result, kGeneral, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
         .push(m_ctx, cmd, p.resolve);
-    vkCmdDispatch(cmd, (m_width + 7) / 8, (m_height + 7) / 8, 1);
+    dispatchPixels(cmd, m_width, m_height, 8);
     memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                   kCompute | kTransfer | kHostStage,
                   kStorageRead | VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_HOST_READ_BIT);

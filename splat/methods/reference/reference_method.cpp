@@ -15,6 +15,7 @@ CpuFrame renderReference(const CpuScene& scene, const RenderSettings& s, const P
     settings.spp = s.spp > 0 ? s.spp : scene.spp;
     settings.stepScale = s.stepScale;
     settings.seed = scene.seed;
+    settings.window = s.window;
     const noise::ReferenceRenderer renderer(scene.mesh, scene.kernel, scene.impulses,
                                             scene.view.shading, scene.view.background,
                                             scene.view.baseColor);
