@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <utility>
 
 #include <sys/resource.h>
@@ -15,6 +16,7 @@
 #include "noise/generator_shared.h"
 #include "noise/surface.h"
 #include "noise/system.h"
+#include "splat/passes/light_space_vk.h"
 
 namespace spot::edit {
 
@@ -195,6 +197,11 @@ splat::FrameStats Session::render(noise::Image* out) {
     if (m_frame->animated())
         m_frame->setTime(m_time);
     const splat::View view{m_camera, m_scene.shading, m_scene.background, m_scene.baseColor};
+    // Lit, a stroke's frames keep the light-space structure of the frame before it: its
+    // shadows lag the paint until the stroke ends, and painting is not slowed by building it.
+    std::optional<splat::LightSpaceHold> hold;
+    if (m_stroke)
+        hold.emplace();
     return m_frame->render(m_method, view, m_settings, out);
 }
 

@@ -59,6 +59,14 @@ void dispatch(VkCommandBuffer cmd, std::uint64_t invocations) {
 
 } // namespace
 
+namespace {
+thread_local bool t_hold = false;
+} // namespace
+
+LightSpaceHold::LightSpaceHold() : m_previous(t_hold) { t_hold = true; }
+LightSpaceHold::~LightSpaceHold() { t_hold = m_previous; }
+bool LightSpaceHold::active() { return t_hold; }
+
 LightSpace::LightSpace(const SceneGpu& scene) : m_scene(scene), m_ctx(scene.context()) {
     Bindings common = lookupBindings();
     const auto with = [&](std::initializer_list<Binding> extra) {
@@ -264,8 +272,9 @@ void LightSpace::prepare(const noise::Shading& shading, const ImpulseSet& impuls
     // What the structure is built from: the views and lights, the impulses (their version
     // changes with them and with the pose; 0 says unknown) and where it lives. The same as the
     // last build's: record() keeps it (the camera alone moved, or nothing did).
+    // The structure's buffers first: with the parameters and extents, what a lookup reads.
     struct Sources {
-        VkBuffer impulses, count, layers, first, placed, items, meshItems, vertices;
+        VkBuffer layers, first, impulses, count, placed, items, meshItems, vertices;
         std::uint64_t version;
         std::uint32_t capacity, itemCapacity, meshItemCapacity;
     } sources{};
@@ -285,7 +294,11 @@ void LightSpace::prepare(const noise::Shading& shading, const ImpulseSet& impuls
     std::memcpy(key.data(), &p, sizeof(p));
     std::memcpy(key.data() + sizeof(p), extents, sizeof(SpotShadowExtent) * views);
     std::memcpy(key.data() + key.size() - sizeof(sources), &sources, sizeof(sources));
+    const std::size_t lookupBytes = key.size() - sizeof(sources) + 2 * sizeof(VkBuffer);
     m_current = impulses.version != 0 && key == m_built;
+    if (!m_current && LightSpaceHold::active() && m_built.size() == key.size() &&
+        std::equal(key.begin(), key.begin() + std::ptrdiff_t(lookupBytes), m_built.begin()))
+        m_current = true; // held: the last build stands for these impulses
     m_key = std::move(key);
 }
 

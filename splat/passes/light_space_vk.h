@@ -37,6 +37,23 @@ struct LightSpaceSettings {
     std::uint32_t skyDirections = 3;
 };
 
+/// While one is alive on this thread, a lit frame whose impulses changed (a stroke's frames in
+/// the editor) keeps the light-space structure the last build made, as long as the lights, the
+/// views and the mesh's extent are those it was built for: its shadows lag the paint, and the
+/// first frame after the hold ends builds it again. Without one, a changed impulse set always
+/// builds it.
+class LightSpaceHold {
+public:
+    LightSpaceHold();
+    ~LightSpaceHold();
+    LightSpaceHold(const LightSpaceHold&) = delete;
+    LightSpaceHold& operator=(const LightSpaceHold&) = delete;
+    static bool active();
+
+private:
+    bool m_previous;
+};
+
 class LightSpace {
 public:
     explicit LightSpace(const SceneGpu& scene);

@@ -9,6 +9,7 @@
 
 #include "noise/error.h"
 #include "splat/frame_vk.h"
+#include "splat/passes/light_space_vk.h"
 #include "splat_test_support.h"
 
 namespace {
@@ -152,6 +153,38 @@ TEST(Frame, TheLightSpaceIsKeptWhileOnlyTheCameraMoves) {
         view.shading.lights[0].direction = glm::normalize(glm::vec3(0.7f, 0.5f, -0.5f));
         EXPECT_TRUE(builtLightSpace(frame.render(method, view, settings)));
     }
+    expectNoValidationErrors(ctx);
+}
+
+// The editor's strokes: under a LightSpaceHold, new impulses keep the last structure (its
+// shadows lag), a moved light does not; the first frame after the hold builds it again.
+TEST(Frame, AHoldKeepsTheLightSpaceForNewImpulsesButNotForAMovedLight) {
+    FrameSetup s = loadFrameSetup("fur-bunny", 40);
+    s.scene.shading =
+        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json")
+            .shading;
+    splat::Context ctx(validated());
+    splat::Frame frame(ctx, s.mesh, *s.generator);
+    splat::RenderSettings settings;
+    splat::View view = s.view();
+    EXPECT_TRUE(builtLightSpace(frame.render("hybrid", view, settings)));
+    settings.lodPixels = 3.0; // thinned: new impulses
+    {
+        splat::LightSpaceHold hold;
+        const splat::FrameStats held = frame.render("hybrid", view, settings);
+        EXPECT_TRUE(held.regenerated);
+        EXPECT_FALSE(builtLightSpace(held));
+        settings.lodPixels = 2.0;
+        EXPECT_FALSE(builtLightSpace(frame.render("hybrid", view, settings)));
+        splat::View turned = view;
+        turned.shading.lights[0].direction = glm::normalize(glm::vec3(0.7f, 0.5f, -0.5f));
+        EXPECT_TRUE(builtLightSpace(frame.render("hybrid", turned, settings)));
+        EXPECT_TRUE(builtLightSpace(frame.render("hybrid", view, settings)));
+        settings.lodPixels = 3.0;
+        EXPECT_FALSE(builtLightSpace(frame.render("hybrid", view, settings)));
+    }
+    EXPECT_TRUE(builtLightSpace(frame.render("hybrid", view, settings))); // the hold has ended
+    EXPECT_FALSE(builtLightSpace(frame.render("hybrid", view, settings)));
     expectNoValidationErrors(ctx);
 }
 
