@@ -917,7 +917,7 @@ TEST(BakeCli, BadRequestsAndBadFilesExitTwoWithOneLine) {
     std::ofstream(garbage) << "not a vdb";
     expectExit2("info --bake " + garbage, "cannot read");
     expectExit2("info --bake " + (dir / "absent.vdb").string(), "no such bake file");
-    expectExit2("info", "--mesh FILE or --bake FILE");
+    expectExit2("info", "give --mesh FILE, --bake FILE or --splats FILE");
 }
 
 TEST(BakeCli, NegativeDensityExitsTwoWithOneLine) {
