@@ -100,10 +100,11 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
     const noise::CameraRays rays(view.camera); // validates the camera (InputError)
     if (m_deformer)
         m_deformer->prepare(m_time);
+    // Lit with shadows, a cell out of view may shadow one in view: none is culled.
+    const bool cullNone = view.shading.castsShadows();
     const bool regenerate = m_generator.prepare(
         [&](const noise::SurfaceCell& cell) {
-            // Lit with shadows, a cell out of view may shadow one in view: none is culled.
-            const bool visible = view.shading.castsShadows() || cellVisible(rays, cell);
+            const bool visible = cullNone || cellVisible(rays, cell);
             stats.visibleCells += visible;
             return visible;
         },

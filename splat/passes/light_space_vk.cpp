@@ -306,7 +306,6 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
     using namespace passes;
     if (m_views == 0 || !m_impulses.impulses)
         return; // no shadows: nothing is looked up
-    m_reused = m_current;
     if (m_current) { // built from the same sources by an earlier frame: made visible again
         memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kFragment, kStorageRead);
         return;

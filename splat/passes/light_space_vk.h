@@ -77,9 +77,6 @@ public:
     /// After the frame completed: the work items it needed. More than it had room for leaves
     /// this frame's shadows incomplete (a warning says so) and grows the list for the next.
     std::uint64_t itemsNeeded();
-    /// Whether the last record() kept the structure an earlier frame built from the same
-    /// sources (the same impulses, version and pose, lights and views) rather than building it.
-    bool reused() const { return m_reused; }
 
 private:
     const SceneGpu& m_scene;
@@ -93,7 +90,7 @@ private:
     /// prepare()'s sources (the parameters, extents, buffers and impulse version), and those of
     /// the last build; m_current when they match.
     std::vector<std::byte> m_key, m_built;
-    bool m_current = false, m_reused = false;
+    bool m_current = false;
 };
 
 } // namespace spot::splat
