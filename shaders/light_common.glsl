@@ -160,6 +160,24 @@ float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye,
     return shadowTransmittance(v, c + enter * l, 1.0) * litOwnShadow(A, amp, eye, l);
 }
 
+float litLobeTransmittanceAlong(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l, vec3 axis) {
+    vec3 d = A * l;
+    float dd = max(dot(d, d), 1e-30);
+    float R2 = 1.21 * k * k;
+    vec3 ua = A * axis;
+    float la = length(ua);
+    float sum = 0.0;
+    for (int j = -1; j <= 1; j += 2) {
+        float s = float(j);
+        vec3 u0 = (la > 0.0 ? s / la : 0.0) * ua;
+        float b = dot(u0, d);
+        float enter = (-b + sqrt(max(b * b - dd * (dot(u0, u0) - R2), 0.0))) / dd;
+        vec3 p = c + (la > 0.0 ? s / la : 0.0) * axis + enter * l;
+        sum += 0.5 * shadowTransmittance(v, p, 1.0);
+    }
+    return sum * litOwnShadow(A, amp, eye, l);
+}
+
 // A lobe's lit colour (docs/design.md, "Lighting on the GPU"): every light through its model
 // and the sky's directions through its diffuse part, each shadowed (litLobeTransmittance).
 // (A, c, amp: the lobe placed, unwidened; k: the support; v: towards the eye.)
@@ -172,7 +190,7 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
         vec3 radiance = litIncoming(light, c, l);
         uint view = uint(light.radiance.w);
         if (view > 0u)
-            radiance *= litLobeTransmittance(view - 1u, A, c, amp, k, v, l);
+            radiance *= litLobeTransmittanceAlong(view - 1u, A, c, amp, k, v, l, axis);
         sum += radiance * spotLobeShade(model, axis, l, v, color, primary, secondary);
     }
     for (uint j = 0u; j < lit.counts.y; ++j) {
@@ -193,21 +211,29 @@ vec3 litArrival(uint i, vec3 p, float biasTexels, out vec3 l) {
     return radiance;
 }
 
-// The base mesh's lit colour at p with unit normal n facing the eye: diffuse, every light and
-// the sky, shadowed (the mesh's own depth biased by 2 texels).
-vec3 litSurfaceColor(vec3 p, vec3 n, vec3 base) {
+// The base mesh's lit diffuse from every light at p with unit normal n facing the eye, shadowed
+// (the mesh's own depth biased by 2 texels), per pixel.
+vec3 litSurfaceLights(vec3 p, vec3 n) {
     vec3 sum = vec3(0.0);
-    vec3 q = p;
     for (uint i = 0u; i < lit.counts.x; ++i) {
         vec3 l;
-        vec3 radiance = litArrival(i, q, 2.0, l);
+        vec3 radiance = litArrival(i, p, 2.0, l);
         sum += radiance * max(0.0, dot(n, l));
     }
+    return sum;
+}
+
+// The sky's diffuse share at p, shadowed, for the two faces: x with normal n, y with -n (the
+// mesh pass evaluates it per vertex, where the face the eye sees is not known yet: the sky is
+// soft, and its directions' lookups are three quarters of the mesh's).
+vec2 litSurfaceSky(vec3 p, vec3 n) {
+    vec2 sum = vec2(0.0);
     for (uint k = 0u; k < lit.counts.y; ++k) {
         vec3 w = lit.skyDirs[k].xyz;
-        float t = shadowTransmittance(uint(lit.skyDirs[k].w), q, 2.0);
-        sum += (t * max(0.0, dot(n, w))) * lit.sky.rgb;
+        float c = dot(n, w);
+        float t = shadowTransmittance(uint(lit.skyDirs[k].w), p, 2.0);
+        sum += t * vec2(max(0.0, c), max(0.0, -c));
     }
-    return sum * base;
+    return sum;
 }
 #endif

@@ -5,9 +5,11 @@
 #include "splat_common.glsl"
 #ifdef SPLAT_MESH_LIT
 // Lit (a variant: it binds the lit frame's parameters and the light-space structure): diffuse,
-// every light and the sky, shadowed (light_common.glsl).
+// every light per pixel and the sky from the vertices (splat_mesh.vert), shadowed
+// (light_common.glsl).
 #include "spot_light.h"
 #include "light_common.glsl"
+layout(location = 2) in vec2 vSky;
 #endif
 
 layout(location = 0) in vec3 vWorld;
@@ -27,7 +29,8 @@ void main() {
         float len = length(vNormal);
         vec3 n = len > 0.0 ? vNormal / len : -frame.forward.xyz;
         vec3 v = frame.eye.w > 0.5 ? -frame.forward.xyz : normalize(frame.eye.xyz - vWorld);
-        color = litSurfaceColor(vWorld, dot(n, v) < 0.0 ? -n : n, color);
+        bool back = dot(n, v) < 0.0;
+        color *= litSurfaceLights(vWorld, back ? -n : n) + (back ? vSky.y : vSky.x) * lit.sky.rgb;
     }
 #endif
     if ((frame.counts.w & kSplatFlagLambert) != 0u) {

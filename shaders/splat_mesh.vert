@@ -3,6 +3,12 @@
 // spotReversedDepth): perspective clip z = near, w = z; orthographic depth comes from the fragment.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
+#ifdef SPLAT_MESH_LIT
+// Lit (a variant): the sky's shadowed diffuse per vertex, for both faces (light_common.glsl).
+#include "spot_light.h"
+#include "light_common.glsl"
+layout(location = 2) out vec2 vSky;
+#endif
 
 layout(std430, binding = kSplatBindVertices) readonly buffer Vertices { SpotMeshVertex vertices[]; };
 
@@ -13,6 +19,12 @@ void main() {
     SpotMeshVertex v = vertices[gl_VertexIndex];
     vWorld = v.position.xyz;
     vNormal = v.normal.xyz;
+#ifdef SPLAT_MESH_LIT
+    {
+        float len = length(v.normal.xyz);
+        vSky = litSurfaceSky(v.position.xyz, len > 0.0 ? v.normal.xyz / len : vec3(0.0));
+    }
+#endif
     vec3 rel = v.position.xyz - frame.eye.xyz;
     float x = dot(rel, frame.right.xyz) / frame.right.w;
     float y = -dot(rel, frame.up.xyz) / frame.up.w; // image rows grow downwards (Vulkan NDC)

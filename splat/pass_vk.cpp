@@ -12,6 +12,7 @@
 #include "splat_mesh.frag.h"
 #include "splat_mesh.vert.h"
 #include "splat_mesh_lit.frag.h"
+#include "splat_mesh_lit.vert.h"
 #include "splat_prepare.comp.h"
 #include "splat_prepare_lit.comp.h"
 
@@ -126,6 +127,7 @@ void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& fram
         const bool culled = cullsBackFaces(frame);
         if (light && !m_lit.handle()) {
             GraphicsPipelineDesc desc = m_desc;
+            desc.vertex = spirv(spv_splat_mesh_lit_vert);
             desc.fragment = spirv(spv_splat_mesh_lit_frag);
             const Bindings lookup = LightSpace::lookupBindings();
             desc.bindings.insert(desc.bindings.end(), lookup.begin(), lookup.end());

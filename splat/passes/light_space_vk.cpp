@@ -307,7 +307,8 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
     if (m_views == 0 || !m_impulses.impulses)
         return; // no shadows: nothing is looked up
     if (m_current) { // built from the same sources by an earlier frame: made visible again
-        memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kFragment, kStorageRead);
+        memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kFragment | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
+                      kStorageRead);
         return;
     }
     m_built = m_key;
@@ -398,7 +399,7 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
         Descriptors d;
         run(m_prefix, m_texels, 0, d);
     }
-    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute | kFragment,
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute | kFragment | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
                   kStorageRead);
     timer.mark(cmd, "light");
 }
