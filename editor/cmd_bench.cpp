@@ -58,6 +58,9 @@ struct SceneEntry {
     std::string file;     ///< relative to presets/scenes
     std::string scenario; ///< the stability matrix's row
     int width = 0, height = 0; ///< image size; 0: the suite's
+    /// Render the scene without its lights and sky (as `render --unlit`): the quick suite's
+    /// claims are the paper's, about compositing emission and absorption.
+    bool unlit = false;
 };
 
 struct Suite {
@@ -178,7 +181,8 @@ Suite makeSuite(const std::string& name) {
         // decided by EWA rather than by compositing.
         s.frames = 5;
         s.referenceSpp = 16;
-        s.scenes = {{"fur-bunny.json", "whole object"}, {"fur-bunny-close.json", "close-up"}};
+        s.scenes = {{"fur-bunny.json", "whole object", 0, 0, true},
+                    {"fur-bunny-close.json", "close-up", 0, 0, true}};
         s.variants = variants(Variants::Quick);
         s.animated = {{SPOT_SOURCE_DIR "/examples/animated/tail-fur.json", "animated"}};
     } else if (name == "full") {
@@ -272,7 +276,7 @@ struct Bench {
         std::ostringstream key;
         key << kReferenceVersion << slurp(sceneFile) << slurp(job.scene.preset) << job.scene.mesh
             << cam.eye.x << cam.eye.y << cam.eye.z << cam.width << "x" << cam.height << " "
-            << suite.referenceSpp;
+            << suite.referenceSpp << " shading " << int(job.scene.shading.mode);
         const fs::path cached = out / "cache" / cat(std::hex, fnv(key.str()), ".exr");
         if (fs::exists(cached))
             return noise::readImage(cached);
@@ -360,7 +364,10 @@ struct Bench {
         json row = {{"scene", job.scene.name}, {"scenario", entry.scenario}, {"method", v.method},
                     {"setting", v.setting}, {"width", job.scene.camera.width},
                     {"rays_per_pixel", v.method == "raymarch" ? v.settings.supersample * v.settings.supersample : 0},
-                    {"height", job.scene.camera.height}};
+                    {"height", job.scene.camera.height},
+                    {"shading", job.scene.shading.mode == noise::Shading::Mode::Lit       ? "lit"
+                                : job.scene.shading.mode == noise::Shading::Mode::Lambert ? "lambert"
+                                                                                         : "unlit"}};
         const splat::MethodInfo& method = splat::gpuMethod(v.method);
         const bool baked = method.takes(splat::settings::bake);
         try {
@@ -465,6 +472,8 @@ struct Bench {
         const fs::path file = scenesDir / entry.file;
         cli::SceneJob job = cli::loadSceneJob(file, entry.width > 0 ? entry.width : suite.width,
                                               entry.height > 0 ? entry.height : suite.height, false);
+        if (entry.unlit)
+            job.scene.shading = noise::Shading{};
         const noise::Image ref = reference(file, job, job.scene.camera);
         std::vector<noise::Image> refOrbit;
         refOrbit.reserve(std::size_t(suite.orbitFrames));

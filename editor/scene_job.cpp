@@ -20,7 +20,11 @@ std::vector<OptionSpec> sceneOptions() {
              false},
             {"preset", "FILE", "override the scene's preset", false},
             {"size", "WxH", "override the image size, e.g. 640x480", false},
-            {"seed", "N", "override the impulse seed", false}};
+            {"seed", "N", "override the impulse seed", false},
+            {"unlit", "",
+             "drop the scene's lights and sky: emission and absorption only (shading.mode "
+             "\"unlit\")",
+             false}};
 }
 
 bool SceneJob::cellVisible(const noise::SurfaceCell& cell) const {
@@ -185,6 +189,8 @@ SceneJob prepareScene(const Args& args, bool cpuImpulses) {
         desc.preset = args.str("preset");
     if (args.has("seed"))
         desc.seed = std::uint32_t(args.integer("seed", 0, 0, 0xffffffffll));
+    if (args.has("unlit"))
+        desc.shading = noise::Shading{};
     if (args.has("size")) {
         const std::string size = args.str("size");
         int w = 0, h = 0;

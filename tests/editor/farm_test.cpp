@@ -237,7 +237,7 @@ TEST(FarmCli, TilesAssembleToTheWholeImageHybrid) {
 }
 /// Lit: the light-space passes and the shadows, the same in every tile.
 TEST(FarmCli, TilesAssembleToTheWholeImageLit) {
-    const std::string lit = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json";
+    const std::string lit = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
     expectTilesAssembleToWhole("sorted", ".exr", lit);
     expectTilesAssembleToWhole("raymarch", ".exr", lit);
 }

@@ -265,7 +265,9 @@ TEST(EditScript, LightTurnsTheSessionLitAndMovesTheKeyLight) {
     fs::remove_all(dir);
     fs::create_directories(dir);
     const fs::path script = dir / "light.script";
+    // fur-bunny is lit: the script turns its lights off first.
     test::writeText(script, "method hybrid\n"
+                            "light off\n"
                             "screenshot " + (dir / "unlit.exr").string() + "\n"
                             "light on azimuth -60 elevation 45 intensity 3 shadows on\n"
                             "screenshot " + (dir / "shadowed.exr").string() + "\n"

@@ -218,6 +218,8 @@ TEST(EditSession, SaveAndLoadRoundTrip) {
 // and an unlit session turns lit first with the default key light; the document is not edited.
 TEST(EditSession, TurningTheKeyLightLightsTheSessionAndMovesTheLight) {
     edit::Session s(test::bunnyScene(), editOptions(64));
+    ASSERT_TRUE(s.lit()); // fur-bunny is lit
+    s.setLit(false);
     ASSERT_FALSE(s.lit());
     s.turnKeyLight(10.0f, 5.0f);
     ASSERT_TRUE(s.lit());

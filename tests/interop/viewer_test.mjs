@@ -16,13 +16,14 @@ const modules = args.modules || path.join(here, 'node_modules');
 const work = path.resolve(args.work);
 fs.mkdirSync(work, { recursive: true });
 const ply = path.join(work, 'splats.ply');
+// Unlit, both: the splats carry the lobes' own colours (a 3DGS viewer lights nothing).
 const exported = spotshell(args.spotshell, ['export', '--format', '3dgs', '--scene', args.scene,
-                                            '--size', args.size, '--out', ply,
+                                            '--unlit', '--size', args.size, '--out', ply,
                                             '--preview', path.join(work, 'twin.png'),
                                             '--mapping', args.mapping || 'coverage']);
 const splatCount = Number(/count\s+(\d+)/.exec(spotshell(args.spotshell, ['info', '--splats', ply]))[1]);
 const reference = path.join(work, 'spotshell.png');
-spotshell(args.spotshell, ['render', '--scene', args.scene, '--method', 'reference', '--size',
+spotshell(args.spotshell, ['render', '--scene', args.scene, '--unlit', '--method', 'reference', '--size',
                            args.size, '--out', reference]);
 
 // The scene's background (linear) as display values, for the viewer's clear colour.

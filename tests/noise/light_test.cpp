@@ -335,11 +335,11 @@ TEST(LitReference, TheSkyDeliversItsRadianceToAnOpenUpwardSurface) {
                 2.0 * 0.8 * base.r * 0.5 * 0.8, 1e-6);
 }
 
-/// fur-bunny-lit at `size` pixels and `spp`, its key light turned by `flip` (1 or -1) across
+/// fur-bunny (lit) at `size` pixels and `spp`, its key light turned by `flip` (1 or -1) across
 /// the camera's right axis; returns the mean brightness of the left and right halves.
 std::pair<double, double> bunnyHalves(double flip, int size, int spp) {
     noise::SceneDesc scene =
-        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json");
+        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json");
     const noise::Mesh mesh = noise::loadMeshOrGenerated(scene.mesh);
     const noise::PresetDesc preset = noise::loadPreset(scene.preset);
     noise::GeneratorOptions options;
@@ -452,7 +452,7 @@ TEST(LitScene, UnlitModeIgnoresTheLights) {
 
 TEST(LitScene, GpuMethodsRefuseLitScenesWithOneLine) {
     const std::string scene =
-        std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json";
+        std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json";
     // The splatting methods and the ray-march render lit scenes (tests/splat/light_space_test.cpp).
     for (const char* method : {"instanced", "oit", "hybrid", "sorted", "raymarch"})
         EXPECT_TRUE(splat::method(method).rendersLit) << method;

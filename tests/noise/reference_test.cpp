@@ -186,8 +186,7 @@ struct Rendered {
 };
 
 Rendered renderScene(const std::string& name, int size, int spp, double stepScale) {
-    const noise::SceneDesc scene =
-        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    const noise::SceneDesc scene = test::loadShippedScene(name);
     const noise::Mesh mesh = noise::loadMeshOrGenerated(scene.mesh);
     const noise::PresetDesc preset = noise::loadPreset(scene.preset);
     noise::GeneratorOptions options;

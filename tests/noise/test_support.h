@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include <boost/math/special_functions/gamma.hpp>
@@ -11,8 +12,25 @@
 #include "noise/kernel.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
+#include "noise/scene.h"
 
 namespace spot::test {
+
+/// The shipped scene presets/scenes/NAME.json. The fur-bunny scenes are lit; a test that gates a
+/// method's unlit accuracy on one drops its lights and sky, as `render --unlit` does. A NAME
+/// ending in "+lit" keeps them ("fur-bunny+lit").
+inline noise::SceneDesc loadShippedScene(std::string name) {
+    const std::string suffix = "+lit";
+    const bool lit = name.size() > suffix.size() &&
+                     name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+    if (lit)
+        name.resize(name.size() - suffix.size());
+    noise::SceneDesc scene =
+        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    if (!lit && scene.shading.mode == noise::Shading::Mode::Lit)
+        scene.shading = noise::Shading{};
+    return scene;
+}
 
 inline noise::FieldDesc constantField(glm::vec3 value, int components) {
     noise::FieldDesc f;

@@ -71,7 +71,7 @@ struct BakedScene {
 
 BakedScene loadBakedScene(const std::string& name, int size, float voxel, int levels) {
     BakedScene s;
-    s.scene = noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    s.scene = test::loadShippedScene(name);
     s.scene.camera.width = s.scene.camera.height = size;
     s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
     noise::GeneratorOptions options;
@@ -319,7 +319,7 @@ double meanOfColumns(const noise::Image& image, int x0, int x1) {
     return sum / double(image.height * (x1 - x0));
 }
 
-// Lit scenes (docs/design.md section 5): fur-bunny-lit at 64x64 against the lit reference (16
+// Lit scenes (docs/design.md section 5): fur-bunny (lit) at 64x64 against the lit reference (16
 // spp), and the same bake unlit against the unlit reference of the same scene. The gate
 // (lit within 1 dB of unlit) does not hold for baked: measured 24.38 dB lit against 30.21 dB
 // unlit here (128x128: 25.05 against 31.72 dB, FLIP 0.088 against 0.087; 256x256 from the
@@ -331,9 +331,9 @@ double meanOfColumns(const noise::Image& image, int x0, int x1) {
 // measured, a little below, the image finite, and no validation error. SPOT_WRITE_IMAGES=1 writes
 // the four images.
 TEST(BakedScenes, LitFurBunnyAgainstTheLitReference) {
-    const BakedScene s = loadBakedScene("lit/fur-bunny-lit", 64, 0.004f, 4);
+    const BakedScene s = loadBakedScene("fur-bunny+lit", 64, 0.004f, 4);
     ASSERT_EQ(s.scene.shading.mode, noise::Shading::Mode::Lit);
-    const noise::Image& litReference = test::referenceImage("lit/fur-bunny-lit", 64, 16);
+    const noise::Image& litReference = test::referenceImage("fur-bunny+lit", 64, 16);
     noise::Shading unlit = s.scene.shading;
     unlit.mode = noise::Shading::Mode::Unlit;
     const noise::ReferenceRenderer reference(s.mesh, s.generator->kernel(), s.generator->generate(),
@@ -367,7 +367,7 @@ TEST(BakedScenes, LitFurBunnyAgainstTheLitReference) {
         0);
     const double litDb = splat::psnr(litReference, lit),
                  unlitDb = splat::psnr(unlitReference, flat);
-    std::printf("fur-bunny-lit 64: baked lit %.2f dB against the lit reference, unlit %.2f dB "
+    std::printf("fur-bunny lit 64: baked lit %.2f dB against the lit reference, unlit %.2f dB "
                 "against the unlit reference (the issue's gate, within 1 dB: %s)\n",
                 litDb, unlitDb, litDb >= unlitDb - 1.0 ? "held" : "not held");
     EXPECT_GT(litDb, 23.0);
@@ -381,7 +381,7 @@ TEST(BakedScenes, LitFurBunnyAgainstTheLitReference) {
 // vertical plane; the sky off): the half of the bunny towards the light is the brighter one.
 // Measured (48x48): 0.127 against 0.041 from the left, 0.053 against 0.085 from the right.
 TEST(BakedScenes, LitLightOnTheOtherSideFlipsTheBrighterHalf) {
-    BakedScene s = loadBakedScene("lit/fur-bunny-lit", 48, 0.004f, 4);
+    BakedScene s = loadBakedScene("fur-bunny+lit", 48, 0.004f, 4);
     const noise::CameraRays rays(s.scene.camera);
     const glm::dvec3 right = glm::normalize(rays.right()), up = glm::normalize(rays.up());
     s.scene.shading.sky.intensity = 0.0f;
@@ -409,7 +409,7 @@ TEST(BakedScenes, LitLightOnTheOtherSideFlipsTheBrighterHalf) {
 // A lit scene needs the bake's shading grids: a bake without them (written before them) is
 // refused with one line that says so, before anything is drawn; unlit it still renders.
 TEST(BakedFrame, ALitSceneWithABakeWithoutShadingGridsIsRefused) {
-    const BakedScene s = loadBakedScene("lit/fur-bunny-lit", 32, 0.004f, 4);
+    const BakedScene s = loadBakedScene("fur-bunny+lit", 32, 0.004f, 4);
     auto older = std::make_shared<splat::BakeData>(*splat::BakeData::load(s.bake));
     ASSERT_TRUE(older->shaded);
     older->shaded = false;
@@ -437,7 +437,7 @@ TEST(BakedFrame, ALitSceneWithABakeWithoutShadingGridsIsRefused) {
 // are: split over 2, 3 and 4 buffers (each a module of its own) the lit image is the unsplit
 // one byte for byte, and the bake holds twice the unlit bricks' bytes on the GPU.
 TEST(BakedFrame, LitBricksSplitOverBuffersRenderTheSame) {
-    const BakedScene s = loadBakedScene("lit/fur-bunny-lit", 32, 0.004f, 4);
+    const BakedScene s = loadBakedScene("fur-bunny+lit", 32, 0.004f, 4);
     splat::Context ctx(validated());
     splat::Frame frame(ctx, s.mesh, *s.generator);
     auto& renderer = dynamic_cast<splat::BakedRenderer&>(frame.renderer("baked"));

@@ -28,7 +28,7 @@ struct FrameSetup {
 
 FrameSetup loadFrameSetup(const std::string& name, int size) {
     FrameSetup s;
-    s.scene = noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    s.scene = test::loadShippedScene(name);
     s.scene.camera.width = s.scene.camera.height = size;
     s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
     noise::GeneratorOptions options;
@@ -130,7 +130,7 @@ bool builtLightSpace(const splat::FrameStats& stats) {
 TEST(Frame, TheLightSpaceIsKeptWhileOnlyTheCameraMoves) {
     FrameSetup s = loadFrameSetup("fur-bunny", 40);
     const noise::SceneDesc lit =
-        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json");
+        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json");
     s.scene.shading = lit.shading;
     ASSERT_TRUE(s.scene.shading.castsShadows());
     splat::Context ctx(validated());
@@ -161,7 +161,7 @@ TEST(Frame, TheLightSpaceIsKeptWhileOnlyTheCameraMoves) {
 TEST(Frame, AHoldKeepsTheLightSpaceForNewImpulsesButNotForAMovedLight) {
     FrameSetup s = loadFrameSetup("fur-bunny", 40);
     s.scene.shading =
-        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/lit/fur-bunny-lit.json")
+        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json")
             .shading;
     splat::Context ctx(validated());
     splat::Frame frame(ctx, s.mesh, *s.generator);

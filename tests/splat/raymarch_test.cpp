@@ -696,8 +696,7 @@ TEST(RaymarchFrame, ThroughTheRegistryAndTheFrame) {
     const splat::MethodInfo& info = splat::gpuMethod("raymarch");
     EXPECT_TRUE(info.takes(splat::settings::steps));
     EXPECT_FALSE(info.takes(splat::settings::ewa));
-    noise::SceneDesc desc =
-        noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/fur-bunny.json");
+    noise::SceneDesc desc = test::loadShippedScene("fur-bunny");
     desc.camera.width = desc.camera.height = 40;
     const noise::Mesh mesh = noise::loadMeshOrGenerated(desc.mesh);
     noise::GeneratorOptions options;

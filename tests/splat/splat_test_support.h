@@ -104,7 +104,7 @@ struct SceneSetup {
 
 inline SceneSetup loadSetup(const std::string& name, int size) {
     SceneSetup s;
-    s.scene = noise::loadScene(std::string(SPOT_SOURCE_DIR) + "/presets/scenes/" + name + ".json");
+    s.scene = loadShippedScene(name);
     s.scene.camera.width = s.scene.camera.height = size;
     s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
     noise::GeneratorOptions options;
