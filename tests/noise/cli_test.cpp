@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_run.h"
+#include "noise/image.h"
 #include "splat/quality.h"
 
 namespace {
@@ -206,6 +207,31 @@ TEST(Cli, RenderGpuMethodsWithValidation) {
                                 "\"gpu_memory_bytes\"", "\"validation_errors\": 0", "\"width\": 64"})
             EXPECT_NE(json.find(key), std::string::npos) << method << ": " << key << " in " << json;
     }
+}
+
+// fur-bunny is lit; --unlit renders it as the same scene with "shading": {"mode": "unlit"} and
+// its lights and sky dropped does, bit for bit, and lit differs.
+TEST(Cli, RenderUnlitDropsTheScenesLights) {
+    const std::string dir = std::string(SPOT_SOURCE_DIR) + "/presets/scenes/";
+    nlohmann::json j = nlohmann::json::parse(slurp(dir + "fur-bunny.json"));
+    ASSERT_EQ(j["shading"]["mode"], "lit");
+    j["shading"] = {{"mode", "unlit"}};
+    j.erase("lights");
+    j.erase("sky");
+    for (const char* key : {"mesh", "preset"})
+        j[key] = dir + j[key].get<std::string>();
+    const std::string unlitScene = tmp("fur-bunny-unlit.json");
+    std::ofstream(unlitScene) << j.dump(1);
+    const std::string flag = tmp("unlit-flag.exr"), scene = tmp("unlit-scene.exr"),
+                      lit = tmp("unlit-lit.exr");
+    for (const auto& [args, out] : {std::pair{dir + "fur-bunny.json --unlit", flag},
+                                    std::pair{unlitScene, scene},
+                                    std::pair{dir + "fur-bunny.json", lit}}) {
+        const Result r = run("render --scene " + args + " --method hybrid --size 48x40 --out " + out);
+        ASSERT_EQ(r.code, 0) << r.err;
+    }
+    EXPECT_TRUE(spot::noise::readImage(flag).pixels == spot::noise::readImage(scene).pixels);
+    EXPECT_FALSE(spot::noise::readImage(flag).pixels == spot::noise::readImage(lit).pixels);
 }
 
 TEST(Cli, RenderRepeatsWarmFramesAndReportsTheirTimes) {
