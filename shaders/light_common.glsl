@@ -152,30 +152,20 @@ vec3 litIncoming(SpotLitLight light, vec3 p, out vec3 l) {
     return light.radiance.rgb * spotPointFalloff(1.0, d);
 }
 
-// Transmittance from a lobe towards view v's light (direction l): the structure's where the
-// light's ray through its centre enters its support (what lies between the lobe and the light),
-// times the lobe's own as the eye sees it (litOwnShadow).
-float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l) {
-    float enter = 1.1 * k / max(length(A * l), 1e-30);
-    return shadowTransmittance(v, c + enter * l, 1.0) * litOwnShadow(A, amp, eye, l);
+// Transmittance from a lobe towards view v's light (direction l): the structure's at the lobe's
+// light points (spot_light.h's spotLobeLightPoint: what lies between the lobe and the light;
+// `along`: the mean of the two along its axis, else the one at its centre), times the lobe's own
+// as the eye sees it (litOwnShadow).
+float litLobeLight(uint v, mat3 A, vec3 c, float k, vec3 l, vec3 axis, bool along) {
+    if (!along)
+        return shadowTransmittance(v, spotLobeLightPoint(A, c, axis, 0.0, l, k), 1.0);
+    return 0.5 * (shadowTransmittance(v, spotLobeLightPoint(A, c, axis, -1.0, l, k), 1.0) +
+                  shadowTransmittance(v, spotLobeLightPoint(A, c, axis, 1.0, l, k), 1.0));
 }
 
-float litLobeTransmittanceAlong(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l, vec3 axis) {
-    vec3 d = A * l;
-    float dd = max(dot(d, d), 1e-30);
-    float R2 = 1.21 * k * k;
-    vec3 ua = A * axis;
-    float la = length(ua);
-    float sum = 0.0;
-    for (int j = -1; j <= 1; j += 2) {
-        float s = float(j);
-        vec3 u0 = (la > 0.0 ? s / la : 0.0) * ua;
-        float b = dot(u0, d);
-        float enter = (-b + sqrt(max(b * b - dd * (dot(u0, u0) - R2), 0.0))) / dd;
-        vec3 p = c + (la > 0.0 ? s / la : 0.0) * axis + enter * l;
-        sum += 0.5 * shadowTransmittance(v, p, 1.0);
-    }
-    return sum * litOwnShadow(A, amp, eye, l);
+float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l, vec3 axis,
+                           bool along) {
+    return litLobeLight(v, A, c, k, l, axis, along) * litOwnShadow(A, amp, eye, l);
 }
 
 // A lobe's lit colour (docs/design.md, "Lighting on the GPU"): every light through its model
@@ -190,12 +180,12 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
         vec3 radiance = litIncoming(light, c, l);
         uint view = uint(light.radiance.w);
         if (view > 0u)
-            radiance *= litLobeTransmittanceAlong(view - 1u, A, c, amp, k, v, l, axis);
+            radiance *= litLobeTransmittance(view - 1u, A, c, amp, k, v, l, axis, true);
         sum += radiance * spotLobeShade(model, axis, l, v, color, primary, secondary);
     }
     for (uint j = 0u; j < lit.counts.y; ++j) {
         vec3 w = lit.skyDirs[j].xyz;
-        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w);
+        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w, axis, false);
         sum += (t * spotLobeDiffuse(model, axis, w, v)) * lit.sky.rgb * color;
     }
     return sum;

@@ -125,3 +125,23 @@ SPOT_FN rvec3 spotSkyDirection(real u1, real u2) {
 SPOT_FN real spotPointFalloff(real intensity, real d) {
     return intensity / max(d * d, real(1e-12));
 }
+
+/* Where the GPU looks a lobe's light up in the light-space structure (docs/design.md, "Lighting
+ * on the GPU"): the point s sigmas from the lobe's centre c along its unit shading axis, moved
+ * towards the light (unit l) to where that ray leaves the lobe's support (k sigmas, grown by 10%),
+ * so that the structure counts what lies between the lobe and the light and not the lobe (whose
+ * own shadow is spotOwnShadow's). The key light is looked up at s = -1 and +1 and averaged (the
+ * two-point Gauss-Hermite rule along a strand: its root may lie in the coat's shadow and its tip
+ * in the light), each sky direction at s = 0. A: world -> lobe space. */
+SPOT_FN rvec3 spotLobeLightPoint(rmat3 A, rvec3 c, rvec3 axis, real s, rvec3 l, real k) {
+    rvec3 d = A * l;
+    real dd = max(dot(d, d), real(1e-30));
+    rvec3 ua = A * axis;
+    real la = length(ua);
+    real step = la > real(0.0) ? s / la : real(0.0);
+    rvec3 u0 = step * ua;
+    real reach = real(1.21) * k * k;
+    real b = dot(u0, d);
+    real exitT = (-b + sqrt(max(b * b - dd * (dot(u0, u0) - reach), real(0.0)))) / dd;
+    return c + step * axis + exitT * l;
+}
