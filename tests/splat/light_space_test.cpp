@@ -156,15 +156,14 @@ TEST(LightSpace, FurBunnyLobesAgainstTheExactTransmittance) {
 }
 
 TEST(LightSpace, FurBunnyLobeLightAsThePassesUseIt) {
-    // A measurement (docs/design.md, "Lighting on the GPU"): what the passes light each lobe with
-    // from the key light (the structure at the lobe's two light points, spot_light.h's
-    // spotLobeLightPoint, averaged as light_common.glsl's litLobeLight does) against the exact:
-    // the transmittance through every other lobe and the mesh averaged over the lobe (the 2x2x2
-    // Gauss-Hermite points of its Gaussian; its own shadow is spotOwnShadow's, apart), at the
-    // structure's default resolution (SPOT_TEST_LIGHT_TEXELS, SPOT_TEST_LIGHT_LAYERS override
-    // it). Measured 0.050 mean (signed +0.038, the structure too bright), so not gated at the
-    // centre test's 0.03: the lookups' error is what the two-point rule and the layers' steps
-    // add to the structure's own (design.md says where it comes from).
+    // What the passes light each lobe with from the key light (the structure at the lobe's two
+    // light points, spot_light.h's spotLobeLightPoint, averaged as light_common.glsl's
+    // litLobeLight does) against the exact: the transmittance through every other lobe and the
+    // mesh averaged over the lobe (the 2x2x2 Gauss-Hermite points of its Gaussian; its own
+    // shadow is spotOwnShadow's, apart), at the structure's default resolution
+    // (SPOT_TEST_LIGHT_TEXELS and SPOT_TEST_LIGHT_LAYERS override it, to measure). Measured mean
+    // 0.0283 (signed -0.0030), p99 0.248; looked up where the ray leaves the whole support
+    // instead, 0.050 (signed +0.038: the neighbours in between were skipped).
     const test::SceneSetup s = test::loadSetup("fur-bunny+lit", 64);
     splat::LightSpaceSettings settings;
     if (const char* t = std::getenv("SPOT_TEST_LIGHT_TEXELS"))
@@ -229,7 +228,7 @@ TEST(LightSpace, FurBunnyLobeLightAsThePassesUseIt) {
     for (const auto& [name, ms] : b.passes)
         std::printf(" %s %.2f", name.c_str(), ms);
     std::printf("\n");
-    EXPECT_LT(mean, 0.5); // a lookup that reads the wrong texels or views errs by far more
+    EXPECT_LE(mean, 0.03);
     test::expectNoValidationErrors(b.ctx);
 }
 
