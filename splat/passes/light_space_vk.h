@@ -3,7 +3,8 @@
 /// GPU"; shaders/spot_shadow.h): one deep opacity map per light with shadows and per sky
 /// direction, built each frame on the GPU from the frame's impulses and (posed) mesh, and the lit
 /// frame's parameters. The prepare pass (splat_prepare_lit.comp) looks it up at each lobe's centre
-/// to light the lobe; the mesh pass (splat_mesh_lit.frag) at each pixel of the base mesh.
+/// to light the lobe; the mesh pass at each pixel of the base mesh for the lights
+/// (splat_mesh_lit.frag) and at each vertex for the sky (splat_mesh_lit.vert).
 ///
 /// Passes, all compute, one dispatch each over every view: place (the lobes in the world), tiles
 /// (the work lists: each lobe's and triangle's tiles of texels per view; a lobe also lowers where
@@ -26,10 +27,10 @@ namespace spot::splat {
 
 /// What the structure is made of: the texels per side of a light's view and of a sky
 /// direction's, the layers per texel, and the sky's directions.
-/// The defaults, measured on fur-bunny-lit (docs/design.md, "Lighting on the GPU"): a light's
-/// view at 512 texels shadows its lobes to 0.028 of the exact transmittance (mean), at 256 to
-/// 0.049, and the images at 96x96 do not tell the two apart; the sky at 3 directions against 6
-/// loses about 2 dB on a sky-only image and about 40% of the structure's cost.
+/// The defaults, measured on the lit fur-bunny (docs/design.md, "Lighting on the GPU"): at 256
+/// texels the passes light its lobes within 0.028 of the exact lobe-averaged transmittance (mean;
+/// 512 texels do no better); the sky at 3 directions against 6 loses about 2 dB on a sky-only
+/// image and about 40% of the structure's cost.
 struct LightSpaceSettings {
     std::uint32_t lightTexels = 256;
     std::uint32_t skyTexels = 48;
