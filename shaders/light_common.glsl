@@ -173,10 +173,9 @@ vec3 litIncoming(SpotLitLight light, vec3 p, out vec3 l) {
     return light.radiance.rgb * spotPointFalloff(1.0, d);
 }
 
-// Transmittance from a lobe towards view v's light (direction l): the structure's at the lobe's
-// light points (spot_light.h's spotLobeLightPoint: what lies between the lobe and the light;
-// `along`: the mean of the two along its axis, else the one at its centre), times the lobe's own
-// as the eye sees it (litOwnShadow).
+// What reaches a lobe from view v's light (direction l) past everything else: the structure's
+// transmittance at the lobe's light points (spot_light.h's spotLobeLightPoint; `along`: the mean
+// of the two along its axis, else the one at its centre, from the nearest texel: the sky's).
 float litLobeLight(uint v, mat3 A, vec3 c, float k, vec3 l, vec3 axis, bool along) {
     if (!along)
         return shadowTransmittanceNearest(v, spotLobeLightPoint(A, c, axis, 0.0, l, k), 1.0);
@@ -184,6 +183,7 @@ float litLobeLight(uint v, mat3 A, vec3 c, float k, vec3 l, vec3 axis, bool alon
                   shadowTransmittance(v, spotLobeLightPoint(A, c, axis, 1.0, l, k), 1.0));
 }
 
+// That, times the lobe's own transmittance as the eye sees it (litOwnShadow).
 float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l, vec3 axis,
                            bool along) {
     return litLobeLight(v, A, c, k, l, axis, along) * litOwnShadow(A, amp, eye, l);
