@@ -82,11 +82,24 @@ float shadowTexelDepth(SpotShadowView view, uint x, uint y, uint t, float s) {
     return mix(below, above, step);
 }
 
+// Transmittance at depth s along texel t of view v (r texels a side): 1 outside the map (nothing
+// in front), 0 where the mesh lies nearer than s by more than `bias`, else the kernels'.
+float shadowTexelTransmittance(SpotShadowView view, uint r, ivec2 t, float s, float bias) {
+    if (t.x < 0 || t.y < 0 || t.x >= int(r) || t.y >= int(r))
+        return 1.0;
+    uint texel = uint(t.y) * r + uint(t.x);
+    float mesh = uintBitsToFloat(spotOrderedToBits(firstDepth[view.offsets.z + texel]));
+    if (s - bias > mesh)
+        return 0.0; // the mesh lies between
+    return exp(-shadowTexelDepth(view, uint(t.x), uint(t.y), texel, s));
+}
+
 // Transmittance from world point p towards view v's light: the kernels' optical depth and the
-// mesh, bilinear over the four nearest texels (one outside the map has nothing in front). The
-// mesh hides p where its depth is nearer than p's by more than `biasTexels` texels (a texel's
-// world size at p), which keeps a surface from shadowing itself.
-float shadowTransmittance(uint v, vec3 p, float biasTexels) {
+// mesh, bilinear over the four nearest texels, or from the nearest one alone (`nearest`: the sky's
+// lookups for the lobes, whose light is soft and averaged over its directions: a quarter of the
+// loads). The mesh hides p where its depth is nearer than p's by more than `biasTexels` texels (a
+// texel's world size at p), which keeps a surface from shadowing itself.
+float shadowTransmittanceAt(uint v, vec3 p, float biasTexels, bool nearest) {
     bool ok;
     vec3 c = shadowCoords(v, p, ok);
     if (!ok)
@@ -95,47 +108,24 @@ float shadowTransmittance(uint v, vec3 p, float biasTexels) {
     vec3 square = shadowSquare(v);
     uint r = view.offsets.w;
     float bias = biasTexels * square.z * (view.origin.w < 0.5 ? 1.0 : c.z);
-    vec2 f = (c.xy - square.xy) / square.z - 0.5;
+    vec2 f = (c.xy - square.xy) / square.z;
+    if (nearest)
+        return shadowTexelTransmittance(view, r, ivec2(floor(f)), c.z, bias);
+    f -= 0.5;
     vec2 fl = floor(f);
     vec2 w = f - fl;
     float sum = 0.0;
     for (int dy = 0; dy < 2; ++dy) {
         for (int dx = 0; dx < 2; ++dx) {
-            ivec2 t = ivec2(fl) + ivec2(dx, dy);
             float weight = (dx == 0 ? 1.0 - w.x : w.x) * (dy == 0 ? 1.0 - w.y : w.y);
-            if (t.x < 0 || t.y < 0 || t.x >= int(r) || t.y >= int(r)) {
-                sum += weight;
-                continue;
-            }
-            uint texel = uint(t.y) * r + uint(t.x);
-            float mesh = uintBitsToFloat(spotOrderedToBits(firstDepth[view.offsets.z + texel]));
-            if (c.z - bias > mesh)
-                continue; // the mesh lies between
-            sum += weight * exp(-shadowTexelDepth(view, uint(t.x), uint(t.y), texel, c.z));
+            sum += weight * shadowTexelTransmittance(view, r, ivec2(fl) + ivec2(dx, dy), c.z, bias);
         }
     }
     return sum;
 }
 
-// shadowTransmittance from the one nearest texel (the sky's views, whose light is soft and
-// averaged over its directions: a quarter of the loads).
-float shadowTransmittanceNearest(uint v, vec3 p, float biasTexels) {
-    bool ok;
-    vec3 c = shadowCoords(v, p, ok);
-    if (!ok)
-        return 1.0;
-    SpotShadowView view = lit.views[v];
-    vec3 square = shadowSquare(v);
-    uint r = view.offsets.w;
-    float bias = biasTexels * square.z * (view.origin.w < 0.5 ? 1.0 : c.z);
-    ivec2 t = ivec2(floor((c.xy - square.xy) / square.z));
-    if (t.x < 0 || t.y < 0 || t.x >= int(r) || t.y >= int(r))
-        return 1.0;
-    uint texel = uint(t.y) * r + uint(t.x);
-    float mesh = uintBitsToFloat(spotOrderedToBits(firstDepth[view.offsets.z + texel]));
-    if (c.z - bias > mesh)
-        return 0.0; // the mesh lies between
-    return exp(-shadowTexelDepth(view, uint(t.x), uint(t.y), texel, c.z));
+float shadowTransmittance(uint v, vec3 p, float biasTexels) {
+    return shadowTransmittanceAt(v, p, biasTexels, false);
 }
 
 // How much of a lobe's own light it lets the eye see (spot_shared.h's spotOwnShadow, three
@@ -178,7 +168,7 @@ vec3 litIncoming(SpotLitLight light, vec3 p, out vec3 l) {
 // of the two along its axis, else the one at its centre, from the nearest texel: the sky's).
 float litLobeLight(uint v, mat3 A, vec3 c, float k, vec3 l, vec3 axis, bool along) {
     if (!along)
-        return shadowTransmittanceNearest(v, spotLobeLightPoint(A, c, axis, 0.0, l, k), 1.0);
+        return shadowTransmittanceAt(v, spotLobeLightPoint(A, c, axis, 0.0, l, k), 1.0, true);
     return 0.5 * (shadowTransmittance(v, spotLobeLightPoint(A, c, axis, -1.0, l, k), 1.0) +
                   shadowTransmittance(v, spotLobeLightPoint(A, c, axis, 1.0, l, k), 1.0));
 }
