@@ -108,6 +108,39 @@ struct Built {
     }
 };
 
+/// The GPU's transmittances against the exact ones: every value in [0, 1], and printed under
+/// `what`: the mean exact value, the mean, signed mean, 99th percentile and largest |error|, the
+/// histogram of |error| by tenths, and the build's passes. Returns the mean |error|.
+double reportErrors(const char* what, const std::vector<double>& gpu,
+                    const std::vector<double>& exact, const Built& b) {
+    EXPECT_EQ(gpu.size(), exact.size());
+    std::vector<double> errors(exact.size());
+    std::vector<int> histogram(10, 0);
+    double sum = 0.0, signedSum = 0.0, exactSum = 0.0;
+    for (std::size_t i = 0; i < exact.size(); ++i) {
+        EXPECT_TRUE(std::isfinite(gpu[i]) && gpu[i] >= 0.0 && gpu[i] <= 1.0 + 1e-6) << gpu[i];
+        errors[i] = std::abs(gpu[i] - exact[i]);
+        sum += errors[i];
+        signedSum += gpu[i] - exact[i];
+        exactSum += exact[i];
+        histogram[std::min(9, int(errors[i] * 10.0))] += 1;
+    }
+    std::sort(errors.begin(), errors.end());
+    const double n = double(errors.size());
+    const double mean = sum / n;
+    std::printf("%s, %zu lobes, mean exact %.4f: mean |error| %.4f (signed %+.4f), p99 %.4f, max "
+                "%.4f\nhistogram of |error| by tenths:",
+                what, errors.size(), exactSum / n, mean, signedSum / n,
+                errors[errors.size() * 99 / 100], errors.back());
+    for (int h : histogram)
+        std::printf(" %d", h);
+    std::printf("\nbuilt in %.2f ms:", b.ms);
+    for (const auto& [name, ms] : b.passes)
+        std::printf(" %s %.2f", name.c_str(), ms);
+    std::printf("\n");
+    return mean;
+}
+
 TEST(LightSpace, FurBunnyLobesAgainstTheExactTransmittance) {
     const test::SceneSetup s = test::loadSetup("fur-bunny+lit", 64);
     // The key light's view at 512 texels (the default 256 gives a mean error of 0.049: the
@@ -127,30 +160,12 @@ TEST(LightSpace, FurBunnyLobesAgainstTheExactTransmittance) {
         }
     ASSERT_GT(centres.size(), 1000u);
     const std::vector<double> gpu = probe(b.ctx, *b.light, centres, 0);
-    std::vector<double> errors(centres.size());
-    std::vector<int> histogram(10, 0);
-    double sum = 0.0, signedSum = 0.0;
-    for (std::size_t i = 0; i < centres.size(); ++i) {
-        const double exact =
+    std::vector<double> exact(centres.size());
+    for (std::size_t i = 0; i < centres.size(); ++i)
+        exact[i] =
             reference.transmittance(centres[i], toLight, std::numeric_limits<double>::infinity());
-        ASSERT_TRUE(std::isfinite(gpu[i]) && gpu[i] >= 0.0 && gpu[i] <= 1.0 + 1e-6) << gpu[i];
-        errors[i] = std::abs(gpu[i] - exact);
-        sum += errors[i];
-        signedSum += gpu[i] - exact;
-        histogram[std::min(9, int(errors[i] * 10.0))] += 1;
-    }
-    std::sort(errors.begin(), errors.end());
-    const double mean = sum / double(errors.size());
-    const double p99 = errors[errors.size() * 99 / 100];
-    std::printf("light space at the %zu lobe centres of fur-bunny (lit): mean |error| %.4f (signed "
-                "%+.4f), p99 %.4f, max %.4f\nhistogram of |error| by tenths:",
-                errors.size(), mean, signedSum / double(errors.size()), p99, errors.back());
-    for (int h : histogram)
-        std::printf(" %d", h);
-    std::printf("\nbuilt in %.2f ms:", b.ms);
-    for (const auto& [name, ms] : b.passes)
-        std::printf(" %s %.2f", name.c_str(), ms);
-    std::printf("\n");
+    const double mean = reportErrors("light space at the lobe centres of fur-bunny (lit)", gpu,
+                                     exact, b);
     EXPECT_LE(mean, 0.03);
     test::expectNoValidationErrors(b.ctx);
 }
@@ -203,31 +218,11 @@ TEST(LightSpace, FurBunnyLobeLightAsThePassesUseIt) {
         }
     ASSERT_GT(exact.size(), 1000u);
     const std::vector<double> probed = probe(b.ctx, *b.light, points, 0);
-    std::vector<double> errors(exact.size());
-    std::vector<int> histogram(10, 0);
-    double sum = 0.0, signedSum = 0.0, meanExact = 0.0;
-    for (std::size_t i = 0; i < exact.size(); ++i) {
-        const double gpu = 0.5 * (probed[2 * i] + probed[2 * i + 1]);
-        ASSERT_TRUE(std::isfinite(gpu) && gpu >= 0.0 && gpu <= 1.0 + 1e-6) << gpu;
-        errors[i] = std::abs(gpu - exact[i]);
-        sum += errors[i];
-        signedSum += gpu - exact[i];
-        meanExact += exact[i];
-        histogram[std::min(9, int(errors[i] * 10.0))] += 1;
-    }
-    std::sort(errors.begin(), errors.end());
-    const double n = double(errors.size());
-    const double mean = sum / n;
-    const double p99 = errors[errors.size() * 99 / 100];
-    std::printf("the key light at the %zu lobes of fur-bunny (lit), mean exact %.4f: mean |error| "
-                "%.4f (signed %+.4f), p99 %.4f, max %.4f\nhistogram of |error| by tenths:",
-                errors.size(), meanExact / n, mean, signedSum / n, p99, errors.back());
-    for (int h : histogram)
-        std::printf(" %d", h);
-    std::printf("\nbuilt in %.2f ms:", b.ms);
-    for (const auto& [name, ms] : b.passes)
-        std::printf(" %s %.2f", name.c_str(), ms);
-    std::printf("\n");
+    std::vector<double> gpu(exact.size());
+    for (std::size_t i = 0; i < exact.size(); ++i)
+        gpu[i] = 0.5 * (probed[2 * i] + probed[2 * i + 1]);
+    const double mean =
+        reportErrors("the key light at the lobes of fur-bunny (lit)", gpu, exact, b);
     EXPECT_LE(mean, 0.03);
     test::expectNoValidationErrors(b.ctx);
 }
