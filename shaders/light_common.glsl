@@ -164,39 +164,43 @@ vec3 litIncoming(SpotLitLight light, vec3 p, out vec3 l) {
 }
 
 // What reaches a lobe from view v's light (direction l) past everything else: the structure's
-// transmittance at the lobe's light points (spot_light.h's spotLobeLightPoint; `along`: the mean
-// of the two along its axis, else the one at its centre, from the nearest texel: the sky's).
-float litLobeLight(uint v, mat3 A, vec3 c, float k, vec3 l, vec3 axis, bool along) {
-    if (!along)
-        return shadowTransmittanceAt(v, spotLobeLightPoint(A, c, axis, 0.0, l, k), 1.0, true);
-    return 0.5 * (shadowTransmittance(v, spotLobeLightPoint(A, c, axis, -1.0, l, k), 1.0) +
-                  shadowTransmittance(v, spotLobeLightPoint(A, c, axis, 1.0, l, k), 1.0));
-}
-
-// That, times the lobe's own transmittance as the eye sees it (litOwnShadow).
-float litLobeTransmittance(uint v, mat3 A, vec3 c, float amp, float k, vec3 eye, vec3 l, vec3 axis,
-                           bool along) {
-    return litLobeLight(v, A, c, k, l, axis, along) * litOwnShadow(A, amp, eye, l);
+// transmittance at the lobe's two light points along its shading axis, one sigma to the root
+// side (x) and one to the tip side (y) (spot_light.h's spotLobeLightPoint).
+vec2 litLobeLightEnds(uint v, mat3 A, vec3 c, float k, vec3 l, vec3 axis) {
+    return vec2(shadowTransmittance(v, spotLobeLightPoint(A, c, axis, -1.0, l, k), 1.0),
+                shadowTransmittance(v, spotLobeLightPoint(A, c, axis, 1.0, l, k), 1.0));
 }
 
 // A lobe's lit colour (docs/design.md, "Lighting on the GPU"): every light through its model
-// and the sky's directions through its diffuse part, each shadowed (litLobeTransmittance).
-// (A, c, amp: the lobe placed, unwidened; k: the support; v: towards the eye.)
+// and the sky's directions through its diffuse part, each shadowed by what lies between (the
+// structure) and by the lobe itself as the eye sees it (litOwnShadow). Returns the colour at the
+// lobe's centre; `slope`: its change per sigma along the shading axis, from the key lights'
+// transmittance one sigma to either side (the sky's, one lookup at the centre from the nearest
+// texel, is soft and has none). (A, c, amp: the lobe placed, unwidened; k: the support; v:
+// towards the eye.)
 vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec3 v, vec3 color,
-                  vec3 primary, vec3 secondary) {
+                  vec3 primary, vec3 secondary, out vec3 slope) {
     vec3 sum = vec3(0.0);
+    slope = vec3(0.0);
     for (uint i = 0u; i < lit.counts.x; ++i) {
         SpotLitLight light = lit.lights[i];
         vec3 l;
-        vec3 radiance = litIncoming(light, c, l);
+        vec3 shaded = litIncoming(light, c, l) * spotLobeShade(model, axis, l, v, color, primary, secondary);
         uint view = uint(light.radiance.w);
-        if (view > 0u)
-            radiance *= litLobeTransmittance(view - 1u, A, c, amp, k, v, l, axis, true);
-        sum += radiance * spotLobeShade(model, axis, l, v, color, primary, secondary);
+        if (view == 0u) {
+            sum += shaded;
+            continue;
+        }
+        vec2 ends = litLobeLightEnds(view - 1u, A, c, k, l, axis);
+        shaded *= litOwnShadow(A, amp, v, l);
+        sum += (0.5 * (ends.x + ends.y)) * shaded;
+        slope += (0.5 * (ends.y - ends.x)) * shaded;
     }
     for (uint j = 0u; j < lit.counts.y; ++j) {
         vec3 w = lit.skyDirs[j].xyz;
-        float t = litLobeTransmittance(uint(lit.skyDirs[j].w), A, c, amp, k, v, w, axis, false);
+        uint view = uint(lit.skyDirs[j].w);
+        float t = shadowTransmittanceAt(view, spotLobeLightPoint(A, c, axis, 0.0, w, k), 1.0, true) *
+                  litOwnShadow(A, amp, v, w);
         sum += (t * spotLobeDiffuse(model, axis, w, v)) * lit.sky.rgb * color;
     }
     return sum;

@@ -201,10 +201,27 @@ vec3 splatKernelColor(uint kernel) { return bounds[kernel].color.rgb; }
 // shading, N samples).
 SpotScreenLobe splatCachedLobes[kLobes];
 SpotWorldLobe splatCachedWorldLobes[kLobes];
+vec4 splatCachedSlopes[kLobes]; // a lit frame's: the second half's a0 and a1 (SpotWorldLobe)
+vec4 splatCachedAxes[kLobes];
 SpotWorldLobe splatWorldLobe(uint first, uint l) { return splatCachedWorldLobes[l]; }
 #else
 SpotWorldLobe splatWorldLobe(uint first, uint l) { return worldLobes[first + l]; }
 #endif
+
+// Lobe l's lit colour at point u of its (widened) lobe space in a lit frame: its colour at the
+// centre, plus its change along the shading axis to u's place there, held within one sigma
+// (the points its light was looked up at), the world lobes' second half (spot_layout.h).
+vec3 splatLitColor(uint first, uint l, vec3 u) {
+#ifdef SPLAT_CACHED_LOBES
+    vec4 slope = splatCachedSlopes[l];
+    vec4 axis = splatCachedAxes[l];
+#else
+    uint change = frame.counts.x * kLobes + first + l;
+    vec4 slope = worldLobes[change].a0;
+    vec4 axis = worldLobes[change].a1;
+#endif
+    return splatWorldLobe(first, l).color.rgb + slope.rgb * clamp(dot(axis.xyz, u), -1.0, 1.0);
+}
 
 vec3 splatShade(vec3 color, vec3 normal) {
     if (!kLambert)
@@ -350,8 +367,7 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
         vec3 v = kOrthographic ? vLobeB[l].xyz : vLobeA[l];
         vec3 ol = kOrthographic ? vLobeA[l] : vLobeB[l].xyz;
         vec4 wo = vec4(cross(ol, v), dot(ol, v));
-        vec4 c = vec4(kLit ? splatWorldLobe(first, l).color.rgb : splatLobeColor(l) * vColor,
-                      vLobeB[l].w);
+        vec4 c = vec4(kLit ? vec3(0.0) : splatLobeColor(l) * vColor, vLobeB[l].w);
 #else
 #ifdef SPLAT_CACHED_LOBES
         SpotScreenLobe s = splatCachedLobes[l];
@@ -360,12 +376,12 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
 #endif
         vec3 v, ol;
         vec4 wo = splatScreenLobeAt(s, p, v, ol);
-        vec4 c = vec4(kLit ? splatWorldLobe(first, l).color.rgb
-                           : splatLobeColor(l) * splatKernelColor(kernel),
-                      s.ay.w);
+        vec4 c = vec4(kLit ? vec3(0.0) : splatLobeColor(l) * splatKernelColor(kernel), s.ay.w);
 #endif
         float tPeak;
         float tau = c.w * scale * spotScreenLobeDepth(wo.xyz, v, wo.w, tEnd, k, tPeak);
+        if (kLit) // at the point of the lobe the ray meets densest (in front of the mesh)
+            c.rgb = splatLitColor(first, l, ol + clamp(tPeak, 0.0, tEnd) * v);
         depths[l] = tau > 0.0 && !isinf(tau) ? tau : 0.0;
         peaks[l] = tPeak;
         colors[l] = c.rgb;
@@ -430,12 +446,26 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
     float amps[kLobes]; // 0 for a lobe that emits nothing (or a NaN amplitude): skipped
     vec3 P[kLobes];
     vec3 Q[kLobes];
+    vec3 slopes[kLobes]; // lit: the colour's change along the shading axis (splatLitColor)
+    vec3 axes[kLobes];
     for (uint l = 0u; l < kLobes; ++l) {
         SpotWorldLobe w = splatWorldLobe(first, l);
         mat3 A = splatLobeMatrix(w);
         origins[l] = A * (o - splatLobeCentre(w));
         dirs[l] = A * d;
         colors[l] = w.color.rgb;
+        slopes[l] = vec3(0.0);
+        axes[l] = vec3(0.0);
+        if (kLit) {
+#ifdef SPLAT_CACHED_LOBES
+            slopes[l] = splatCachedSlopes[l].rgb;
+            axes[l] = splatCachedAxes[l].xyz;
+#else
+            uint change = frame.counts.x * kLobes + first + l;
+            slopes[l] = worldLobes[change].a0.rgb;
+            axes[l] = worldLobes[change].a1.xyz;
+#endif
+        }
         amps[l] = w.color.w > 0.0 ? w.color.w : 0.0;
         if (kLambert) {
             mat3 At = transpose(A);
@@ -471,7 +501,8 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
             vec3 u = origins[l] + t * dirs[l];
             float density = amps[l] > 0.0 ? amps[l] * spotLobeDensity(u, k) : 0.0;
             sigma += density;
-            emitted += density * colors[l];
+            emitted += density * (kLit ? colors[l] + slopes[l] * clamp(dot(axes[l], u), -1.0, 1.0)
+                                       : colors[l]);
             if (kLambert)
                 g += density * (P[l] + t * Q[l]);
         }

@@ -17,7 +17,9 @@
 // samples, the ray-march): they are 4 of a lobe's 8 stored vectors.
 // With SPLAT_PREPARE_LIT (a lit frame), each world lobe's colour is its lit colour instead
 // (litLobeColor: every light and the sky through the lobe's model at its centre, shadowed by the
-// light-space structure), which every lit method reads in place of the unlit one.
+// light-space structure), which every lit method reads in place of the unlit one; with kScreen
+// (the splatting methods) also how that colour changes along the lobe's shading axis, in the
+// world lobes' second half (spot_layout.h's SpotWorldLobe), which their pixels read.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #ifdef SPLAT_PREPARE_LIT
@@ -320,6 +322,9 @@ void main() {
         float amplitude = lobe.color.w * imp.position.w;
         vec3 color = lobe.color.rgb * imp.color.rgb;
 #ifdef SPLAT_PREPARE_LIT
+        vec3 slope;       // the lit colour's change per sigma along the shading axis
+        vec3 axisLobe;    // that axis in lobe space (unwidened), unit
+        mat3 unwidened = A;
         {
             SpotLitLobe model = lit.lobes[l];
             vec3 axis = normalize(imp.normal.xyz); // lambert: the surface's normal on the GPU
@@ -330,9 +335,14 @@ void main() {
                 axis = spotPlacedNormal(A, int(model.model.y));
             vec3 v = kOrthographic ? -frame.forward.xyz : normalize(frame.eye.xyz - centre);
             color = litLobeColor(model.model.x, axis, A, centre, amplitude, frame.size.w, v, color,
-                                 model.primary.xyz, model.secondary.xyz);
-            if (any(isnan(color)) || any(isinf(color)))
+                                 model.primary.xyz, model.secondary.xyz, slope);
+            axisLobe = A * axis;
+            float axisLength = length(axisLobe);
+            axisLobe = axisLength > 0.0 ? axisLobe / axisLength : vec3(0.0);
+            if (any(isnan(color)) || any(isinf(color)) || any(isnan(slope)) || any(isinf(slope))) {
                 color = vec3(0.0);
+                slope = vec3(0.0);
+            }
         }
 #endif
         if (kEwa) {
@@ -354,6 +364,18 @@ void main() {
         w.color = vec4(color, ok ? amplitude : 0.0);
         if (kWorldLobes) // (makePreparePipeline sets it without kScreen)
             worldLobes[i * kLobes + l] = w;
+#ifdef SPLAT_PREPARE_LIT
+        if (kScreen) {
+            // The axis in the widened lobe space the pixels evaluate: x = axisLobe . (A0 M u).
+            vec3 along = transpose(M) * (transpose(unwidened) * axisLobe);
+            SpotWorldLobe change;
+            change.a0 = vec4(ok ? slope : vec3(0.0), 0.0);
+            change.a1 = vec4(ok && finite3(along) ? along : vec3(0.0), 0.0);
+            change.a2 = vec4(0.0);
+            change.color = vec4(0.0);
+            worldLobes[(frame.counts.x + i) * kLobes + l] = change;
+        }
+#endif
         live[l] = false;
         centres[l] = vec2(0.0);
         shapes[l] = mat2(0.0);

@@ -69,6 +69,11 @@ void main() {
         splatCachedLobes[l] = screenLobes[kernel * kLobes + l];
         if (kLambert || kSamples > 0u || kLit)
             splatCachedWorldLobes[l] = worldLobes[kernel * kLobes + l];
+        if (kLit) { // the world lobes' second half (splatLitColor)
+            uint change = frame.counts.x * kLobes + kernel * kLobes + l;
+            splatCachedSlopes[l] = worldLobes[change].a0;
+            splatCachedAxes[l] = worldLobes[change].a1;
+        }
     }
     for (int y = lo.y; y <= hi.y; ++y) {
         int first;

@@ -59,6 +59,9 @@ public:
     bool ensure(Extent extent, const RenderSettings& settings, const std::string& what);
     /// The extent made last (0 wide before the first ensure).
     Extent extent() const { return m_extent; }
+    /// Makes the next ensure() make everything again: what a resource's bytes depend on beyond
+    /// the extent and the settings changed.
+    void invalidate() { m_extent = Extent{0, 0}; }
 
 private:
     struct Resource {

@@ -76,8 +76,14 @@ SplattingRenderer::SplattingRenderer(const SceneGpu& scene, std::string name, bo
     const auto perKernel = [](std::uint64_t bytes) {
         return [bytes](Extent e) { return std::max<std::uint64_t>(e.width, 1) * bytes; };
     };
-    m_kernels.buffer(m_worldLobes, "splat world lobes",
-                     perKernel(lobes * sizeof(gpu::SpotWorldLobe)), kStorage, kDevice);
+    // A lit frame's hold a second half: each lobe's colour change (spot_layout.h).
+    m_kernels.buffer(
+        m_worldLobes, "splat world lobes",
+        [this, lobes](Extent e) {
+            return std::max<std::uint64_t>(e.width, 1) * lobes * sizeof(gpu::SpotWorldLobe) *
+                   (m_litLobes ? 2u : 1u);
+        },
+        kStorage, kDevice);
     m_kernels.buffer(m_screenLobes, "splat screen lobes", perKernel(lobes * sizeof(SpotScreenLobe)),
                      kStorage, kDevice);
     m_kernels.buffer(m_bounds, "splat kernel bounds", perKernel(sizeof(SpotKernelBound)), kStorage,
@@ -229,6 +235,10 @@ void SplattingRenderer::prepare(const View& view, const ImpulseSet& impulses,
         targetsMade();
     Frame& f = m_frame;
     f.settings = settings;
+    if (const bool lit = view.shading.mode == noise::Shading::Mode::Lit; lit != m_litLobes) {
+        m_litLobes = lit; // the world lobes' size changes
+        m_kernels.invalidate();
+    }
     ensureKernels(impulses.capacity);
 
     f.view = view;

@@ -163,6 +163,7 @@ protected:
     Buffer m_counters;
     /// A lit frame's light-space structure (made at the first lit frame).
     std::unique_ptr<LightSpace> m_light;
+    bool m_litLobes = false; ///< the world lobes hold a lit frame's second half (spot_layout.h)
 
     /// The frame prepared last.
     struct Frame {

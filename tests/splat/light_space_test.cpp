@@ -172,8 +172,8 @@ TEST(LightSpace, FurBunnyLobesAgainstTheExactTransmittance) {
 
 TEST(LightSpace, FurBunnyLobeLightAsThePassesUseIt) {
     // What the passes light each lobe with from the key light (the structure at the lobe's two
-    // light points, spot_light.h's spotLobeLightPoint, averaged as light_common.glsl's
-    // litLobeLight does) against the exact: the transmittance through every other lobe and the
+    // light points, spot_light.h's spotLobeLightPoint, averaged: the lobe's colour at its
+    // centre in light_common.glsl's litLobeColor) against the exact: the transmittance through every other lobe and the
     // mesh averaged over the lobe (the 2x2x2 Gauss-Hermite points of its Gaussian; its own
     // shadow is spotOwnShadow's, apart), at the structure's default resolution
     // (SPOT_TEST_LIGHT_TEXELS and SPOT_TEST_LIGHT_LAYERS override it, to measure). Measured mean
@@ -269,6 +269,65 @@ TEST(LightSpace, AWallOfKernelsShadowsWhatLiesBehindItAndNothingElse) {
     EXPECT_NEAR(t[3], 1.0, 1e-6);
     EXPECT_EQ(t[4], 0.0);         // the floor is opaque
     test::expectNoValidationErrors(b.ctx);
+}
+
+TEST(LitGpuScenes, AStrandHalfInShadowIsLitAlongItsLength) {
+    // One long strand along x at the origin, seen from +z; the light straight above, and a
+    // mesh roof at y = 0.6 over x < 0 only: the strand's -x half lies in the roof's shadow. The
+    // splatting methods light a lobe from the structure one sigma to either side of its centre
+    // along its axis and carry the difference across its pixels (splat_common.glsl's
+    // splatLitColor), so its -x end is dark and its +x end lit. One colour for the whole lobe
+    // (its mean transmittance, 0.5 here) would light both halves alike.
+    noise::Kernel kernel = test::oneLobeKernel(glm::vec3(0.04f, 0.04f, 0.3f),
+                                               glm::vec3(0.0f, 90.0f, 0.0f), 50.0f,
+                                               glm::vec3(0.5f), 3.0f);
+    kernel.lobes[0].shading.model = noise::LobeShading::Model::Strand;
+    kernel.lobes[0].shading.primary.strength = 0.0f;
+    kernel.lobes[0].shading.secondary.strength = 0.0f;
+    noise::Mesh roof;
+    roof.name = "roof";
+    roof.positions = {{-3, 0.6f, -3}, {0, 0.6f, -3}, {0, 0.6f, 3}, {-3, 0.6f, 3}};
+    roof.triangles = {{0, 2, 1}, {0, 3, 2}};
+    noise::finalizeMesh(roof);
+    noise::Shading shading;
+    shading.mode = noise::Shading::Mode::Lit;
+    noise::Light light;
+    light.direction = glm::vec3(0, 1, 0);
+    shading.lights = {light};
+    shading.sky.intensity = 0.0f;
+    splat::Context ctx(test::validated());
+    const std::vector<noise::Impulse> strand = {test::impulseAt(glm::vec3(0.0f))};
+    const splat::Buffer impulses = test::upload(ctx, strand);
+    test::SplatRig rig(ctx, roof, kernel);
+    noise::Camera camera = test::lobeCamera(noise::Projection::Perspective, 64);
+    camera.eye = glm::dvec3(0.0, 0.0, 5.0);
+    const auto halves = [&](splat::Method method, int samples) {
+        test::SplatSettings settings;
+        settings.method = method;
+        settings.kernelSamples = samples;
+        const noise::Image image =
+            rig.render(camera, shading, glm::vec3(0.0f), glm::vec3(0.5f), impulses, 1, settings);
+        // The strand's rows (the roof lies above them in the image, seen edge on).
+        double left = 0.0, right = 0.0;
+        for (int y = 24; y < 40; ++y)
+            for (int x = 0; x < image.width; ++x) {
+                const glm::vec3 p = image.at(x, y);
+                EXPECT_TRUE(std::isfinite(p.r + p.g + p.b)) << x << "," << y;
+                (x < image.width / 2 ? left : right) += p.r + p.g + p.b;
+            }
+        return std::make_pair(left, right);
+    };
+    for (const splat::Method method : {splat::Method::Instanced, splat::Method::Oit,
+                                       splat::Method::Hybrid, splat::Method::Sorted}) {
+        for (const int samples : {0, 8}) {
+            const auto [left, right] = halves(method, samples);
+            std::printf("%s, %d samples: shadowed half %.3f, lit half %.3f\n",
+                        splat::methodName(method), samples, left, right);
+            EXPECT_GT(right, 0.5) << splat::methodName(method); // the strand is seen, and lit
+            EXPECT_GT(right, 3.0 * left) << splat::methodName(method) << ", " << samples;
+        }
+    }
+    test::expectNoValidationErrors(ctx);
 }
 
 /// The lit bunny written with `edit` applied, as a scene file in the test folder.
