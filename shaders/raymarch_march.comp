@@ -43,6 +43,8 @@ uint marchEntry(uint i) { return entries[i]; }
 mat3 marchLobeMatrix(uint i) { return mat3(lobes[i].a0.xyz, lobes[i].a1.xyz, lobes[i].a2.xyz); }
 vec3 marchLobeCentre(uint i) { return vec3(lobes[i].a0.w, lobes[i].a1.w, lobes[i].a2.w); }
 vec4 marchLobeColor(uint i) { return lobes[i].color; }
+vec4 marchLobeSlope(uint i) { return lobes[i].a0; }
+vec4 marchLobeAxis(uint i) { return lobes[i].a1; }
 SpotMarchBox marchBox(uint impulse) { return boxes[impulse]; }
 vec4 marchLight() { return push.light; }
 uvec2 marchWalkBrick(ivec3 b) {

@@ -8,7 +8,9 @@
  * and, unless RAYMARCH_LOOKUP_ONLY is defined,
  *   SpotMarchCell marchCell(uint record); uint marchStart(uint slot); uint marchEntry(uint i);
  *   uvec2 marchWalkBrick(ivec3 brick) (kMarchBindWalkBits); mat3 marchLobeMatrix(uint i); vec3 marchLobeCentre(uint i); vec4 marchLobeColor(uint i)
- *   (world lobe i's A, centre and colour with its amplitude, SpotWorldLobe);
+ *   (world lobe i's A, centre and colour with its amplitude, SpotWorldLobe); vec4 marchLobeSlope(uint i)
+ *   and vec4 marchLobeAxis(uint i) (record i's a0 and a1: in a lit frame, a lobe's colour change
+ *   along its shading axis, at SpotMarchParams counts.x + the lobe, spot_layout.h);
  *   SpotMarchBox marchBox(uint impulse); vec4 marchLight() (SpotMarchPush::light),
  * and the specialization constants kMarchLobes (uint), kMarchLambert, kMarchCull and
  * kMarchWalkBits (bool).
@@ -218,6 +220,7 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
         return state;
     float dt = s.span / float(steps);
     float k = p.grid.z;
+    uint changes = p.counts.x; // a lit frame's colour changes (0: none)
     float subScale = p.grid.y * float(kMarchSub);
     uint seg = 0u;
     vec2 cur = s.seg[0]; // segment `seg`, in registers
@@ -291,8 +294,13 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
                                     vec4 c = marchLobeColor(i);
                                     float rho = c.w * spotLobeDensity(u, k);
                                     if (c.w > 0.0f && rho > 0.0f) {
+                                        vec3 color = vec3(c);
+                                        if (changes > 0u) // lit: along the shading axis
+                                            color = color + vec3(marchLobeSlope(changes + i)) *
+                                                                clamp(dot(vec3(marchLobeAxis(changes + i)), u),
+                                                                      -1.0f, 1.0f);
                                         sigma += rho;
-                                        emitted += rho * vec3(c);
+                                        emitted += rho * color;
                                         if (kMarchLambert)
                                             gradient += spotLobeGradient(A, u, rho);
                                     }

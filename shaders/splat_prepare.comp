@@ -17,9 +17,9 @@
 // samples, the ray-march): they are 4 of a lobe's 8 stored vectors.
 // With SPLAT_PREPARE_LIT (a lit frame), each world lobe's colour is its lit colour instead
 // (litLobeColor: every light and the sky through the lobe's model at its centre, shadowed by the
-// light-space structure), which every lit method reads in place of the unlit one; with kScreen
-// (the splatting methods) also how that colour changes along the lobe's shading axis, in the
-// world lobes' second half (spot_layout.h's SpotWorldLobe), which their pixels read.
+// light-space structure), which every lit method reads in place of the unlit one, and how that
+// colour changes along the lobe's shading axis, in the world lobes' second half (spot_layout.h's
+// SpotWorldLobe), which the splatting's pixels and the ray-march's samples read.
 #extension GL_GOOGLE_include_directive : require
 #include "splat_common.glsl"
 #ifdef SPLAT_PREPARE_LIT
@@ -365,7 +365,7 @@ void main() {
         if (kWorldLobes) // (makePreparePipeline sets it without kScreen)
             worldLobes[i * kLobes + l] = w;
 #ifdef SPLAT_PREPARE_LIT
-        if (kScreen) {
+        if (kWorldLobes) {
             // The axis in the widened lobe space the pixels evaluate: x = axisLobe . (A0 M u).
             vec3 along = transpose(M) * (transpose(unwidened) * axisLobe);
             SpotWorldLobe change;

@@ -42,13 +42,13 @@ struct SpotLobe {
     vec4 color; /* rgb; w: peak extinction (1 / world unit) */
 };
 
-/* A lobe placed in the world for the current view, EWA-widened (64 bytes). In a lit frame of a
- * splatting method, `color` is the lobe's lit colour at its centre, and the buffer holds a second
- * half after the capacity's lobes: lobe i's record at [capacity x lobes + i] is not a placed lobe
- * but how its lit colour changes along its shading axis (splat_prepare.comp): a0.rgb the change
- * per sigma (the key lights' transmittance differs from root to tip), a1.xyz the axis in this
- * lobe space, so that a point u of it is x = a1.u sigmas along the axis and has the colour
- * color + a0 clamp(x, -1, 1) (splat_common.glsl's splatLitColor). */
+/* A lobe placed in the world for the current view, EWA-widened (64 bytes). In a lit frame,
+ * `color` is the lobe's lit colour at its centre, and the buffer holds a second half after the
+ * capacity's lobes: lobe i's record at [capacity x lobes + i] is not a placed lobe but how its
+ * lit colour changes along its shading axis (splat_prepare.comp): a0.rgb the change per sigma
+ * (the key lights' transmittance differs from root to tip), a1.xyz the axis in this lobe space,
+ * so that a point u of it is x = a1.u sigmas along the axis and has the colour
+ * color + a0 clamp(x, -1, 1) (splat_common.glsl's splatLitColor, raymarch_shared.glsl's march). */
 struct SpotWorldLobe {
     vec4 a0;    /* columns of A (world -> lobe space); w: centre.x */
     vec4 a1;    /* w: centre.y */

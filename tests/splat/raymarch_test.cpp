@@ -566,9 +566,10 @@ TEST(Raymarch, SkippingImpulsesByTheirBoxesIsExact) {
 TEST(Raymarch, WalkBitsAndHashWalkAgree) {
     // The walk finds the shell's cells by one bit per cell of the bounding box, read per 4^3
     // brick, or (for boxes too large for the bits) in the hash table: the same segments, so the
-    // same image, bit for bit, and the CPU twin agrees with both.
+    // same image, bit for bit, and the CPU twin agrees with both, lit too (the lit lobes'
+    // colours and their changes along the axis captured with them).
     splat::Context ctx(validated());
-    for (const char* name : {"ring-sphere", "fur-bunny-close"}) {
+    for (const char* name : {"ring-sphere", "fur-bunny-close", "fur-bunny-close+lit"}) {
         const SceneSetup s = loadSetup(name, 40);
         splat::SceneGpu scene(ctx, s.mesh, s.kernel);
         splat::RaymarchRenderer renderer(scene);

@@ -77,6 +77,8 @@ private:
         return glm::vec3(w.a0.w, w.a1.w, w.a2.w);
     }
     glm::vec4 marchLobeColor(uint i) const { return m_a.lobes[i].color; }
+    glm::vec4 marchLobeSlope(uint i) const { return m_a.lobes[i].a0; }
+    glm::vec4 marchLobeAxis(uint i) const { return m_a.lobes[i].a1; }
     const SpotMarchBox& marchBox(uint impulse) const { return m_a.boxes[impulse]; }
     glm::vec4 marchLight() const { return m_a.light; }
     glm::uvec2 marchWalkBrick(glm::ivec3 b) const {
@@ -381,7 +383,8 @@ void RaymarchRenderer::ensureImpulseBuffers(std::uint32_t capacity) {
     const std::uint32_t grown = std::max(
         capacity, std::uint32_t(std::min<std::uint64_t>(kMaxImpulses, capacity + capacity / 4)));
     const std::uint64_t n = std::max<std::uint32_t>(grown, 1);
-    const std::uint64_t lobeBytes = n * m_scene.lobeCount() * sizeof(gpu::SpotWorldLobe);
+    // Twice: a lit frame's colour changes follow the world lobes (spot_layout.h).
+    const std::uint64_t lobeBytes = 2 * n * m_scene.lobeCount() * sizeof(gpu::SpotWorldLobe);
     const std::uint64_t need = lobeBytes + n * (1 + m_scene.lobeCount()) * sizeof(SpotMarchBox);
     const std::uint64_t held =
         m_worldLobes.reservedBytes() + m_boxes.reservedBytes() + m_lobeBoxes.reservedBytes();
@@ -942,6 +945,9 @@ void RaymarchRenderer::prepare(const View& view, const ImpulseSet& impulses,
                                         impulses.capacity, m_scene.lobeCount(), m_scene.support(),
                                         0, 0);
     }
+    // Where the lit prepare writes the colour changes, for the march (0: unlit, none).
+    static_cast<SpotMarchParams*>(m_params.mapped())->counts.x =
+        f.lit ? impulses.capacity * m_scene.lobeCount() : 0u;
 }
 
 void RaymarchRenderer::record(VkCommandBuffer cmd, PassTimer& timer) {
@@ -1110,7 +1116,12 @@ RaymarchCapture RaymarchRenderer::capture() {
     const auto* list = static_cast<const std::uint32_t*>(m_list.mapped());
     c.list.assign(list, list + m_binStats.listEntries);
     const auto* w = static_cast<const gpu::SpotWorldLobe*>(m_worldLobes.mapped());
-    c.lobeData.assign(w, w + std::uint64_t(m_binStats.impulses) * m_scene.lobeCount());
+    const std::uint64_t lobes = std::uint64_t(m_binStats.impulses) * m_scene.lobeCount();
+    c.lobeData.assign(w, w + lobes);
+    if (c.params.counts.x > 0) { // a lit frame's colour changes, right after the captured lobes
+        c.lobeData.insert(c.lobeData.end(), w + c.params.counts.x, w + c.params.counts.x + lobes);
+        c.params.counts.x = std::uint32_t(lobes);
+    }
     const auto* box = static_cast<const SpotMarchBox*>(m_boxes.mapped());
     c.boxes.assign(box, box + m_binStats.impulses);
     const auto* b = static_cast<const glm::vec4*>(base.mapped());
