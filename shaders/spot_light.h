@@ -133,9 +133,10 @@ SPOT_FN real spotPointFalloff(real intensity, real d) {
  * spotOwnShadow's) and all but little of what lies between the lobe and the light. Leaving the
  * whole support (3.3 sigmas) skipped the neighbours in between: the lobes of fur-bunny were lit
  * 0.038 too bright on average; from 1.5 sigmas, 0.001 (LightSpace.FurBunnyLobeLightAsThePassesUseIt).
- * The key light is looked up at s = -1 and +1 and averaged (the two-point Gauss-Hermite rule
- * along a strand: its root may lie in the coat's shadow and its tip in the light), each sky
- * direction at s = 0. A: world -> lobe space. */
+ * The key light is looked up at s = -1 and +1: their mean lights the lobe's centre (the
+ * two-point Gauss-Hermite rule along a strand: its root may lie in the coat's shadow and its tip
+ * in the light) and half their difference its change per sigma along the axis
+ * (light_common.glsl's litLobeColor); each sky direction at s = 0. A: world -> lobe space. */
 SPOT_FN rvec3 spotLobeLightPoint(rmat3 A, rvec3 c, rvec3 axis, real s, rvec3 l, real k) {
     rvec3 d = A * l;
     real dd = max(dot(d, d), real(1e-30));
