@@ -185,7 +185,8 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
     for (uint i = 0u; i < lit.counts.x; ++i) {
         SpotLitLight light = lit.lights[i];
         vec3 l;
-        vec3 shaded = litIncoming(light, c, l) * spotLobeShade(model, axis, l, v, color, primary, secondary);
+        vec3 shaded = litIncoming(light, c, l) *
+                      spotLobeShade(model, axis, l, v, color, primary, secondary);
         uint view = uint(light.radiance.w);
         if (view == 0u) {
             sum += shaded;
@@ -199,8 +200,8 @@ vec3 litLobeColor(uint model, vec3 axis, mat3 A, vec3 c, float amp, float k, vec
     for (uint j = 0u; j < lit.counts.y; ++j) {
         vec3 w = lit.skyDirs[j].xyz;
         uint view = uint(lit.skyDirs[j].w);
-        float t = shadowTransmittanceAt(view, spotLobeLightPoint(A, c, axis, 0.0, w, k), 1.0, true) *
-                  litOwnShadow(A, amp, v, w);
+        vec3 p = spotLobeLightPoint(A, c, axis, 0.0, w, k);
+        float t = shadowTransmittanceAt(view, p, 1.0, true) * litOwnShadow(A, amp, v, w);
         sum += (t * spotLobeDiffuse(model, axis, w, v)) * lit.sky.rgb * color;
     }
     return sum;

@@ -29,8 +29,9 @@ struct SpotMarchParams {
     ivec4 hi;     /* xyz: largest shell cell index (inclusive); w: longest probe, in slots past a
                      key's home slot (a lookup examines at most hi.w + 1 slots) */
     uvec4 counts; /* x: a lit frame: where the world lobes' colour changes start (the capacity x
-                     lobes per impulse, spot_layout.h's SpotWorldLobe), else 0; y: lobes per impulse; z: walk cap (cells a ray can cross in the
-                     shell's bounding box); w: unused */
+                     lobes per impulse, spot_layout.h's SpotWorldLobe), else 0; y: lobes per
+                     impulse; z: walk cap (cells a ray can cross in the shell's bounding box); w:
+                     unused */
 };
 
 /* The push constants of the march and its resolve (112 bytes of lavapipe's 128). The camera is

@@ -8,9 +8,10 @@
  * and, unless RAYMARCH_LOOKUP_ONLY is defined,
  *   SpotMarchCell marchCell(uint record); uint marchStart(uint slot); uint marchEntry(uint i);
  *   uvec2 marchWalkBrick(ivec3 brick) (kMarchBindWalkBits); mat3 marchLobeMatrix(uint i); vec3 marchLobeCentre(uint i); vec4 marchLobeColor(uint i)
- *   (world lobe i's A, centre and colour with its amplitude, SpotWorldLobe); vec4 marchLobeSlope(uint i)
- *   and vec4 marchLobeAxis(uint i) (record i's a0 and a1: in a lit frame, a lobe's colour change
- *   along its shading axis, at SpotMarchParams counts.x + the lobe, spot_layout.h);
+ *   (world lobe i's A, centre and colour with its amplitude, SpotWorldLobe);
+ *   vec4 marchLobeSlope(uint i) and vec4 marchLobeAxis(uint i) (record i's a0 and a1: in a lit
+ *   frame, a lobe's colour change along its shading axis, at SpotMarchParams counts.x + the
+ *   lobe, spot_layout.h);
  *   SpotMarchBox marchBox(uint impulse); vec4 marchLight() (SpotMarchPush::light),
  * and the specialization constants kMarchLobes (uint), kMarchLambert, kMarchCull and
  * kMarchWalkBits (bool).
@@ -295,10 +296,11 @@ SPOT_FN vec4 marchRay(vec3 o, vec3 d, float tEnd, uint first, uint end, uint ste
                                     float rho = c.w * spotLobeDensity(u, k);
                                     if (c.w > 0.0f && rho > 0.0f) {
                                         vec3 color = vec3(c);
-                                        if (changes > 0u) // lit: along the shading axis
+                                        if (changes > 0u) { // lit: along the shading axis
+                                            vec3 along = vec3(marchLobeAxis(changes + i));
                                             color = color + vec3(marchLobeSlope(changes + i)) *
-                                                                clamp(dot(vec3(marchLobeAxis(changes + i)), u),
-                                                                      -1.0f, 1.0f);
+                                                                clamp(dot(along, u), -1.0f, 1.0f);
+                                        }
                                         sigma += rho;
                                         emitted += rho * color;
                                         if (kMarchLambert)

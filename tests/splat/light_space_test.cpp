@@ -173,12 +173,12 @@ TEST(LightSpace, FurBunnyLobesAgainstTheExactTransmittance) {
 TEST(LightSpace, FurBunnyLobeLightAsThePassesUseIt) {
     // What the passes light each lobe with from the key light (the structure at the lobe's two
     // light points, spot_light.h's spotLobeLightPoint, averaged: the lobe's colour at its
-    // centre in light_common.glsl's litLobeColor) against the exact: the transmittance through every other lobe and the
-    // mesh averaged over the lobe (the 2x2x2 Gauss-Hermite points of its Gaussian; its own
-    // shadow is spotOwnShadow's, apart), at the structure's default resolution
-    // (SPOT_TEST_LIGHT_TEXELS and SPOT_TEST_LIGHT_LAYERS override it, to measure). Measured mean
-    // 0.0283 (signed -0.0030), p99 0.248; looked up where the ray leaves the whole support
-    // instead, 0.050 (signed +0.038: the neighbours in between were skipped).
+    // centre in light_common.glsl's litLobeColor) against the exact: the transmittance through
+    // every other lobe and the mesh averaged over the lobe (the 2x2x2 Gauss-Hermite points of
+    // its Gaussian; its own shadow is spotOwnShadow's, apart), at the structure's default
+    // resolution (SPOT_TEST_LIGHT_TEXELS and SPOT_TEST_LIGHT_LAYERS override it, to measure).
+    // Measured mean 0.0283 (signed -0.0030), p99 0.248; looked up where the ray leaves the
+    // whole support instead, 0.050 (signed +0.038: the neighbours in between were skipped).
     const test::SceneSetup s = test::loadSetup("fur-bunny+lit", 64);
     splat::LightSpaceSettings settings;
     if (const char* t = std::getenv("SPOT_TEST_LIGHT_TEXELS"))
