@@ -299,17 +299,19 @@ TEST(LitGpuScenes, AStrandHalfInShadowIsLitAlongItsLength) {
     const std::vector<noise::Impulse> strand = {test::impulseAt(glm::vec3(0.0f))};
     const splat::Buffer impulses = test::upload(ctx, strand);
     test::SplatRig rig(ctx, roof, kernel);
-    noise::Camera camera = test::lobeCamera(noise::Projection::Perspective, 64);
-    camera.eye = glm::dvec3(0.0, 0.0, 5.0);
-    const auto halves = [&](splat::Method method, int samples) {
+    const auto halves = [&](splat::Method method, int samples, int size, int smallPixels) {
+        noise::Camera camera = test::lobeCamera(noise::Projection::Perspective, size);
+        camera.eye = glm::dvec3(0.0, 0.0, 5.0);
         test::SplatSettings settings;
         settings.method = method;
         settings.kernelSamples = samples;
+        settings.smallPixels = smallPixels;
         const noise::Image image =
             rig.render(camera, shading, glm::vec3(0.0f), glm::vec3(0.5f), impulses, 1, settings);
-        // The strand's rows (the roof lies above them in the image, seen edge on).
+        // The strand's rows, the middle quarter of the image (the roof lies above them, seen
+        // edge on).
         double left = 0.0, right = 0.0;
-        for (int y = 24; y < 40; ++y)
+        for (int y = 3 * size / 8; y < 5 * size / 8; ++y)
             for (int x = 0; x < image.width; ++x) {
                 const glm::vec3 p = image.at(x, y);
                 EXPECT_TRUE(std::isfinite(p.r + p.g + p.b)) << x << "," << y;
@@ -317,14 +319,21 @@ TEST(LitGpuScenes, AStrandHalfInShadowIsLitAlongItsLength) {
             }
         return std::make_pair(left, right);
     };
+    // At 64x64 the strand's quad is drawn; at 32x32 it covers under 256 pixel centres, and with
+    // that threshold oit evaluates it in its small kernels' compute pass (splat_small.comp, its
+    // lobes and their changes cached: with the cached change zeroed, its halves came out equal).
     for (const splat::Method method : {splat::Method::Instanced, splat::Method::Oit,
                                        splat::Method::Hybrid, splat::Method::Sorted}) {
         for (const int samples : {0, 8}) {
-            const auto [left, right] = halves(method, samples);
-            std::printf("%s, %d samples: shadowed half %.3f, lit half %.3f\n",
-                        splat::methodName(method), samples, left, right);
-            EXPECT_GT(right, 0.5) << splat::methodName(method); // the strand is seen, and lit
-            EXPECT_GT(right, 3.0 * left) << splat::methodName(method) << ", " << samples;
+            for (const int size : {64, 32}) {
+                const int smallPixels = size == 64 ? 0 : 256;
+                const auto [left, right] = halves(method, samples, size, smallPixels);
+                std::printf("%s, %d samples, %dx%d: shadowed half %.3f, lit half %.3f\n",
+                            splat::methodName(method), samples, size, size, left, right);
+                EXPECT_GT(right, 0.1) << splat::methodName(method); // the strand is seen, lit
+                EXPECT_GT(right, 3.0 * left)
+                    << splat::methodName(method) << ", " << samples << ", " << size;
+            }
         }
     }
     test::expectNoValidationErrors(ctx);
