@@ -365,9 +365,7 @@ struct Bench {
                     {"setting", v.setting}, {"width", job.scene.camera.width},
                     {"rays_per_pixel", v.method == "raymarch" ? v.settings.supersample * v.settings.supersample : 0},
                     {"height", job.scene.camera.height},
-                    {"shading", job.scene.shading.mode == noise::Shading::Mode::Lit       ? "lit"
-                                : job.scene.shading.mode == noise::Shading::Mode::Lambert ? "lambert"
-                                                                                         : "unlit"}};
+                    {"shading", noise::Shading::modeName(job.scene.shading.mode)}};
         const splat::MethodInfo& method = splat::gpuMethod(v.method);
         const bool baked = method.takes(splat::settings::bake);
         try {

@@ -66,6 +66,10 @@ struct Sky {
 /// kernel.lobes[i].shading, shaders/spot_light.h) and the mesh's diffuse, with shadows.
 struct Shading {
     enum class Mode { Unlit, Lambert, Lit };
+    /// A mode's name in scene files (shading.mode) and bench rows.
+    static constexpr const char* modeName(Mode m) {
+        return m == Mode::Lit ? "lit" : m == Mode::Lambert ? "lambert" : "unlit";
+    }
     Mode mode = Mode::Unlit;
     glm::vec3 lightDir{0.0f, 1.0f, 0.0f}; ///< Lambert: unit, world, pointing towards the light
     float ambient = 0.3f;                 ///< Lambert: [0,1]

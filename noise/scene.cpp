@@ -54,16 +54,16 @@ Shading parseShading(const json::Reader& rd, const json::Json& j) {
     rd.requireObject(j, "shading", {"mode", "light_dir", "ambient"});
     Shading s;
     const std::string mode = rd.string(rd.require(j, "shading", "mode"), "shading.mode", false);
-    if (mode == "unlit") {
-        s.mode = Shading::Mode::Unlit;
-    } else if (mode == "lambert") {
-        s.mode = Shading::Mode::Lambert;
-    } else if (mode == "lit") {
-        s.mode = Shading::Mode::Lit;
-    } else {
+    bool known = false;
+    for (const Shading::Mode m :
+         {Shading::Mode::Unlit, Shading::Mode::Lambert, Shading::Mode::Lit})
+        if (mode == Shading::modeName(m)) {
+            s.mode = m;
+            known = true;
+        }
+    if (!known)
         rd.fail(cat("shading.mode = \"", json::printable(mode),
                     "\" is not one of \"unlit\", \"lambert\", \"lit\""));
-    }
     if (s.mode == Shading::Mode::Lit)
         for (const char* key : {"light_dir", "ambient"})
             if (json::Reader::find(j, key))

@@ -29,8 +29,9 @@
 /// steps and 2 x 2 rays, the most accurate GPU row on fur and volumes, which misses paper-thin
 /// flakes (flakes-sphere 8 dB against sorted's 36): balanced is the choice there.
 /// The table is measured unlit. On the lit fur-bunny (docs/bench-lit) best is off the front:
-/// the ray-march lights per lobe, as the splatting does, and sorted beats it (23.2 dB in 36 ms
-/// against 21.5 dB in 157 ms); README says to use balanced, or baked, for lit fur.
+/// the ray-march lights each lobe from two points on its axis, as the splatting does, and sorted
+/// beats it (24.1 dB in 43 ms against 23.0 dB in 202 ms); README says to use balanced, or baked,
+/// for lit fur.
 #pragma once
 
 #include <string>

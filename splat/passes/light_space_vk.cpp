@@ -31,6 +31,10 @@ constexpr VkBufferUsageFlags kCleared = kStorage | VK_BUFFER_USAGE_TRANSFER_DST_
 constexpr std::uint32_t kMaxGroupsX = 65535;
 /// The item list's dispatch is one-dimensional: at most this many items.
 constexpr std::uint64_t kMaxItems = std::uint64_t(kMaxGroupsX) * kShadowGroup;
+/// The stages that look the structure up: the lit prepare (compute) and the lit mesh pass, its
+/// sky per vertex and its lights per pixel.
+constexpr VkPipelineStageFlags2 kLookups = passes::kCompute | passes::kFragment |
+                                           VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT;
 
 /// A unit basis (u, w) perpendicular to unit d.
 void basis(glm::dvec3 d, glm::dvec3& u, glm::dvec3& w) {
@@ -307,8 +311,7 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
     if (m_views == 0 || !m_impulses.impulses)
         return; // no shadows: nothing is looked up
     if (m_current) { // built from the same sources by an earlier frame: made visible again
-        memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kCompute | kFragment | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
-                      kStorageRead);
+        memoryBarrier(cmd, kAll, VK_ACCESS_2_MEMORY_WRITE_BIT, kLookups, kStorageRead);
         return;
     }
     m_built = m_key;
@@ -399,8 +402,7 @@ void LightSpace::record(VkCommandBuffer cmd, PassTimer& timer) {
         Descriptors d;
         run(m_prefix, m_texels, 0, d);
     }
-    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kCompute | kFragment | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
-                  kStorageRead);
+    memoryBarrier(cmd, kCompute, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, kLookups, kStorageRead);
     timer.mark(cmd, "light");
 }
 
