@@ -330,7 +330,8 @@ TEST(LitGpuScenes, AStrandHalfInShadowIsLitAlongItsLength) {
                 const auto [left, right] = halves(method, samples, size, smallPixels);
                 std::printf("%s, %d samples, %dx%d: shadowed half %.3f, lit half %.3f\n",
                             splat::methodName(method), samples, size, size, left, right);
-                EXPECT_GT(right, 0.1) << splat::methodName(method); // the strand is seen, lit
+                // The strand is seen, and lit (about 31 at 64x64, 7 at 32x32).
+                EXPECT_GT(right, size == 64 ? 10.0 : 2.5) << splat::methodName(method);
                 EXPECT_GT(right, 3.0 * left)
                     << splat::methodName(method) << ", " << samples << ", " << size;
             }
