@@ -436,6 +436,8 @@ struct Bench {
                         {"psnr", std::isfinite(m.psnr) ? m.psnr : 99.0},
                         {"ssim", m.ssim},
                         {"flip", m.flip},
+                        {"bias", m.bias},
+                        {"mean_diff_display", m.meanDiffDisplay},
                         {"flicker", flick},
                         {"gpu_memory_bytes", ctx.peakAllocatedBytes()},
                         {"host_memory_bytes", hostResidentBytes()}});
@@ -881,7 +883,9 @@ void writeCsv(const fs::path& file, const json& rows) {
                           "resolution", "voxel_size", "levels", "peel_passes", "bake_seconds",
                           "bake_bytes", "bake_cached",
                           // appended likewise
-                          "timed_frames", "orbit_ms_median", "orbit_wall_ms_median"};
+                          "timed_frames", "orbit_ms_median", "orbit_wall_ms_median",
+                          // the mean brightness against the reference (compare's bias)
+                          "bias", "mean_diff_display"};
     writeFileAtomic(file, [&](std::ostream& o) {
         for (std::size_t i = 0; i < std::size(cols); ++i)
             o << (i ? "," : "") << cols[i];

@@ -19,7 +19,8 @@ int compare(int argc, char** argv) {
         files.emplace_back(argv[i]);
     cli::Args args("compare",
                    "Compare image B against reference A: spotshell compare A B [options].\n"
-                   "PSNR, SSIM (luma, 11x11 Gaussian window) and FLIP (LDR) on display values.",
+                   "PSNR, SSIM (luma, 11x11 Gaussian window) and FLIP (LDR) on display values; the signed\n"
+                   "mean difference (linear and display) and the relative bias of the mean.",
                    {{"diff", "FILE", "write the per-pixel FLIP error as a heat map (.png/.exr)", false},
                     {"json", "", "print the metrics as JSON", false},
                     {"ppd", "N", "FLIP observer's pixels per degree (default 67)", false}},
@@ -42,15 +43,24 @@ int compare(int argc, char** argv) {
         noise::writeImage(args.str("diff"), splat::heatMap(flipMap, a.width, a.height),
                           {{"metric", "flip"}});
     if (args.has("json")) {
-        nlohmann::json j = {{"ssim", m.ssim}, {"flip", m.flip}, {"mean_abs", m.meanAbs},
-                            {"max_abs", m.maxAbs}, {"width", a.width}, {"height", a.height}};
+        nlohmann::json j = {{"ssim", m.ssim},
+                            {"flip", m.flip},
+                            {"mean_abs", m.meanAbs},
+                            {"max_abs", m.maxAbs},
+                            {"mean_diff", m.meanDiffLinear},
+                            {"mean_diff_display", m.meanDiffDisplay},
+                            {"bias", m.bias},
+                            {"width", a.width},
+                            {"height", a.height}};
         // JSON has no infinity: identical images report psnr null and identical true.
         j["psnr"] = std::isfinite(m.psnr) ? nlohmann::json(m.psnr) : nlohmann::json(nullptr);
         j["identical"] = !std::isfinite(m.psnr);
         std::printf("%s\n", j.dump(2).c_str());
     } else {
-        std::printf("psnr %.4f dB\nssim %.6f\nflip %.6f\nmean_abs %.6f\nmax_abs %.6f\n", m.psnr,
-                    m.ssim, m.flip, m.meanAbs, m.maxAbs);
+        std::printf("psnr %.4f dB\nssim %.6f\nflip %.6f\nmean_abs %.6f\nmax_abs %.6f\n"
+                    "mean_diff %+.6f (linear)\nmean_diff_display %+.6f\nbias %+.2f%% (mean, linear)\n",
+                    m.psnr, m.ssim, m.flip, m.meanAbs, m.maxAbs, m.meanDiffLinear,
+                    m.meanDiffDisplay, 100.0 * m.bias);
     }
     if (args.has("diff") && !args.has("json")) // --json output stays pure JSON
         std::printf("wrote %s\n", args.str("diff").c_str());

@@ -12,6 +12,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "shaders/spot_shared.hpp"
 #include "error.h"
 #include "mesh.h"
 #include "system.h"
@@ -23,7 +24,6 @@ static_assert(std::endian::native == std::endian::little, "3DGS PLY I/O assumes 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kEulerGamma = 0.57721566490153286061;
 constexpr double kMinSigma = 1e-30;
 constexpr double kMinOpacity = 1e-6;
 /// The twin's near plane (world units from the eye's plane): splats nearer are culled, as
@@ -110,35 +110,6 @@ glm::vec3 splatDisplayColor(const Splat3dgs& s) {
 
 } // namespace
 
-double entireExponentialIntegral(double x) {
-    if (!(x > 0.0))
-        return 0.0;
-    if (x < 10.0) { // sum_{n>=1} (-1)^(n+1) x^n / (n n!): terms below 1e4, 1e-12 relative
-        double term = 1.0, sum = 0.0;
-        for (int n = 1; n < 200; ++n) {
-            term *= -x / n; // (-x)^n / n!
-            const double add = -term / n;
-            sum += add;
-            if (std::abs(add) < 1e-17 * std::abs(sum))
-                break;
-        }
-        return sum;
-    }
-    // Ein(x) = E1(x) + ln x + gamma; E1 by its continued fraction (Lentz), below 4.2e-6 here.
-    double b = x + 1.0, c = 1e300, d = 1.0 / b, h = d;
-    for (int i = 1; i < 200; ++i) {
-        const double an = -double(i) * i;
-        b += 2.0;
-        d = 1.0 / (an * d + b);
-        c = b + an / c;
-        const double del = c * d;
-        h *= del;
-        if (std::abs(del - 1.0) < 1e-15)
-            break;
-    }
-    return h * std::exp(-x) + std::log(x) + kEulerGamma;
-}
-
 Splat3dgs lobeSplat(const WorldLobe& lobe, const SplatOptions& options) {
     // Sigma = A^-1 A^-T; in its eigenframe |A v|^2 = sum u_i^2 / lambda_i, u = R^T v.
     const glm::dmat3 inverse = glm::inverse(lobe.toLobe);
@@ -164,7 +135,7 @@ Splat3dgs lobeSplat(const WorldLobe& lobe, const SplatOptions& options) {
     const double opacity = -std::expm1(-tau);
     double widen = 1.0; // k^2
     if (options.mapping == SplatMapping::Coverage && opacity > 0.0)
-        widen = std::max(1.0, entireExponentialIntegral(tau) / opacity);
+        widen = std::max(1.0, shared::f64::spotEin(tau) / opacity);
     return gaussianSplat(lobe.centre, lambda * widen, axes, opacity, lobe.color);
 }
 

@@ -14,7 +14,8 @@
 ///   - peak: opacity 1 - exp(-tau), covariance Sigma (right at the centre, too narrow for thick
 ///     lobes, whose coverage saturates and widens);
 ///   - coverage: opacity 1 - exp(-tau), covariance k^2 Sigma with k^2 = Ein(tau) / (1 - exp(-tau)),
-///     Ein the entire exponential integral: the splat then also covers the same area as the
+///     Ein the entire exponential integral (shaders/spot_shared.h's spotEin, which the splatting's
+///     widening shares): the splat then also covers the same area as the
 ///     lobe (the integral of its alpha over the image plane), for every view direction.
 /// tau itself is view dependent: the view-independent choice is its mean over directions; `view`
 /// takes it along the ray from one eye (exact for that camera only).
@@ -62,9 +63,6 @@ struct SplatOptions {
     /// this eye (world) to the lobe's centre.
     std::optional<glm::dvec3> eye;
 };
-
-/// Ein(x) = integral_0^x (1 - e^-t) / t dt, x >= 0 (series below 10, ln x + gamma + E1 above).
-double entireExponentialIntegral(double x);
 
 /// The splat of one placed lobe (see the file comment). Sigmas below 1e-30 world units are
 /// raised to it so the log stays finite; opacity is kept in [1e-6, 1 - 1e-6].

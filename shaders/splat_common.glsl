@@ -138,6 +138,8 @@ struct SplatKernelSample {
     float tau;    // optical depth through the kernel: alpha = 1 - exp(-tau)
     float depth;  // view depth of the kernel along this pixel's ray: the mean of the lobe peaks
                   // (or samples) weighted by what each contributes to alpha
+    bool covers;  // SPLAT_INSTANCED_COVER (instanced): some lobe's optical depth reaches its
+                  // coverage threshold (splatLobeCoverThreshold)
 };
 
 mat3 splatLobeMatrix(SpotWorldLobe w) { return mat3(w.a0.xyz, w.a1.xyz, w.a2.xyz); }
@@ -345,6 +347,19 @@ bool splatMeetsSupport() {
 
 #endif
 
+#ifdef SPLAT_INSTANCED_COVER
+// The optical depth above which lobe `l` of `kernel` covers a pixel opaque for instanced
+// (SpotScreenLobe::b.w, written by the prepare pass: spotCoverThreshold of its peak), so that its
+// opaque footprint covers as much of the image as the lobe does.
+float splatLobeCoverThreshold(uint kernel, uint l) {
+#ifdef SPLAT_CACHED_LOBES
+    return splatCachedLobes[l].b.w;
+#else
+    return screenLobes[kernel * kLobes + l].b.w;
+#endif
+}
+#endif
+
 // Analytic: each lobe's exact optical depth up to the mesh (spotScreenLobeDepth on the lobe's
 // screen form), lobes composited front to back in the order of their density peaks along the
 // ray. kLobes is a specialization constant, so the loops unroll and the per-lobe arrays stay in
@@ -362,6 +377,7 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     float shades[kLobes];
     vec3 origins[kLobes]; // Lambert: each lobe's ray in its space, u(t) = origin + t dir
     vec3 dirs[kLobes];
+    bool covers = false;
     for (uint l = 0u; l < kLobes; ++l) {
 #ifdef SPLAT_FRAGMENT
         vec3 v = kOrthographic ? vLobeB[l].xyz : vLobeA[l];
@@ -383,6 +399,9 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
         if (kLit) // at the point of the lobe the ray meets densest (in front of the mesh)
             c.rgb = splatLitColor(first, l, ol + clamp(tPeak, 0.0, tEnd) * v);
         depths[l] = tau > 0.0 && !isinf(tau) ? tau : 0.0;
+#ifdef SPLAT_INSTANCED_COVER
+        covers = covers || (depths[l] > 0.0 && depths[l] >= splatLobeCoverThreshold(kernel, l));
+#endif
         peaks[l] = tPeak;
         colors[l] = c.rgb;
         shades[l] = 1.0;
@@ -425,6 +444,7 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     // kernels take the series, as spotOneMinusExp does, for relative precision).
     s.alpha = s.tau < 1e-3 ? s.tau * (1.0 - s.tau * (0.5 - s.tau * (1.0 / 6.0))) : 1.0 - transmittance;
     s.depth = weightSum > 0.0 ? depthSum / weightSum : 0.0;
+    s.covers = covers;
     return s;
 }
 
@@ -486,6 +506,7 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
     s.alpha = 0.0;
     s.depth = 0.0;
     s.tau = 0.0;
+    s.covers = false;
     if (!(tb > ta))
         return s;
     float dt = (tb - ta) / float(kSamples);
@@ -519,6 +540,14 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
     }
     s.alpha = spotOneMinusExp(s.tau);
     s.depth = (weightSum > 0.0 ? depthSum / weightSum : ta) / scale;
+#ifdef SPLAT_INSTANCED_COVER
+    // The samples do not keep each lobe's depth apart: the kernel's, against its lobes' lowest
+    // threshold (a strand's lobes overlap along it, and each alone would reach its own).
+    float threshold = kSplatNoMesh;
+    for (uint l = 0u; l < kLobes; ++l)
+        threshold = amps[l] > 0.0 ? min(threshold, splatLobeCoverThreshold(kernel, l)) : threshold;
+    s.covers = s.tau > 0.0 && s.tau >= threshold;
+#endif
     return s;
 }
 
@@ -536,12 +565,13 @@ SplatKernelSample splatKernel(uint kernel, vec2 p, float tMesh) {
 }
 
 // Instanced (paper fig. 4 left): whether the kernel's sample at pixel position p covers it as an
-// opaque splat. Its alpha reaches kSplatInstancedMinAlpha, and its depth is strictly nearer than
-// the mesh at world distance tMesh. The splat is opaque at that depth, so the mesh hides it there,
-// as a depth test would. A kernel whose lobes all peak at or behind the mesh has its depth
-// clamped to the mesh, and stays hidden.
+// opaque splat. One of its lobes' optical depth reaches that lobe's cover threshold
+// (SPLAT_INSTANCED_COVER), and its depth is strictly nearer than the mesh at world distance
+// tMesh. The splat is opaque at that depth, so the mesh hides it there, as a depth test would. A
+// kernel whose lobes all peak at or behind the mesh has its depth clamped to the mesh, and stays
+// hidden.
 bool splatInstancedCovers(SplatKernelSample s, vec2 p, float tMesh) {
-    return s.alpha >= kSplatInstancedMinAlpha && s.depth * splatRayScale(p) < tMesh;
+    return s.covers && s.depth * splatRayScale(p) < tMesh;
 }
 
 // The OIT weight of a kernel sample (view depth z), as the pipeline is specialized.

@@ -1,7 +1,8 @@
 #version 450
 // Instanced opaque kernels (paper fig. 4 left): a kernel covers a pixel, opaque with its mean
-// colour, where its alpha there reaches kSplatInstancedMinAlpha and its depth is nearer than the
-// mesh's (splatInstancedCovers), and the nearest covering kernel wins. The nearest is found as
+// colour, where one of its lobes' optical depth there reaches that lobe's cover threshold (so its
+// opaque footprint covers as much as the lobe does: spotCoverThreshold) and its depth is nearer
+// than the mesh's (splatInstancedCovers), and the nearest covering kernel wins. The nearest is found as
 // the hybrid finds its closest kernel: a 64-bit atomicMin of (depth bits << 32 | kernel index)
 // into a storage buffer (the index breaks ties as a depth test does, the first drawn kernel
 // winning); the resolve paints the winner's colour over the mesh. No depth is written, so the
@@ -12,6 +13,7 @@
 #define SPLAT_READS_LOBES
 #define SPLAT_FRAGMENT
 #define SPLAT_COUNTS
+#define SPLAT_INSTANCED_COVER
 #include "splat_common.glsl"
 
 layout(early_fragment_tests) in;

@@ -1,6 +1,6 @@
 #version 450
 // Per impulse: its kernel's lobes placed in the world (spotPlaceLobe), optionally EWA-widened by
-// the pixel footprint at the lobe's depth (spotWidenLobe). With kScreen (the splatting methods),
+// the pixel footprint at the lobe's depth, keeping what each lobe covers (spotWidenLobeCoverage). With kScreen (the splatting methods),
 // also each lobe's screen form (SpotScreenLobe, what the fragment shaders evaluate) and the
 // kernel's screen bound (SpotKernelBound): each lobe's k-sigma ellipsoid projects to an ellipse
 // (the conic |w(p)|^2 = k^2 |v(p)|^2 in pixel coordinates, exact), and the kernel's quad is the
@@ -350,9 +350,7 @@ void main() {
             float z = max(splatViewDepth(centre), 0.0);
             float footprint = frame.size.z * (kOrthographic ? 1.0 : z);
             vec3 dir = kOrthographic ? frame.forward.xyz : normalize(centre - frame.eye.xyz);
-            float scale;
-            A = spotWidenLobe(A, dir, footprint * 0.28867513459481287, scale);
-            amplitude *= scale;
+            A = spotWidenLobeCoverage(A, dir, footprint * 0.28867513459481287, amplitude);
         }
         mat3 M = inverse(A);
         bool ok = amplitude > 0.0 && !isinf(amplitude) && finite3(A[0]) && finite3(A[1]) &&
@@ -391,6 +389,10 @@ void main() {
             screenLobes[i * kLobes + l] = stored;
             continue;
         }
+        // Instanced's opaque footprint: the optical depth from which it covers a pixel, from
+        // the peak along the view through the centre (spotCoverThreshold).
+        vec3 viewDir = kOrthographic ? frame.forward.xyz : normalize(centre - frame.eye.xyz);
+        stored.b.w = spotCoverThreshold(amplitude * kSqrtTwoPi / length(A * viewDir));
         screenLobes[i * kLobes + l] = stored;
         // The depth range of the support (tangent planes along the view direction).
         vec3 rel = centre - frame.eye.xyz;

@@ -10,7 +10,7 @@
 //    fixed-point sums (kSplatBindOitFixed, spot_splat.h: 64-bit integer atomicAdd, associative,
 //    so the sums do not depend on the order the invocations run in); the resolve adds them to
 //    the raster targets' values. Hybrid also competes for the closest kernel (atomicMin);
-//  - instanced: the atomicMin where alpha reaches kSplatInstancedMinAlpha.
+//  - instanced: the atomicMin where a lobe reaches its cover threshold (SPLAT_INSTANCED_COVER).
 // One module per method (shaders/CMakeLists.txt), each declaring the buffers it writes:
 // SPLAT_SMALL_OIT (the fixed-point sums), SPLAT_SMALL_CLOSEST (hybrid's atomicMin),
 // SPLAT_SMALL_INSTANCED (instanced's).
@@ -22,6 +22,9 @@
 #define SPLAT_READS_LOBES
 #define SPLAT_COUNTS
 #define SPLAT_CACHED_LOBES
+#ifdef SPLAT_SMALL_INSTANCED
+#define SPLAT_INSTANCED_COVER
+#endif
 #include "splat_common.glsl"
 #if !defined(SPLAT_SMALL_OIT) && !defined(SPLAT_SMALL_INSTANCED)
 #error "define what this module writes (SPLAT_SMALL_OIT, ...)"

@@ -52,7 +52,8 @@ struct SpotScreenLobe {
     vec4 ax; /* xyz: a's change per pixel along x; w: ref.y */
     vec4 ay; /* xyz: a's change per pixel along y; w: peak extinction x weight (x EWA amplitude);
                 0: the lobe is off */
-    vec4 b;  /* xyz: b; w: unused */
+    vec4 b;  /* xyz: b; w: instanced's cover threshold, the optical depth from which the lobe
+                covers a pixel opaque (spotCoverThreshold of its peak along the view) */
 };
 
 /* Screen bound of one kernel for the current view (48 bytes): an oriented rectangle holding every
@@ -199,8 +200,6 @@ SPOT_CONST float kSplatHybridMinAlpha = 1.0 / 255.0;
  * wins, as atomicMin's kernel index does on equal depths). */
 SPOT_CONST float kSplatClosestDepthScale = 1.0 / 1048576.0;
 
-/* Instanced: a kernel covers a pixel (opaque proxy) where its alpha reaches this. */
-SPOT_CONST float kSplatInstancedMinAlpha = 0.5;
 
 /* Ray distance stored where no mesh is hit. */
 SPOT_CONST float kSplatNoMesh = 3.0e38;

@@ -309,6 +309,17 @@ ImageMetrics compareImages(const Image& reference, const Image& test, std::vecto
             m.maxAbs = std::max(m.maxAbs, d);
         }
     m.meanAbs = sum / (3.0 * double(a.size()));
+    double sumA = 0.0, sumB = 0.0, sumDisplay = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            sumA += reference.pixels[i][c];
+            sumB += test.pixels[i][c];
+            sumDisplay += b[i][c] - a[i][c];
+        }
+    const double n = 3.0 * double(a.size());
+    m.meanDiffLinear = (sumB - sumA) / n;
+    m.meanDiffDisplay = sumDisplay / n;
+    m.bias = sumA > 0.0 ? sumB / sumA - 1.0 : 0.0;
     return m;
 }
 

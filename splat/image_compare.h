@@ -21,6 +21,15 @@ struct ImageMetrics {
     double flip = 0.0;    ///< mean FLIP in [0,1], 0 for identical images
     double meanAbs = 0.0; ///< mean |a - b| over pixels and channels (display values)
     double maxAbs = 0.0;
+    /// Signed mean of b - a over pixels and channels, in linear values and in display values:
+    /// positive where the test image is brighter than the reference.
+    double meanDiffLinear = 0.0;
+    double meanDiffDisplay = 0.0;
+    /// Relative bias of the test image's mean brightness, mean(b) / mean(a) - 1 over pixels and
+    /// channels in linear values (0 where the reference's mean is 0): +0.11 is 11% too bright.
+    /// The whole image counts, background included, so it reads as the fur's own bias where the
+    /// fur fills the frame or the background is dark.
+    double bias = 0.0;
 };
 
 /// Default observer: a 0.7 m wide 3840-pixel monitor seen from 0.7 m (FLIP's default).

@@ -46,6 +46,33 @@ TEST(Compare, PsnrOfAConstantOffsetIs20dB) {
     EXPECT_NEAR(m.maxAbs, 0.1, 1e-5);
 }
 
+TEST(Compare, BiasIsTheSignedRelativeMeanDifference) {
+    // b is a scaled by 1.1 in linear values: 10% too bright; the signed differences follow, and
+    // swapping the images gives the opposite sign.
+    Image a(20, 10), b(20, 10);
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(0.05f, 0.8f);
+    double sumA = 0.0, sumDisplay = 0.0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+        a.pixels[i] = glm::vec3(u(rng), u(rng), u(rng));
+        b.pixels[i] = 1.1f * a.pixels[i];
+        for (int c = 0; c < 3; ++c) {
+            sumA += a.pixels[i][c];
+            sumDisplay += noise::srgbEncode(b.pixels[i][c]) - noise::srgbEncode(a.pixels[i][c]);
+        }
+    }
+    const double n = 3.0 * double(a.pixels.size());
+    const splat::ImageMetrics m = splat::compareImages(a, b);
+    EXPECT_NEAR(m.bias, 0.1, 1e-6);
+    EXPECT_NEAR(m.meanDiffLinear, 0.1 * sumA / n, 1e-7);
+    EXPECT_NEAR(m.meanDiffDisplay, sumDisplay / n, 1e-7);
+    EXPECT_GT(m.meanDiffDisplay, 0.0);
+    const splat::ImageMetrics back = splat::compareImages(b, a);
+    EXPECT_NEAR(back.bias, 1.0 / 1.1 - 1.0, 1e-6);
+    EXPECT_NEAR(back.meanDiffLinear, -m.meanDiffLinear, 1e-9);
+    EXPECT_DOUBLE_EQ(splat::compareImages(a, a).bias, 0.0);
+}
+
 TEST(Compare, SsimOfUniformImagesHasItsClosedForm) {
     // Uniform images: variances and covariance vanish, SSIM = (2ab + C1) / (a^2 + b^2 + C1).
     const double a = 0.2, b = 0.6, c1 = 1e-4;
