@@ -245,6 +245,7 @@ vec3 splatShade(vec3 color, vec3 normal) {
 // a few multiplies and one exp per lobe, A_m^T being loaded and applied once per pixel.
 #ifdef SPLAT_FRAGMENT
 void splatShadeTerms(uint m, out vec3 P, out vec3 Q, out float amplitude); // below
+bool splatVaryingsTrusted();                                                 // below
 #endif
 void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float peaks[kLobes],
                      float depths[kLobes], float tEnd, vec3 d, inout float shades[kLobes]) {
@@ -256,7 +257,7 @@ void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float 
     float amps[kLobes];
     for (uint m = 0u; m < kLobes; ++m) {
 #ifdef SPLAT_FRAGMENT
-        if (kShadeVaryings) // from splat_quad.vert: no per-pixel loads or matrix products
+        if (kShadeVaryings && splatVaryingsTrusted()) // from splat_quad.vert: no per-pixel loads
             splatShadeTerms(m, P[m], Q[m], amps[m]);
         else
 #endif
@@ -314,8 +315,15 @@ void splatShadeLobes(uint first, vec3 origins[kLobes], vec3 dirs[kLobes], float 
 layout(location = 1) noperspective in vec3 vLobeA[kLobes];
 layout(location = 9) flat in vec4 vLobeB[kLobes];
 layout(location = 17) flat in vec3 vColor;
-// The view depth of the kernel support's nearest point (SpotKernelBound.axis.w).
-layout(location = 18) flat in float vNearDepth;
+// 1 when the kernel's quad reaches past the image, else 0. lavapipe clips such a quad's
+// triangles, and the lobe varyings it interpolates there were measured wrong over part of the
+// quad (an isolated lobe's alpha off by up to 0.5, in a region bounded by a clip line, with the
+// corners' values right): such a kernel's fragments evaluate their lobes' screen forms from the
+// buffer (splatScreenLobeAt, as the compute paths do) instead. A flat value, the same for every
+// fragment of a triangle; kernels inside the image keep the cheaper varyings (reading the buffer
+// in every fragment cost 60% more splat time on fur-bunny at 640x480).
+layout(location = 18) flat in float vOffImage;
+bool splatVaryingsTrusted() { return !(vOffImage > 0.0); }
 // Lambert (kShadeVaryings): each lobe's gradient terms P = A^T o' and Q = A^T v (splatShadeLobes),
 // the one affine in the pixel interpolated (vShadeA: Q in perspective, P in orthographic), the
 // other constant (vShadeB). Locations 19 to 30 at most (6 lobes).
@@ -334,6 +342,8 @@ void splatShadeTerms(uint m, out vec3 P, out vec3 Q, out float amplitude) {
 // and lavapipe, which runs every branch one of its lanes takes, does skip the rest of a fragment
 // shader for a batch of lanes that are all discarded.
 bool splatMeetsSupport() {
+    if (!splatVaryingsTrusted())
+        return true; // splatKernelAnalytic decides from the buffer
     float k2 = frame.size.w * frame.size.w;
     bool meets = false;
     for (uint l = 0u; l < kLobes; ++l) {
@@ -380,9 +390,15 @@ SplatKernelSample splatKernelAnalytic(uint kernel, vec2 p, vec3 o, vec3 d, float
     bool covers = false;
     for (uint l = 0u; l < kLobes; ++l) {
 #ifdef SPLAT_FRAGMENT
-        vec3 v = kOrthographic ? vLobeB[l].xyz : vLobeA[l];
-        vec3 ol = kOrthographic ? vLobeA[l] : vLobeB[l].xyz;
-        vec4 wo = vec4(cross(ol, v), dot(ol, v));
+        vec3 v, ol;
+        vec4 wo;
+        if (!splatVaryingsTrusted()) {
+            wo = splatScreenLobeAt(screenLobes[first + l], p, v, ol);
+        } else {
+            v = kOrthographic ? vLobeB[l].xyz : vLobeA[l];
+            ol = kOrthographic ? vLobeA[l] : vLobeB[l].xyz;
+            wo = vec4(cross(ol, v), dot(ol, v));
+        }
         vec4 c = vec4(kLit ? vec3(0.0) : splatLobeColor(l) * vColor, vLobeB[l].w);
 #else
 #ifdef SPLAT_CACHED_LOBES
@@ -538,7 +554,10 @@ SplatKernelSample splatKernelMarch(uint kernel, vec3 o, vec3 d, float tMesh, flo
         weightSum += transmittance * a;
         transmittance *= 1.0 - a;
     }
-    s.alpha = spotOneMinusExp(s.tau);
+    // The composite's own alpha, the sum of the samples' shares (1 - transmittance, and
+    // 1 - exp(-tau) up to rounding): the colour premul / alpha is then a mean of the samples'
+    // colours to rounding, never above the brightest (instanced draws it opaque).
+    s.alpha = weightSum;
     s.depth = (weightSum > 0.0 ? depthSum / weightSum : ta) / scale;
 #ifdef SPLAT_INSTANCED_COVER
     // The samples do not keep each lobe's depth apart: the kernel's, against its lobes' lowest

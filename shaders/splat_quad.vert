@@ -18,7 +18,7 @@ layout(location = 0) flat out uint vKernel;
 layout(location = 1) noperspective out vec3 vLobeA[kLobes];
 layout(location = 9) flat out vec4 vLobeB[kLobes];
 layout(location = 17) flat out vec3 vColor;
-layout(location = 18) flat out float vNearDepth;
+layout(location = 18) flat out float vOffImage;
 // Lambert (kShadeVaryings, splat_common.glsl): per lobe A^T applied to the lobe-space ray, the
 // part affine in the pixel (vShadeA) and the constant one (vShadeB).
 layout(location = 19) noperspective out vec3 vShadeA[kShadeLobes];
@@ -35,7 +35,12 @@ void main() {
     // The depth of the support's nearest point, tested against the mesh (reversed depth).
     gl_Position = vec4(2.0 * corner / frame.size.xy - 1.0, spotReversedDepth(b.axis.w, frame.forward.w), 1.0);
     vKernel = kernel;
-    vNearDepth = b.axis.w;
+    // Whether the quad reaches past the image (splat_common.glsl: vOffImage).
+    vec2 reach = abs(u) * b.quad.z + abs(v) * b.quad.w;
+    vOffImage = any(lessThan(b.quad.xy - reach, vec2(0.0))) ||
+                        any(greaterThan(b.quad.xy + reach, frame.size.xy))
+                    ? 1.0
+                    : 0.0;
     vColor = b.color.rgb;
     for (uint l = 0u; l < kLobes; ++l) {
         SpotScreenLobe s = screenLobes[kernel * kLobes + l];

@@ -282,21 +282,32 @@ TEST(SplatRenderer, IsolatedLobeMatchesTheClosedForm) {
                 }
             EXPECT_LT(worst, samples == 64 ? 5e-3 : 2e-4) << samples << " samples";
         }
-        // Instanced: opaque where the closed-form alpha passes 0.5, background elsewhere (pixels
-        // within 0.02 of the threshold are not judged).
+        // Instanced: opaque where the closed-form optical depth reaches the lobe's cover
+        // threshold c = t e^-Ein(t) (t its peak depth along the view through its centre: the
+        // opaque region then covers as much of the image as the lobe does), background elsewhere
+        // (pixels within 3% of c are not judged).
         SplatSettings s;
         s.method = splat::Method::Instanced;
         s.ewa = false;
         const noise::Image image =
             renderer.render(cam, noise::Shading{}, c.background, glm::vec3(0.0f), impulses, 1, s);
+        const noise::WorldLobe placed = noise::placeLobe(c.kernel, 0, c.impulses[0]);
+        const glm::dvec3 view = projection == noise::Projection::Orthographic
+                                    ? rays.forward()
+                                    : glm::normalize(placed.centre - cam.eye);
+        const double peak = placed.extinction * std::sqrt(2.0 * glm::pi<double>()) /
+                            glm::length(placed.toLobe * view);
+        const double threshold = spot::shared::f64::spotCoverThreshold(peak);
+        ASSERT_GT(peak, threshold);
         int covered = 0, wrong = 0;
         for (int y = 0; y < cam.height; ++y)
             for (int x = 0; x < cam.width; ++x) {
-                const double alpha = lobeAlpha(c, rays, x + 0.5, y + 0.5);
-                if (std::abs(alpha - 0.5) < 0.02)
+                const noise::Ray r = rays.ray(x + 0.5, y + 0.5);
+                const double depth = closedFormDepth(placed, r.origin, r.dir);
+                if (std::abs(depth / threshold - 1.0) < 0.03)
                     continue;
-                const glm::vec3 expected = alpha > 0.5 ? c.color : c.background;
-                covered += alpha > 0.5;
+                const glm::vec3 expected = depth > threshold ? c.color : c.background;
+                covered += depth > threshold;
                 wrong += glm::length(image.at(x, y) - expected) > 1e-5f;
             }
         EXPECT_GT(covered, 50);
@@ -1133,14 +1144,16 @@ TEST(SplatRenderer, SmallKernelsRenderAsTheRasterPathDoes) {
                 EXPECT_LE(d.changed, 0.001) << label;
                 EXPECT_LT(d.meanAbs, 1e-5) << label;
             } else {
-                // Measured: mean at most 1.6e-6; every pixel within 7.4e-4 but 3 of fur-bunny's
-                // 16,384, within 8.2e-3. There a lobe's screen form is ill-conditioned, and the
-                // fragment shader's (o' at the provoking vertex, w = o' x v per pixel) and the
+                // Measured: mean at most 1.6e-6; every pixel within 7.4e-4 but 6 of fur-bunny's
+                // 16,384, within 1.9e-2 (3 within 8.2e-3 before the EWA widening kept coverage,
+                // which reshapes every lobe). There a lobe's screen form is ill-conditioned, and
+                // the fragment shader's (o' at the provoking vertex, w = o' x v per pixel) and the
                 // compute path's (w and o'.v affine in the pixel) round apart; with the fragment
-                // shader reading the affine form too, the two images agree to 1e-5 everywhere.
+                // shader reading the affine form too, the two images agree to 2e-6 everywhere,
+                // at 60% more splat time (docs/design.md, "Filtering").
                 const bool illConditioned = std::string(k.scene) == "fur-bunny";
-                EXPECT_LT(d.maxAbs, illConditioned ? 1e-2 : 2e-3) << label;
-                EXPECT_LE(d.changed, 3.0 / (128.0 * 128.0)) << label; // pixels over 1e-3
+                EXPECT_LT(d.maxAbs, illConditioned ? 2.5e-2 : 2e-3) << label;
+                EXPECT_LE(d.changed, 6.0 / (128.0 * 128.0)) << label; // pixels over 1e-3
                 EXPECT_LT(d.meanAbs, 5e-6) << label;
             }
         }
@@ -1190,7 +1203,9 @@ TEST(SplatRenderer, LambertTermsFromTheVertexShaderMatchTheLoadedOnes) {
             const ImageDifference d = difference(a, b);
             std::printf("    %s: max %.2e mean %.2e changed %.4f\n", label.c_str(), d.maxAbs,
                         d.meanAbs, d.changed);
-            EXPECT_LT(d.maxAbs, 2e-3) << label;
+            // Measured: 2.07e-3 at most (the 7-lobe kernel's ill-conditioned screen forms, as
+            // in SmallKernelsRenderAsTheRasterPathDoes), mean 2.2e-8.
+            EXPECT_LT(d.maxAbs, 3e-3) << label;
             EXPECT_LT(d.meanAbs, 5e-6) << label;
         }
     }
