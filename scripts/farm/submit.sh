@@ -62,9 +62,10 @@ first=${BASH_REMATCH[1]} last=${BASH_REMATCH[2]} step=${BASH_REMATCH[4]:-1}
 [ "$ext" = exr ] || [ "$ext" = png ] || fail "--ext '$ext' must be exr or png"
 # The first line of a command's complaint, for one-line messages.
 first_line() { tr -s '\n' '\n' | grep -v '^[[:space:]]*$' | head -n 1; }
-# A cluster that answers (sbatch alone says nothing until it submits).
-if ! answer=$(sinfo -h -o %P 2>&1); then
-  fail "no Slurm cluster answers (sinfo: $(first_line <<<"$answer")): point SLURM_CONF at your cluster's slurm.conf, or start one (README 'Shots on a farm')"
+# A cluster that answers (sbatch alone says nothing until it submits), within 10 s: without a
+# configuration Slurm's tools retry for a minute.
+if ! answer=$(timeout 10 sinfo -h -o %P 2>&1); then
+  fail "no Slurm cluster answers (sinfo: $(first_line <<<"${answer:-no answer in 10 s}")): point SLURM_CONF at your cluster's slurm.conf, or start one (README 'Shots on a farm')"
 fi
 # The output's folder: every node writes there, so it must already be a shared folder; a
 # missing one is not made here (it would be this machine's alone).
@@ -82,7 +83,7 @@ else
 fi
 # The cluster takes the job as asked (memory, partition, time...): a test submission.
 # shellcheck disable=SC2086 # the extra sbatch options are split as the user wrote them
-if ! answer=$(sbatch --test-only --cpus-per-task="$threads" $sbatch_options --wrap true 2>&1); then
+if ! answer=$(timeout 30 sbatch --test-only --cpus-per-task="$threads" $sbatch_options --wrap true 2>&1); then
   fail "the cluster refuses the job's options (--cpus-per-task=$threads${sbatch_options:+ $sbatch_options}): $(first_line <<<"$answer")"
 fi
 count=$(((last - first) / step + 1))
