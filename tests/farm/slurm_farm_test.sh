@@ -116,7 +116,11 @@ SLURM_CONF=$work/no-cluster/slurm.conf refused "no cluster" "no Slurm cluster an
 refused "a refused sbatch option" "the cluster refuses" --frames 0-7 --out "$work/bad" \
   --sbatch '--partition=nosuch'
 refused "a missing shared folder" "does not exist" --frames 0-7 --out "$work/bad/shots/tail"
-refused "frames outside the clip" "outside the scene's clip" --frames 0-100 --out "$work/bad"
+refused "frames outside the clip" "outside the scene's clip: frames 0-48" --frames 0-100 \
+  --out "$work/bad"
+# Frames count from the clip's start: the character's clip is Blender's frames 1 to 25.
+refused "frame 0 of a clip from frame 1" "outside the scene's clip: frames 1-25" \
+  --scene "$source/examples/character/character-fur.json" --frames 0-3 --out "$work/bad"
 
 # README's example runs as written on this cluster (its --out in a shared folder made here, and
 # --test-only: checked and accepted, nothing submitted).

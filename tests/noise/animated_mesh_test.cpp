@@ -19,6 +19,8 @@
 #include "cli_run.h"
 #include "noise/animated_mesh.h"
 #include "noise/error.h"
+#include "noise/field.h"
+#include "noise/image.h"
 #include "noise/scene.h"
 
 namespace {
@@ -1100,6 +1102,53 @@ TEST(Character, PartsMaterialsAndTheClipsFrames) {
     const spot::noise::FrameRange frames = spot::noise::clipFrames(a, 24.0);
     EXPECT_EQ(frames.first, 1);
     EXPECT_EQ(frames.last, 25);
+}
+
+// A material whose texture is a file beside the glTF (an external uri, %-escaped): its path is
+// kept, and the material field reads it through the uv.
+TEST(AnimatedMesh, AnExternalTextureIsReadBesideTheFile) {
+    Builder b;
+    spot::noise::Mesh tri;
+    tri.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    tri.uvs = {{0, 0}, {1, 0}, {0, 1}};
+    tri.triangles = {{0, 1, 2}};
+    const int mesh = b.meshPrimitive(tri);
+    b.model.meshes[std::size_t(mesh)].primitives[0].material = 0;
+    tinygltf::Node node;
+    node.mesh = mesh;
+    b.model.nodes.push_back(node);
+    tinygltf::Scene scene;
+    scene.nodes = {0};
+    b.model.scenes.push_back(scene);
+    b.model.defaultScene = 0;
+    tinygltf::Image image;
+    image.uri = "anim%20tex.png";
+    b.model.images.push_back(image);
+    tinygltf::Texture texture;
+    texture.source = 0;
+    b.model.textures.push_back(texture);
+    tinygltf::Material material;
+    material.name = "Skin";
+    material.pbrMetallicRoughness.baseColorTexture.index = 0;
+    material.pbrMetallicRoughness.baseColorFactor = {0.5, 1.0, 1.0, 1.0};
+    b.model.materials.push_back(material);
+    spot::noise::Image red(2, 2, glm::vec3(1.0f, 0.0f, 0.0f));
+    const std::filesystem::path dir(SPOT_TEST_TMP_DIR);
+    spot::noise::writeImage(dir / "anim tex.png", red);
+    const std::string file = b.write(tmp("external.glb"));
+    const AnimatedMesh a = AnimatedMesh::loadGltf(file);
+    ASSERT_EQ(a.rest().materials.size(), 1u);
+    const spot::noise::MeshMaterial& m = a.rest().materials[0];
+    EXPECT_EQ(m.textureFile, dir / "anim tex.png");
+    EXPECT_FALSE(m.textureBytes);
+    spot::noise::FieldDesc d;
+    d.kind = spot::noise::FieldDesc::Kind::Material;
+    d.components = 3;
+    d.hi = glm::vec3(1.0f);
+    const auto field = spot::noise::makeField(d, a.rest(), {}, "fields.color");
+    spot::noise::SurfacePoint p;
+    p.uv = {0.25f, 0.25f};
+    EXPECT_EQ(field->eval(p), glm::vec3(0.5f, 0.0f, 0.0f));
 }
 
 // A glTF 1.0 file is refused with a message that names its version, not as a corrupt file.

@@ -1018,6 +1018,23 @@ TEST(MeshWeld, DroppedTrianglesAreCountedByReason) {
     EXPECT_EQ(m.droppedWhy.at("two corners at one position (welded)"), 1u);
 }
 
+TEST(MeshWeld, PlyCopiesAreWeldedToo) {
+    // Two triangles of a square, each with its own copies of the diagonal's corners (and its own
+    // uv): 6 vertices at 4 positions.
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\n"
+                            "property float y\nproperty float z\nproperty float u\n"
+                            "property float v\nelement face 2\n"
+                            "property list uchar int vertex_indices\nend_header\n"
+                            "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 0 0 0.5 0\n1 1 0 0.5 1\n"
+                            "0 1 0 0 1\n3 0 1 2\n3 3 4 5\n";
+    const Mesh m = parsePly(ply, "copies.ply");
+    EXPECT_EQ(m.weldReport.welded, 4u);
+    EXPECT_EQ(m.weldReport.shared, 2u);
+    EXPECT_EQ(m.weld[3], 0u);
+    EXPECT_EQ(m.weld[4], 2u);
+    EXPECT_EQ(m.uvs[3], glm::vec2(0.5f, 0.0f)); // the copies keep their own uv
+}
+
 TEST(MeshWeld, GeneratedShapesAreWeldedAtTheirSeamsAndPoles) {
     const Mesh sphere = makeSphere(1.0f, 8, 16);
     // Poles: one vertex per segment each (16 -> 1); the seam: 7 rings of 17 -> 16.
