@@ -45,8 +45,8 @@ int info(int argc, char** argv) {
     if (int(args.has("mesh") || args.has("scene")) + int(args.has("bake")) +
             int(args.has("splats")) !=
         1)
-        throw InputError("spotshell info: give --mesh FILE (or --scene FILE), --bake FILE or "
-                         "--splats FILE (one of them)");
+        throw InputError("spotshell info: give --mesh FILE, --bake FILE or --splats FILE (one "
+                         "of them; --scene FILE gives its mesh)");
     if (args.has("splats")) {
         const noise::Splats3dgsFile file = noise::readSplats3dgs(args.str("splats"));
         std::printf("splats %s\n", args.str("splats").c_str());

@@ -449,7 +449,7 @@ struct GltfReader {
             for (int c = 0; c < 4; ++c)
                 if (!std::isfinite(mat.baseColorFactor[c]) || mat.baseColorFactor[c] < 0.0f)
                     throw InputError(cat(name, ": material ", i, " '", m.name,
-                                         "' has a base colour factor outside [0, 1]"));
+                                         "' has a negative or non-finite base colour factor"));
             const tinygltf::TextureInfo& info = m.pbrMetallicRoughness.baseColorTexture;
             if (info.index >= 0) {
                 if (info.index >= int(model.textures.size()))
