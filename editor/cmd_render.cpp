@@ -253,8 +253,11 @@ int render(int argc, char** argv) {
         window = {}; // the whole image: written as one
     settings.window = window;
 
-    if (!info->gpu() && shot.frames.size() > 1 && args.has("stats"))
-        throw InputError("spotshell render: --stats describes one frame; give --time, not --frames");
+    // What the method needs from the command line, checked before the device starts (seconds
+    // on lavapipe), not after.
+    if (info->takes(splat::settings::bake) && !settings.bake)
+        throw InputError(cat("spotshell render: --method ", method, " needs --bake FILE.vdb "
+                             "(spotshell bake makes one)"));
     std::optional<splat::Context> ctx;
     std::optional<splat::Frame> frame;
     if (info->gpu()) {
@@ -267,6 +270,7 @@ int render(int argc, char** argv) {
     Rendered r;
     std::string written;
     std::size_t skipped = 0, rendered = 0;
+    nlohmann::json perFrame = nlohmann::json::array(); // --stats of a --frames range: each frame
     for (std::size_t i = 0; i < shot.frames.size(); ++i) {
         const double t = shot.frames[i].time;
         if (args.has("resume") && complete(shot.frames[i].file)) {
@@ -300,6 +304,16 @@ int render(int argc, char** argv) {
             metadata["tile"] = args.str("tile");
         written = shot.frames[i].file;
         noise::writeImage(written, r.image, metadata);
+        if (args.has("stats") && args.has("frames")) {
+            nlohmann::json f = r.stats;
+            f["frame"] = shot.frames[i].frame;
+            f["time"] = t;
+            f["file"] = written;
+            f["seconds"] = r.seconds;
+            if (f.contains("first_frame"))
+                f.erase("first_frame"); // each frame here is its own first: gpu_total_ms, wall_ms
+            perFrame.push_back(std::move(f));
+        }
         bar.update(long(i + 1), long(shot.frames.size()));
     }
     bar.finish();
@@ -323,6 +337,22 @@ int render(int argc, char** argv) {
                                                                : job.visibleCells;
         if (job.moves())
             j["time"] = shot.frames.back().time;
+        if (args.has("frames")) {
+            // A range: what every frame shares at the top, each frame's own numbers in "frames"
+            // (in order; frames skipped by --resume are not there).
+            for (const char* key : {"time", "seconds", "first_frame", "frame_ms", "wall_ms",
+                                    "gpu_ms", "gpu_total_ms", "kernels_generated",
+                                    "kernel_candidates", "visible_cells", "kernels_drawn"})
+                j.erase(key);
+            for (auto it = j.begin(); it != j.end();) {
+                bool perFrameKey = false;
+                for (const nlohmann::json& f : perFrame)
+                    perFrameKey = perFrameKey || (f.contains(it.key()) && f[it.key()] != it.value());
+                it = perFrameKey ? j.erase(it) : std::next(it);
+            }
+            j["frames"] = perFrame;
+            j["frame_count"] = perFrame.size();
+        }
         writeFileAtomic(args.str("stats"), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
     }
     const std::string chosen =

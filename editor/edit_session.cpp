@@ -141,8 +141,13 @@ Session::Session(const std::filesystem::path& scene, const SessionOptions& optio
     (void)noise::CameraRays(m_camera); // checks the camera
     // A static OBJ/PLY or generated mesh loads as before (AnimatedMesh::load: a mesh that does
     // not move); the noise is generated on the rest pose of one that does.
+    if (options.preset.empty())
+        noise::requireSceneFiles(m_scene);
     m_animation = noise::AnimatedMesh::load(m_scene.mesh, m_scene.animation.clip,
-                                            m_scene.animation.fps, m_scene.animation.restFrame);
+                                            m_scene.animation.fps, m_scene.animation.restFrame,
+                                            m_scene.meshOptions);
+    if (const std::string warning = noise::checkAnimation(m_scene, m_animation); !warning.empty())
+        std::fprintf(stderr, "%s\n", warning.c_str());
     m_mesh = m_animation.rest();
     if (m_animation.animated() || m_scene.wind.on())
         setTime(m_scene.animation.time);

@@ -64,8 +64,18 @@ SceneJob::SceneJob(noise::SceneDesc desc, bool withCpuImpulses)
     : scene(std::move(desc)), cpuImpulses(withCpuImpulses) {
     baseCamera = scene.camera;
     rays = std::make_unique<noise::CameraRays>(scene.camera);
+    noise::requireSceneFiles(scene);
     animation = noise::AnimatedMesh::load(scene.mesh, scene.animation.clip, scene.animation.fps,
-                                          scene.animation.restFrame);
+                                          scene.animation.restFrame, scene.meshOptions);
+    if (const std::string warning = noise::checkAnimation(scene, animation); !warning.empty())
+        std::fprintf(stderr, "%s\n", warning.c_str());
+    if (animation.rest().weldReport.refused > 0) {
+        const noise::WeldReport& w = animation.rest().weldReport;
+        std::fprintf(stderr,
+                     "%s: warning: %zu positions keep split vertices, whose skins, morph targets "
+                     "or frames differ (first: vertices %u and %u); the shell may crack there\n",
+                     scene.mesh.c_str(), w.refused, w.refusedA, w.refusedB);
+    }
     mesh = animation.rest();
     preset = noise::loadPreset(scene.preset);
     noise::GeneratorOptions options;
@@ -130,7 +140,8 @@ std::optional<FrameSpan> frameSpan(const SceneJob& job) {
     const double eps = 1e-9;
     if (job.animation.animated()) {
         const std::string& clip = job.animation.clipName();
-        return FrameSpan{0, long(std::floor(job.animation.duration() * fps + eps)),
+        const noise::FrameRange range = noise::clipFrames(job.animation, fps);
+        return FrameSpan{range.first, range.last,
                          clip.empty() ? std::string("the mesh's clip")
                                       : cat("the clip '", clip, "'")};
     }
@@ -183,10 +194,16 @@ SceneJob loadSceneJob(const std::filesystem::path& scene, int width, int height,
 
 SceneJob prepareScene(const Args& args, bool cpuImpulses) {
     noise::SceneDesc desc = noise::loadScene(args.str("scene"));
-    if (args.has("mesh"))
+    if (args.has("mesh")) {
         desc.mesh = args.str("mesh");
-    if (args.has("preset"))
+        desc.meshWritten = desc.mesh;
+        desc.meshRelativeTo = "the current folder";
+    }
+    if (args.has("preset")) {
         desc.preset = args.str("preset");
+        desc.presetWritten = args.str("preset");
+        desc.presetRelativeTo = "the current folder";
+    }
     if (args.has("seed"))
         desc.seed = std::uint32_t(args.integer("seed", 0, 0, 0xffffffffll));
     if (args.has("unlit"))

@@ -81,7 +81,8 @@ struct FrameSpan {
     long first = 0, last = 0;
     std::string what; ///< what bounds it, for messages ("the clip 'sway'")
 };
-/// A scene's frame span: a mesh clip's [0, duration x fps]; without a clip, the camera keys'
+/// A scene's frame span: a mesh clip's frames (noise::clipFrames: from the clip's start, frame f
+/// at f / fps); without a clip, the camera keys'
 /// times when they are all that moves (at least two keys apart in time); otherwise none (the wind
 /// and a turntable go on forever).
 std::optional<FrameSpan> frameSpan(const SceneJob& job);

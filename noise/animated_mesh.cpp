@@ -5,8 +5,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fnmatch.h>
+#include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 
 #define TINYGLTF_IMPLEMENTATION
 #define TINYGLTF_NO_STB_IMAGE
@@ -16,6 +19,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <nlohmann/json.hpp>
 
 #include "noise/error.h"
 
@@ -192,8 +196,41 @@ std::vector<float> AnimatedMesh::sample(const std::vector<float>& times,
 
 namespace {
 
-/// The file read by tinygltf (images skipped: spotshell's fields read their own), after the
-/// size check.
+/// The glTF version a file says it is ("1.0", "2.0"), or empty when it says none readable: a
+/// binary's header version, or a text file's asset.version.
+std::string gltfVersionOf(const std::filesystem::path& file, std::uint64_t bytes) {
+    std::ifstream in(file, std::ios::binary);
+    char head[12] = {};
+    if (!in.read(head, sizeof(head)))
+        return {};
+    if (std::memcmp(head, "glTF", 4) == 0) {
+        std::uint32_t version = 0;
+        std::memcpy(&version, head + 4, 4);
+        return version == 1 ? "1.0" : version == 2 ? "2.0" : std::to_string(version);
+    }
+    if (bytes > (64u << 20))
+        return {}; // a text file this large is not read twice for its version
+    in.seekg(0);
+    try {
+        const nlohmann::json j = nlohmann::json::parse(in);
+        const auto asset = j.find("asset");
+        if (asset != j.end() && asset->is_object()) {
+            const auto v = asset->find("version");
+            if (v != asset->end() && v->is_string())
+                return v->get<std::string>();
+        }
+        // glTF 1.0 files often carry no asset at all; their meshes are an object, not an array.
+        const auto meshes = j.find("meshes");
+        if (meshes != j.end() && meshes->is_object())
+            return "1.0";
+    } catch (const std::exception&) {
+    }
+    return {};
+}
+
+/// The file read by tinygltf, after the size check. Images are kept as their encoded bytes (the
+/// `material` field decodes a base-colour texture with OpenImageIO when a preset asks for one);
+/// external images are left as their uri.
 tinygltf::Model readModel(const std::filesystem::path& file, const MeshLimits& limits) {
     const std::string name = file.string();
     std::error_code ec;
@@ -203,10 +240,19 @@ tinygltf::Model readModel(const std::filesystem::path& file, const MeshLimits& l
     if (bytes > limits.maxFileBytes)
         throw InputError(
             cat(name, ": ", bytes, " bytes, more than the ", limits.maxFileBytes, " accepted"));
+    const auto notVersion2 = [&](const std::string& version) {
+        return cat(name, ": a glTF ", version,
+                   " file; spotshell reads glTF 2.0 (export it again as glTF 2.0, as Blender 2.80 "
+                   "and later do)");
+    };
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(
-        [](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*,
-           int, void*) { return true; }, // images are not read: spotshell's fields read their own
+        [](tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+           const unsigned char* data, int size, void*) {
+            if (data && size > 0)
+                image->image.assign(data, data + size); // encoded: decoded when a field reads it
+            return true;
+        },
         nullptr);
     tinygltf::Model model;
     std::string err, warn;
@@ -214,11 +260,23 @@ tinygltf::Model readModel(const std::filesystem::path& file, const MeshLimits& l
     const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, name)
                            : loader.LoadASCIIFromFile(&model, &err, &warn, name);
     if (!ok) {
+        const std::string version = gltfVersionOf(file, bytes);
+        if (!version.empty() && version.rfind("2.", 0) != 0)
+            throw InputError(notVersion2(version));
         std::string first = err.substr(0, err.find('\n'));
         throw InputError(cat(name, ": not a glTF 2.0 file tinygltf reads (",
                              first.empty() ? "no reason given" : first, ")"));
     }
+    if (!model.asset.version.empty() && model.asset.version.rfind("2.", 0) != 0)
+        throw InputError(notVersion2(model.asset.version));
     return model;
+}
+
+/// Whether `name` (or index `index`) matches a "grow" pattern.
+bool matches(const PartPattern& p, const std::string& name, int index) {
+    if (p.glob.empty())
+        return p.index == index;
+    return fnmatch(p.glob.c_str(), name.c_str(), 0) == 0;
 }
 
 } // namespace
@@ -231,6 +289,7 @@ struct GltfReader {
     AnimatedMesh& out;
     std::vector<glm::vec2> uvs; ///< every primitive's, (0, 0) where one has none
     bool anyUv = false, allUv = true;
+    std::vector<bool> partUv; ///< per part: it has TEXCOORD_0
     std::size_t skipped = 0; ///< point and line primitives
 
     /// Nodes with their parents (no cycles).
@@ -346,6 +405,15 @@ struct GltfReader {
         if (attr("POSITION") < 0)
             throw InputError(cat(what, ": has no POSITION"));
         Mesh& mesh = out.m_rest;
+        MeshPart part;
+        part.mesh = m.name;
+        part.meshIndex = node.mesh;
+        part.node = node.name;
+        part.nodeIndex = n;
+        part.primitive = int(p);
+        part.material = prim.material >= 0 && prim.material < int(model.materials.size())
+                            ? prim.material
+                            : -1;
         AnimatedMesh::Piece piece;
         piece.node = n;
         piece.skin = node.skin;
@@ -356,11 +424,178 @@ struct GltfReader {
         if (mesh.positions.size() + piece.count > limits.maxVertices)
             throw InputError(cat(name, ": more than ", limits.maxVertices, " vertices"));
         uv(attr("TEXCOORD_0"), piece.count, what);
+        partUv.push_back(attr("TEXCOORD_0") >= 0);
         joints(prim, node.skin, piece, what);
         targets(prim, piece, what);
+        const std::size_t before = mesh.triangles.size();
         triangles(prim, mode, piece, what);
+        mesh.trianglePart.resize(mesh.triangles.size(), std::uint32_t(mesh.parts.size()));
+        part.triangles = mesh.triangles.size() - before;
+        mesh.parts.push_back(std::move(part));
         mesh.positions.resize(mesh.positions.size() + piece.count);
         out.m_pieces.push_back(std::move(piece));
+    }
+
+    /// The materials' base colours (factor and texture), as the `material` field reads them.
+    void materials() {
+        const std::filesystem::path dir = std::filesystem::path(name).parent_path();
+        for (std::size_t i = 0; i < model.materials.size(); ++i) {
+            const tinygltf::Material& m = model.materials[i];
+            MeshMaterial mat;
+            mat.name = m.name;
+            const std::vector<double>& f = m.pbrMetallicRoughness.baseColorFactor;
+            if (f.size() == 4)
+                mat.baseColorFactor = glm::vec4(float(f[0]), float(f[1]), float(f[2]), float(f[3]));
+            for (int c = 0; c < 4; ++c)
+                if (!std::isfinite(mat.baseColorFactor[c]) || mat.baseColorFactor[c] < 0.0f)
+                    throw InputError(cat(name, ": material ", i, " '", m.name,
+                                         "' has a negative or non-finite base colour factor"));
+            const tinygltf::TextureInfo& info = m.pbrMetallicRoughness.baseColorTexture;
+            if (info.index >= 0) {
+                if (info.index >= int(model.textures.size()))
+                    throw InputError(cat(name, ": material ", i, " '", m.name, "' names texture ",
+                                         info.index, " that does not exist"));
+                const tinygltf::Texture& tex = model.textures[std::size_t(info.index)];
+                if (tex.source < 0 || tex.source >= int(model.images.size()))
+                    throw InputError(cat(name, ": texture ", info.index, " names image ",
+                                         tex.source, " that does not exist"));
+                const tinygltf::Image& image = model.images[std::size_t(tex.source)];
+                mat.texture = image.name.empty() ? (image.uri.empty() || image.uri.rfind("data:", 0) == 0
+                                                        ? cat("image ", tex.source)
+                                                        : image.uri)
+                                                 : image.name;
+                mat.texCoord = info.texCoord;
+                if (!image.image.empty()) {
+                    mat.textureBytes = std::make_shared<const std::string>(image.image.begin(),
+                                                                           image.image.end());
+                    mat.textureMime = image.mimeType;
+                } else if (!image.uri.empty()) {
+                    mat.textureFile = dir / uriDecode(image.uri);
+                } else {
+                    throw InputError(cat(name, ": image ", tex.source, " has no data"));
+                }
+                if (tex.sampler >= 0 && tex.sampler < int(model.samplers.size()))
+                    mat.repeat = model.samplers[std::size_t(tex.sampler)].wrapS !=
+                                 TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+            }
+            out.m_rest.materials.push_back(std::move(mat));
+        }
+    }
+
+    /// %XX escapes of a uri decoded (glTF's external image uris).
+    static std::string uriDecode(const std::string& uri) {
+        std::string out;
+        for (std::size_t i = 0; i < uri.size(); ++i) {
+            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit((unsigned char)uri[i + 1]) &&
+                std::isxdigit((unsigned char)uri[i + 2])) {
+                out.push_back(char(std::stoi(uri.substr(i + 1, 2), nullptr, 16)));
+                i += 2;
+            } else {
+                out.push_back(uri[i]);
+            }
+        }
+        return out;
+    }
+
+    /// Which parts grow fur (the scene's "grow"): every pattern must match a mesh or node of the
+    /// file, and some triangle must remain.
+    void select(const GrowSelection& grow) {
+        if (!grow.chooses())
+            return;
+        const auto list = [](const auto& names) {
+            std::string s;
+            for (std::size_t i = 0; i < names.size(); ++i)
+                s += cat(i ? ", " : "", i, " '", names[i].name, "'");
+            return s.empty() ? std::string("none") : s;
+        };
+        const auto check = [&](const std::vector<PartPattern>& patterns, const auto& things,
+                               const char* key, const char* kind) {
+            for (const PartPattern& p : patterns) {
+                bool any = false;
+                for (std::size_t i = 0; i < things.size(); ++i)
+                    any = any || matches(p, things[i].name, int(i));
+                if (!any)
+                    throw InputError(cat(name, ": grow.", key, " names '", p.text(),
+                                         "', which is none of its ", kind, " (", list(things),
+                                         ")"));
+            }
+        };
+        check(grow.meshes, model.meshes, "meshes", "meshes");
+        check(grow.excludeMeshes, model.meshes, "exclude_meshes", "meshes");
+        check(grow.nodes, model.nodes, "nodes", "nodes");
+        check(grow.excludeNodes, model.nodes, "exclude_nodes", "nodes");
+        // The node or an ancestor matches one of `patterns`.
+        const auto underNode = [&](int node, const std::vector<PartPattern>& patterns) {
+            for (int n = node; n >= 0; n = out.m_nodes[std::size_t(n)].parent)
+                for (const PartPattern& p : patterns)
+                    if (matches(p, model.nodes[std::size_t(n)].name, n))
+                        return true;
+            return false;
+        };
+        const auto meshIs = [&](int mesh, const std::vector<PartPattern>& patterns) {
+            for (const PartPattern& p : patterns)
+                if (matches(p, model.meshes[std::size_t(mesh)].name, mesh))
+                    return true;
+            return false;
+        };
+        const bool include = !grow.meshes.empty() || !grow.nodes.empty();
+        std::size_t growing = 0;
+        for (MeshPart& part : out.m_rest.parts) {
+            part.grows = !include || meshIs(part.meshIndex, grow.meshes) ||
+                         underNode(part.nodeIndex, grow.nodes);
+            if (meshIs(part.meshIndex, grow.excludeMeshes) ||
+                underNode(part.nodeIndex, grow.excludeNodes))
+                part.grows = false;
+            growing += part.grows ? part.triangles : 0;
+        }
+        if (growing == 0)
+            throw InputError(cat(name, ": the scene's \"grow\" leaves no triangle to grow fur on"));
+    }
+
+    /// Whether split copies a and b (at one position) move together: the same node and skin,
+    /// the same joints with the same weights (within 1e-3), and the same morph deltas (within
+    /// `eps`, world units).
+    bool moveTogether(std::uint32_t a, std::uint32_t b, double eps) const {
+        const auto pieceOf = [&](std::uint32_t v) -> const AnimatedMesh::Piece& {
+            std::size_t lo = 0, hi = out.m_pieces.size();
+            while (hi - lo > 1) {
+                const std::size_t mid = (lo + hi) / 2;
+                (out.m_pieces[mid].first <= v ? lo : hi) = mid;
+            }
+            return out.m_pieces[lo];
+        };
+        const AnimatedMesh::Piece& pa = pieceOf(a);
+        const AnimatedMesh::Piece& pb = pieceOf(b);
+        const std::size_t ia = a - pa.first, ib = b - pb.first;
+        if (pa.skin != pb.skin || (pa.skin < 0 && pa.node != pb.node))
+            return false;
+        if (pa.skin >= 0) {
+            std::map<std::uint32_t, double> wa, wb;
+            for (int set = 0; set < 2; ++set)
+                for (int c = 0; c < 4; ++c) {
+                    if (!pa.joints[set].empty() && pa.weights[set][ia][c] > 0.0f)
+                        wa[pa.joints[set][ia][c]] += pa.weights[set][ia][c];
+                    if (!pb.joints[set].empty() && pb.weights[set][ib][c] > 0.0f)
+                        wb[pb.joints[set][ib][c]] += pb.weights[set][ib][c];
+                }
+            for (const auto& [j, w] : wa)
+                if (std::abs(w - (wb.count(j) ? wb[j] : 0.0)) > 1e-3)
+                    return false;
+            for (const auto& [j, w] : wb)
+                if (std::abs(w - (wa.count(j) ? wa[j] : 0.0)) > 1e-3)
+                    return false;
+        }
+        const std::size_t targets = std::max(pa.targets.size(), pb.targets.size());
+        for (std::size_t t = 0; t < targets; ++t) {
+            const glm::vec3 da = t < pa.targets.size() ? pa.targets[t][ia] : glm::vec3(0.0f);
+            const glm::vec3 db = t < pb.targets.size() ? pb.targets[t][ib] : glm::vec3(0.0f);
+            if (glm::length(glm::dvec3(da) - glm::dvec3(db)) > eps)
+                return false;
+        }
+        // Morph weights belong to the mesh: different meshes' targets play apart.
+        if (targets > 0 && pa.mesh != pb.mesh)
+            return false;
+        return true;
     }
 
     /// TEXCOORD_0 (accessor `index`, -1: none) of a primitive of `count` vertices.
@@ -596,14 +831,20 @@ struct GltfReader {
 };
 
 AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std::string& clip,
-                                    const MeshLimits& limits) {
+                                    const MeshLimits& limits, const MeshOptions& options) {
     const std::string name = file.string();
     const tinygltf::Model model = readModel(file, limits);
     AnimatedMesh out;
     out.m_rest.name = name;
+    out.m_gltfVersion = model.asset.version;
+    for (const tinygltf::Mesh& m : model.meshes)
+        out.m_meshNames.push_back(m.name);
+    for (const tinygltf::Node& n : model.nodes)
+        out.m_nodeNames.push_back(n.name);
     GltfReader r{model, name, limits, out, {}};
     r.nodes();
     r.skins();
+    r.materials();
     // The scene's nodes in depth-first order, their primitives merged.
     for (const int n : r.sceneOrder()) {
         const tinygltf::Node& node = model.nodes[std::size_t(n)];
@@ -623,13 +864,22 @@ AnimatedMesh AnimatedMesh::loadGltf(const std::filesystem::path& file, const std
                              "), no triangles"));
     if (out.m_pieces.empty())
         throw InputError(cat(name, ": its scene holds no triangle mesh"));
-    if (r.anyUv && r.allUv)
+    r.select(options.grow);
+    // uv when every part that grows fur has it (a stand without uv left bald does not take the
+    // character's uv away); a part without it reads (0, 0).
+    bool growingUv = true;
+    for (std::size_t i = 0; i < out.m_rest.parts.size(); ++i)
+        growingUv = growingUv && (r.partUv[i] || !out.m_rest.parts[i].grows);
+    if (r.anyUv && growingUv)
         out.m_rest.uvs = std::move(r.uvs);
     r.clip(clip);
     // The rest pose.
     out.buildPoseGeometry();
     out.m_rest.positions = out.positionsAt(0.0, true);
-    finalizeMesh(out.m_rest);
+    const Bounds b = out.m_rest.bounds();
+    const double eps = options.weld.tolerance * glm::length(glm::dvec3(b.hi) - glm::dvec3(b.lo));
+    finalizeMesh(out.m_rest, options.weld,
+                 [&](std::uint32_t a, std::uint32_t c) { return r.moveTogether(a, c, eps); });
     return out;
 }
 
@@ -841,7 +1091,8 @@ Mesh AnimatedMesh::pose(double t) const {
 }
 
 AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int first,
-                                     int restFrame, const MeshLimits& limits) {
+                                     int restFrame, const MeshLimits& limits,
+                                     const WeldOptions& weld) {
     if (!(fps > 0.0) || !std::isfinite(fps))
         throw InputError(cat(pattern, ": fps ", fps, " is not positive"));
     // One integer conversion (%d, %04d, %4d, %i) in the file name, nothing else for printf.
@@ -934,8 +1185,10 @@ AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int
     AnimatedMesh out;
     out.m_fps = fps;
     Mesh firstMesh;
+    WeldOptions unwelded = weld;
+    unwelded.on = false; // each frame as stored; the rest is welded below, against every frame
     for (const int number : found) {
-        Mesh m = loadMesh(frameName(number), limits);
+        Mesh m = loadMesh(frameName(number), limits, unwelded);
         if (!out.m_frames.empty() && !sameTopology(firstMesh, m))
             throw InputError(cat(m.name, ": its topology differs from ", firstMesh.name, "'s (",
                                  m.positions.size(), " vertices, ", m.triangles.size(),
@@ -948,22 +1201,59 @@ AnimatedMesh AnimatedMesh::loadCache(const std::string& pattern, double fps, int
             firstMesh = std::move(m);
     }
     out.m_duration = double(out.m_frames.size() - 1) / fps;
+    if (weld.on) {
+        // The rest frame welded where the copies stay within the tolerance in every frame; then
+        // every frame's welded copies take their kept vertex's position, as the rest's do.
+        const std::string restFile = out.m_rest.name;
+        double eps = 0.0;
+        for (const std::vector<glm::vec3>& f : out.m_frames) {
+            glm::dvec3 lo(f.front()), hi(f.front());
+            for (const glm::vec3& p : f) {
+                lo = glm::min(lo, glm::dvec3(p));
+                hi = glm::max(hi, glm::dvec3(p));
+            }
+            eps = std::max(eps, weld.tolerance * glm::length(hi - lo));
+        }
+        out.m_rest = loadMesh(restFile, limits, weld, [&](std::uint32_t a, std::uint32_t b) {
+            for (const std::vector<glm::vec3>& f : out.m_frames)
+                if (glm::length(glm::dvec3(f[a]) - glm::dvec3(f[b])) > eps)
+                    return false;
+            return true;
+        });
+        for (std::vector<glm::vec3>& f : out.m_frames)
+            for (std::size_t v = 0; v < f.size(); ++v)
+                f[v] = f[out.m_rest.welded(std::uint32_t(v))];
+    }
     return out;
 }
 
 AnimatedMesh AnimatedMesh::load(const std::string& spec, const std::string& clip, double fps,
-                                int restFrame) {
+                                int restFrame, const MeshOptions& options) {
     const std::filesystem::path p(spec);
     std::string ext = p.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
     if (ext == ".gltf" || ext == ".glb")
-        return loadGltf(p, clip);
+        return loadGltf(p, clip, {}, options);
+    if (options.grow.chooses())
+        throw InputError(cat(spec, ": the scene's \"grow\" chooses glTF meshes and nodes; this "
+                                   "mesh has none (a glTF file, .gltf or .glb, has)"));
     if (spec.find('%') != std::string::npos)
-        return loadCache(spec, fps, -1, restFrame);
+        return loadCache(spec, fps, -1, restFrame, {}, options.weld);
     AnimatedMesh out;
-    out.m_rest = loadMeshOrGenerated(spec);
+    out.m_rest = loadMeshOrGenerated(spec, options.weld);
     return out;
+}
+
+FrameRange clipFrames(const AnimatedMesh& mesh, double fps) {
+    // A frame within 1e-6 of a frame's time is that frame (key times are floats: 1/24 s is
+    // 0.0416666679).
+    constexpr double eps = 1e-6;
+    const double start = mesh.start(), end = mesh.start() + mesh.duration();
+    FrameRange r;
+    r.first = long(std::ceil(start * fps - eps));
+    r.last = std::max(r.first, long(std::floor(end * fps + eps)));
+    return r;
 }
 
 } // namespace spot::noise

@@ -74,18 +74,25 @@ public:
     /// buffers missing or short, an index (accessor, buffer view, joint, vertex) out of range,
     /// a negative joint weight or a skinned vertex whose weights sum to 0, a non-finite number,
     /// key times that go back, no triangles, sparse accessors, an unknown clip.
+    /// `options`: the weld (split copies are welded only where their skins and morph targets
+    /// agree: Mesh::weldReport counts the positions where they do not) and which parts grow fur.
     static AnimatedMesh loadGltf(const std::filesystem::path& file, const std::string& clip = "",
-                                 const MeshLimits& limits = {});
+                                 const MeshLimits& limits = {}, const MeshOptions& options = {});
     /// A mesh cache: `pattern` with one printf integer conversion (`%d`, `%04d`) in its file
     /// name; the frames are the files it names from `first` (the lowest found when negative) to
     /// the highest, with no gap (InputError naming the missing file), played at `fps`;
     /// `restFrame` (an index into the frames found) is the rest pose.
+    /// The rest frame is welded only where the copies stay together (within the tolerance) in
+    /// every frame, and every frame's welded copies then take their kept vertex's position.
     static AnimatedMesh loadCache(const std::string& pattern, double fps, int first = -1,
-                                  int restFrame = 0, const MeshLimits& limits = {});
+                                  int restFrame = 0, const MeshLimits& limits = {},
+                                  const WeldOptions& weld = {});
     /// A file by extension: .gltf/.glb as glTF; a name with a '%' as a cache (24 fps); anything
-    /// else (a static OBJ/PLY or a generated shape) as a mesh that does not move.
+    /// else (a static OBJ/PLY or a generated shape) as a mesh that does not move. A selection of
+    /// parts (`options.grow`) is refused for anything but a glTF file.
     static AnimatedMesh load(const std::string& spec, const std::string& clip = "",
-                             double fps = 24.0, int restFrame = 0);
+                             double fps = 24.0, int restFrame = 0,
+                             const MeshOptions& options = {});
 
     const Mesh& rest() const { return m_rest; }
     bool animated() const { return m_duration > 0.0; }
@@ -94,6 +101,11 @@ public:
     double start() const { return m_start; }
     const std::string& clipName() const { return m_clipName; }
     const std::vector<std::string>& clipNames() const { return m_clipNames; }
+    /// A glTF file's meshes and nodes by name (index order), for `spotshell info`.
+    const std::vector<std::string>& meshNames() const { return m_meshNames; }
+    const std::vector<std::string>& nodeNames() const { return m_nodeNames; }
+    /// The glTF file's version as its asset says ("2.0").
+    const std::string& gltfVersion() const { return m_gltfVersion; }
     std::size_t jointCount() const { return m_jointCount; }
     std::size_t morphTargetCount() const { return m_morphTargets; }
     std::size_t frameCount() const { return m_frames.size(); } ///< a cache's frames
@@ -158,6 +170,8 @@ private:
     void buildPoseGeometry();
 
     Mesh m_rest;
+    std::vector<std::string> m_meshNames, m_nodeNames;
+    std::string m_gltfVersion;
     std::string m_clipName;
     std::vector<std::string> m_clipNames;
     double m_start = 0.0, m_duration = 0.0;
@@ -176,5 +190,15 @@ private:
     std::vector<std::vector<glm::vec3>> m_frames;
     double m_fps = 24.0;
 };
+
+/// The frames an animated mesh's clip spans at `fps`, first to last inclusive. Frame f is at
+/// f / fps seconds everywhere (render --frames, info, the editor's timeline, the farm), so a clip
+/// from s to s + d seconds spans frames ceil(s fps) to floor((s + d) fps): Blender's frames 1 to
+/// 383 for a clip it exported from frame 1 at 24 fps (from 1/24 s). A mesh cache's clip starts at
+/// 0: its files are frames 0 to count - 1 at its own rate.
+struct FrameRange {
+    long first = 0, last = 0;
+};
+FrameRange clipFrames(const AnimatedMesh& mesh, double fps);
 
 } // namespace spot::noise

@@ -128,15 +128,17 @@ void clipTriangle(const Mesh& mesh, std::uint32_t t, double h, std::vector<Piece
     }
 }
 
-/// Adapter feeding our triangles to meshToVolume in index space.
+/// Adapter feeding our triangles (those that grow fur: `triangles`) to meshToVolume in index
+/// space.
 struct MeshAdapter {
     const Mesh* mesh;
+    const std::vector<std::uint32_t>* triangles;
     const openvdb::math::Transform* transform;
-    std::size_t polygonCount() const { return mesh->triangles.size(); }
+    std::size_t polygonCount() const { return triangles->size(); }
     std::size_t pointCount() const { return mesh->positions.size(); }
     std::size_t vertexCount(std::size_t) const { return 3; }
     void getIndexSpacePoint(std::size_t n, std::size_t v, openvdb::Vec3d& pos) const {
-        const glm::vec3 p = mesh->positions[mesh->triangles[n][int(v)]];
+        const glm::vec3 p = mesh->positions[mesh->triangles[(*triangles)[n]][int(v)]];
         pos = transform->worldToIndex(openvdb::Vec3d(p.x, p.y, p.z));
     }
 };
@@ -208,7 +210,8 @@ std::vector<PieceEntry> clipIntoCells(const Mesh& mesh, double h) {
     tbb::parallel_for(std::size_t(0), blockCount, [&](std::size_t b) {
         const std::size_t end = std::min(triangleCount, (b + 1) * kBlock);
         for (std::size_t t = b * kBlock; t < end; ++t)
-            clipTriangle(mesh, std::uint32_t(t), h, blocks[b]);
+            if (mesh.grows(t)) // a part the scene's "grow" left out is drawn, but has no cells
+                clipTriangle(mesh, std::uint32_t(t), h, blocks[b]);
     });
     std::vector<PieceEntry> entries;
     std::size_t total = 0;
@@ -256,7 +259,12 @@ void groupIntoCells(const std::vector<PieceEntry>& entries, SurfaceCells& result
 /// 2. Each cell's summary (closest point, normal, tangent, uv) from the polygon OpenVDB finds
 ///    closest to its centre.
 void summarizeCells(const Mesh& mesh, double h, SurfaceCells& result) {
-    const std::size_t triangleCount = mesh.triangles.size();
+    std::vector<std::uint32_t> growing;
+    growing.reserve(mesh.triangles.size());
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        if (mesh.grows(t))
+            growing.push_back(std::uint32_t(t));
+    const std::size_t triangleCount = growing.size();
     // OpenVDB's unsigned distance band over the same grid (voxel ijk centred at
     //    (ijk + 1/2) h) with its closest-polygon index: the per-cell summary comes from the
     //    polygon closest to each cell centre, and every cell the pieces found must lie in the band
@@ -265,7 +273,7 @@ void summarizeCells(const Mesh& mesh, double h, SurfaceCells& result) {
     openvdb::math::Transform::Ptr transform = openvdb::math::Transform::createLinearTransform(h);
     transform->postTranslate(openvdb::Vec3d(0.5 * h));
     openvdb::Int32Grid polygonIndex;
-    MeshAdapter adapter{&mesh, transform.get()};
+    MeshAdapter adapter{&mesh, &growing, transform.get()};
     const float bandVoxels = 1.0f; // >= sqrt(3)/2: holds every crossed cell's centre
     openvdb::FloatGrid::Ptr distance = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
         adapter, *transform, bandVoxels, bandVoxels, openvdb::tools::UNSIGNED_DISTANCE_FIELD,
@@ -287,6 +295,8 @@ void summarizeCells(const Mesh& mesh, double h, SurfaceCells& result) {
                 if (result.pieces[cell.firstPiece + p].area > best->area)
                     best = &result.pieces[cell.firstPiece + p];
             tri = std::int32_t(best->triangle);
+        } else {
+            tri = std::int32_t(growing[std::size_t(tri)]);
         }
         const glm::uvec3 t = mesh.triangles[std::size_t(tri)];
         const glm::dvec3 centre = (glm::dvec3(cell.ijk) + 0.5) * h;

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include "noise/error.h"
@@ -407,6 +408,105 @@ TexelEncoding texelEncoding(FieldDesc::ColorSpace space, const OIIO::ImageSpec& 
     return {TexelEncoding::Kind::Linear, 1.0f};
 }
 
+/// An image's texels as floats, decoded to linear.
+struct DecodedImage {
+    int width = 0, height = 0, channels = 0;
+    int alphaChannel = -1; ///< among the channels read (-1: none)
+    std::vector<float> texels;
+};
+
+/// Channels [first, first + count) of an opened image (count 0: all of them), clamped to [0, 1]
+/// (NaN read as 0) and decoded to linear by `space` and the file's header; an alpha channel is
+/// never decoded. `where` names the image in messages.
+DecodedImage decodeImage(OIIO::ImageInput& in, int first, int count, FieldDesc::ColorSpace space,
+                         const std::string& where) {
+    // Everything below is decided from the header, before any pixel is decoded.
+    const OIIO::ImageSpec& spec = in.spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        throw InputError(cat(where, ": image has no pixels (", spec.width, "x", spec.height, ", ",
+                             spec.nchannels, " channels)"));
+    if (spec.depth > 1)
+        throw InputError(cat(where, ": volume images are not supported"));
+    if (count == 0)
+        count = spec.nchannels - first;
+    if (first < 0 || count <= 0 || first + count > spec.nchannels)
+        throw InputError(cat(where, ": needs channels ", first, "..", first + count - 1,
+                             " but the image has ", spec.nchannels,
+                             spec.nchannels == 1 ? " channel" : " channels"));
+    const std::uint64_t pixels =
+        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+    const std::uint64_t perPixel = static_cast<std::uint64_t>(spec.nchannels) * sizeof(float);
+    if (pixels > kMaxImageBytes / perPixel)
+        throw InputError(cat(where, ": image is too large (", spec.width, "x", spec.height, " x ",
+                             spec.nchannels, " channels as float exceeds ", kMaxImageBytes >> 20,
+                             " MiB)"));
+    requireMemory(pixels * perPixel, where);
+
+    DecodedImage out;
+    out.width = spec.width;
+    out.height = spec.height;
+    out.channels = count;
+    out.alphaChannel = spec.alpha_channel >= first && spec.alpha_channel < first + count
+                           ? spec.alpha_channel - first
+                           : -1;
+    out.texels.resize(pixels * static_cast<std::uint64_t>(count));
+    bool ok = false;
+    StderrSilencer quiet; // libpng prints its own copy of errors we report ourselves
+    try {
+        ok = in.read_image(0, 0, first, first + count, OIIO::TypeDesc::FLOAT, out.texels.data());
+    } catch (const std::exception& e) {
+        throw InputError(cat(where, ": cannot decode (", oneLine(e.what()), ")"));
+    }
+    if (!ok)
+        throw InputError(cat(where, ": cannot decode (", oneLine(in.geterror()), ")"));
+    in.close();
+
+    // The field maps [0,1] to [lo, hi]; float images may hold anything, NaN included. Texels
+    // are decoded to linear here, once, so the CPU and the GPU read the same values.
+    const TexelEncoding encoding = texelEncoding(space, spec);
+    const std::size_t n = static_cast<std::size_t>(count);
+    for (std::size_t i = 0; i < out.texels.size(); ++i) {
+        float& t = out.texels[i];
+        t = std::isnan(t) ? 0.0f : std::clamp(t, 0.0f, 1.0f);
+        if (static_cast<int>(i % n) == out.alphaChannel)
+            continue; // coverage, never colour-encoded
+        if (encoding.kind == TexelEncoding::Kind::Srgb)
+            t = srgbDecode(t);
+        else if (encoding.kind == TexelEncoding::Kind::Gamma)
+            t = std::pow(t, encoding.gamma);
+    }
+    return out;
+}
+
+/// An image file opened for reading (its alpha as stored), or InputError naming `where`.
+/// `proxy`: read from memory instead, `file` then only names the format (its extension).
+std::unique_ptr<OIIO::ImageInput> openImage(const std::filesystem::path& file,
+                                            const std::string& where,
+                                            OIIO::Filesystem::IOProxy* proxy = nullptr) {
+    // Alpha as stored: a density or weight map in the alpha channel must not be premultiplied.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    std::unique_ptr<OIIO::ImageInput> in;
+    StderrSilencer quiet; // libpng prints its own copy of errors we report ourselves
+    try {
+        if (!proxy) {
+            in = OIIO::ImageInput::open(file.string(), &config);
+        } else {
+            // From memory: the reader for the format the name says, given the bytes (OIIO 2.4
+            // takes the proxy as the configuration's "oiio:ioproxy" pointer).
+            config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+            in = OIIO::ImageInput::open(file.string(), &config, proxy);
+        }
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(cat(where, ": cannot read (", oneLine(e.what()), ")"));
+    }
+    if (!in)
+        throw InputError(cat(where, ": cannot read (", oneLine(OIIO::geterror()), ")"));
+    return in;
+}
+
 std::unique_ptr<Field> makeImageField(const FieldDesc& desc, const Mesh& mesh,
                                       const std::filesystem::path& baseDir,
                                       const std::string& context) {
@@ -422,68 +522,119 @@ std::unique_ptr<Field> makeImageField(const FieldDesc& desc, const Mesh& mesh,
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file, ec))
         throw InputError(cat(where, ": no such file"));
+    std::unique_ptr<OIIO::ImageInput> in = openImage(file, where);
+    DecodedImage image =
+        decodeImage(*in, desc.channel, desc.components, desc.colorSpace, where);
+    return std::make_unique<ImageField>(image.width, image.height, desc.components,
+                                        std::move(image.texels), desc.repeat,
+                                        LinearMap(keepComponents(desc.lo, desc.components),
+                                                  keepComponents(desc.hi, desc.components)));
+}
 
-    // Alpha as stored: a density or weight map in the alpha channel must not be premultiplied.
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    std::unique_ptr<OIIO::ImageInput> in;
-    StderrSilencer quiet; // libpng prints its own copy of errors we report ourselves
-    try {
-        in = OIIO::ImageInput::open(file.string(), &config);
-    } catch (const std::exception& e) {
-        throw InputError(cat(where, ": cannot read (", oneLine(e.what()), ")"));
+/// The material a material field names (by name, by index, or the one the growing triangles
+/// use), or InputError listing the mesh's materials.
+const MeshMaterial& chooseMaterial(const FieldDesc& desc, const Mesh& mesh,
+                                   const std::string& context) {
+    std::string names;
+    for (std::size_t i = 0; i < mesh.materials.size(); ++i)
+        names += cat(i ? ", " : "", i, " '", mesh.materials[i].name, "'");
+    if (mesh.materials.empty())
+        throw InputError(cat(context, ": a material field reads a glTF material, and mesh ",
+                             mesh.name, " has none"));
+    if (desc.materialIndex >= 0) {
+        if (std::size_t(desc.materialIndex) >= mesh.materials.size())
+            throw InputError(cat(context, ": material ", desc.materialIndex, " is not one of ",
+                                 mesh.name, "'s (", names, ")"));
+        return mesh.materials[std::size_t(desc.materialIndex)];
     }
-    if (!in)
-        throw InputError(cat(where, ": cannot read (", oneLine(OIIO::geterror()), ")"));
-
-    // Everything below is decided from the header, before any pixel is decoded.
-    const OIIO::ImageSpec& spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-        throw InputError(cat(where, ": image has no pixels (", spec.width, "x", spec.height, ", ",
-                             spec.nchannels, " channels)"));
-    if (spec.depth > 1)
-        throw InputError(cat(where, ": volume images are not supported"));
-    if (desc.channel < 0 || desc.channel + desc.components > spec.nchannels)
-        throw InputError(cat(where, ": needs channels ", desc.channel, "..",
-                             desc.channel + desc.components - 1, " but the image has ",
-                             spec.nchannels, spec.nchannels == 1 ? " channel" : " channels"));
-    const std::uint64_t pixels =
-        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
-    const std::uint64_t perPixel = static_cast<std::uint64_t>(spec.nchannels) * sizeof(float);
-    if (pixels > kMaxImageBytes / perPixel)
-        throw InputError(cat(where, ": image is too large (", spec.width, "x", spec.height, " x ",
-                             spec.nchannels, " channels as float exceeds ", kMaxImageBytes >> 20,
-                             " MiB)"));
-    requireMemory(pixels * perPixel, where);
-
-    std::vector<float> texels(pixels * static_cast<std::uint64_t>(desc.components));
-    bool ok = false;
-    try {
-        ok = in->read_image(0, 0, desc.channel, desc.channel + desc.components,
-                            OIIO::TypeDesc::FLOAT, texels.data());
-    } catch (const std::exception& e) {
-        throw InputError(cat(where, ": cannot decode (", oneLine(e.what()), ")"));
+    if (!desc.material.empty()) {
+        for (const MeshMaterial& m : mesh.materials)
+            if (m.name == desc.material)
+                return m;
+        throw InputError(cat(context, ": material '", desc.material, "' is not one of ", mesh.name,
+                             "'s (", names, ")"));
     }
-    if (!ok)
-        throw InputError(cat(where, ": cannot decode (", oneLine(in->geterror()), ")"));
-    in->close();
+    // The materials of the parts that grow fur.
+    std::vector<int> used;
+    for (const MeshPart& p : mesh.parts)
+        if (p.grows && p.triangles > 0 && p.material >= 0 &&
+            std::find(used.begin(), used.end(), p.material) == used.end())
+            used.push_back(p.material);
+    if (used.size() == 1)
+        return mesh.materials[std::size_t(used.front())];
+    std::string usedNames;
+    for (std::size_t i = 0; i < used.size(); ++i)
+        usedNames += cat(i ? ", " : "", used[i], " '", mesh.materials[std::size_t(used[i])].name, "'");
+    throw InputError(cat(context, ": the triangles that grow fur use ",
+                         used.empty() ? std::string("no material")
+                                      : cat(used.size(), " materials (", usedNames, ")"),
+                         "; name one with \"material\""));
+}
 
-    // The field maps [0,1] to [lo, hi]; float images may hold anything, NaN included. Texels
-    // are decoded to linear here, once, so the CPU and the GPU read the same values.
-    const TexelEncoding encoding = texelEncoding(desc.colorSpace, spec);
-    const std::size_t n = static_cast<std::size_t>(desc.components);
-    for (std::size_t i = 0; i < texels.size(); ++i) {
-        float& t = texels[i];
-        t = std::isnan(t) ? 0.0f : std::clamp(t, 0.0f, 1.0f);
-        if (desc.channel + static_cast<int>(i % n) == spec.alpha_channel)
-            continue; // coverage, never colour-encoded
-        if (encoding.kind == TexelEncoding::Kind::Srgb)
-            t = srgbDecode(t);
-        else if (encoding.kind == TexelEncoding::Kind::Gamma)
-            t = std::pow(t, encoding.gamma);
+/// A glTF material's base colour as an image field: its texture (sRGB, as glTF says) times its
+/// factor, or the factor alone (a 1 x 1 image), channels `desc.channel`.. of RGBA.
+std::unique_ptr<Field> makeMaterialField(const FieldDesc& desc, const Mesh& mesh,
+                                         const std::string& context) {
+    const MeshMaterial& m = chooseMaterial(desc, mesh, context);
+    const std::string where = cat(context, ": material '", m.name, "' of ", mesh.name);
+    DecodedImage image;
+    if (!m.hasTexture()) {
+        image.width = image.height = 1;
+        image.channels = 4;
+        image.alphaChannel = 3;
+        image.texels = {1.0f, 1.0f, 1.0f, 1.0f};
+    } else {
+        if (!mesh.hasUv())
+            throw InputError(cat(where, ": its texture needs uv, and the mesh has none (some "
+                                        "primitive has no TEXCOORD_0)"));
+        if (m.texCoord != 0)
+            throw InputError(cat(where, ": its base colour texture reads TEXCOORD_", m.texCoord,
+                                 "; spotshell reads TEXCOORD_0"));
+        const std::string texture = cat(where, ", texture '", m.texture, "'");
+        std::unique_ptr<OIIO::ImageInput> in;
+        std::optional<OIIO::Filesystem::IOMemReader> memory;
+        if (m.textureBytes) {
+            // The format from the bytes: PNG's and JPEG's signatures.
+            const std::string& b = *m.textureBytes;
+            const char* ext = b.size() >= 8 && b.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0 ? "png"
+                              : b.size() >= 3 && static_cast<unsigned char>(b[0]) == 0xff &&
+                                      static_cast<unsigned char>(b[1]) == 0xd8
+                                  ? "jpg"
+                                  : nullptr;
+            if (!ext)
+                throw InputError(cat(texture, ": not a PNG or JPEG image (",
+                                     m.textureMime.empty() ? std::string("no type given")
+                                                           : m.textureMime,
+                                     ")"));
+            memory.emplace(b.data(), b.size());
+            in = openImage(cat("embedded.", ext), texture, &*memory);
+        } else {
+            std::error_code ec;
+            if (!std::filesystem::is_regular_file(m.textureFile, ec))
+                throw InputError(cat(texture, ": ", m.textureFile.string(), ": no such file"));
+            in = openImage(m.textureFile, cat(texture, " (", m.textureFile.string(), ")"));
+        }
+        // glTF's base colour textures are sRGB (alpha linear), whatever the file says.
+        image = decodeImage(*in, 0, 0, FieldDesc::ColorSpace::Srgb, texture);
     }
-    return std::make_unique<ImageField>(spec.width, spec.height, desc.components, std::move(texels),
-                                        desc.repeat,
+    // RGBA times the factor: a grey image fills red, green and blue; no alpha reads 1.
+    const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
+    const std::size_t n = std::size_t(desc.components);
+    std::vector<float> texels(pixels * n);
+    const int colour = image.alphaChannel >= 0 ? image.channels - 1 : image.channels;
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const float* t = image.texels.data() + i * std::size_t(image.channels);
+        glm::vec4 rgba(1.0f);
+        for (int c = 0; c < 3; ++c)
+            rgba[c] = colour <= 0 ? 1.0f : t[std::min(c, colour - 1)];
+        if (image.alphaChannel >= 0)
+            rgba.a = t[image.alphaChannel];
+        rgba *= m.baseColorFactor;
+        for (std::size_t c = 0; c < n; ++c)
+            texels[i * n + c] = std::clamp(rgba[int(std::size_t(desc.channel) + c)], 0.0f, 1.0f);
+    }
+    return std::make_unique<ImageField>(image.width, image.height, desc.components,
+                                        std::move(texels), m.repeat,
                                         LinearMap(keepComponents(desc.lo, desc.components),
                                                   keepComponents(desc.hi, desc.components)));
 }
@@ -607,6 +758,13 @@ std::unique_ptr<Field> makeBaseField(const FieldDesc& desc, const Mesh& mesh,
         if (!finite(desc.lo) || !finite(desc.hi))
             throw InputError(cat(context, ": image range is not finite"));
         return makeImageField(desc, mesh, baseDir, context);
+    case FieldDesc::Kind::Material:
+        if (!finite(desc.lo) || !finite(desc.hi))
+            throw InputError(cat(context, ": material range is not finite"));
+        if (desc.channel < 0 || desc.channel + desc.components > 4)
+            throw InputError(cat(context, ": material channels ", desc.channel, "..",
+                                 desc.channel + desc.components - 1, " are not within RGBA"));
+        return makeMaterialField(desc, mesh, context);
     case FieldDesc::Kind::Painted:
         return makePaintedField(desc, baseDir, context);
     case FieldDesc::Kind::Tangent:

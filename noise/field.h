@@ -55,7 +55,9 @@ struct SurfacePoint {
 struct FieldDesc {
     /// Tangent: the surface tangent (+u), what an unset comb reads; only as the base of a comb
     /// whose preset has paint and no base.
-    enum class Kind { Constant, Gradient, Noise, Vertex, Image, Painted, Tangent };
+    /// Material: a glTF material's base colour (its texture times its factor, or the factor
+    /// alone) through the mesh's uv, as an image field (noise/mesh.h MeshMaterial).
+    enum class Kind { Constant, Gradient, Noise, Vertex, Image, Painted, Tangent, Material };
     Kind kind = Kind::Constant;
     int components = 1;
 
@@ -83,6 +85,11 @@ struct FieldDesc {
     /// channel is never decoded.
     enum class ColorSpace { Auto, Srgb, Linear };
     ColorSpace colorSpace = ColorSpace::Auto;
+
+    /// Material: the mesh's material by name, or by index (materialIndex >= 0); neither: the
+    /// one material of the triangles that grow fur. `channel` picks red (0) to alpha (3).
+    std::string material;
+    int materialIndex = -1;
 
     std::string grid;     ///< Painted: the grid's name in the .vdb file
     /// Painted: when set, the grid in memory (the editor's live grid) instead of the file. The

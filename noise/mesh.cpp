@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <functional>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -60,6 +61,17 @@ void checkSizes(const Mesh& mesh, const std::string& name) {
     }
 }
 
+void checkParts(const Mesh& mesh, const std::string& name) {
+    if (mesh.trianglePart.empty())
+        return;
+    if (mesh.trianglePart.size() != mesh.triangles.size())
+        throw InputError(cat(name, ": ", mesh.trianglePart.size(), " triangle parts for ",
+                             mesh.triangles.size(), " triangles"));
+    for (const std::uint32_t p : mesh.trianglePart)
+        if (p >= mesh.parts.size())
+            throw InputError(cat(name, ": a triangle names part ", p, " of ", mesh.parts.size()));
+}
+
 void checkValues(const Mesh& mesh, const std::string& name) {
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
         if (!isFinite(mesh.positions[i]))
@@ -90,41 +102,223 @@ void checkValues(const Mesh& mesh, const std::string& name) {
 }
 
 void dropDegenerate(Mesh& mesh) {
+    const bool parted = !mesh.trianglePart.empty();
     std::size_t kept = 0;
-    for (const glm::uvec3& tri : mesh.triangles) {
-        if (degenerateTriangle(mesh.positions, tri))
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const glm::uvec3 tri = mesh.triangles[t];
+        const glm::uvec3 w(mesh.welded(tri.x), mesh.welded(tri.y), mesh.welded(tri.z));
+        const char* why = nullptr;
+        if (tri.x == tri.y || tri.y == tri.z || tri.z == tri.x)
+            why = "two corners on one vertex";
+        else if (w.x == w.y || w.y == w.z || w.z == w.x)
+            why = "two corners at one position (welded)";
+        else if (degenerateTriangle(mesh.positions, tri))
+            why = "zero area (corners on a line)";
+        if (why) {
             ++mesh.droppedTriangles;
-        else
-            mesh.triangles[kept++] = tri;
+            ++mesh.droppedWhy[why];
+            if (parted)
+                ++mesh.parts[mesh.trianglePart[t]].dropped[why];
+            continue;
+        }
+        if (parted)
+            mesh.trianglePart[kept] = mesh.trianglePart[t];
+        mesh.triangles[kept++] = tri;
     }
     mesh.triangles.resize(kept);
     mesh.triangles.shrink_to_fit();
+    if (parted) {
+        mesh.trianglePart.resize(kept);
+        for (MeshPart& p : mesh.parts)
+            p.triangles = 0;
+        for (const std::uint32_t p : mesh.trianglePart)
+            ++mesh.parts[p].triangles;
+    }
 }
+
+/// Union-find over vertex indices; the root of a set is its lowest index.
+struct LowestRootSets {
+    std::vector<std::uint32_t> parent;
+    explicit LowestRootSets(std::size_t n) : parent(n) {
+        for (std::size_t i = 0; i < n; ++i)
+            parent[i] = std::uint32_t(i);
+    }
+    std::uint32_t root(std::uint32_t i) {
+        while (parent[i] != i)
+            i = parent[i] = parent[parent[i]];
+        return i;
+    }
+    void join(std::uint32_t a, std::uint32_t b) {
+        a = root(a);
+        b = root(b);
+        if (a < b)
+            parent[b] = a;
+        else if (b < a)
+            parent[a] = b;
+    }
+};
+
+/// Weld the mesh's vertices by position (docs/design.md section 1, "Welding"): vertices within
+/// `options.tolerance` x the bounds' diagonal of each other (chains included) are one position;
+/// within a position, each vertex joins the lowest-index vertex already kept there that
+/// `compatible` accepts, or is kept itself. Welded vertices take their kept vertex's position
+/// exactly. Deterministic (no hashing: a sort of grid keys).
+void weldVertices(Mesh& mesh, const WeldOptions& options, const WeldCompatible& compatible) {
+    const std::size_t n = mesh.positions.size();
+    mesh.weld.clear();
+    mesh.weldReport = WeldReport{};
+    mesh.weldReport.on = options.on;
+    mesh.weldReport.welded = n;
+    if (!options.on || n == 0)
+        return;
+    const Bounds b = mesh.bounds();
+    const double diagonal = glm::length(glm::dvec3(b.hi) - glm::dvec3(b.lo));
+    const double eps = options.tolerance * diagonal;
+    mesh.weldReport.tolerance = eps;
+    // Grid cells of edge eps (exact positions only when eps is 0); vertices closer than eps lie
+    // in the same or neighbouring cells.
+    struct Key {
+        std::int64_t x, y, z;
+        std::uint32_t v;
+        bool operator<(const Key& o) const {
+            return x != o.x ? x < o.x : y != o.y ? y < o.y : z != o.z ? z < o.z : v < o.v;
+        }
+    };
+    std::vector<Key> sorted(n);
+    for (std::uint32_t v = 0; v < n; ++v) {
+        const glm::dvec3 p(mesh.positions[v]);
+        if (eps > 0.0) {
+            const glm::dvec3 q = (p - glm::dvec3(b.lo)) / eps;
+            sorted[v] = {std::int64_t(std::floor(q.x)), std::int64_t(std::floor(q.y)),
+                         std::int64_t(std::floor(q.z)), v};
+        } else { // the float's bits (-0 read as +0) as the key: equal positions only
+            const glm::vec3 f = mesh.positions[v] + glm::vec3(0.0f);
+            sorted[v] = {std::int64_t(std::bit_cast<std::int32_t>(f.x)),
+                         std::int64_t(std::bit_cast<std::int32_t>(f.y)),
+                         std::int64_t(std::bit_cast<std::int32_t>(f.z)), v};
+        }
+    }
+    std::sort(sorted.begin(), sorted.end());
+    LowestRootSets sets(n);
+    const double eps2 = eps * eps;
+    const int reach = eps > 0.0 ? 1 : 0;
+    for (const Key& k : sorted) {
+        const glm::dvec3 p(mesh.positions[k.v]);
+        // This cell and the 13 neighbours after it in key order: each pair of cells once.
+        for (int dx = 0; dx <= reach; ++dx)
+            for (int dy = dx == 0 ? 0 : -reach; dy <= reach; ++dy)
+                for (int dz = (dx == 0 && dy == 0) ? 0 : -reach; dz <= reach; ++dz) {
+                    const bool same = dx == 0 && dy == 0 && dz == 0;
+                    const Key lo{k.x + dx, k.y + dy, k.z + dz, same ? k.v + 1 : 0};
+                    for (auto it = std::lower_bound(sorted.begin(), sorted.end(), lo);
+                         it != sorted.end() && it->x == lo.x && it->y == lo.y && it->z == lo.z;
+                         ++it) {
+                        const glm::dvec3 d = glm::dvec3(mesh.positions[it->v]) - p;
+                        if (glm::dot(d, d) <= eps2)
+                            sets.join(k.v, it->v);
+                    }
+                }
+    }
+    // Within each position, in index order: join the first kept vertex that accepts, or keep.
+    // The kept vertices of a position are a list through `next`, from `head` to `tail`.
+    constexpr std::uint32_t kNone = ~std::uint32_t(0);
+    std::vector<std::uint32_t> head(n, kNone), tail(n, kNone), next(n, kNone), weld(n);
+    std::vector<std::uint8_t> refused(n, 0), shared(n, 0);
+    std::size_t welded = 0;
+    for (std::uint32_t v = 0; v < n; ++v) {
+        const std::uint32_t r = sets.root(v);
+        std::uint32_t to = kNone;
+        for (std::uint32_t k = head[r]; k != kNone && to == kNone; k = next[k])
+            if (!compatible || compatible(k, v))
+                to = k;
+        if (to == kNone) {
+            if (head[r] != kNone && !refused[r]) {
+                refused[r] = 1;
+                if (mesh.weldReport.refused++ == 0) {
+                    mesh.weldReport.refusedA = head[r];
+                    mesh.weldReport.refusedB = v;
+                }
+            }
+            (head[r] == kNone ? head[r] : next[tail[r]]) = v;
+            tail[r] = v;
+            to = v;
+            ++welded;
+        }
+        if (v != r && !shared[r]) {
+            shared[r] = 1;
+            ++mesh.weldReport.shared;
+        }
+        weld[v] = to;
+    }
+    for (std::uint32_t v = 0; v < n; ++v)
+        mesh.positions[v] = mesh.positions[weld[v]];
+    mesh.weld = std::move(weld);
+    mesh.weldReport.welded = welded;
+}
+
+/// The angle of the triangle (p0, p1, p2) at p0, in [0, pi] (atan2 of |a x b| and a . b: exact
+/// near 0 and pi, where acos is not).
+double cornerAngle(const glm::dvec3& p0, const glm::dvec3& p1, const glm::dvec3& p2) {
+    const glm::dvec3 a = p1 - p0, b = p2 - p0;
+    return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+}
+
+/// Given normals of welded copies agree when their directions are within about 1.1 degrees; a
+/// welded vertex whose copies were given other directions (a hard edge, flat shading) takes the
+/// computed normal instead.
+constexpr double kGivenNormalsAgree = 0.9998;
 
 void computeNormals(Mesh& mesh) {
     const std::size_t n = mesh.positions.size();
-    // Area-weighted: the un-normalized cross product is twice the triangle's area times its normal.
+    // Angle-weighted (Thuermer and Wuethrich 1998): each triangle adds its unit normal times its
+    // angle at the corner to the corner's welded vertex, so the normal depends neither on how
+    // the faces around it are cut into triangles nor on their sizes.
     std::vector<glm::dvec3> sum(n, glm::dvec3(0.0));
-    // The largest incident face, used where the weighted sum cancels out.
+    // The incident face of the largest angle, used where the weighted sum cancels out.
     std::vector<glm::dvec3> largest(n, glm::dvec3(0.0));
-    std::vector<double> largestLength(n, 0.0);
+    std::vector<double> largestWeight(n, 0.0);
     for (const glm::uvec3& tri : mesh.triangles) {
-        const glm::dvec3 p0(mesh.positions[tri.x]);
-        const glm::dvec3 c = glm::cross(glm::dvec3(mesh.positions[tri.y]) - p0,
-                                        glm::dvec3(mesh.positions[tri.z]) - p0);
+        const glm::dvec3 p[3] = {glm::dvec3(mesh.positions[tri.x]),
+                                 glm::dvec3(mesh.positions[tri.y]),
+                                 glm::dvec3(mesh.positions[tri.z])};
+        const glm::dvec3 c = glm::cross(p[1] - p[0], p[2] - p[0]);
         const double length = glm::length(c);
+        if (!(length > 0.0))
+            continue;
+        const glm::dvec3 unit = c / length;
         for (int k = 0; k < 3; ++k) {
-            sum[tri[k]] += c;
-            if (length > largestLength[tri[k]]) {
-                largestLength[tri[k]] = length;
-                largest[tri[k]] = c;
+            const double angle = cornerAngle(p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+            const std::uint32_t w = mesh.welded(tri[k]);
+            sum[w] += angle * unit;
+            if (angle > largestWeight[w]) {
+                largestWeight[w] = angle;
+                largest[w] = unit;
             }
         }
     }
     const bool given = !mesh.normals.empty();
+    // Per welded vertex: whether its copies' given normals agree (a hard edge's do not).
+    std::vector<std::uint8_t> agree(given ? n : 0, 1);
+    if (given && !mesh.weld.empty()) {
+        std::vector<glm::dvec3> first(n, glm::dvec3(0.0));
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint32_t w = mesh.weld[i];
+            const glm::dvec3 g(mesh.normals[i]);
+            const double length = glm::length(g);
+            if (!(isFinite(g) && std::isfinite(length) && length > 0.0)) {
+                agree[w] = 0; // one copy has none: all take the computed one
+                continue;
+            }
+            if (first[w] == glm::dvec3(0.0))
+                first[w] = g / length;
+            else if (glm::dot(first[w], g / length) < kGivenNormalsAgree)
+                agree[w] = 0;
+        }
+    }
     mesh.normals.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-        if (given) {
+        const std::uint32_t w = mesh.welded(std::uint32_t(i));
+        if (given && agree[w]) {
             const glm::dvec3 g(mesh.normals[i]);
             const double length = glm::length(g);
             if (isFinite(g) && std::isfinite(length) && length > 0.0) {
@@ -132,11 +326,11 @@ void computeNormals(Mesh& mesh) {
                 continue;
             }
         }
-        const double length = glm::length(sum[i]);
-        if (length > kCancelledRel * largestLength[i] && length > 0.0)
-            mesh.normals[i] = glm::vec3(sum[i] / length);
-        else if (largestLength[i] > 0.0)
-            mesh.normals[i] = glm::vec3(largest[i] / largestLength[i]);
+        const double length = glm::length(sum[w]);
+        if (length > kCancelledRel * largestWeight[w] && length > 0.0)
+            mesh.normals[i] = glm::vec3(sum[w] / length);
+        else if (largestWeight[w] > 0.0)
+            mesh.normals[i] = glm::vec3(largest[w]);
         else
             mesh.normals[i] = glm::vec3(0.0f, 1.0f, 0.0f); // used by no triangle: any unit vector
     }
@@ -172,12 +366,34 @@ void computeTangents(Mesh& mesh) {
             weight[tri[k]] += area;
         }
     }
+    // Welded copies share their +u direction where theirs agree (within 60 degrees of the
+    // welded vertex's sum: a uv seam cut through one parametrization), and keep their own where
+    // it does not (a mirrored or turned uv island meets them there).
+    std::vector<glm::dvec3> groupSum;
+    std::vector<double> groupWeight;
+    if (!mesh.weld.empty()) {
+        groupSum.assign(n, glm::dvec3(0.0));
+        groupWeight.assign(n, 0.0);
+        for (std::size_t i = 0; i < n; ++i) {
+            groupSum[mesh.weld[i]] += sum[i];
+            groupWeight[mesh.weld[i]] += weight[i];
+        }
+    }
     mesh.tangents.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
+        glm::dvec3 s = sum[i];
+        double w = weight[i];
+        if (!groupSum.empty()) {
+            const glm::dvec3& g = groupSum[mesh.weld[i]];
+            if (glm::dot(s, g) > 0.5 * glm::length(s) * glm::length(g)) {
+                s = g;
+                w = groupWeight[mesh.weld[i]];
+            }
+        }
         const glm::dvec3 normal(mesh.normals[i]);
-        const glm::dvec3 t = sum[i] - normal * glm::dot(normal, sum[i]); // Gram-Schmidt
+        const glm::dvec3 t = s - normal * glm::dot(normal, s); // Gram-Schmidt
         const double length = glm::length(t);
-        const glm::dvec3 unit = (length > kCancelledRel * weight[i] && length > 0.0)
+        const glm::dvec3 unit = (length > kCancelledRel * w && length > 0.0)
                                     ? t / length
                                     : orthogonalUnit(normal);
         mesh.tangents[i] = glm::vec3(unit);
@@ -302,10 +518,24 @@ bool degenerateTriangle(const std::vector<glm::vec3>& positions, const glm::uvec
     return glm::length(glm::cross(e1, e2)) <= kDegenerateRelArea * longest2;
 }
 
-void finalizeMesh(Mesh& mesh) {
+std::vector<glm::uvec3> Mesh::weldedTriangles() const {
+    if (weld.empty())
+        return triangles;
+    std::vector<glm::uvec3> out(triangles.size());
+    for (std::size_t t = 0; t < triangles.size(); ++t)
+        out[t] = weldedTriangle(t);
+    return out;
+}
+
+void finalizeMesh(Mesh& mesh, const WeldOptions& weld, const WeldCompatible& compatible) {
     const std::string name = meshName(mesh);
     checkSizes(mesh, name);
     checkValues(mesh, name);
+    checkParts(mesh, name);
+    if (!(weld.tolerance >= 0.0 && weld.tolerance <= 0.01))
+        throw InputError(cat(name, ": weld tolerance ", weld.tolerance,
+                             " is not in [0, 0.01] (a fraction of the mesh's size)"));
+    weldVertices(mesh, weld, compatible);
     const std::size_t before = mesh.triangles.size();
     const std::size_t droppedBefore = mesh.droppedTriangles;
     dropDegenerate(mesh);

@@ -1169,6 +1169,7 @@ private:
                 }
                 if (n < 3) {
                     ++m_mesh.droppedTriangles; // a face with fewer than 3 corners has no area
+                    ++m_mesh.droppedWhy["a face of fewer than 3 corners"];
                     continue;
                 }
                 if (m_mesh.triangles.size() + (n - 2) > m_limits.maxTriangles)
@@ -1211,7 +1212,8 @@ private:
 
 } // namespace
 
-Mesh parseObj(std::string_view text, const std::string& name, const MeshLimits& limits) {
+Mesh parseObj(std::string_view text, const std::string& name, const MeshLimits& limits,
+              const WeldOptions& weld, const WeldCompatible& compatible) {
     checkInputSize(text, name, limits);
     ObjScanner scanner(text, name, limits);
     std::string canonical = scanner.run();
@@ -1235,18 +1237,20 @@ Mesh parseObj(std::string_view text, const std::string& name, const MeshLimits& 
         throw InputError(cat(name, ": ", first.empty() ? std::string("cannot parse") : first));
     }
     Mesh mesh = buildObjMesh(attrib, shapes, name, limits, counts);
-    finalizeMesh(mesh);
+    finalizeMesh(mesh, weld, compatible);
     return mesh;
 }
 
-Mesh parsePly(std::string_view bytes, const std::string& name, const MeshLimits& limits) {
+Mesh parsePly(std::string_view bytes, const std::string& name, const MeshLimits& limits,
+              const WeldOptions& weld, const WeldCompatible& compatible) {
     checkInputSize(bytes, name, limits);
     Mesh mesh = PlyParser(bytes, name, limits).run();
-    finalizeMesh(mesh);
+    finalizeMesh(mesh, weld, compatible);
     return mesh;
 }
 
-Mesh loadMesh(const std::filesystem::path& file, const MeshLimits& limits) {
+Mesh loadMesh(const std::filesystem::path& file, const MeshLimits& limits, const WeldOptions& weld,
+              const WeldCompatible& compatible) {
     const std::string name = file.string();
     const std::string ext = lowerExtension(file);
     if (ext != ".obj" && ext != ".ply")
@@ -1254,20 +1258,28 @@ Mesh loadMesh(const std::filesystem::path& file, const MeshLimits& limits) {
                              ext.empty() ? std::string("(no extension)") : quote(ext),
                              "; expected .obj or .ply"));
     const std::string bytes = readFileCapped(file, limits.maxFileBytes);
-    return ext == ".obj" ? parseObj(bytes, name, limits) : parsePly(bytes, name, limits);
+    return ext == ".obj" ? parseObj(bytes, name, limits, weld, compatible)
+                         : parsePly(bytes, name, limits, weld, compatible);
 }
 
-Mesh loadMeshOrGenerated(const std::string& spec) {
+Mesh loadMeshOrGenerated(const std::string& spec, const WeldOptions& weld) {
     const std::string prefix = "generated:";
     if (spec.rfind(prefix, 0) != 0)
-        return loadMesh(spec);
+        return loadMesh(spec, {}, weld);
     const std::string shape = spec.substr(prefix.size());
+    // The shapes are made welded by default; another weld is done again over them (their normals
+    // are given, and kept).
+    const auto welded = [&](Mesh m) {
+        if (!weld.on || weld.tolerance != WeldOptions{}.tolerance)
+            finalizeMesh(m, weld);
+        return m;
+    };
     if (shape == "sphere")
-        return makeSphere(1.0f, 96, 192);
+        return welded(makeSphere(1.0f, 96, 192));
     if (shape == "torus")
-        return makeTorus(1.0f, 0.35f, 192, 64);
+        return welded(makeTorus(1.0f, 0.35f, 192, 64));
     if (shape == "plane")
-        return makePlane(2.0f, 32);
+        return welded(makePlane(2.0f, 32));
     throw InputError(cat("unknown generated mesh '", shape, "' (sphere, torus or plane)"));
 }
 

@@ -163,6 +163,32 @@ public:
                              "\" is not one of \"auto\", \"srgb\", \"linear\""));
             }
             fieldRange(require(j, path, "range"), join(path, "range"), components, r, desc);
+        } else if (type == "material") {
+            // A glTF material's base colour (texture times factor) through the mesh's uv:
+            // checked against the mesh when the field is bound (makeField).
+            requireObject(j, path, {"type", "material", "channel", "range"});
+            desc.kind = FieldDesc::Kind::Material;
+            if (const Json* m = find(j, "material")) {
+                if (m->is_number_integer())
+                    desc.materialIndex =
+                        static_cast<int>(integer(*m, join(path, "material"), 0, 1000000));
+                else
+                    desc.material = string(*m, join(path, "material"), false);
+            }
+            if (const Json* c = find(j, "channel"))
+                desc.channel = static_cast<int>(integer(*c, join(path, "channel"), 0, 3));
+            if (desc.channel + components > 4)
+                fail(cat(join(path, "channel"), " = ", desc.channel, ": a material's colour has 4 "
+                         "channels (red, green, blue, alpha), and this slot reads ", components));
+            if (const Json* rg = find(j, "range")) {
+                fieldRange(*rg, join(path, "range"), components, r, desc);
+            } else {
+                if (!r.contains(0.0) || !r.contains(1.0))
+                    fail(cat(path, ": a material's colour is in [0, 1], outside this slot's range ",
+                             r, "; give \"range\""));
+                desc.lo = components == 1 ? glm::vec3(0.0f) : glm::vec3(0.0f);
+                desc.hi = components == 1 ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(1.0f);
+            }
         } else if (type == "painted") {
             // The values are read with the grid (makeField), so they are not checked here.
             requireObject(j, path, {"type", "file", "grid"});
@@ -172,7 +198,7 @@ public:
         } else {
             fail(cat(join(path, "type"), " = \"", printable(type),
                      "\" is not one of \"constant\", \"gradient\", \"noise\", \"vertex\", "
-                     "\"image\", \"painted\""));
+                     "\"image\", \"material\", \"painted\""));
         }
         return desc;
     }

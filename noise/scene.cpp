@@ -165,6 +165,7 @@ Sky parseSky(const json::Reader& rd, const json::Json& j) {
 AnimationDesc parseAnimation(const json::Reader& rd, const json::Json& j) {
     rd.requireObject(j, "animation", {"clip", "fps", "time", "frame", "rest_frame"});
     AnimationDesc a;
+    a.given = true;
     if (const json::Json* c = json::Reader::find(j, "clip"))
         a.clip = rd.string(*c, "animation.clip", false);
     if (const json::Json* f = json::Reader::find(j, "fps"))
@@ -177,8 +178,10 @@ AnimationDesc parseAnimation(const json::Reader& rd, const json::Json& j) {
         a.time = rd.number(*time, "animation.time", json::Interval{-1e6, 1e6});
     if (frame)
         a.time = rd.number(*frame, "animation.frame", json::Interval{-1e9, 1e9}) / a.fps;
-    if (const json::Json* r = json::Reader::find(j, "rest_frame"))
+    if (const json::Json* r = json::Reader::find(j, "rest_frame")) {
         a.restFrame = int(rd.integer(*r, "animation.rest_frame", 0, 100000));
+        a.restFrameGiven = true;
+    }
     return a;
 }
 
@@ -200,6 +203,52 @@ Wind parseWind(const json::Reader& rd, const json::Json& j) {
     return w;
 }
 
+/// "weld": true (the default tolerance), false, or a tolerance relative to the mesh's size.
+WeldOptions parseWeld(const json::Reader& rd, const json::Json& j) {
+    WeldOptions w;
+    if (j.is_boolean()) {
+        w.on = j.get<bool>();
+        return w;
+    }
+    if (!j.is_number())
+        rd.fail(cat("weld must be true, false or a tolerance (a fraction of the mesh's size, "
+                    "such as 1e-5), got ", j.type_name()));
+    w.tolerance = rd.number(j, "weld", json::Interval{0.0, 0.01});
+    return w;
+}
+
+/// "grow": {"meshes": [...], "nodes": [...], "exclude_meshes": [...], "exclude_nodes": [...]},
+/// each entry a name (with * ? [..] wildcards) or an index.
+GrowSelection parseGrow(const json::Reader& rd, const json::Json& j) {
+    rd.requireObject(j, "grow", {"meshes", "nodes", "exclude_meshes", "exclude_nodes"});
+    GrowSelection g;
+    const auto list = [&](const char* key, std::vector<PartPattern>& out) {
+        const json::Json* l = json::Reader::find(j, key);
+        if (!l)
+            return;
+        const std::string path = cat("grow.", key);
+        if (!l->is_array() || l->empty() || l->size() > 10000)
+            rd.fail(cat(path, " must be an array of 1 to 10000 names or indices"));
+        for (std::size_t i = 0; i < l->size(); ++i) {
+            const json::Json& e = (*l)[i];
+            PartPattern p;
+            if (e.is_string())
+                p.glob = rd.string(e, json::index(path, i), false);
+            else if (e.is_number_integer())
+                p.index = long(rd.integer(e, json::index(path, i), 0, 1000000000));
+            else
+                rd.fail(cat(json::index(path, i), " must be a name or an index, got ",
+                            e.type_name()));
+            out.push_back(p);
+        }
+    };
+    list("meshes", g.meshes);
+    list("nodes", g.nodes);
+    list("exclude_meshes", g.excludeMeshes);
+    list("exclude_nodes", g.excludeNodes);
+    return g;
+}
+
 } // namespace
 
 SceneDesc parseScene(std::string_view text, const std::string& name,
@@ -212,7 +261,7 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
     rd.requireObject(root, "",
                      {"version", "name", "description", "mesh", "preset", "seed", "camera", "image",
                       "background", "base_color", "shading", "reference", "animation", "wind",
-                      "lights", "sky"});
+                      "lights", "sky", "weld", "grow"});
     rd.requireVersion(root, kSceneVersion);
     SceneDesc s;
     if (const json::Json* n = json::Reader::find(root, "name"))
@@ -222,8 +271,11 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
     if (const json::Json* d = json::Reader::find(root, "description"))
         rd.string(*d, "description", true);
     const std::string mesh = rd.string(rd.require(root, "", "mesh"), "mesh", false);
+    s.file = name;
     s.mesh = mesh.rfind("generated:", 0) == 0 ? mesh : (baseDir / mesh).string();
-    s.preset = baseDir / rd.string(rd.require(root, "", "preset"), "preset", false);
+    s.meshWritten = mesh;
+    s.presetWritten = rd.string(rd.require(root, "", "preset"), "preset", false);
+    s.preset = baseDir / s.presetWritten;
     if (const json::Json* seed = json::Reader::find(root, "seed"))
         s.seed = std::uint32_t(rd.integer(*seed, "seed", 0, 0xffffffffll));
     const json::Json& camera = rd.require(root, "", "camera");
@@ -259,6 +311,10 @@ SceneDesc parseScene(std::string_view text, const std::string& name,
         s.animation = parseAnimation(rd, *a);
     if (const json::Json* w = json::Reader::find(root, "wind"))
         s.wind = parseWind(rd, *w);
+    if (const json::Json* w = json::Reader::find(root, "weld"))
+        s.meshOptions.weld = parseWeld(rd, *w);
+    if (const json::Json* g = json::Reader::find(root, "grow"))
+        s.meshOptions.grow = parseGrow(rd, *g);
     return s;
 }
 
@@ -282,6 +338,44 @@ Camera cameraAt(const SceneDesc& scene, const Camera& base, double t) {
         c.eye = c.target + along + across * std::cos(angle) + glm::cross(up, across) * std::sin(angle);
     }
     return c;
+}
+
+void requireSceneFiles(const SceneDesc& scene) {
+    const auto check = [&](const char* key, const std::filesystem::path& path,
+                           const std::string& written, const std::string& relativeTo) {
+        std::error_code ec;
+        if (std::filesystem::is_regular_file(path, ec))
+            return;
+        const std::filesystem::path tried = std::filesystem::absolute(path, ec).lexically_normal();
+        const bool relative = !written.empty() && std::filesystem::path(written).is_relative();
+        throw InputError(cat(scene.file.empty() ? std::string("scene") : scene.file, ": ", key,
+                             " '", written.empty() ? path.string() : written, "' ",
+                             relative ? cat("(relative to ", relativeTo, ") ") : std::string(),
+                             "is not a file: tried ", tried.string()));
+    };
+    const bool generated = scene.mesh.rfind("generated:", 0) == 0;
+    if (!generated && scene.mesh.find('%') == std::string::npos)
+        check("mesh", scene.mesh, scene.meshWritten, scene.meshRelativeTo);
+    check("preset", scene.preset, scene.presetWritten, scene.presetRelativeTo);
+}
+
+std::string checkAnimation(const SceneDesc& scene, const AnimatedMesh& mesh) {
+    const AnimationDesc& a = scene.animation;
+    if (!a.given)
+        return {};
+    const std::string where = scene.file.empty() ? std::string("scene") : scene.file;
+    const bool hasClip = mesh.animated() || !mesh.clipNames().empty() || mesh.frameCount() > 0;
+    if (!hasClip && !a.clip.empty())
+        throw InputError(cat(where, ": animation.clip '", a.clip, "' names a clip, but mesh ",
+                             scene.mesh, " has none (it does not move; a glTF file or a mesh "
+                             "cache walk.%04d.ply brings one)"));
+    if (!hasClip && a.restFrameGiven)
+        throw InputError(cat(where, ": animation.rest_frame is a mesh cache's, and mesh ",
+                             scene.mesh, " is not one"));
+    if (!hasClip && !scene.wind.on() && !scene.cameraMoves())
+        return cat(where, ": warning: its \"animation\" block has no effect: mesh ", scene.mesh,
+                   " does not move, and neither wind nor camera keys nor a turntable do");
+    return {};
 }
 
 SceneDesc loadScene(const std::filesystem::path& file) {

@@ -21,6 +21,8 @@ inline constexpr int kSceneVersion = 1;
 
 /// How an animated mesh plays (scene key "animation"; docs/design.md section 6).
 struct AnimationDesc {
+    bool given = false;         ///< the scene has an "animation" block
+    bool restFrameGiven = false; ///< it names "rest_frame"
     std::string clip;  ///< a glTF file's clip by name; empty: its first
     double fps = 24.0; ///< frames per second: --frames' numbering, a mesh cache's rate
     double time = 0.0; ///< the time rendered when the command line names none (seconds)
@@ -35,8 +37,13 @@ struct CameraKey {
 
 struct SceneDesc {
     std::string name;
+    std::string file;                ///< the scene file, for messages (empty: parsed from text)
     std::string mesh;                ///< path (resolved against the scene's folder) or generated:NAME
     std::filesystem::path preset;    ///< resolved against the scene's folder
+    /// The mesh and preset as written, and what a relative one was resolved against ("the
+    /// scene's folder", or "the current folder" for a command-line override): for messages.
+    std::string meshWritten, presetWritten;
+    std::string meshRelativeTo = "the scene's folder", presetRelativeTo = "the scene's folder";
     std::uint32_t seed = 0;
     Camera camera;                   ///< includes the image size
     glm::vec3 background{0.0f};      ///< linear RGB
@@ -44,6 +51,8 @@ struct SceneDesc {
     Shading shading;
     int referenceSpp = 16;
     AnimationDesc animation;
+    /// How the mesh loads: its weld (scene key "weld") and the glTF parts that grow fur ("grow").
+    MeshOptions meshOptions;
     Wind wind;
     /// The camera over time: keys (ascending times; eye and target interpolated linearly,
     /// clamped at the ends), then a turntable turning the eye about the target's up axis by
@@ -56,6 +65,16 @@ struct SceneDesc {
 /// The camera at time t (seconds): `base` (the scene's camera as parsed, with the command
 /// line's size) moved by the scene's keys and turntable.
 Camera cameraAt(const SceneDesc& scene, const Camera& base, double t);
+
+/// The scene's mesh file (not a generated shape or a cache pattern) and preset exist, or
+/// InputError naming the scene, the path as written, what it was resolved against and the path
+/// tried.
+void requireSceneFiles(const SceneDesc& scene);
+
+/// The scene's "animation" block against the mesh it loaded: InputError for a "clip" or
+/// "rest_frame" on a mesh that has no clip (a static OBJ, PLY or generated shape); a warning
+/// (returned, one line; empty: none) for a block that nothing in the scene uses (nothing moves).
+std::string checkAnimation(const SceneDesc& scene, const AnimatedMesh& mesh);
 
 /// Parse a scene; `name` is the file (for messages), `baseDir` resolves relative paths.
 SceneDesc parseScene(std::string_view json, const std::string& name,

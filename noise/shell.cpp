@@ -95,7 +95,9 @@ ShellMesh buildShell(const Mesh& mesh, float thickness) {
     shell.positions = mesh.positions;
     for (std::size_t i = 0; i < mesh.positions.size(); ++i)
         shell.positions.push_back(mesh.positions[i] + thickness * mesh.normals[i]);
-    shell.tetrahedra = shellTetrahedra(mesh.triangles, shell.baseCount);
+    // The welded triangles: prisms meet at one vertex (one extrusion, one diagonal rule) across
+    // uv and normal seams, so neighbouring prisms share their side faces.
+    shell.tetrahedra = shellTetrahedra(mesh.weldedTriangles(), shell.baseCount);
     return shell;
 }
 

@@ -62,7 +62,8 @@ std::vector<ShellTetrahedron> shellTetrahedra(const std::vector<glm::uvec3>& tri
                                               std::uint32_t baseCount);
 
 /// Extrude `mesh` by `thickness` (world units, > 0 and finite; InputError otherwise) along its
-/// vertex normals and split every prism.
+/// vertex normals and split every prism. The prisms are built on the welded triangles
+/// (Mesh::weldedTriangles): split copies of a vertex are one base and one top vertex.
 ShellMesh buildShell(const Mesh& mesh, float thickness);
 
 /// shellNeighbours as the baked renderer's walk reads them: per tetrahedron and face, the

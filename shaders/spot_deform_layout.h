@@ -59,7 +59,7 @@ SPOT_CONST uint kDeformBindWeights = 4u;   /* float[]: the frame's morph weights
 SPOT_CONST uint kDeformBindPosed = 5u;     /* SpotMeshVertex[]: the posed mesh (all passes) */
 SPOT_CONST uint kDeformBindRest = 6u;      /* SpotMeshVertex[]: the rest mesh (frames) */
 SPOT_CONST uint kDeformBindIndices = 7u;   /* uint[3 x triangles] (normals, frames, move) */
-SPOT_CONST uint kDeformBindAdjacency = 8u; /* uint[vertices + 1] offsets, then triangles (normals) */
+SPOT_CONST uint kDeformBindAdjacency = 8u; /* uint[vertices + 1] offsets, then corners 3 t + k (normals) */
 SPOT_CONST uint kDeformBindRotations = 9u; /* vec4[3 x triangles]: each one's rotation's columns
                                               (frames writes, move reads) */
 SPOT_CONST uint kDeformBindImpulses = 10u; /* SpotImpulse[]: at rest (move) */

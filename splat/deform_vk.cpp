@@ -54,22 +54,42 @@ GpuDeformer::GpuDeformer(Context& ctx, const noise::AnimatedMesh& animation, Mes
     const noise::Mesh& rest = animation.rest();
     m_vertexCount = std::uint32_t(rest.positions.size());
     m_triangleCount = std::uint32_t(rest.triangles.size());
-    // Each vertex's triangles (offsets, then the lists): the normals pass gathers over them.
-    std::vector<std::uint32_t> adjacency(m_vertexCount + 1 + 3 * std::size_t(m_triangleCount), 0);
-    for (const glm::uvec3& t : rest.triangles)
+    // Each vertex's corners (offsets, then the lists of 3 t + k): the corners of every triangle
+    // at its welded vertex, so that split copies of a vertex (uv and normal seams) get one
+    // normal: the normals pass gathers over them.
+    const std::vector<glm::uvec3> welded = rest.weldedTriangles();
+    std::vector<std::uint32_t> valence(m_vertexCount, 0);
+    for (const glm::uvec3& t : welded)
         for (int k = 0; k < 3; ++k)
-            ++adjacency[t[k] + 1];
+            ++valence[t[k]];
+    std::vector<std::uint32_t> first(m_vertexCount + 1, 0); // per welded vertex, into `corners`
+    for (std::uint32_t v = 0; v < m_vertexCount; ++v)
+        first[v + 1] = first[v] + valence[v];
+    std::vector<std::uint32_t> corners(first[m_vertexCount]);
+    {
+        std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+        for (std::uint32_t t = 0; t < m_triangleCount; ++t)
+            for (std::uint32_t k = 0; k < 3; ++k)
+                corners[fill[welded[t][int(k)]]++] = 3 * t + k;
+    }
+    std::size_t entries = 0;
     for (std::uint32_t v = 0; v < m_vertexCount; ++v) {
-        if (adjacency[v + 1] > kDeformMaxValence)
-            throw InputError(cat(rest.name, ": vertex ", v, " is shared by ", adjacency[v + 1],
+        const std::uint32_t w = rest.welded(v);
+        if (valence[w] > kDeformMaxValence)
+            throw InputError(cat(rest.name, ": vertex ", v, " is shared by ", valence[w],
                                  " triangles, more than the ", kDeformMaxValence,
                                  " an animated mesh may have"));
-        adjacency[v + 1] += adjacency[v];
+        entries += valence[w];
     }
-    std::vector<std::uint32_t> fill(adjacency.begin(), adjacency.begin() + m_vertexCount);
-    for (std::uint32_t t = 0; t < m_triangleCount; ++t)
-        for (int k = 0; k < 3; ++k)
-            adjacency[m_vertexCount + 1 + fill[rest.triangles[t][k]]++] = t;
+    if (entries > std::size_t(std::numeric_limits<std::uint32_t>::max()) - m_vertexCount - 1)
+        throw InputError(cat(rest.name, ": its vertices' corners do not fit 32-bit offsets"));
+    std::vector<std::uint32_t> adjacency(m_vertexCount + 1 + entries, 0);
+    for (std::uint32_t v = 0; v < m_vertexCount; ++v) {
+        const std::uint32_t w = rest.welded(v);
+        adjacency[v + 1] = adjacency[v] + valence[w];
+        std::copy(corners.begin() + first[w], corners.begin() + first[w + 1],
+                  adjacency.begin() + m_vertexCount + 1 + adjacency[v]);
+    }
     put(ctx, m_adjacency, adjacency, "deform adjacency");
     // Every triangle starts at rest (no rotation).
     std::vector<glm::vec4> rotations(3 * std::size_t(m_triangleCount));

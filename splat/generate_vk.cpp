@@ -220,12 +220,14 @@ const Pipeline& GpuGenerator::candidatePipeline() {
     if (m_candidatePipeline.handle())
         return m_candidatePipeline;
     m_candidateKey = specializationKey();
-    if (m_preparedPipeline.handle() && m_preparedKey == m_candidateKey) {
-        m_candidatePipeline = std::move(m_preparedPipeline);
-        m_preparedKey.clear();
-    } else {
-        m_candidatePipeline = makeCandidatePipeline(m_candidateKey);
-    }
+    for (auto it = m_prepared.begin(); it != m_prepared.end(); ++it)
+        if (it->key == m_candidateKey) {
+            // Made on its thread (waits for it when it is not done yet).
+            m_candidatePipeline = it->pipeline.get();
+            m_prepared.erase(it);
+            return m_candidatePipeline;
+        }
+    m_candidatePipeline = makeCandidatePipeline(m_candidateKey);
     return m_candidatePipeline;
 }
 
@@ -246,19 +248,37 @@ void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
     key[2 + 2 * slot] = components;
     if (slot == SPOT_FIELD_COMB)
         key[0] = 1; // a comb field is bound
-    if ((m_candidatePipeline.handle() && key == m_candidateKey) ||
-        (m_preparedPipeline.handle() && key == m_preparedKey))
+    if (m_candidatePipeline.handle() && key == m_candidateKey)
         return;
-    m_preparedPipeline = makeCandidatePipeline(key);
-    m_preparedKey = std::move(key);
+    for (const Prepared& p : m_prepared)
+        if (p.key == key)
+            return;
+    // The mesh's flags now (no field changes them); the compile reads nothing else that changes.
+    const gpu::SpotGenParams& params = m_generator.sharedParams();
+    const bool uv = (params.flags.w & 1u) != 0u, tangents = (params.flags.w & 2u) != 0u;
+    constexpr std::size_t kKept = 4; // the editor's slots: a few kinds armed in turn
+    if (m_prepared.size() >= kKept) {
+        m_prepared.front().pipeline.wait(); // its thread must end before its pipeline is dropped
+        m_prepared.pop_front();
+    }
+    m_prepared.push_back(
+        {key, std::async(std::launch::async, [this, key, uv, tangents] {
+                  return makeCandidatePipeline(key, false, uv, tangents);
+              })});
 }
 
 Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& key, bool partial) {
     const gpu::SpotGenParams& params = m_generator.sharedParams();
+    return makeCandidatePipeline(key, partial, (params.flags.w & 1u) != 0u,
+                                 (params.flags.w & 2u) != 0u);
+}
+
+Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& key, bool partial,
+                                             bool uv, bool tangents) {
     Specialization spec;
     spec.set(kGenSpecComb, key[0] != 0)
-        .set(kGenSpecUv, (params.flags.w & 1u) != 0u) // the mesh's: no field changes them
-        .set(kGenSpecTangents, (params.flags.w & 2u) != 0u);
+        .set(kGenSpecUv, uv) // the mesh's: no field changes them
+        .set(kGenSpecTangents, tangents);
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
         spec.set(kGenSpecFieldKind + slot, key[1 + 2 * slot])
             .set(kGenSpecFieldComponents + slot, key[2 + 2 * slot]);

@@ -11,6 +11,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <deque>
+#include <future>
 #include <vector>
 
 #include "context_vk.h"
@@ -73,10 +75,12 @@ public:
     /// regenerate. The cells' candidate counts stay (they depend on no field). No frame that
     /// reads this generator may be in flight.
     void refreshFields();
-    /// Make now, ahead of its use, the candidates pipeline for the current fields with field
+    /// Start making, ahead of its use, the candidates pipeline for the current fields with field
     /// `slot` (SPOT_FIELD_*) of kind `kind` and `components` components, so that a setField
     /// that gives the slot that kind later (the editor's first stroke on a slot swaps in its
-    /// painted grid) does not compile in its frame. Keeps one such pipeline.
+    /// painted grid) does not compile in its frame. The compile runs on a thread of its own
+    /// (seconds on lavapipe: the editor's brush arms at once); the generation that needs the
+    /// pipeline waits for it. Keeps the pipelines of the last few kinds prepared.
     void prepareFieldKind(std::uint32_t slot, std::int32_t kind, std::int32_t components);
     /// refreshFields() when the fields changed only where the model cells `cells` (indices into
     /// the generator's cells) read them: the next prepare(), if it chooses the cells and level of
@@ -113,6 +117,10 @@ private:
     const Pipeline& partialPipeline();
     /// The candidates pipeline for a specializationKey(), of a full or a partial generation.
     Pipeline makeCandidatePipeline(const std::vector<std::int32_t>& key, bool partial = false);
+    /// The same with the mesh's uv and tangent flags given (what a compile on another thread
+    /// reads: nothing of the generator that may change meanwhile).
+    Pipeline makeCandidatePipeline(const std::vector<std::int32_t>& key, bool partial, bool uv,
+                                   bool tangents);
     /// What the candidates pipeline is specialized for: the comb flag, each slot's kind and
     /// component count.
     std::vector<std::int32_t> specializationKey() const;
@@ -127,8 +135,13 @@ private:
     Pipeline m_candidatePipeline;                 ///< specialized for the preset; made on first use
     Pipeline m_partialPipeline;                   ///< the same for partial generations
     std::vector<std::int32_t> m_candidateKey;     ///< specializationKey() it was made for
-    Pipeline m_preparedPipeline;                  ///< prepareFieldKind's, until its key is used
-    std::vector<std::int32_t> m_preparedKey;
+    /// prepareFieldKind's pipelines, made or being made on their threads, until their key is
+    /// used (the oldest dropped past a few).
+    struct Prepared {
+        std::vector<std::int32_t> key;
+        std::future<Pipeline> pipeline;
+    };
+    std::deque<Prepared> m_prepared;
     Pipeline m_scanPipeline, m_scatterPipeline;
     Buffer m_params, m_pieces, m_triangles, m_positions, m_normals, m_tangents, m_uvs, m_fieldData;
 

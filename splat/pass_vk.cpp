@@ -61,12 +61,16 @@ MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_c
                         cat(who, " mesh vertices (", mesh.name, ")"));
     if (!vertices.empty())
         m_vertices.upload(std::span<const gpu_splat::SpotMeshVertex>(vertices));
-    m_indexCount = std::uint32_t(mesh.triangles.size() * 3);
-    m_indices = Buffer(ctx, mesh.triangles.size() * sizeof(glm::uvec3),
+    // The welded triangles (noise::Mesh::weld): the shell, the posed normals and the shadow
+    // rays read these indices, so that triangles meet at one vertex across uv and normal seams.
+    // Welded copies have equal positions and normals, so the mesh draws the same.
+    const std::vector<glm::uvec3> triangles = mesh.weldedTriangles();
+    m_indexCount = std::uint32_t(triangles.size() * 3);
+    m_indices = Buffer(ctx, triangles.size() * sizeof(glm::uvec3),
                        VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                        Buffer::Memory::HostVisible, cat(who, " mesh indices (", mesh.name, ")"));
-    if (!mesh.triangles.empty())
-        m_indices.upload(std::span<const glm::uvec3>(mesh.triangles));
+    if (!triangles.empty())
+        m_indices.upload(std::span<const glm::uvec3>(triangles));
 
     GraphicsPipelineDesc desc;
     desc.vertex = spirv(spv_splat_mesh_vert);

@@ -385,3 +385,40 @@ TEST(EditAnimated, ScriptTimeShowsWhatRenderRenders) {
 }
 
 } // namespace
+
+namespace spot {
+namespace {
+
+// The character Blender exports (examples/character/): the editor's timeline spans Blender's
+// frames 1 to 25 (the clip starts at 1/24 s), a brush arms every slot in turn without compiling
+// in the arming (the pipelines compile on their own threads; the armed kinds differ: the comb's
+// tangent, the density's noise, the length's constant), and a stroke after them paints and
+// regenerates as ever.
+TEST(EditAnimated, TheCharactersTimelineArmingAndAStroke) {
+    edit::Session s(std::filesystem::path(SPOT_SOURCE_DIR) / "examples/character/character-fur.json",
+                    test::editOptions(96));
+    ASSERT_TRUE(s.animated());
+    const edit::Timeline line = s.timeline();
+    EXPECT_EQ(line.frame(line.start), 1);
+    EXPECT_EQ(line.frame(line.end), 25);
+    for (const edit::BrushKind kind :
+         {edit::BrushKind::Comb, edit::BrushKind::DensityErase, edit::BrushKind::Length}) {
+        const edit::EditCost cost = s.setBrushKind(kind);
+        EXPECT_TRUE(cost.armed);
+        std::printf("arming %d on the character: %.3f ms\n", int(kind), cost.milliseconds);
+    }
+    s.setBrushKind(edit::BrushKind::DensityErase);
+    const std::vector<noise::Impulse> before = s.generator().generate();
+    const glm::vec2 centre(48.0f, 48.0f);
+    ASSERT_TRUE(s.pick(centre)) << "the character is not in the middle of the view";
+    s.brush().strength = 1.0f;
+    const edit::EditCost cost = s.stroke({centre, centre + glm::vec2(6.0f, 0.0f)});
+    EXPECT_GT(cost.voxelsWritten, 0u);
+    noise::Image image;
+    s.render(&image);
+    EXPECT_LT(s.generator().generate().size(), before.size()) << "the stroke erased nothing";
+    test::expectNoValidationErrors(s.context());
+}
+
+} // namespace
+} // namespace spot

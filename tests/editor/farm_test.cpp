@@ -131,6 +131,27 @@ TEST(FarmCli, RefusesBadInputWritingNothing) {
         0);
 }
 
+/// Frames are numbered from the clip's start, as Blender numbers them: the character's clip,
+/// exported from frames 1 to 25 at 24 fps (from 1/24 s), is frames 1 to 25 for --frames, as
+/// for `info` and the editor's timeline; 0 and 26 are outside it.
+TEST(FarmCli, FramesCountFromTheClipsStart) {
+    const fs::path dir = freshDir("farm-start");
+    const std::string scene =
+        std::string(SPOT_SOURCE_DIR) + "/examples/character/character-fur.json";
+    const std::string base = "render --method instanced --unlit --size 16x16 --scene " + scene +
+                             " --out '" + (dir / "f.%04d.png").string() + "' --frames ";
+    for (const char* outside : {"0-0", "26-26", "0-25"}) {
+        const test::CliResult r = test::runSpotshell(base + outside);
+        EXPECT_EQ(r.code, 2) << outside << "\n" << r.err;
+        EXPECT_NE(r.err.find("frames 1-25 at 24 fps"), std::string::npos) << r.err;
+    }
+    EXPECT_TRUE(fs::is_empty(dir));
+    const test::CliResult r = test::runSpotshell(base + "1-25:24");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(dir / "f.0001.png"));
+    EXPECT_TRUE(fs::exists(dir / "f.0025.png"));
+}
+
 /// Without a clip, camera keys alone bound --frames to their span (0.5 s to 1 s at 24 fps: frames
 /// 12 to 24); a turntable turns forever, so it bounds nothing.
 TEST(FarmCli, CameraKeysBoundTheFrames) {

@@ -30,7 +30,10 @@ cluster_stop() {
 
 cluster_start() {
   cluster_dir=$1
-  local cpus=$2 host port
+  local cpus=$2 host port memory
+  # The machine's memory (MB), as a real node declares it: without it Slurm takes 1 MB and
+  # refuses any --mem (README's --sbatch '--mem=4G').
+  memory=$(awk '/^MemTotal:/ {print int($2 / 1024)}' /proc/meminfo)
   host=$(hostname -s)
   mkdir -p "$cluster_dir/state" "$cluster_dir/spool"
   chmod 700 "$cluster_dir"
@@ -75,7 +78,7 @@ ReturnToService=2
 KillWait=5
 InactiveLimit=0
 MinJobAge=300
-NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$memory State=UNKNOWN
 PartitionName=farm Nodes=$host Default=YES MaxTime=INFINITE State=UP
 CONF
   export SLURM_CONF=$cluster_dir/slurm.conf

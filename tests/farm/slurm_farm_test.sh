@@ -96,6 +96,43 @@ set -e
 [ $code = 2 ] && [ "$(wc -l <<<"$message")" = 1 ] && grep -q "apt-get install" <<<"$message" ||
   fail "submit.sh without sbatch: exit $code, said: $message"
 
+# Each bad input is one line and exit 2, and leaves nothing behind: a machine with sbatch but no
+# cluster, options the cluster refuses, an --out in a folder that is not there, frames outside
+# the clip.
+refused() { # refused WHAT EXPECTED-TEXT submit.sh-arguments...
+  local what=$1 expect=$2 message code
+  shift 2
+  set +e
+  message=$("$source/scripts/farm/submit.sh" --spotshell "$spotshell" --scene "$scene" "$@" 2>&1)
+  code=$?
+  set -e
+  [ $code = 2 ] && [ "$(wc -l <<<"$message")" = 1 ] && grep -q -- "$expect" <<<"$message" ||
+    fail "submit.sh with $what: exit $code, said: $message"
+  [ ! -e "$work/bad" ] || fail "submit.sh with $what left $work/bad behind"
+  echo "ok: $what: $message"
+}
+SLURM_CONF=$work/no-cluster/slurm.conf refused "no cluster" "no Slurm cluster answers" \
+  --frames 0-7 --out "$work/bad"
+refused "a refused sbatch option" "the cluster refuses" --frames 0-7 --out "$work/bad" \
+  --sbatch '--partition=nosuch'
+refused "a missing shared folder" "does not exist" --frames 0-7 --out "$work/bad/shots/tail"
+refused "frames outside the clip" "outside the scene's clip: frames 0-48" --frames 0-100 \
+  --out "$work/bad"
+# Frames count from the clip's start: the character's clip is Blender's frames 1 to 25.
+refused "frame 0 of a clip from frame 1" "outside the scene's clip: frames 1-25" \
+  --scene "$source/examples/character/character-fur.json" --frames 0-3 --out "$work/bad"
+
+# README's example runs as written on this cluster (its --out in a shared folder made here, and
+# --test-only: checked and accepted, nothing submitted).
+readme=$(awk '/^scripts\/farm\/submit.sh/,/method sorted$/' "$source/README.md" | tr -d '\\\n')
+[[ $readme == *"--sbatch '--mem=4G'"* ]] || fail "README's submit.sh example not found: $readme"
+mkdir -p "$work/shared/shots"
+readme=${readme//\/shared\/shots\/bunny/$work/shared/shots/bunny}
+readme=${readme/scripts\/farm\/submit.sh/scripts\/farm\/submit.sh --spotshell '$spotshell' --test-only}
+message=$(cd "$source" && eval "$readme" 2>&1) ||
+  fail "README's example ($readme) was refused: $message"
+echo "ok: README's example: $message"
+
 # 3. The shot on the farm.
 submit "$work/farm1"
 wait_jobs 150 "$array" "$finish"

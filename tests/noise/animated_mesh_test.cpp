@@ -6,7 +6,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -17,6 +19,8 @@
 #include "cli_run.h"
 #include "noise/animated_mesh.h"
 #include "noise/error.h"
+#include "noise/field.h"
+#include "noise/image.h"
 #include "noise/scene.h"
 
 namespace {
@@ -982,4 +986,212 @@ TEST(AnimatedExamples, TheScenesLoadWithTheirClips) {
         EXPECT_DOUBLE_EQ(s.animation.fps, 24.0);
         EXPECT_TRUE(std::filesystem::exists(s.preset)) << s.preset;
     }
+}
+
+// ---- A character as Blender exports it (examples/character/, scripts/make_character.py) -------
+
+namespace {
+
+const std::filesystem::path kCharacter =
+    std::filesystem::path(SPOT_SOURCE_DIR) / "examples/character/character.glb";
+
+} // namespace
+
+// Flat shading and uv seams make Blender's exporter split vertices: welded, the body's 278 and
+// the stand's 24 vertices are one per position, each copy of a position has one normal, and the
+// skins of a position's copies agree (no position is left split).
+TEST(Character, SplitVerticesAreWeldedAndTheirSkinsAgree) {
+    const AnimatedMesh a = AnimatedMesh::loadGltf(kCharacter);
+    const spot::noise::Mesh& m = a.rest();
+    ASSERT_EQ(m.positions.size(), 302u);
+    const spot::noise::WeldReport& w = m.weldReport;
+    EXPECT_TRUE(w.on);
+    EXPECT_EQ(w.refused, 0u);
+    std::set<std::tuple<float, float, float>> distinct;
+    for (const glm::vec3& p : m.positions)
+        distinct.insert({p.x, p.y, p.z});
+    EXPECT_EQ(w.welded, distinct.size());
+    EXPECT_LT(w.welded, m.positions.size() - 60); // many copies
+    for (std::uint32_t v = 0; v < m.positions.size(); ++v) {
+        EXPECT_EQ(m.positions[v], m.positions[m.weld[v]]);
+        EXPECT_EQ(m.normals[v], m.normals[m.weld[v]]);
+    }
+    // Off: every copy stays, the flat torso's corners keep their faces' normals apart.
+    spot::noise::MeshOptions off;
+    off.weld.on = false;
+    const AnimatedMesh split = AnimatedMesh::loadGltf(kCharacter, "", {}, off);
+    EXPECT_TRUE(split.rest().weld.empty());
+    std::size_t apart = 0;
+    for (std::uint32_t v = 0; v < m.positions.size(); ++v)
+        apart += glm::length(split.rest().normals[v] - split.rest().normals[m.weld[v]]) > 0.1f;
+    EXPECT_GT(apart, 50u);
+}
+
+// The welded copies pose alike at every time of the clip (their skins agree), and the posed
+// normals are the welded ones.
+TEST(Character, WeldedCopiesMoveTogether) {
+    const AnimatedMesh a = AnimatedMesh::loadGltf(kCharacter);
+    const spot::noise::Mesh& rest = a.rest();
+    for (const double t : {0.0, 0.3, 0.5, 1.0}) {
+        const spot::noise::Mesh posed = a.pose(t);
+        for (std::uint32_t v = 0; v < rest.positions.size(); ++v) {
+            EXPECT_LT(glm::length(posed.positions[v] - posed.positions[rest.weld[v]]), 1e-6f) << t;
+            EXPECT_LT(glm::length(posed.normals[v] - posed.normals[rest.weld[v]]), 1e-6f) << t;
+        }
+    }
+}
+
+// Its meshes, nodes, materials and parts, the clip from Blender's frame 1, and "grow".
+TEST(Character, PartsMaterialsAndTheClipsFrames) {
+    const AnimatedMesh a = AnimatedMesh::loadGltf(kCharacter);
+    const spot::noise::Mesh& m = a.rest();
+    EXPECT_EQ(a.gltfVersion(), "2.0");
+    EXPECT_EQ(a.meshNames(), (std::vector<std::string>{"Stand", "Body"}));
+    ASSERT_EQ(m.parts.size(), 2u);
+    EXPECT_EQ(m.parts[0].mesh, "Stand");
+    EXPECT_EQ(m.parts[1].mesh, "Body");
+    EXPECT_EQ(m.parts[0].triangles + m.parts[1].triangles, m.triangles.size());
+    EXPECT_TRUE(m.parts[0].grows && m.parts[1].grows);
+    ASSERT_EQ(m.materials.size(), 2u);
+    EXPECT_EQ(m.materials[0].name, "Wood");
+    EXPECT_FALSE(m.materials[0].hasTexture());
+    EXPECT_NEAR(m.materials[0].baseColorFactor.r, 0.5f, 1e-6f);
+    EXPECT_EQ(m.materials[1].name, "Fur");
+    ASSERT_TRUE(m.materials[1].textureBytes);
+    EXPECT_EQ(m.materials[1].textureMime, "image/png");
+    EXPECT_EQ(m.parts[1].material, 1);
+    // The stand has no uv: with every part growing, the mesh has none; with the body alone, it
+    // has the body's.
+    EXPECT_FALSE(m.hasUv());
+    spot::noise::MeshOptions body;
+    body.grow.meshes = {{"Bo*", -1}};
+    const AnimatedMesh b = AnimatedMesh::loadGltf(kCharacter, "", {}, body);
+    EXPECT_TRUE(b.rest().hasUv());
+    EXPECT_FALSE(b.rest().parts[0].grows);
+    EXPECT_TRUE(b.rest().parts[1].grows);
+    for (std::size_t t = 0; t < b.rest().triangles.size(); ++t)
+        EXPECT_EQ(b.rest().grows(t), b.rest().trianglePart[t] == 1u);
+    // The same by node (the body is under the armature's node "rig"), by index, and excluded.
+    for (const auto& grow : {spot::noise::GrowSelection{{}, {{"rig", -1}}, {}, {}},
+                             spot::noise::GrowSelection{{{"", 1}}, {}, {}, {}},
+                             spot::noise::GrowSelection{{}, {}, {{"Stand", -1}}, {}}}) {
+        spot::noise::MeshOptions o;
+        o.grow = grow;
+        const AnimatedMesh c = AnimatedMesh::loadGltf(kCharacter, "", {}, o);
+        EXPECT_FALSE(c.rest().parts[0].grows);
+        EXPECT_TRUE(c.rest().parts[1].grows);
+    }
+    // A name that matches nothing, or a choice that leaves nothing, is one line naming them.
+    spot::noise::MeshOptions typo;
+    typo.grow.meshes = {{"Boddy", -1}};
+    try {
+        AnimatedMesh::loadGltf(kCharacter, "", {}, typo);
+        ADD_FAILURE() << "a name that matches nothing was taken";
+    } catch (const spot::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("grow.meshes names 'Boddy', which is none of its "
+                                             "meshes (0 'Stand', 1 'Body')"),
+                  std::string::npos)
+            << e.what();
+    }
+    spot::noise::MeshOptions none;
+    none.grow.excludeNodes = {{"*", -1}};
+    EXPECT_THROW(AnimatedMesh::loadGltf(kCharacter, "", {}, none), spot::InputError);
+    // The clip: Blender's frames 1 to 25 at 24 fps, from 1/24 s.
+    EXPECT_EQ(a.clipName(), "walk");
+    EXPECT_NEAR(a.start(), 1.0 / 24.0, 1e-6);
+    const spot::noise::FrameRange frames = spot::noise::clipFrames(a, 24.0);
+    EXPECT_EQ(frames.first, 1);
+    EXPECT_EQ(frames.last, 25);
+}
+
+// A material whose texture is a file beside the glTF (an external uri, %-escaped): its path is
+// kept, and the material field reads it through the uv.
+TEST(AnimatedMesh, AnExternalTextureIsReadBesideTheFile) {
+    Builder b;
+    spot::noise::Mesh tri;
+    tri.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    tri.uvs = {{0, 0}, {1, 0}, {0, 1}};
+    tri.triangles = {{0, 1, 2}};
+    const int mesh = b.meshPrimitive(tri);
+    b.model.meshes[std::size_t(mesh)].primitives[0].material = 0;
+    tinygltf::Node node;
+    node.mesh = mesh;
+    b.model.nodes.push_back(node);
+    tinygltf::Scene scene;
+    scene.nodes = {0};
+    b.model.scenes.push_back(scene);
+    b.model.defaultScene = 0;
+    tinygltf::Image image;
+    image.uri = "anim%20tex.png";
+    b.model.images.push_back(image);
+    tinygltf::Texture texture;
+    texture.source = 0;
+    b.model.textures.push_back(texture);
+    tinygltf::Material material;
+    material.name = "Skin";
+    material.pbrMetallicRoughness.baseColorTexture.index = 0;
+    material.pbrMetallicRoughness.baseColorFactor = {0.5, 1.0, 1.0, 1.0};
+    b.model.materials.push_back(material);
+    spot::noise::Image red(2, 2, glm::vec3(1.0f, 0.0f, 0.0f));
+    const std::filesystem::path dir(SPOT_TEST_TMP_DIR);
+    spot::noise::writeImage(dir / "anim tex.png", red);
+    const std::string file = b.write(tmp("external.glb"));
+    const AnimatedMesh a = AnimatedMesh::loadGltf(file);
+    ASSERT_EQ(a.rest().materials.size(), 1u);
+    const spot::noise::MeshMaterial& m = a.rest().materials[0];
+    EXPECT_EQ(m.textureFile, dir / "anim tex.png");
+    EXPECT_FALSE(m.textureBytes);
+    spot::noise::FieldDesc d;
+    d.kind = spot::noise::FieldDesc::Kind::Material;
+    d.components = 3;
+    d.hi = glm::vec3(1.0f);
+    const auto field = spot::noise::makeField(d, a.rest(), {}, "fields.color");
+    spot::noise::SurfacePoint p;
+    p.uv = {0.25f, 0.25f};
+    EXPECT_EQ(field->eval(p), glm::vec3(0.5f, 0.0f, 0.0f));
+}
+
+// A glTF 1.0 file is refused with a message that names its version, not as a corrupt file.
+TEST(AnimatedMesh, AGltfOneFileIsRefusedByItsVersion) {
+    const std::string text = tmp("old.gltf");
+    std::ofstream(text) << R"({"asset": {"version": "1.0"}, "meshes": {"m": {"primitives": []}},)"
+                           R"( "scene": "s", "scenes": {"s": {"nodes": []}}})";
+    const std::string binary = tmp("old.glb");
+    {
+        std::ofstream out(binary, std::ios::binary);
+        const std::string json = R"({"asset":{"version":"1.0"}})";
+        const std::uint32_t header[5] = {0x46546C67u, 1u, 20u + std::uint32_t(json.size()),
+                                         std::uint32_t(json.size()), 0u};
+        out.write(reinterpret_cast<const char*>(header), sizeof(header));
+        out << json;
+    }
+    for (const std::string& file : {text, binary}) {
+        try {
+            AnimatedMesh::loadGltf(file);
+            ADD_FAILURE() << file << " was loaded";
+        } catch (const spot::InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("a glTF 1.0 file; spotshell reads glTF 2.0"), std::string::npos)
+                << what;
+            EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+        }
+    }
+}
+
+// A mesh cache whose split copies part in one frame: those stay apart (the rest's weld is
+// checked against every frame), and every frame's welded copies take the kept vertex's place.
+TEST(AnimatedMesh, MeshCacheWeldsOnlyCopiesThatStayTogether) {
+    const auto frame = [&](int i, float apart) {
+        std::ofstream(tmp(spot::cat("weld.", i, ".obj")))
+            << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 0 0\nv 1 1 0\nv 0 1 " << apart << "\n"
+            << "f 1 2 3\nf 4 5 6\n";
+    };
+    frame(0, 0.0f);
+    frame(1, 0.0f);
+    frame(2, 0.5f); // vertex 6 leaves vertex 3
+    const AnimatedMesh a = AnimatedMesh::loadCache(tmp("weld.%d.obj"), 24.0);
+    const spot::noise::Mesh& m = a.rest();
+    EXPECT_EQ(m.weld[3], 1u); // 4 and 2 stay together
+    EXPECT_EQ(m.weld[5], 5u); // 6 parts from 3 in frame 2
+    EXPECT_EQ(m.weldReport.refused, 1u);
 }

@@ -367,3 +367,127 @@ TEST(Cli, RenderQualityPicksTheTablesChoice) {
                      "(--quality balanced picks " + balanced->method +
                          "): --steps is a setting of");
 }
+
+namespace {
+
+std::string character() { return std::string(SPOT_SOURCE_DIR) + "/examples/character/"; }
+
+/// A scene file in the tmp folder: `keys` (JSON members, with a trailing comma) then the rest.
+std::string sceneFile(const std::string& name, const std::string& keys,
+                      const std::string& mesh = bunny(), const std::string& presetFile = preset("fur")) {
+    const std::string file = tmp(name + ".json");
+    write(file, R"({"version": 1, "mesh": ")" + mesh + R"(", "preset": ")" + presetFile + R"(", )" +
+                    keys +
+                    R"( "camera": {"eye": [0, 0.5, 2], "target": [0, 0.4, 0]}, )"
+                    R"("image": {"width": 16, "height": 16}})");
+    return file;
+}
+
+} // namespace
+
+// `info` on the character as its scene loads it: the weld's counts, its meshes, nodes, materials
+// and parts (the stand left bald by the scene's "grow"), why triangles were dropped, and the
+// clip's frames from Blender's frame 1.
+TEST(Cli, InfoListsTheCharactersPartsWeldAndFrames) {
+    const Result r = run("info --scene " + character() + "character-fur.json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* line :
+         {"glTF       2.0", "vertices   302", "split copies merged at", "dropped    0 degenerate",
+          "meshes     2: 0 'Stand', 1 'Body'", "nodes      6: 0 'Stand'", "materials  2",
+          "0 'Wood': base colour 0.5 0.3 0.1 1, no texture",
+          "1 'Fur': base colour 1 1 1 1, texture 'fur_colour' (embedded, image/png, TEXCOORD_0)",
+          "mesh 0 'Stand' primitive 0, node 0 'Stand', material 0 'Wood': 12 triangles, no fur",
+          "mesh 1 'Body' primitive 0, node 4 'Body', material 1 'Fur'", "grows fur",
+          "clip       walk, 1 s from 0.0416667 s", "frames     1-25 at 24 fps"})
+        EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
+    const Result off = run("info --mesh " + character() + "character.glb --weld off");
+    ASSERT_EQ(off.code, 0) << off.err;
+    EXPECT_NE(off.out.find("welded     off"), std::string::npos) << off.out;
+    // Past the clip, the pose is clamped and info says so.
+    const Result late = run("info --mesh " + character() + "character.glb --time 5");
+    ASSERT_EQ(late.code, 0) << late.err;
+    EXPECT_NE(late.out.find("pose       at 5 s (frame 120), clamped to the clip's end at 1.04167 s"),
+              std::string::npos)
+        << late.out;
+}
+
+// The scene keys "weld" and "grow", and what the scene asks of a mesh that cannot give it.
+TEST(Cli, SceneWeldAndGrowKeysAndTheirErrors) {
+    const std::string glb = character() + "character.glb";
+    expectInputError("info --scene " + sceneFile("weld-bad", R"("weld": "yes",)"),
+                     "weld must be true, false or a tolerance");
+    expectInputError("info --scene " + sceneFile("weld-big", R"("weld": 0.5,)"),
+                     "weld = 0.5 is out of range");
+    expectInputError("info --scene " + sceneFile("grow-obj", R"("grow": {"meshes": ["Body"]},)"),
+                     "chooses glTF meshes and nodes; this mesh has none");
+    expectInputError(
+        "info --scene " + sceneFile("grow-typo", R"("grow": {"nodes": ["Bdy"]},)", glb),
+        "grow.nodes names 'Bdy', which is none of its nodes");
+    expectInputError(
+        "info --scene " + sceneFile("grow-key", R"("grow": {"mesh": ["Body"]},)", glb),
+        "unknown key \"grow.mesh\"");
+    const Result off = run("info --scene " + sceneFile("weld-off", R"("weld": false,)", glb));
+    ASSERT_EQ(off.code, 0) << off.err;
+    EXPECT_NE(off.out.find("welded     off"), std::string::npos) << off.out;
+}
+
+// An animation block on a mesh that does not move: a clip or a rest frame is refused, a block
+// nothing uses is a warning; a glTF 1.0 file names its version; a preset or mesh that does not
+// resolve names the path tried; baked without --bake is refused before the device starts.
+TEST(Cli, SilentOrUnclearInputsSayWhatIsWrong) {
+    const std::string obj = tmp("static-square.obj");
+    write(obj, "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 4 3 2\n");
+    const std::string png = tmp("static.png");
+    expectInputError("render --method reference --spp 1 --out " + png + " --scene " +
+                         sceneFile("anim-clip", R"("animation": {"clip": "walk"},)", obj),
+                     "animation.clip 'walk' names a clip, but mesh");
+    expectInputError("render --method reference --spp 1 --out " + png + " --scene " +
+                         sceneFile("anim-rest", R"("animation": {"rest_frame": 2},)", obj),
+                     "animation.rest_frame is a mesh cache's");
+    const Result warned = run("render --method reference --spp 1 --out " + png + " --scene " +
+                              sceneFile("anim-time", R"("animation": {"time": 1.5},)", obj));
+    EXPECT_EQ(warned.code, 0) << warned.err;
+    EXPECT_NE(warned.err.find("warning: its \"animation\" block has no effect"), std::string::npos)
+        << warned.err;
+    const std::string old = tmp("old-version.gltf");
+    write(old, R"({"asset": {"version": "1.0"}, "meshes": {}})");
+    expectInputError("info --mesh " + old, "a glTF 1.0 file; spotshell reads glTF 2.0");
+    const std::string lost = sceneFile("lost-preset", "", bunny(), "no-such/fur.json");
+    const Result r = run("render --method reference --spp 1 --out " + png + " --scene " + lost);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("preset 'no-such/fur.json' (relative to the scene's folder) is not a "
+                         "file: tried " + tmp("no-such/fur.json")),
+              std::string::npos)
+        << r.err;
+    expectInputError("render --method reference --spp 1 --out " + png + " --scene " +
+                         sceneFile("ok", "") + " --preset missing.json",
+                     "preset 'missing.json' (relative to the current folder) is not a file");
+    expectInputError("render --method baked --out " + png + " --scene " + sceneFile("ok", ""),
+                     "--method baked needs --bake FILE.vdb");
+}
+
+// --stats of a --frames range lists every frame's own numbers (a CPU method too).
+TEST(Cli, StatsOfAFramesRangeListEveryFrame) {
+    const std::string scene = character() + "character-fur.json";
+    for (const char* method : {"sorted", "reference --spp 1"}) {
+        SCOPED_TRACE(method);
+        const std::string stats = tmp("frames-stats.json");
+        const Result r = run(std::string("render --method ") + method + " --scene " + scene +
+                             " --unlit --size 24x24 --frames 1-3 --out " + tmp("fs.%04d.png") +
+                             " --stats " + stats);
+        ASSERT_EQ(r.code, 0) << r.err;
+        const nlohmann::json j = nlohmann::json::parse(slurp(stats));
+        ASSERT_TRUE(j.contains("frames")) << j.dump(2);
+        ASSERT_EQ(j["frames"].size(), 3u);
+        EXPECT_EQ(j["frame_count"], 3);
+        for (int i = 0; i < 3; ++i) {
+            const nlohmann::json& f = j["frames"][std::size_t(i)];
+            EXPECT_EQ(f["frame"], i + 1);
+            EXPECT_NEAR(double(f["time"]), (i + 1) / 24.0, 1e-12);
+            EXPECT_EQ(f["file"], tmp("fs.000" + std::to_string(i + 1) + ".png"));
+            EXPECT_FALSE(f.contains("first_frame"));
+        }
+        EXPECT_FALSE(j.contains("first_frame"));
+        EXPECT_EQ(j["scene"], "character-fur");
+    }
+}

@@ -631,6 +631,127 @@ TEST_F(FieldImage, MemoryBudgetIsCheckedBeforeReading) {
     EXPECT_NE(message.find("MiB"), std::string::npos) << message;
 }
 
+// --- glTF materials (the "material" field) --------------------------------------------------
+
+FieldDesc material(int components = 3, int channel = 0) {
+    FieldDesc d;
+    d.kind = FieldDesc::Kind::Material;
+    d.components = components;
+    d.channel = channel;
+    d.lo = glm::vec3(0.0f);
+    d.hi = components == 1 ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(1.0f);
+    return d;
+}
+
+/// A 2 x 2 sRGB PNG, top row red (128 in 8 bits) and green, bottom row blue and white; alpha
+/// 1, 0.5, 1, 0 (uv (0, 0) is the image's bottom-left: blue).
+std::filesystem::path writeQuadrants(const std::string& name) {
+    std::filesystem::create_directories(kTmp);
+    const std::filesystem::path file = kTmp / (name + "-" + std::to_string(::getpid()) + ".png");
+    const std::vector<float> pixels = {128.0f / 255.0f, 0, 0, 1, 0, 1, 0, 0.5f,
+                                       0, 0, 1, 1, 1, 1, 1, 0};
+    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(file.string());
+    EXPECT_TRUE(out) << OIIO::geterror();
+    OIIO::ImageSpec spec(2, 2, 4, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:UnassociatedAlpha", 1); // the colours as given, not divided by alpha
+    EXPECT_TRUE(out->open(file.string(), spec)) << out->geterror();
+    EXPECT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data())) << out->geterror();
+    EXPECT_TRUE(out->close());
+    return file;
+}
+
+Mesh materialMesh() {
+    Mesh m = triangleMesh();
+    MeshPart part;
+    part.material = 0;
+    part.triangles = 1;
+    m.parts = {part};
+    m.trianglePart = {0};
+    m.materials.resize(1);
+    m.materials[0].name = "Fur";
+    return m;
+}
+
+TEST(FieldMaterial, TextureTimesFactorThroughUvDecodedFromSrgb) {
+    Mesh mesh = materialMesh();
+    const std::filesystem::path png = writeQuadrants("material");
+    mesh.materials[0].textureFile = png;
+    mesh.materials[0].texture = "quadrants";
+    mesh.materials[0].baseColorFactor = glm::vec4(0.5f, 1.0f, 1.0f, 1.0f);
+    mesh.materials[0].repeat = false;
+    const auto colour = makeField(material(), mesh, {}, "fields.color");
+    // Texel centres: sRGB 128 is 0.2158 linear, times the factor's 0.5.
+    EXPECT_NEAR(colour->eval(atUv(0.25f, 0.75f)).r, 0.5f * std::pow((128.0f / 255.0f + 0.055f) / 1.055f, 2.4f), 1e-5f);
+    EXPECT_EQ(colour->eval(atUv(0.75f, 0.75f)), glm::vec3(0.0f, 1.0f, 0.0f));
+    EXPECT_EQ(colour->eval(atUv(0.25f, 0.25f)), glm::vec3(0.0f, 0.0f, 1.0f));
+    EXPECT_EQ(colour->eval(atUv(0.75f, 0.25f)), glm::vec3(0.5f, 1.0f, 1.0f));
+    // The alpha channel as a scalar (a density mask), never decoded.
+    const auto alpha = makeField(material(1, 3), mesh, {}, "fields.density");
+    EXPECT_NEAR(alpha->eval(atUv(0.75f, 0.75f)).x, 0.5f, 1e-2f);
+    EXPECT_EQ(alpha->eval(atUv(0.75f, 0.25f)).x, 0.0f);
+    // Embedded bytes read the same.
+    std::ifstream in(png, std::ios::binary);
+    Mesh embedded = mesh;
+    embedded.materials[0].textureFile.clear();
+    embedded.materials[0].textureBytes = std::make_shared<const std::string>(
+        std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    embedded.materials[0].textureMime = "image/png";
+    const auto same = makeField(material(), embedded, {}, "fields.color");
+    for (const glm::vec2 uv : {glm::vec2(0.1f, 0.2f), glm::vec2(0.6f, 0.9f), glm::vec2(0.5f)})
+        EXPECT_EQ(same->eval(atUv(uv.x, uv.y)), colour->eval(atUv(uv.x, uv.y)));
+}
+
+TEST(FieldMaterial, AFactorAloneIsAConstantAndNeedsNoUv) {
+    Mesh mesh = materialMesh();
+    mesh.uvs.clear();
+    mesh.tangents.clear();
+    mesh.materials[0].baseColorFactor = glm::vec4(0.5f, 0.3f, 0.1f, 1.0f);
+    const auto f = makeField(material(), mesh, {}, "fields.color");
+    EXPECT_EQ(f->eval(atUv(0.3f, 0.9f)), glm::vec3(0.5f, 0.3f, 0.1f));
+    EXPECT_EQ(f->range().lo, glm::vec3(0.5f, 0.3f, 0.1f));
+}
+
+TEST(FieldMaterial, WhichMaterialAndBadTexturesAreOneLine) {
+    Mesh mesh = materialMesh();
+    mesh.materials.push_back(mesh.materials[0]);
+    mesh.materials[1].name = "Wood";
+    mesh.parts.push_back(mesh.parts[0]);
+    mesh.parts[1].material = 1;
+    // Both parts grow: which material is ambiguous.
+    EXPECT_NE(bindError(material(), mesh).find("use 2 materials (0 'Fur', 1 'Wood'); name one"),
+              std::string::npos);
+    FieldDesc byName = material();
+    byName.material = "Wood";
+    EXPECT_NO_THROW(makeField(byName, mesh, {}, "ctx"));
+    byName.material = "Stone";
+    EXPECT_NE(bindError(byName, mesh).find("material 'Stone' is not one of tri's (0 'Fur', 1 "
+                                           "'Wood')"),
+              std::string::npos);
+    FieldDesc byIndex = material();
+    byIndex.materialIndex = 1;
+    EXPECT_NO_THROW(makeField(byIndex, mesh, {}, "ctx"));
+    byIndex.materialIndex = 2;
+    EXPECT_NE(bindError(byIndex, mesh).find("material 2 is not one of"), std::string::npos);
+    mesh.parts[1].grows = false; // the one that grows decides
+    EXPECT_NO_THROW(makeField(material(), mesh, {}, "ctx"));
+    // Corrupt or missing textures, a mesh without materials.
+    Mesh bad = materialMesh();
+    bad.materials[0].textureBytes = std::make_shared<const std::string>("not an image");
+    bad.materials[0].texture = "skin";
+    const std::string corrupt = bindError(material(), bad);
+    EXPECT_NE(corrupt.find("texture 'skin': not a PNG or JPEG image"), std::string::npos) << corrupt;
+    bad.materials[0].textureBytes =
+        std::make_shared<const std::string>(std::string("\x89PNG\r\n\x1a\n", 8) + "truncated");
+    const std::string truncated = bindError(material(), bad);
+    EXPECT_NE(truncated.find("cannot read"), std::string::npos) << truncated;
+    EXPECT_EQ(truncated.find('\n'), std::string::npos) << truncated;
+    bad.materials[0].textureBytes.reset();
+    bad.materials[0].textureFile = kTmp / "missing-texture.png";
+    EXPECT_NE(bindError(material(), bad).find("no such file"), std::string::npos);
+    Mesh plain = triangleMesh();
+    EXPECT_NE(bindError(material(), plain).find("has none"), std::string::npos);
+}
+
 } // namespace
 } // namespace spot::noise
 

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <numbers>
+#include <set>
 #include <string>
 
 #include "noise/error.h"
@@ -836,6 +837,211 @@ TEST(MeshBadInput, OnlyDegenerateTriangles) {
                      "point.ply");
         },
         "point.ply", "has no usable triangles");
+}
+
+// ---- welding (docs/design.md section 1, "Welding") ---------------------------------------------
+
+/// A flat-shaded box of half sizes (a, b, c) as an exporter writes it: every face with its own
+/// normal ("vn" per face), so each corner is split into 3 vertices; with `uv`, each face also has
+/// its own uv square (a seam along every edge).
+std::string flatBoxObj(float a, float b, float c, bool uv) {
+    std::string obj;
+    for (int i = 0; i < 8; ++i)
+        obj += cat("v ", (i & 1) ? a : -a, " ", (i & 2) ? b : -b, " ", (i & 4) ? c : -c, "\n");
+    obj += "vn -1 0 0\nvn 1 0 0\nvn 0 -1 0\nvn 0 1 0\nvn 0 0 -1\nvn 0 0 1\n";
+    if (uv)
+        obj += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+    // Faces counter-clockwise from outside: (corners, normal).
+    const int faces[6][5] = {{1, 5, 7, 3, 1}, {2, 4, 8, 6, 2}, {1, 2, 6, 5, 3},
+                             {3, 7, 8, 4, 4}, {1, 3, 4, 2, 5}, {5, 6, 8, 7, 6}};
+    for (const auto& f : faces) {
+        obj += "f";
+        for (int k = 0; k < 4; ++k)
+            obj += uv ? cat(" ", f[k], "/", k + 1, "/", f[4]) : cat(" ", f[k], "//", f[4]);
+        obj += "\n";
+    }
+    return obj;
+}
+
+TEST(MeshWeld, SplitCornersOfAFlatBoxAreWeldedWithOneAngleWeightedNormal) {
+    // A box 4 x 2 x 1: each corner's three faces meet at right angles, so the angle-weighted
+    // normal is the diagonal (1, 1, 1)/sqrt 3 whatever the faces' sizes (area weighting would
+    // lean towards the largest face).
+    const Mesh m = parseObj(flatBoxObj(2.0f, 1.0f, 0.5f, false), "box.obj");
+    ASSERT_EQ(m.positions.size(), 24u); // 8 corners x 3 faces
+    ASSERT_EQ(m.weld.size(), 24u);
+    EXPECT_TRUE(m.weldReport.on);
+    EXPECT_EQ(m.weldReport.welded, 8u);
+    EXPECT_EQ(m.weldReport.shared, 8u);
+    EXPECT_EQ(m.weldReport.refused, 0u);
+    EXPECT_GT(m.weldReport.tolerance, 0.0);
+    std::set<std::uint32_t> kept;
+    for (std::uint32_t v = 0; v < 24; ++v) {
+        const std::uint32_t w = m.weld[v];
+        kept.insert(w);
+        EXPECT_LE(w, v);
+        EXPECT_EQ(m.weld[w], w);
+        EXPECT_EQ(m.positions[v], m.positions[w]);
+        EXPECT_EQ(m.normals[v], m.normals[w]) << v;
+        const glm::vec3 diagonal = glm::sign(m.positions[v]) / std::sqrt(3.0f);
+        EXPECT_NEAR(glm::length(m.normals[v] - diagonal), 0.0f, 1e-6f) << v;
+    }
+    EXPECT_EQ(kept.size(), 8u);
+    // The welded triangles use the 8 kept vertices only, each triangle's three distinct.
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+        const glm::uvec3 w = m.weldedTriangle(t);
+        EXPECT_TRUE(kept.count(w.x) && kept.count(w.y) && kept.count(w.z));
+        EXPECT_TRUE(w.x != w.y && w.y != w.z && w.x != w.z);
+    }
+    EXPECT_TRUE(closedOutward(m));
+}
+
+TEST(MeshWeld, OffKeepsEveryCopyAndItsOwnNormal) {
+    WeldOptions off;
+    off.on = false;
+    const Mesh m = parseObj(flatBoxObj(2.0f, 1.0f, 0.5f, false), "box.obj", {}, off);
+    EXPECT_TRUE(m.weld.empty());
+    EXPECT_FALSE(m.weldReport.on);
+    EXPECT_EQ(m.weldReport.welded, 24u);
+    // Each copy keeps its face's normal (the file's), an axis.
+    for (const glm::vec3& n : m.normals)
+        EXPECT_NEAR(std::abs(n.x) + std::abs(n.y) + std::abs(n.z), 1.0f, 1e-6f);
+    for (std::size_t t = 0; t < m.triangles.size(); ++t)
+        EXPECT_EQ(m.weldedTriangle(t), m.triangles[t]);
+}
+
+TEST(MeshWeld, ToleranceIsRelativeToTheMeshSize) {
+    // Two triangles meeting along an edge whose copies are 1e-7 of the size apart (welded), and
+    // the same at 1e-3 (apart: a gap, not a seam); at 1000x the scale, the same.
+    for (const float scale : {1.0f, 1000.0f}) {
+        for (const float gap : {1e-7f, 1e-3f}) {
+            Mesh m;
+            m.name = "two";
+            m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1 + gap, 0, 0}, {gap, 1, 0},
+                           {1, 1, 0}};
+            for (glm::vec3& p : m.positions)
+                p *= scale;
+            m.triangles = {{0, 1, 2}, {3, 5, 4}};
+            finalizeMesh(m);
+            const bool welded = gap < 1e-5f;
+            EXPECT_EQ(m.weldReport.welded, welded ? 4u : 6u) << scale << " " << gap;
+            EXPECT_EQ(m.weld[3], welded ? 1u : 3u);
+            EXPECT_EQ(m.weld[4], welded ? 2u : 4u);
+            if (welded)
+                EXPECT_EQ(m.positions[3], m.positions[1]); // the copy takes the kept position
+        }
+    }
+    WeldOptions coarse;
+    coarse.tolerance = 1e-2;
+    Mesh m;
+    m.name = "two";
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1.001f, 0, 0}, {0.001f, 1, 0}, {1, 1, 0}};
+    m.triangles = {{0, 1, 2}, {3, 5, 4}};
+    finalizeMesh(m, coarse);
+    EXPECT_EQ(m.weldReport.welded, 4u);
+    WeldOptions absurd;
+    absurd.tolerance = 0.5;
+    expectInputError([&] { finalizeMesh(m, absurd); }, "two", "weld tolerance 0.5");
+}
+
+TEST(MeshWeld, CompatibleRefusesPairsAndTheReportSaysWhich) {
+    Mesh m;
+    m.name = "skins";
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    m.triangles = {{0, 1, 2}, {3, 4, 5}};
+    // Vertices 1 and 3 are one position but "move apart"; 2 and 5 may weld.
+    finalizeMesh(m, {}, [](std::uint32_t a, std::uint32_t b) { return !(a == 1 && b == 3); });
+    EXPECT_EQ(m.weld[3], 3u);
+    EXPECT_EQ(m.weld[5], 2u);
+    EXPECT_EQ(m.weldReport.welded, 5u);
+    EXPECT_EQ(m.weldReport.shared, 2u);
+    EXPECT_EQ(m.weldReport.refused, 1u);
+    EXPECT_EQ(m.weldReport.refusedA, 1u);
+    EXPECT_EQ(m.weldReport.refusedB, 3u);
+}
+
+TEST(MeshWeld, SeamCopiesShareTheirTangentUnlessTheirUvTurns) {
+    // A plane of two quads along x, its uv cut at x = 1: the right quad's uv continues +u along
+    // +x (its copies share the +u direction), then the same with the right quad's uv mirrored
+    // (+u along -x: each copy keeps its own).
+    for (const bool mirrored : {false, true}) {
+        Mesh m;
+        m.name = "seam";
+        m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 0, -1}, {0, 0, -1},
+                       {1, 0, 0}, {2, 0, 0}, {2, 0, -1}, {1, 0, -1}};
+        const float a = mirrored ? 1.0f : 0.0f, b = mirrored ? 0.0f : 1.0f;
+        m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {a, 0}, {b, 0}, {b, 1}, {a, 1}};
+        m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+        finalizeMesh(m);
+        EXPECT_EQ(m.weldReport.welded, 6u);
+        EXPECT_EQ(m.normals[1], m.normals[4]);
+        const float along = glm::dot(m.tangents[1], m.tangents[4]);
+        if (mirrored)
+            EXPECT_NEAR(along, -1.0f, 1e-6f);
+        else
+            EXPECT_EQ(m.tangents[1], m.tangents[4]);
+        EXPECT_NEAR(m.tangents[4].x, mirrored ? -1.0f : 1.0f, 1e-6f);
+    }
+}
+
+TEST(MeshWeld, GivenNormalsThatAgreeAreKeptAndHardEdgesAreComputed) {
+    // A smooth-shaded box whose corners were given one normal per position (an exporter's uv
+    // seam split): kept as given. The flat box's face normals disagree: computed instead.
+    std::string obj = flatBoxObj(1.0f, 1.0f, 1.0f, true);
+    const Mesh flat = parseObj(obj, "flat.obj");
+    for (std::size_t v = 0; v < flat.positions.size(); ++v)
+        EXPECT_NEAR(glm::length(flat.normals[v] - glm::sign(flat.positions[v]) / std::sqrt(3.0f)),
+                    0.0f, 1e-6f);
+    Mesh smooth;
+    smooth.name = "smooth";
+    smooth.positions = flat.positions;
+    smooth.uvs = flat.uvs;
+    smooth.triangles = flat.triangles;
+    for (const glm::vec3& p : smooth.positions)
+        smooth.normals.push_back(glm::normalize(p * glm::vec3(1.0f, 2.0f, 3.0f))); // not diagonal
+    finalizeMesh(smooth);
+    for (std::size_t v = 0; v < smooth.positions.size(); ++v)
+        EXPECT_NEAR(glm::length(smooth.normals[v] -
+                                glm::normalize(smooth.positions[v] * glm::vec3(1.0f, 2.0f, 3.0f))),
+                    0.0f, 1e-6f);
+}
+
+TEST(MeshWeld, DroppedTrianglesAreCountedByReason) {
+    Mesh m;
+    m.name = "dropped";
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {0, 0, 0}};
+    m.triangles = {{0, 1, 2}, {0, 0, 1}, {0, 1, 3}, {4, 0, 2}};
+    finalizeMesh(m);
+    EXPECT_EQ(m.droppedTriangles, 3u);
+    EXPECT_EQ(m.droppedWhy.at("two corners on one vertex"), 1u);
+    EXPECT_EQ(m.droppedWhy.at("zero area (corners on a line)"), 1u);
+    EXPECT_EQ(m.droppedWhy.at("two corners at one position (welded)"), 1u);
+}
+
+TEST(MeshWeld, PlyCopiesAreWeldedToo) {
+    // Two triangles of a square, each with its own copies of the diagonal's corners (and its own
+    // uv): 6 vertices at 4 positions.
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\n"
+                            "property float y\nproperty float z\nproperty float u\n"
+                            "property float v\nelement face 2\n"
+                            "property list uchar int vertex_indices\nend_header\n"
+                            "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 0 0 0.5 0\n1 1 0 0.5 1\n"
+                            "0 1 0 0 1\n3 0 1 2\n3 3 4 5\n";
+    const Mesh m = parsePly(ply, "copies.ply");
+    EXPECT_EQ(m.weldReport.welded, 4u);
+    EXPECT_EQ(m.weldReport.shared, 2u);
+    EXPECT_EQ(m.weld[3], 0u);
+    EXPECT_EQ(m.weld[4], 2u);
+    EXPECT_EQ(m.uvs[3], glm::vec2(0.5f, 0.0f)); // the copies keep their own uv
+}
+
+TEST(MeshWeld, GeneratedShapesAreWeldedAtTheirSeamsAndPoles) {
+    const Mesh sphere = makeSphere(1.0f, 8, 16);
+    // Poles: one vertex per segment each (16 -> 1); the seam: 7 rings of 17 -> 16.
+    EXPECT_EQ(sphere.weldReport.welded, 2u + 7u * 16u);
+    EXPECT_EQ(sphere.weldReport.shared, 2u + 7u);
+    const Mesh unwelded = loadMeshOrGenerated("generated:torus", WeldOptions{false, 1e-5});
+    EXPECT_TRUE(unwelded.weld.empty());
 }
 
 } // namespace

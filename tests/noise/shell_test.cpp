@@ -437,3 +437,45 @@ TEST(Shell, WalksThroughTheBunnysFoldsNeverCircle) {
     EXPECT_GT(walks, 300u);
     EXPECT_LT(longest, 200u);
 }
+
+// A flat-shaded box as exporters write it (each corner split into 3 vertices, one per face, with
+// the face's normal): welded, its prisms extrude along one angle-weighted normal per corner and
+// pair every side face, so only the top and base surfaces are boundary (no crack along any edge,
+// where the walk would stop and the baked renderer draw a black line). Unwelded, each face's
+// prisms stand alone: every side face along the 12 edges is boundary, and the tops of two faces
+// meeting at an edge part (their top vertices are apart).
+TEST(Shell, SplitVerticesOfAFlatBoxWeldIntoOneCracklessShell) {
+    std::string obj;
+    for (int i = 0; i < 8; ++i)
+        obj += cat("v ", (i & 1) ? 1 : -1, " ", (i & 2) ? 0.5 : -0.5, " ", (i & 4) ? 0.25 : -0.25,
+                   "\n");
+    obj += "vn -1 0 0\nvn 1 0 0\nvn 0 -1 0\nvn 0 1 0\nvn 0 0 -1\nvn 0 0 1\n";
+    obj += "f 1//1 5//1 7//1 3//1\nf 2//2 4//2 8//2 6//2\nf 1//3 2//3 6//3 5//3\n"
+           "f 3//4 7//4 8//4 4//4\nf 1//5 3//5 4//5 2//5\nf 5//6 6//6 8//6 7//6\n";
+    const auto boundary = [](const Mesh& m) {
+        const ShellMesh shell = buildShell(m, 0.1f);
+        std::size_t open = 0;
+        for (const auto& n : shellNeighbours(shell.tetrahedra))
+            for (const std::int32_t f : n)
+                open += f < 0;
+        // The widest gap between the top vertices of one welded position.
+        float gap = 0.0f;
+        for (std::uint32_t a = 0; a < m.positions.size(); ++a)
+            for (std::uint32_t b = 0; b < m.positions.size(); ++b)
+                if (m.positions[a] == m.positions[b])
+                    gap = std::max(gap, glm::length(shell.positions[shell.top(a)] -
+                                                    shell.positions[shell.top(b)]));
+        return std::pair<std::size_t, float>(open, gap);
+    };
+    const Mesh welded = parseObj(obj, "flat-box.obj");
+    ASSERT_EQ(welded.positions.size(), 24u);
+    const auto [open, gap] = boundary(welded);
+    EXPECT_EQ(open, 2 * welded.triangles.size()); // the top and base faces only
+    EXPECT_EQ(gap, 0.0f);
+    WeldOptions off;
+    off.on = false;
+    const Mesh split = parseObj(obj, "flat-box.obj", {}, off);
+    const auto [splitOpen, splitGap] = boundary(split);
+    EXPECT_EQ(splitOpen, 2 * split.triangles.size() + 2 * 12 * 2); // + both sides of 12 edges
+    EXPECT_GT(splitGap, 0.1f);
+}
