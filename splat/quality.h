@@ -16,7 +16,10 @@
 /// geometric mean of wall milliseconds per frame, lavapipe on 2 cores (README, "Which method to
 /// use when", has the table):
 /// - quick (2 scenes, 128x128): oit 30.96 dB 18.7 ms, hybrid 32.21 dB 19.4 ms, sorted 32.59 dB
-///   25.0 ms, raymarch 64 steps 2x2 35.92 dB 258 ms; instanced 25.71 dB 15.2 ms.
+///   25.0 ms, raymarch 64 steps 2x2 35.92 dB 258 ms; instanced 25.71 dB 15.2 ms. Rerun after the
+///   EWA widening kept each lobe's coverage: oit 31.56, hybrid 33.57, sorted 35.66, raymarch
+///   35.92, instanced 26.05 dB (times on a loaded machine, in the same order as before: instanced
+///   106, hybrid 130, oit 139, sorted 176, raymarch 2024 ms); the choices stay on the front.
 /// - full (9 scenes, 128x128): oit 32.18 dB 21.9 ms, hybrid 32.61 dB 24.9 ms, sorted 33.52 dB
 ///   30.1 ms, raymarch 64 steps 2x2 34.93 dB 178 ms.
 /// - realtime (10 scenes, 640x480): oit 34.25 dB 97.0 ms, sorted 36.67 dB 98.3 ms, hybrid
