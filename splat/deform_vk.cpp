@@ -198,7 +198,18 @@ bool GpuDeformer::cellVisible(const noise::CameraRays& rays, const noise::Surfac
     return rays.boxMayBeVisible(glm::dvec3(lo) - h, glm::dvec3(hi) + h);
 }
 
+bool GpuDeformer::current(const ImpulseSet& rest) const {
+    return m_last.valid && m_last.time == m_time && rest.version != 0 &&
+           m_last.version == rest.version && m_last.impulses == rest.impulses &&
+           rest.impulses && m_last.handle == rest.impulses->handle() &&
+           m_last.capacity == rest.capacity;
+}
+
 void GpuDeformer::record(VkCommandBuffer cmd, PassTimer& timer, const ImpulseSet& rest) {
+    if (current(rest)) {
+        m_reserved = false;
+        return;
+    }
     SpotDeformPush push{};
     push.counts = glm::uvec4(m_vertexCount, m_triangleCount, rest.capacity, m_wind.on() ? 1u : 0u);
     push.wind = glm::vec4(m_wind.direction, m_wind.strength);
@@ -240,6 +251,8 @@ void GpuDeformer::record(VkCommandBuffer cmd, PassTimer& timer, const ImpulseSet
     if (!m_reserved)
         reserve(rest);
     m_reserved = false;
+    m_last = Moved{true, m_time, rest.version, rest.impulses,
+                   rest.impulses ? rest.impulses->handle() : VK_NULL_HANDLE, rest.capacity};
     if (rest.capacity > 0) {
         bind(cmd, m_move, push);
         Descriptors()
@@ -288,11 +301,14 @@ void GpuDeformer::reserve(const ImpulseSet& rest) {
     if (!m_moved.handle() || m_moved.size() < need) {
         m_moved = Buffer();
         m_moved = Buffer(m_ctx, need + need / 4, kStorage, kHost, "moved impulses");
+        m_last.valid = false; // a new buffer: nothing is moved into it yet
     }
+    const bool keep = current(rest);
+    const std::uint64_t version = m_movedSet.version;
     m_movedSet = rest;
     m_movedSet.impulses = &m_moved;
-    // Versions of their own (the generator's count up from 0).
-    m_movedSet.version = (std::uint64_t(1) << 63) | ++m_version;
+    // Versions of their own (the generator's count up from 0), kept while nothing moved.
+    m_movedSet.version = keep ? version : (std::uint64_t(1) << 63) | ++m_version;
     m_reserved = true;
 }
 

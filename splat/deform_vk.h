@@ -44,8 +44,14 @@ public:
     bool cellVisible(const noise::CameraRays& rays, const noise::SurfaceCells& cells,
                      const noise::SurfaceCell& cell) const;
 
+    /// Whether the last recorded passes already posed the mesh and moved `rest` at prepare()'s
+    /// time: the same time and the same rest set (its version, buffer and capacity). A paused
+    /// clip, a repeat or an orbit then skips the passes, and the moved set keeps its version, so
+    /// what is built from it (the light space, the ray march's lists) is not built again.
+    bool current(const ImpulseSet& rest) const;
     /// Host side of the moved set for `rest` (the generator's set of this frame): its buffer
-    /// grown when needed, and a new version. record() does it when not done since the last.
+    /// grown when needed, and a new version unless current(rest). record() does it when not done
+    /// since the last.
     void reserve(const ImpulseSet& rest);
     /// The grid cells the posed surface passes through (each rest cell's pieces posed, and every
     /// cell their boxes touch: a superset of the moved impulses' root cells), for the ray
@@ -58,10 +64,11 @@ public:
     ImpulseSet sortedByCell(std::uint32_t count);
     /// Record the four passes: the mesh posed, its normals, its triangles' rotations, and `rest`
     /// moved into moved() (marked on `timer` as "deform" and "move"). `rest` must be the set the
-    /// generator holds at record time (its count is read on the GPU).
+    /// generator holds at record time (its count is read on the GPU). Records nothing when
+    /// current(rest): the mesh and the impulses are as they were left.
     void record(VkCommandBuffer cmd, PassTimer& timer, const ImpulseSet& rest);
     /// The moved impulses of the last reserve(): the rest set's count and capacity, a version of
-    /// their own (every frame is a new set).
+    /// their own (a new one whenever the pose or the rest set changed).
     ImpulseSet moved() const { return m_movedSet; }
 
 private:
@@ -83,6 +90,15 @@ private:
     ImpulseSet m_movedSet;
     std::uint64_t m_version = 0;
     bool m_reserved = false;
+    /// What the last recorded passes posed and moved: the time and the rest set.
+    struct Moved {
+        bool valid = false;
+        double time = 0.0;
+        std::uint64_t version = 0;
+        const Buffer* impulses = nullptr;
+        VkBuffer handle = VK_NULL_HANDLE;
+        std::uint32_t capacity = 0;
+    } m_last;
 };
 
 } // namespace spot::splat

@@ -110,15 +110,17 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
         },
         lodParameters(view.camera, settings.lodPixels));
     // What the frame records before the method: the generation when the cells changed, the
-    // deform passes every frame of an animated mesh.
+    // deform passes when the time or the rest impulses did (a paused clip, a repeat or an orbit
+    // keeps the pose, the moved impulses and what is built from them).
     const auto recordImpulses = [&](VkCommandBuffer cmd, bool generate) {
         if (generate)
             m_generator.record(cmd, m_timer);
         if (m_deformer)
             m_deformer->record(cmd, m_timer, m_generator.impulses());
     };
+    const bool pose = m_deformer && (regenerate || !m_deformer->current(m_generator.impulses()));
     bool impulsesInFrame = true;
-    if (r.readsImpulsesInPrepare() && (regenerate || m_deformer)) {
+    if (r.readsImpulsesInPrepare() && (regenerate || pose)) {
         // The renderer reads the new impulses on the host: make them in a submit of their own.
         VkCommandBuffer cmd = m_commands.begin();
         m_timer.begin(cmd);
@@ -129,7 +131,7 @@ FrameStats Frame::render(std::string_view method, const View& view, const Render
         impulsesInFrame = false;
     }
     // The deform passes' set stands in for the generator's from the first record on (its
-    // buffer is made there; the version changes every frame).
+    // buffer is made there; the version changes whenever the pose or the rest set does).
     if (m_deformer && impulsesInFrame)
         m_deformer->reserve(m_generator.impulses());
     // A renderer that reads the impulses on the host (the ray march) takes them in cell order,

@@ -299,3 +299,77 @@ TEST(DeformGpu, ATurntableFrameIsTheStillSceneFromThatCamera) {
         EXPECT_LT(splat::psnr(frame0, frame12), 40.0) << method << ": the camera turned";
     }
 }
+
+namespace {
+
+bool hasPass(const spot::splat::FrameStats& stats, const std::string& name) {
+    for (const auto& [pass, ms] : stats.passMs)
+        if (pass == name)
+            return true;
+    return false;
+}
+
+} // namespace
+
+TEST(DeformGpu, AFrameAtTheSameTimeKeepsThePoseAndTheLightSpace) {
+    // Issue 40, item 1: a paused clip, a repeat or an orbit at an unchanged time records no
+    // deform or move pass and builds no light space; its image is the last frame's bit for bit,
+    // and the impulses keep their version. A new time poses, moves and builds again.
+    const noise::AnimatedMesh clip = noise::AnimatedMesh::loadGltf(bendClip(tmp("paused.glb")));
+    const noise::ImpulseGenerator generator(
+        clip.rest(), noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur.json"), {});
+    noise::Camera camera;
+    camera.eye = {1.0, 0.5, 6.0};
+    camera.target = {1.0, 0.5, 0.0};
+    camera.fovYDeg = 40.0;
+    camera.width = camera.height = 48;
+    noise::Shading lit;
+    lit.mode = noise::Shading::Mode::Lit;
+    lit.lights.push_back(noise::Light{});
+    lit.lights.back().direction = glm::normalize(glm::vec3(0.3f, 1.0f, 0.4f));
+    lit.sky.intensity = 0.3f;
+    ASSERT_TRUE(lit.castsShadows());
+    splat::View view{camera, lit, glm::vec3(0.05f), glm::vec3(0.3f)};
+    splat::Context ctx(validated());
+    for (const char* method : {"sorted", "raymarch"}) {
+        SCOPED_TRACE(method);
+        splat::Frame frame(ctx, clip.rest(), generator);
+        frame.animate(clip, noise::Wind{});
+        frame.setTime(0.5);
+        noise::Image first, again, orbit, moved;
+        const splat::FrameStats a = frame.render(method, view, {}, &first);
+        const std::uint64_t version = frame.deformer()->moved().version;
+        EXPECT_TRUE(hasPass(a, "deform") && hasPass(a, "move") && hasPass(a, "light"));
+        const splat::FrameStats b = frame.render(method, view, {}, &again);
+        EXPECT_FALSE(hasPass(b, "deform") || hasPass(b, "move") || hasPass(b, "light"));
+        EXPECT_EQ(frame.deformer()->moved().version, version);
+        ASSERT_EQ(first.pixels.size(), again.pixels.size());
+        EXPECT_EQ(std::memcmp(first.pixels.data(), again.pixels.data(),
+                              first.pixels.size() * sizeof(glm::vec3)),
+                  0);
+        // An orbit: the camera moves, the pose and the light space stay.
+        splat::View turned = view;
+        turned.camera.eye = {2.5, 0.8, 5.5};
+        const splat::FrameStats c = frame.render(method, turned, {}, &orbit);
+        EXPECT_FALSE(hasPass(c, "deform") || hasPass(c, "move") || hasPass(c, "light"));
+        EXPECT_NE(std::memcmp(first.pixels.data(), orbit.pixels.data(),
+                              first.pixels.size() * sizeof(glm::vec3)),
+                  0);
+        // A new time: posed, moved and lit again, and a different picture.
+        frame.setTime(0.9);
+        const splat::FrameStats d = frame.render(method, view, {}, &moved);
+        EXPECT_TRUE(hasPass(d, "deform") && hasPass(d, "move") && hasPass(d, "light"));
+        EXPECT_NE(frame.deformer()->moved().version, version);
+        EXPECT_NE(std::memcmp(first.pixels.data(), moved.pixels.data(),
+                              first.pixels.size() * sizeof(glm::vec3)),
+                  0);
+        // Back at the first time: the first picture again, bit for bit (built again, not kept).
+        frame.setTime(0.5);
+        noise::Image back;
+        frame.render(method, view, {}, &back);
+        EXPECT_EQ(std::memcmp(first.pixels.data(), back.pixels.data(),
+                              first.pixels.size() * sizeof(glm::vec3)),
+                  0);
+    }
+    expectNoValidationErrors(ctx);
+}
