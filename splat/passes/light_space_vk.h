@@ -63,7 +63,7 @@ public:
 
     /// Host side of a lit frame: the views of `shading`'s lights (those with shadows) and sky,
     /// the parameters uploaded, the buffers (re)made for `impulses`' capacity. The layers are
-    /// 4 h / layers thick (h: the impulses' cell size, the kernel's reach), so they span four
+    /// 8 h / layers thick (h: the impulses' cell size, the kernel's reach), so they span eight
     /// times the fur's depth from where it begins in a tile. No frame that reads this may be in flight.
     void prepare(const noise::Shading& shading, const ImpulseSet& impulses,
                  const LightSpaceSettings& settings = {});
