@@ -6,8 +6,12 @@
 #include <vector>
 
 #include "generate_jittered.comp.h"
+#include "generate_jittered_groom.comp.h"
+#include "generate_jittered_groom_partial.comp.h"
 #include "generate_jittered_partial.comp.h"
 #include "generate_poisson.comp.h"
+#include "generate_poisson_groom.comp.h"
+#include "generate_poisson_groom_partial.comp.h"
 #include "generate_poisson_partial.comp.h"
 #include "generate_scan.comp.h"
 #include "generate_scatter.comp.h"
@@ -138,6 +142,7 @@ std::vector<std::int32_t> GpuGenerator::specializationKey() const {
     std::vector<std::int32_t> key = {std::int32_t(params.flags.z != 0u)};
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
         key.insert(key.end(), {params.fields[slot].kind.x, params.fields[slot].kind.y});
+    key.push_back(std::int32_t(params.clumpFlags.y)); // clumps, secondary, the mask overlay
     return key;
 }
 
@@ -246,6 +251,13 @@ void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
     key[2 + 2 * slot] = components;
     if (slot == SPOT_FIELD_COMB)
         key[0] = 1; // a comb field is bound
+    if (slot == SPOT_FIELD_CLUMP) { // a clump layer turns clumps on (noise::clumpFieldSet)
+        const gpu::SpotGenParams& params = m_generator.sharedParams();
+        key.back() |= std::int32_t(shared::f32::SharedGenerator::kClumpOn) |
+                      (params.clump2.x > 0.0f
+                           ? std::int32_t(shared::f32::SharedGenerator::kClumpSecondary)
+                           : 0);
+    }
     if ((m_candidatePipeline.handle() && key == m_candidateKey) ||
         (m_preparedPipeline.handle() && key == m_preparedKey))
         return;
@@ -262,6 +274,7 @@ Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& ke
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
         spec.set(kGenSpecFieldKind + slot, key[1 + 2 * slot])
             .set(kGenSpecFieldComponents + slot, key[2 + 2 * slot]);
+    spec.set(kGenSpecClump, std::uint32_t(key[1 + 2 * SPOT_FIELD_COUNT]));
     Bindings bindings = {storageBuffer(kGenBindParams),    storageBuffer(kGenBindCells),
                          storageBuffer(kGenBindPieces),    storageBuffer(kGenBindTriangles),
                          storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
@@ -272,12 +285,21 @@ Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& ke
         bindings.push_back(storageBuffer(kGenBindSites));
     if (partial)
         bindings.push_back(storageBuffer(kGenBindDirty));
-    // A module per sampling and per full or partial generation, each declaring what it reads.
+    // A module per sampling and per full or partial generation, each declaring what it reads,
+    // and with the groom's part (clumps, masks, the mask overlay) only where the preset uses it.
+    bool groom = key[1 + 2 * SPOT_FIELD_COUNT] != 0;
+    for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
+        groom |= (key[1 + 2 * slot] & (shared::f32::SharedGenerator::kFieldMaskedInside |
+                                       shared::f32::SharedGenerator::kFieldMaskedOutside)) != 0;
     const std::span<const std::uint32_t> module =
-        m_jittered ? (partial ? spirv(spv_generate_jittered_partial_comp)
-                              : spirv(spv_generate_jittered_comp))
-                   : (partial ? spirv(spv_generate_poisson_partial_comp)
-                              : spirv(spv_generate_poisson_comp));
+        groom ? (m_jittered ? (partial ? spirv(spv_generate_jittered_groom_partial_comp)
+                                       : spirv(spv_generate_jittered_groom_comp))
+                            : (partial ? spirv(spv_generate_poisson_groom_partial_comp)
+                                       : spirv(spv_generate_poisson_groom_comp)))
+              : (m_jittered ? (partial ? spirv(spv_generate_jittered_partial_comp)
+                                       : spirv(spv_generate_jittered_comp))
+                            : (partial ? spirv(spv_generate_poisson_partial_comp)
+                                       : spirv(spv_generate_poisson_comp)));
     return makeComputePipeline(m_ctx, module, bindings, sizeof(SpotGenPush), spec);
 }
 
