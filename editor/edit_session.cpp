@@ -409,6 +409,13 @@ std::int32_t Session::layeredKind(Slot slot) const {
            (slot == Slot::Density ? Generator::kFieldLayeredDensity : Generator::kFieldLayered);
 }
 
+std::int32_t Session::layeredComponents(Slot slot) const {
+    const gpu::SpotGenParams& params = m_generator->sharedParams();
+    if (slot == Slot::Comb && params.flags.z == 0u)
+        return 3; // layered over the tangent field
+    return params.fields[slotField(slot)].kind.y;
+}
+
 EditCost Session::setBrush(const BrushSettings& brush) {
     m_brush = brush;
     return armBrush();
@@ -441,7 +448,7 @@ EditCost Session::armBrush() {
     if (arm) {
         m_armed[s] = Armed{startLayer(slot), slotJson(slot)};
         m_frame->generator().prepareFieldKind(std::uint32_t(slotField(slot)), layeredKind(slot),
-                                              slotComponents(slot));
+                                              layeredComponents(slot));
     }
     cost.armed = arm;
     cost.milliseconds = msSince(start);
@@ -917,7 +924,7 @@ bool Session::undo(EditCost* cost) {
         if (full && m_armed[t].layer)
             m_frame->generator().prepareFieldKind(std::uint32_t(slotField(Slot(t))),
                                                   layeredKind(Slot(t)),
-                                                  slotComponents(Slot(t)));
+                                                  layeredComponents(Slot(t)));
     m_current = m_undo.empty() ? 0 : m_undo.back().id;
     m_redo.push_back(std::move(e));
     if (cost) {

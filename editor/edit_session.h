@@ -304,6 +304,10 @@ private:
     std::shared_ptr<noise::PaintLayer> startLayer(Slot slot) const;
     /// The generator's kind of `slot`'s field with a layer (SpotField.kind.x, for the pipeline).
     std::int32_t layeredKind(Slot slot) const;
+    /// The component count the slot's field has in the shared parameters once layered: its
+    /// base's (constants, gradients and noise carry 3 whatever the slot's count), so that the
+    /// pipeline armBrush prepares is the one the first stroke asks for.
+    std::int32_t layeredComponents(Slot slot) const;
     /// After voxels of grids changed in place: the CPU generator re-flattens its fields, and
     /// the frame regenerates only the cells whose impulses read the voxels `changed` (world
     /// positions of voxels of size `voxelSize`), or every cell when `changed` is null.

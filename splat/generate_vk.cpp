@@ -227,6 +227,7 @@ const Pipeline& GpuGenerator::candidatePipeline() {
     m_candidateKey = specializationKey();
     if (m_preparedPipeline.handle() && m_preparedKey == m_candidateKey) {
         m_candidatePipeline = std::move(m_preparedPipeline);
+        m_partialPipeline = std::move(m_preparedPartialPipeline);
         m_preparedKey.clear();
     } else {
         m_candidatePipeline = makeCandidatePipeline(m_candidateKey);
@@ -262,6 +263,7 @@ void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
         (m_preparedPipeline.handle() && key == m_preparedKey))
         return;
     m_preparedPipeline = makeCandidatePipeline(key);
+    m_preparedPartialPipeline = makeCandidatePipeline(key, true);
     m_preparedKey = std::move(key);
 }
 

@@ -76,7 +76,8 @@ public:
     /// Make now, ahead of its use, the candidates pipeline for the current fields with field
     /// `slot` (SPOT_FIELD_*) of kind `kind` and `components` components, so that a setField
     /// that gives the slot that kind later (the editor's first stroke on a slot swaps in its
-    /// painted grid) does not compile in its frame. Keeps one such pipeline.
+    /// painted grid) does not compile in its frame, nor the partial generations after it (its
+    /// partial twin is made too). Keeps one such pair.
     void prepareFieldKind(std::uint32_t slot, std::int32_t kind, std::int32_t components);
     /// refreshFields() when the fields changed only where the model cells `cells` (indices into
     /// the generator's cells) read them: the next prepare(), if it chooses the cells and level of
@@ -128,6 +129,7 @@ private:
     Pipeline m_partialPipeline;                   ///< the same for partial generations
     std::vector<std::int32_t> m_candidateKey;     ///< specializationKey() it was made for
     Pipeline m_preparedPipeline;                  ///< prepareFieldKind's, until its key is used
+    Pipeline m_preparedPartialPipeline;           ///< its partial twin (the strokes after the first)
     std::vector<std::int32_t> m_preparedKey;
     Pipeline m_scanPipeline, m_scatterPipeline;
     Buffer m_params, m_pieces, m_triangles, m_positions, m_normals, m_tangents, m_uvs, m_fieldData;
