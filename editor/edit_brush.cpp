@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "noise/error.h"
 #include "noise/surface.h"
@@ -21,7 +22,11 @@ constexpr KindName kKinds[] = {{BrushKind::DensityAdd, "density-add"},
                                {BrushKind::Tilt, "tilt"},
                                {BrushKind::Length, "length"},
                                {BrushKind::Color, "color"},
-                               {BrushKind::Smooth, "smooth"}};
+                               {BrushKind::Smooth, "smooth"},
+                               {BrushKind::Clump, "clump"},
+                               {BrushKind::ClumpSize, "clump-size"},
+                               {BrushKind::Mask, "mask"}};
+static_assert(std::size(kKinds) == kBrushKindCount);
 
 /// "Over" compositing of target `t` with weight `a` onto the override (value v, weight w) of
 /// `old`: the field b (1 - w) + v w becomes (that) (1 - a) + t a whatever the base b.
@@ -71,6 +76,18 @@ glm::vec4 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& 
     }
     case BrushKind::Color:
         return over(old, brush.color, a);
+    case BrushKind::Clump:
+    case BrushKind::Mask:
+        // Towards 1 (gather, mask) or, with a negative strength, towards 0.
+        return over(old, glm::vec3(s >= 0.0f ? 1.0f : 0.0f, 0.0f, 0.0f), a);
+    case BrushKind::ClumpSize: {
+        // As the length brush: the relative size here 25% larger or smaller per dab, within
+        // the clump_size slot's [0.5, 2].
+        const float b = base ? base->eval(sv.point).x : 1.0f;
+        const float now = b * (1.0f - old.w) + old.x * old.w;
+        const glm::vec4 v = over(old, glm::vec3(now * (s >= 0.0f ? 1.25f : 0.75f), 0.0f, 0.0f), a);
+        return glm::vec4(std::clamp(v.x, 0.5f, 2.0f), 0.0f, 0.0f, v.w);
+    }
     case BrushKind::Smooth: {
         glm::vec4 sum(0.0f);
         constexpr glm::ivec3 kSteps[6] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
@@ -86,8 +103,9 @@ glm::vec4 paint(const BrushSettings& brush, const Dab& dab, const SurfaceVoxel& 
 } // namespace
 
 int slotField(Slot slot) {
-    constexpr int kFields[kSlotCount] = {SPOT_FIELD_DENSITY, SPOT_FIELD_COMB, SPOT_FIELD_TILT,
-                                         SPOT_FIELD_SCALE, SPOT_FIELD_COLOR};
+    constexpr int kFields[kSlotCount] = {SPOT_FIELD_DENSITY, SPOT_FIELD_COMB,       SPOT_FIELD_TILT,
+                                         SPOT_FIELD_SCALE,   SPOT_FIELD_COLOR,      SPOT_FIELD_CLUMP,
+                                         SPOT_FIELD_CLUMP_SIZE, SPOT_FIELD_MASK};
     return kFields[int(slot)];
 }
 
@@ -111,7 +129,27 @@ BrushKind parseBrushKind(std::string_view name) {
         if (name == k.name)
             return k.kind;
     throw InputError(cat("unknown brush '", name,
-                         "' (density-add, density-erase, comb, tilt, length, color, smooth)"));
+                         "' (density-add, density-erase, comb, tilt, length, color, smooth, "
+                         "clump, clump-size, mask)"));
+}
+
+const char* maskLimitName(MaskLimit limit) {
+    return limit == MaskLimit::None ? "none" : limit == MaskLimit::Masked ? "masked" : "unmasked";
+}
+
+MaskLimit parseMaskLimit(std::string_view name) {
+    if (name == "none")
+        return MaskLimit::None;
+    if (name == "masked")
+        return MaskLimit::Masked;
+    if (name == "unmasked")
+        return MaskLimit::Unmasked;
+    throw InputError(cat("unknown mask limit '", name, "' (none, masked, unmasked)"));
+}
+
+float maskLimitFactor(MaskLimit limit, float mask) {
+    const float m = std::clamp(mask, 0.0f, 1.0f);
+    return limit == MaskLimit::Masked ? m : limit == MaskLimit::Unmasked ? 1.0f - m : 1.0f;
 }
 
 const char* falloffName(Falloff falloff) {
@@ -145,6 +183,12 @@ Slot brushSlot(const BrushSettings& brush) {
         return Slot::Color;
     case BrushKind::Smooth:
         return brush.smoothTarget;
+    case BrushKind::Clump:
+        return Slot::Clump;
+    case BrushKind::ClumpSize:
+        return Slot::ClumpSize;
+    case BrushKind::Mask:
+        return Slot::Mask;
     }
     return Slot::Density;
 }
@@ -233,7 +277,8 @@ void applyDelta(noise::PaintLayer& grid, const GridDelta& delta, bool after) {
 
 std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
                      noise::PaintLayer& layer, const noise::Field* base, GridDelta& delta,
-                     std::vector<glm::ivec3>* touched) {
+                     std::vector<glm::ivec3>* touched, const noise::Field* mask) {
+    const bool limited = mask && brush.limit != MaskLimit::None && brush.kind != BrushKind::Mask;
     // Written voxels stay a voxel diagonal inside the radius: the lookups that read them are
     // those of points inside it (the 8 voxels around a point lie within a diagonal of it).
     const float inner = dab.radius - layer.voxelSize() * std::sqrt(3.0f) * 1.001f;
@@ -249,8 +294,11 @@ std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIn
         const glm::vec3 p = layer.value().voxelPosition(sv.ijk);
         if (brush.frontFacesOnly && glm::dot(sv.point.normal, dab.eye - p) <= 0.0f)
             continue;
-        const float f = falloffWeight(brush.falloff, glm::length(p - dab.centre) / inner);
+        float f = falloffWeight(brush.falloff, glm::length(p - dab.centre) / inner);
         if (f <= 0.0f)
+            continue;
+        // Limited to the mask: a voxel the limit gives no weight is not written at all.
+        if (limited && !((f *= maskLimitFactor(brush.limit, mask->eval(sv.point).x)) > 0.0f))
             continue;
         glm::vec4 v = paint(brush, dab, sv, layer.get(sv.ijk), f, layer, base);
         if (components == 1)

@@ -31,12 +31,28 @@
 
 namespace spot::edit {
 
-enum class BrushKind { DensityAdd, DensityErase, Comb, Tilt, Length, Color, Smooth };
+enum class BrushKind {
+    DensityAdd,
+    DensityErase,
+    Comb,
+    Tilt,
+    Length,
+    Color,
+    Smooth,
+    Clump,     ///< the clump strength towards 1 (negative strength: towards 0)
+    ClumpSize, ///< the relative clump size x 1.25 per dab (negative strength: x 0.75)
+    Mask,      ///< the mask towards 1 (negative strength: towards 0, unmasking)
+};
+inline constexpr int kBrushKindCount = 10;
 enum class Falloff { Smooth, Linear, Constant };
+/// Where a brush paints: everywhere, only where the mask is set (each voxel's weight times the
+/// mask m there), or only where it is not (times 1 - m). A voxel where that factor is 0 is not
+/// written, so nothing outside changes.
+enum class MaskLimit { None, Masked, Unmasked };
 
 /// The painted slots of a preset, in the order the preset's `fields` lists them.
-enum class Slot { Density, Comb, Tilt, Scale, Color };
-inline constexpr int kSlotCount = 5;
+enum class Slot { Density, Comb, Tilt, Scale, Color, Clump, ClumpSize, Mask };
+inline constexpr int kSlotCount = 8;
 
 /// The generator's field slot a painted slot is (SPOT_FIELD_*: an index into noise::kFieldSlots).
 int slotField(Slot slot);
@@ -51,6 +67,11 @@ const char* brushKindName(BrushKind kind);
 BrushKind parseBrushKind(std::string_view name);
 const char* falloffName(Falloff falloff);
 Falloff parseFalloff(std::string_view name);
+/// "none", "masked", "unmasked"; parse throws InputError listing them.
+const char* maskLimitName(MaskLimit limit);
+MaskLimit parseMaskLimit(std::string_view name);
+/// The factor a dab's weight takes at a point where the mask reads `mask`.
+float maskLimitFactor(MaskLimit limit, float mask);
 
 struct BrushSettings {
     BrushKind kind = BrushKind::DensityAdd;
@@ -66,6 +87,8 @@ struct BrushSettings {
     bool raise = false;
     /// Smooth: the slot it averages (the other kinds imply theirs).
     Slot smoothTarget = Slot::Density;
+    /// Where the brush paints (the mask brush itself ignores it).
+    MaskLimit limit = MaskLimit::None;
 };
 
 /// The slot a brush paints.
@@ -126,10 +149,12 @@ void applyDelta(noise::PaintLayer& layer, const GridDelta& delta, bool after);
 
 /// Apply one dab of `brush` to `layer` (the brush's slot's), recording every change in `delta`
 /// and, when given, appending the voxels written to `touched`. `base` is the field under the
-/// layer (null: the surface tangent), which the length brush scales. Returns the number of
-/// voxels written.
+/// layer (null: the surface tangent), which the length and clump-size brushes scale. `mask` is
+/// the mask field (its base and paint) the brush's limit reads at each voxel's surface point
+/// (null: no limit). Returns the number of voxels written.
 std::size_t applyDab(const BrushSettings& brush, const Dab& dab, const SurfaceIndex& surface,
                      noise::PaintLayer& layer, const noise::Field* base, GridDelta& delta,
-                     std::vector<glm::ivec3>* touched = nullptr);
+                     std::vector<glm::ivec3>* touched = nullptr,
+                     const noise::Field* mask = nullptr);
 
 } // namespace spot::edit

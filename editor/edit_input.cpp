@@ -88,9 +88,14 @@ InputAction mapKey(const InputEvent& e, const InputContext& c) {
     } else if (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET) {
         a.type = shift ? Type::BrushStrength : Type::BrushRadius;
         a.step = key == GLFW_KEY_RIGHT_BRACKET ? 1 : -1;
-    } else if (key >= GLFW_KEY_1 && key <= GLFW_KEY_7) {
+    } else if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9) {
         a.type = Type::BrushKind;
         a.kind = key - GLFW_KEY_1;
+    } else if (key == GLFW_KEY_0) {
+        a.type = Type::BrushKind;
+        a.kind = 9; // the mask brush: 0 follows 9 on the keyboard
+    } else if (key == GLFW_KEY_M && e.action == GLFW_PRESS) {
+        a.type = Type::MaskOverlay;
     } else if (key == GLFW_KEY_X) {
         a.type = Type::MirrorX;
     } else if (key == GLFW_KEY_F12 && e.action == GLFW_PRESS) {

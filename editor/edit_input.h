@@ -16,8 +16,9 @@
 ///     ctrl+z, ctrl+shift+z, ctrl+y   undo, redo, redo
 ///     F or Home            frame the mesh
 ///     [ ]                  brush radius down / up; shift+[ ] strength down / up
-///     1..7                 brush kind (density-add, density-erase, comb, tilt, length, colour,
-///                          smooth)
+///     1..9, 0              brush kind (density-add, density-erase, comb, tilt, length, colour,
+///                          smooth, clump, clump-size, mask)
+///     M                    show or hide the mask overlay
 ///     X                    mirror the brush about x = 0
 ///     F12                  export the view (the File panel's Export)
 ///     N                    show or hide the panels' column
@@ -77,7 +78,8 @@ struct InputAction {
         Export,        ///< write the view as the File panel's Export does
         TogglePanels,  ///< show or hide the panels' column
         PlayPause,     ///< play or pause the timeline
-        StepFrame      ///< move the timeline by `step` frames (+1 forward, -1 back)
+        StepFrame,     ///< move the timeline by `step` frames (+1 forward, -1 back)
+        MaskOverlay    ///< show or hide the mask overlay (Session::setMaskOverlay)
     };
     Type type = Type::None;
     Drag drag = Drag::None; ///< the drag after the event

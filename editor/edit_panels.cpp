@@ -77,9 +77,10 @@ bool brushPanel(edit::Session& session, SessionPanels& st) {
     ImGui::PushItemWidth(kLabelWidth);
     int kind = int(b.kind);
     if (ImGui::BeginCombo("kind", edit::brushKindName(b.kind))) {
-        for (int k = 0; k <= int(edit::BrushKind::Smooth); ++k)
-            if (ImGui::Selectable(cat(k + 1, "  ", edit::brushKindName(edit::BrushKind(k))).c_str(),
-                                  k == kind))
+        for (int k = 0; k < edit::kBrushKindCount; ++k)
+            if (ImGui::Selectable(
+                    cat((k + 1) % 10, "  ", edit::brushKindName(edit::BrushKind(k))).c_str(),
+                    k == kind))
                 armed |= attempt(st, [&] { session.setBrushKind(edit::BrushKind(k)); });
         ImGui::EndCombo();
     }
@@ -92,13 +93,22 @@ bool brushPanel(edit::Session& session, SessionPanels& st) {
     ImGui::Checkbox("X mirror", &b.mirrorX);
     ImGui::ColorEdit3("colour", &b.color.x, ImGuiColorEditFlags_Float);
     int target = int(b.smoothTarget);
-    if (ImGui::Combo("smooth target", &target, "density\0comb\0tilt\0length\0color\0")) {
+    if (ImGui::Combo("smooth target", &target,
+                     "density\0comb\0tilt\0length\0color\0clump\0clump size\0mask\0")) {
         b.smoothTarget = edit::Slot(target);
         armed |= attempt(st, [&] { session.armBrush(); });
     }
+    int limit = int(b.limit);
+    if (ImGui::Combo("limit", &limit, "everywhere\0only masked\0only unmasked\0"))
+        b.limit = edit::MaskLimit(limit);
+    bool overlay = session.maskOverlay();
+    if (ImGui::Checkbox("show mask (M)", &overlay)) {
+        session.setMaskOverlay(overlay);
+        armed = true; // the view changes
+    }
     ImGui::PopItemWidth();
-    hint("paint: left drag (shift/ctrl: erase, shrink)\n1-7 kind, [ ] radius,\n"
-         "shift+[ ] strength, x mirror\nctrl+z undo, ctrl+shift+z / ctrl+y redo");
+    hint("paint: left drag (shift/ctrl: erase, shrink)\n1-9, 0 kind, [ ] radius,\n"
+         "shift+[ ] strength, x mirror, m mask\nctrl+z undo, ctrl+shift+z / ctrl+y redo");
     return armed;
 }
 
@@ -209,6 +219,62 @@ bool kernelPanel(edit::Session& session, SessionPanels& st) {
             break;
     }
     ImGui::PopItemWidth();
+    return changed;
+}
+
+/// The clumps' parameters (presets/README.md "clump"): size, variation, shape, seed and the
+/// per-impulse strength variation; the strength and relative size are painted (the clump and
+/// clump-size brushes). A preset without a `clump` object gets one at the first change.
+bool clumpPanel(edit::Session& session, SessionPanels& st) {
+    bool changed = false;
+    if (!beginSection("Clumps", st))
+        return false;
+    ImGui::PushItemWidth(kLabelWidth);
+    const nlohmann::json c = session.get("clump");
+    const auto setKey = [&](const std::string& key, const nlohmann::json& value) {
+        if (c.is_object())
+            session.set("clump." + key, value);
+        else
+            session.set("clump", nlohmann::json{{key, value}});
+    };
+    struct Slider {
+        const char* key;
+        float fallback, lo, hi;
+        const char* format;
+    };
+    const Slider sliders[] = {{"size", 0.1f, 0.005f, 0.5f, "%.3f"},
+                              {"variation", 0.3f, 0.0f, 1.0f, "%.2f"},
+                              {"shape", 0.5f, 0.0f, 1.0f, "%.2f"}};
+    for (const Slider& sl : sliders) {
+        const nlohmann::json now = c.is_object() ? c.value(sl.key, nlohmann::json()) : nlohmann::json();
+        std::vector<float> v = {now.is_number() ? now.get<float>() : sl.fallback};
+        if (heldEdit(st, cat("clump ", sl.key), v, [&](const char* l, float* x) {
+                ImGui::SliderFloat(l, x, sl.lo, sl.hi, sl.format);
+            }))
+            changed |= attempt(st, [&] { setKey(sl.key, double(v[0])); });
+    }
+    const nlohmann::json strength = session.get("fields.clump");
+    if (strength.is_number()) {
+        std::vector<float> v = {strength.get<float>()};
+        if (heldEdit(st, "clump strength", v, [&](const char* l, float* x) {
+                ImGui::SliderFloat(l, x, 0.0f, 1.0f, "%.2f");
+            }))
+            changed |= attempt(st, [&] { session.set("fields.clump", double(v[0])); });
+    }
+    const nlohmann::json var = session.get("variation.clump");
+    std::vector<float> v = {var.is_number() ? var.get<float>() : 0.0f};
+    if (heldEdit(st, "strength variation", v, [&](const char* l, float* x) {
+            ImGui::SliderFloat(l, x, 0.0f, 0.99f, "%.2f");
+        }))
+        changed |= attempt(st, [&] {
+            if (session.get("variation").is_object())
+                session.set("variation.clump", double(v[0]));
+            else
+                session.set("variation", nlohmann::json{{"clump", double(v[0])}});
+        });
+    ImGui::PopItemWidth();
+    hint("paint the strength with the clump brush (8), the size with clump-size (9); a mask (0, "
+         "M shows it) limits any brush");
     return changed;
 }
 
@@ -341,7 +407,7 @@ bool filePanel(edit::Session& session, SessionPanels& st) {
 
 const std::vector<std::string>& sectionNames() {
     static const std::vector<std::string> names = {"render", "brush", "kernel", "distribution",
-                                                   "wind",   "file",  "stats"};
+                                                   "clumps", "wind",  "file",   "stats"};
     return names;
 }
 
@@ -403,6 +469,7 @@ bool sessionPanels(edit::Session& session, SessionPanels& state) {
     bool changed = brushPanel(session, state);
     changed |= kernelPanel(session, state);
     changed |= distributionPanel(session, state);
+    changed |= clumpPanel(session, state);
     changed |= windPanel(session, state);
     changed |= lightPanel(session, state);
     changed |= filePanel(session, state);

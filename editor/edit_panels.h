@@ -41,7 +41,7 @@ struct SessionPanels {
     /// between frames); its Play button and the space bar toggle it, a scrub pauses it.
     bool playing = false;
     /// The sections unfolded when the window opens (lower case: render, brush, kernel,
-    /// distribution, wind, file, stats); the user folds and unfolds them after.
+    /// distribution, clumps, wind, file, stats); the user folds and unfolds them after.
     std::vector<std::string> openAtStart = {"render", "brush", "file"};
     /// Where the Kernel section left room for the rendered kernel preview (screen pixels,
     /// kPreviewSize square), and whether all of it is on screen this frame (the section is
@@ -62,9 +62,9 @@ void hint(const char* text);
 /// state.openAtStart names it); true when it is unfolded (then draw its widgets).
 bool beginSection(const char* title, const SessionPanels& state);
 
-/// Draw the sections (Brush, Kernel, Distribution, Wind, File); returns true when the session
-/// changed what it shows (render again). Session errors (InputError: a value the preset refuses, a
-/// file that cannot be written) are shown in the File panel, never thrown.
+/// Draw the sections (Brush, Kernel, Distribution, Clumps, Wind, File); returns true when the
+/// session changed what it shows (render again). Session errors (InputError: a value the preset
+/// refuses, a file that cannot be written) are shown in the File panel, never thrown.
 bool sessionPanels(edit::Session& session, SessionPanels& state);
 
 /// The timeline of an animated scene (nothing for a static one), at the top of the column: Play /

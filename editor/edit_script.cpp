@@ -157,11 +157,26 @@ void parseBrush(Line& line, BrushSettings& b) {
                 b.smoothTarget = Slot::Scale;
             else if (slot == "color")
                 b.smoothTarget = Slot::Color;
+            else if (slot == "clump")
+                b.smoothTarget = Slot::Clump;
+            else if (slot == "clump-size")
+                b.smoothTarget = Slot::ClumpSize;
+            else if (slot == "mask")
+                b.smoothTarget = Slot::Mask;
             else
-                line.fail(cat("target '", slot, "' is not density, comb, tilt, length or color"));
+                line.fail(cat("target '", slot,
+                              "' is not density, comb, tilt, length, color, clump, clump-size or "
+                              "mask"));
+        } else if (key == "limit") {
+            try {
+                b.limit = parseMaskLimit(line.word("limit"));
+            } catch (const InputError& e) {
+                line.fail(e.what());
+            }
         } else {
             line.fail(cat("unknown brush option '", key,
-                          "' (radius, strength, falloff, mirror, color, raise, backfaces, target)"));
+                          "' (radius, strength, falloff, mirror, color, raise, backfaces, target, "
+                          "limit)"));
         }
     }
 }
@@ -309,6 +324,14 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
         }
         if (!a.on && (a.azimuthDeg || a.elevationDeg || a.intensity || a.shadows))
             line.fail("'light off' takes no options");
+    } else if (verb == "mask") {
+        a.type = T::Mask;
+        if (line.word("'overlay'") != "overlay")
+            line.fail("expected 'mask overlay on|off'");
+        const std::string state = line.word("on or off");
+        if (state != "on" && state != "off")
+            line.fail(cat("mask overlay '", state, "' must be on or off"));
+        a.on = state == "on";
     } else if (verb == "frames") {
         a.type = T::Frames;
         a.count = line.integer("frame count", 1, 100000);
@@ -337,8 +360,8 @@ ScriptAction parseLine(Line& line, const std::string& verb) {
     } else {
         line.fail(
             cat("unknown action '", verb,
-                "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, light, frames, "
-                "time, play, save, screenshot)"));
+                "' (camera, method, brush, stroke, undo, redo, lobe, set, seed, wind, light, mask, "
+                "frames, time, play, save, screenshot)"));
     }
     line.end();
     return a;
@@ -526,6 +549,9 @@ void runScriptAction(Session& session, const ScriptAction& a, const std::string&
                 }
                 break;
             }
+            case T::Mask:
+                session.setMaskOverlay(a.on);
+                break;
             case T::Frames:
                 for (int i = 0; i < a.count; ++i) {
                     session.setTime(session.time() + 1.0 / 30.0);

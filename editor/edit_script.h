@@ -7,9 +7,12 @@
 ///                                        # the settings not given stay as they were (the
 ///                                        # command line's: `method baked` keeps --bake)
 ///     brush KIND [radius PX] [strength S] [falloff smooth|linear|constant] [mirror x]
-///                [color R G B] [raise] [backfaces] [target SLOT]
-///                # target (smooth): density, comb, tilt, length or color; raise (density-add):
-///                # above the field's own density, towards 1
+///                [color R G B] [raise] [backfaces] [target SLOT] [limit none|masked|unmasked]
+///                # KIND: density-add, density-erase, comb, tilt, length, color, smooth, clump,
+///                # clump-size, mask; target (smooth): density, comb, tilt, length, color,
+///                # clump, clump-size or mask; raise (density-add): above the field's own
+///                # density, towards 1; limit: paint only where the mask is set, or is not
+///     mask overlay on|off                # tint the impulses by the mask (a view)
 ///     stroke X,Y X,Y ...                 # a drag through these window points (clipped to the
 ///                                        # window grown by the brush radius)
 ///     set fields.density.base.frequency 6   # a painted slot's field stays editable under it
@@ -65,6 +68,7 @@ struct ScriptAction {
         Seed,
         Wind,
         Light,
+        Mask,
         Frames,
         Time,
         Play,
@@ -90,7 +94,7 @@ struct ScriptAction {
     double seconds = 0.0;           ///< Time
     std::optional<bool> loop;       ///< Play: loop on or off (none: the session's)
     std::uint32_t seed = 0;         ///< Seed
-    bool on = false;                ///< Wind, Light
+    bool on = false;                ///< Wind, Light, Mask (the overlay)
     /// Light: the key light's azimuth, elevation (degrees), intensity and shadows, where given.
     std::optional<float> azimuthDeg, elevationDeg, intensity;
     std::optional<bool> shadows;

@@ -300,8 +300,14 @@ noise::FieldDesc* Session::slotDesc(Slot slot) {
 }
 
 nlohmann::json Session::layeredJson(Slot slot) const {
-    nlohmann::json j = {{"paint", {{"file", m_vdbName}, {"grid", layerGrid(slot)}}}};
-    const nlohmann::json base = slotJson(slot);
+    const nlohmann::json paint = {{"file", m_vdbName}, {"grid", layerGrid(slot)}};
+    nlohmann::json base = slotJson(slot);
+    // A slot limited to the mask is already in the object form: the layer joins its base.
+    if (base.is_object() && (base.contains("mask") || base.contains("else"))) {
+        base["paint"] = paint;
+        return base;
+    }
+    nlohmann::json j = {{"paint", paint}};
     if (!base.is_null())
         j["base"] = base; // absent: the slot's default (the comb's: the surface tangent)
     return j;
@@ -339,6 +345,7 @@ void Session::rebuild() {
     noise::GeneratorOptions options;
     options.seed = m_scene.seed;
     auto generator = std::make_unique<noise::ImpulseGenerator>(m_mesh, m_preset, options);
+    generator->setMaskOverlay(m_maskOverlay);
     m_frame.reset();
     m_generator = std::move(generator);
     m_frame = std::make_unique<splat::Frame>(*m_ctx, m_mesh, *m_generator);
@@ -400,8 +407,18 @@ std::int32_t Session::layeredKind(Slot slot) const {
     const std::int32_t base = slot == Slot::Comb && m_generator->sharedParams().flags.z == 0u
                                   ? Generator::kFieldTangent
                                   : (f.kind.x & Generator::kFieldKindMask);
-    return base | (slot == Slot::Density ? Generator::kFieldLayeredDensity
-                                         : Generator::kFieldLayered);
+    // A slot limited to the mask keeps its flag (spot_generate.h spotSlotValue).
+    const std::int32_t masked =
+        f.kind.x & (Generator::kFieldMaskedInside | Generator::kFieldMaskedOutside);
+    return base | masked |
+           (slot == Slot::Density ? Generator::kFieldLayeredDensity : Generator::kFieldLayered);
+}
+
+std::int32_t Session::layeredComponents(Slot slot) const {
+    const gpu::SpotGenParams& params = m_generator->sharedParams();
+    if (slot == Slot::Comb && params.flags.z == 0u)
+        return 3; // layered over the tangent field
+    return params.fields[slotField(slot)].kind.y;
 }
 
 EditCost Session::setBrush(const BrushSettings& brush) {
@@ -436,7 +453,7 @@ EditCost Session::armBrush() {
     if (arm) {
         m_armed[s] = Armed{startLayer(slot), slotJson(slot)};
         m_frame->generator().prepareFieldKind(std::uint32_t(slotField(slot)), layeredKind(slot),
-                                              slotComponents(slot));
+                                              layeredComponents(slot));
     }
     cost.armed = arm;
     cost.milliseconds = msSince(start);
@@ -596,6 +613,11 @@ EditCost Session::beginStroke(glm::vec2 pixel, bool invert) {
                                         cat("preset ", m_presetFile.string(), ", fields.",
                                             slotKey(slot), ".base"));
     }
+    // The mask as it is now (its base and paint), which a limited brush reads.
+    m_strokeMask.reset();
+    if (m_brush.limit != MaskLimit::None && slot != Slot::Mask)
+        m_strokeMask = noise::makeField(m_preset.mask, m_mesh, m_preset.baseDir,
+                                        cat("preset ", m_presetFile.string(), ", fields.mask"));
     m_strokeLast = pixel;
     m_strokeCarry = 0.0f;
     m_strokeDabs = m_strokeVoxels = 0;
@@ -694,7 +716,9 @@ BrushSettings Session::strokeBrush() const {
         b.kind = BrushKind::DensityErase;
     else if (b.kind == BrushKind::DensityErase)
         b.kind = BrushKind::DensityAdd;
-    else if (b.kind == BrushKind::Length || b.kind == BrushKind::Tilt)
+    else if (b.kind == BrushKind::Length || b.kind == BrushKind::Tilt ||
+             b.kind == BrushKind::Clump || b.kind == BrushKind::ClumpSize ||
+             b.kind == BrushKind::Mask)
         b.strength = -b.strength;
     return b;
 }
@@ -755,16 +779,16 @@ void Session::dab(glm::vec2 pixel, glm::vec2 drag) {
         d.direction = screenToWorld(drag);
     }
     const BrushSettings brush = strokeBrush();
-    m_strokeVoxels +=
-        applyDab(brush, d, *m_surface, layer, m_strokeBase.get(), it->second, &m_eventVoxels);
+    m_strokeVoxels += applyDab(brush, d, *m_surface, layer, m_strokeBase.get(), it->second,
+                               &m_eventVoxels, m_strokeMask.get());
     if (brush.mirrorX) {
         // The mirrored dab sees the mirrored camera, so front faces stay front faces.
         Dab m = d;
         m.centre = mirrorX(d.centre);
         m.eye = mirrorX(d.eye);
         m.direction = mirrorX(d.direction);
-        m_strokeVoxels +=
-            applyDab(brush, m, *m_surface, layer, m_strokeBase.get(), it->second, &m_eventVoxels);
+        m_strokeVoxels += applyDab(brush, m, *m_surface, layer, m_strokeBase.get(), it->second,
+                                   &m_eventVoxels, m_strokeMask.get());
     }
     ++m_strokeDabs;
 }
@@ -905,7 +929,7 @@ bool Session::undo(EditCost* cost) {
         if (full && m_armed[t].layer)
             m_frame->generator().prepareFieldKind(std::uint32_t(slotField(Slot(t))),
                                                   layeredKind(Slot(t)),
-                                                  slotComponents(Slot(t)));
+                                                  layeredComponents(Slot(t)));
     m_current = m_undo.empty() ? 0 : m_undo.back().id;
     m_redo.push_back(std::move(e));
     if (cost) {
@@ -980,7 +1004,8 @@ void Session::save(const std::filesystem::path& file) {
             if (!slot || !field.is_object())
                 continue;
             if (!field.contains("paint")) {
-                keepFiles(field, *slot);
+                // A field, or the object form of a slot limited to the mask.
+                keepFiles(field.contains("base") ? field["base"] : field, *slot);
                 continue;
             }
             if (field.contains("base"))
@@ -1001,6 +1026,14 @@ void Session::save(const std::filesystem::path& file) {
     m_vdbName = vdbName;
     m_preset.baseDir = file.parent_path();
     m_saved = m_current;
+}
+
+void Session::setMaskOverlay(bool on) {
+    if (on == m_maskOverlay)
+        return;
+    m_maskOverlay = on;
+    m_generator->setMaskOverlay(on);
+    m_frame->fieldsChanged();
 }
 
 void Session::setWind(bool on, float amplitudeDeg, float frequencyHz) {

@@ -205,6 +205,11 @@ public:
     /// document's comb; saving writes the document's comb.
     void setWind(bool on, float amplitudeDeg = 20.0f, float frequencyHz = 0.5f);
     bool wind() const { return m_windOn; }
+    /// The mask overlay: while on, the impulses are drawn tinted towards red by the mask (the
+    /// `mask` slot: its field and paint) at their anchors. A view, not an edit: the document,
+    /// dirty() and the undo history are unchanged, and saving writes the impulses' own colours.
+    void setMaskOverlay(bool on);
+    bool maskOverlay() const { return m_maskOverlay; }
     /// Lighting as the frames show it (docs/design.md section 9): lit shows the scene's lights
     /// and sky, or, where the scene has none, a key light from the upper left with shadows and a
     /// pale sky; unlit shows the scene's colours as they are. Not an edit: the document is the
@@ -299,6 +304,10 @@ private:
     std::shared_ptr<noise::PaintLayer> startLayer(Slot slot) const;
     /// The generator's kind of `slot`'s field with a layer (SpotField.kind.x, for the pipeline).
     std::int32_t layeredKind(Slot slot) const;
+    /// The component count the slot's field has in the shared parameters once layered: its
+    /// base's (constants, gradients and noise carry 3 whatever the slot's count), so that the
+    /// pipeline armBrush prepares is the one the first stroke asks for.
+    std::int32_t layeredComponents(Slot slot) const;
     /// After voxels of grids changed in place: the CPU generator re-flattens its fields, and
     /// the frame regenerates only the cells whose impulses read the voxels `changed` (world
     /// positions of voxels of size `voxelSize`), or every cell when `changed` is null.
@@ -356,6 +365,8 @@ private:
     bool m_strokeInvert = false;
     std::vector<glm::ivec3> m_eventVoxels; ///< written by the current pointer event's dabs
     std::unique_ptr<noise::Field> m_strokeBase; ///< the stroke's slot's field without its layer
+    std::unique_ptr<noise::Field> m_strokeMask; ///< the mask a limited stroke reads (else null)
+    bool m_maskOverlay = false;
 
     std::deque<Edit> m_undo;
     std::vector<Edit> m_redo;

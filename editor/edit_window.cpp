@@ -252,6 +252,10 @@ void applyInput(InputState& s, const InputAction& a) {
         case T::StepFrame:
             s.stepFrames += a.step;
             break;
+        case T::MaskOverlay:
+            s.session->setMaskOverlay(!s.session->maskOverlay());
+            s.sceneDirty = true;
+            break;
         }
     } catch (const InputError& e) {
         s.error = e.what();

@@ -108,6 +108,14 @@ struct FieldDesc {
         std::shared_ptr<const PaintLayer> layer;
     };
     std::optional<Paint> paint;
+
+    /// A slot limited to the mask (the preset's `fields.mask` slot, value m at the point;
+    /// presets/README.md "Masks"): its value v becomes e + (v - e) m (Inside) or
+    /// e + (v - e) (1 - m) (Outside), e = `maskElse` (the slot's components). The generator
+    /// applies it (spot_generate.h spotSlotValue); a bound Field is the field alone.
+    enum class MaskUse { None, Inside, Outside };
+    MaskUse mask = MaskUse::None;
+    glm::vec3 maskElse{0.0f};
 };
 
 /// Inclusive bounds of every value a field can return (componentwise).

@@ -53,15 +53,20 @@ private:
     glm::vec4 spotParamLod() const { return m_a.params->lod; }
     const SpotField& spotParamField(uint slot) const { return m_a.params->fields[slot]; }
     glm::ivec2 spotParamFieldKind(uint slot) const { return glm::ivec2(m_a.params->fields[slot].kind); }
+    glm::vec4 spotParamClump() const { return m_a.params->clump; }
+    glm::vec4 spotParamClump2() const { return m_a.params->clump2; }
+    glm::uvec4 spotParamClumpFlags() const { return m_a.params->clumpFlags; }
 
 public:
 #define SPOT_FN
 #define SPOT_CONST static constexpr
 #define SPOT_OUT(T) T&
+#define SPOT_INOUT(T) T&
 #include "spot_generate.h"
 #undef SPOT_FN
 #undef SPOT_CONST
 #undef SPOT_OUT
+#undef SPOT_INOUT
 
     /// Host only, jittered distribution: the candidates of `cell` whose moved lattice site lies
     /// in its triangle and the cell, in candidate order, appended to `out`. Only the density

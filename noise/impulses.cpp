@@ -1,7 +1,9 @@
 #include "impulses.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <iterator>
 
 #include <tbb/parallel_for.h>
 
@@ -15,6 +17,7 @@
 
 namespace spot::noise {
 
+using Generator = shared::f32::SharedGenerator;
 
 namespace {
 
@@ -29,6 +32,13 @@ std::unique_ptr<Field> bind(const FieldDesc& desc, const Mesh& mesh, const Prese
 }
 
 } // namespace
+
+float clumpTipHeight(const KernelDesc& kernel) {
+    float tip = 0.0f;
+    for (const LobeDesc& lobe : kernel.lobes)
+        tip = std::max(tip, lobe.offset.z + lobe.sigma.z);
+    return std::max(tip, 1e-3f);
+}
 
 ImpulseGenerator::ImpulseGenerator(const Mesh& mesh, const PresetDesc& preset,
                                    const GeneratorOptions& options)
@@ -113,18 +123,23 @@ void ImpulseGenerator::setField(int slot, const FieldDesc& desc) {
                                  need, " world units, larger than the generator's ",
                                  m_cells.cellSize));
     }
+    // The description first: the shared form reads its mask (buildFieldData).
+    const PresetDesc before = m_preset;
+    if (info.optional)
+        m_preset.comb = desc;
+    else
+        *presetField(m_preset, slot) = desc;
+    if (slot == SPOT_FIELD_CLUMP)
+        m_preset.clumpDesc.on = m_preset.clumpDesc.on || clumpFieldSet(desc);
     std::swap(bound, field);
     try {
         buildFieldData();
     } catch (...) {
         std::swap(bound, field); // the previous fields flatten as before
+        m_preset = before;
         buildFieldData();
         throw;
     }
-    if (info.optional)
-        m_preset.comb = desc;
-    else
-        *presetField(m_preset, slot) = desc;
     if (slot == SPOT_FIELD_SCALE)
         m_minCellSize = minimumCellSizeFor(*bound);
 }
@@ -155,12 +170,42 @@ void ImpulseGenerator::buildFieldData() {
     m_params.flags = glm::uvec4(m_options.seed, d.type == DistributionType::Jittered ? 1u : 0u,
                                 m_fields[SPOT_FIELD_COMB] ? 1u : 0u,
                                 (m_mesh.hasUv() ? 1u : 0u) | (m_mesh.tangents.empty() ? 0u : 2u));
+    const ClumpDesc& c = m_preset.clumpDesc;
+    m_params.clump = glm::vec4(c.size, c.variation, c.shape, clumpTipHeight(m_preset.kernel));
+    m_params.clump2 = glm::vec4(c.secondarySize, c.secondaryStrength, v.clump, 0.0f);
+    const std::uint32_t clumpBits =
+        (c.on ? Generator::kClumpOn : 0u) |
+        (c.on && c.secondarySize > 0.0f ? Generator::kClumpSecondary : 0u) |
+        (m_maskOverlay ? Generator::kClumpMaskOverlay : 0u);
+    m_params.clumpFlags =
+        glm::uvec4(shared::f32::spotHashCombine(shared::f32::spotHash(m_options.seed ^ 0x85ebca6bu),
+                                                c.seed),
+                   clumpBits, 0u, 0u);
     gpu::SpotField fields[SPOT_FIELD_COUNT];
-    for (int i = 0; i < SPOT_FIELD_COUNT; ++i)
+    for (int i = 0; i < SPOT_FIELD_COUNT; ++i) {
         fields[i] = m_fields[i] ? m_fields[i]->shared(data) : gpu::SpotField{};
+        const FieldDesc* desc = presetField(m_preset, i);
+        if (!desc || desc->mask == FieldDesc::MaskUse::None || !m_fields[i])
+            continue;
+        // Limited to the mask (spot_generate.h spotSlotValue): the value outside it, and a flag.
+        const float e[4] = {desc->maskElse.x, desc->maskElse.y, desc->maskElse.z, 0.0f};
+        SPOT_CHECK_LE(data.size() + 4, std::size_t(UINT32_MAX));
+        const auto at = static_cast<std::uint32_t>(data.size());
+        data.insert(data.end(), std::begin(e), std::end(e));
+        fields[i].value.w = std::bit_cast<float>(at);
+        fields[i].kind.x |= desc->mask == FieldDesc::MaskUse::Inside ? Generator::kFieldMaskedInside
+                                                                     : Generator::kFieldMaskedOutside;
+    }
     // Nothing changes until every field is flattened (a painted grid may refuse).
     m_fieldData = std::move(data);
     std::copy(std::begin(fields), std::end(fields), std::begin(m_params.fields));
+}
+
+void ImpulseGenerator::setMaskOverlay(bool on) {
+    if (on == m_maskOverlay)
+        return;
+    m_maskOverlay = on;
+    buildFieldData();
 }
 
 shared::f32::GeneratorArrays ImpulseGenerator::arrays() const {

@@ -46,6 +46,10 @@ struct Impulse {
     std::uint32_t triangle = 0;          ///< anchor triangle
     glm::vec2 barycentric{0.0f};         ///< anchor (b1, b2) in that triangle; b0 = 1 - b1 - b2
     glm::ivec3 cell{0};                  ///< generating cell
+    /// Clumps (spot_clump.h): the strength the kernel was clumped with (0: not clumped) and
+    /// the distance from its anchor to its clump's centre, world units (0 when not clumped).
+    float clumpStrength = 0.0f;
+    float clumpDistance = 0.0f;
 };
 
 struct GeneratorOptions {
@@ -59,6 +63,10 @@ struct GeneratorOptions {
 
 /// Fields of a preset bound to one mesh, indexed by slot (kFieldSlots; null: an unset comb).
 using BoundFields = std::array<std::unique_ptr<Field>, kFieldSlotCount>;
+
+/// The height of a kernel's tip, kernel units: the top of its highest lobe (offset z plus its
+/// z sigma), at least 1e-3. The clumps move the tip towards the clump's axis (spot_clump.h).
+float clumpTipHeight(const KernelDesc& kernel);
 
 class ImpulseGenerator {
 public:
@@ -98,6 +106,12 @@ public:
     /// as setField).
     void refreshFields();
 
+    /// The editor's mask overlay (a view, not the document): masked impulses are tinted
+    /// towards red by the mask's value. Rebuilds the shared parameters (a GpuGenerator of this
+    /// generator needs refreshFields() after it).
+    void setMaskOverlay(bool on);
+    bool maskOverlay() const { return m_maskOverlay; }
+
     /// Impulses of the cells accepted by `keep` (all cells when empty), concatenated in cell
     /// order; parallel over cells, identical for any thread count. Checks the memory budget first.
     std::vector<Impulse> generate(const std::function<bool(const SurfaceCell&)>& keep = {}) const;
@@ -119,6 +133,7 @@ private:
     std::vector<gpu::SpotPiece> m_sharedPieces;
     std::vector<float> m_fieldData;
     gpu::SpotGenParams m_params{};
+    bool m_maskOverlay = false;
 };
 
 } // namespace spot::noise

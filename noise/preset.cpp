@@ -50,6 +50,7 @@ constexpr Interval kWorldPosition{-1e6, 1e6};
 constexpr Interval kFrequency{0.0, 1e6, true, false};
 constexpr Interval kVariationAngle{0.0, 180.0};
 constexpr Interval kVariationBend{0.0, 3600.0};
+constexpr Interval kClumpSize{0.0, 1e3, true, false};
 /// A gradient whose ends are closer than this has no usable direction in float.
 constexpr float kMinGradientLength = 1e-6f;
 
@@ -203,13 +204,43 @@ public:
         return desc;
     }
 
-    /// A slot's field: a field, or {"base": field, "paint": {"file", "grid"}} (a paint layer
-    /// over the base; an absent base is the slot's default, the surface tangent for the comb).
+    /// A slot's field: a field, or {"base": field, "paint": {"file", "grid"}, "mask": "inside"
+    /// or "outside", "else": value} (a paint layer over the base, the slot limited to the mask;
+    /// `paint` or `mask` makes the form; an absent base is the slot's default, the surface
+    /// tangent for the comb).
     FieldDesc slotField(const Json& j, const std::string& path, const FieldSlot& slot,
                         const Interval& r) const {
-        if (!j.is_object() || !find(j, "paint"))
+        if (!j.is_object() || (!find(j, "paint") && !find(j, "mask") && !find(j, "else")))
             return field(j, path, slot.components, r);
-        requireObject(j, path, {"base", "paint"});
+        requireObject(j, path, {"base", "paint", "mask", "else"});
+        FieldDesc desc = slotBase(j, path, slot, r);
+        if (const Json* mask = find(j, "mask")) {
+            if (slot.index == SPOT_FIELD_MASK)
+                fail(cat(join(path, "mask"), ": the mask cannot be limited to itself"));
+            const std::string where = string(*mask, join(path, "mask"), false);
+            if (where == "inside")
+                desc.mask = FieldDesc::MaskUse::Inside;
+            else if (where == "outside")
+                desc.mask = FieldDesc::MaskUse::Outside;
+            else
+                fail(cat(join(path, "mask"), " = \"", printable(where),
+                         "\" is not one of \"inside\", \"outside\""));
+            desc.maskElse = slot.components == 1 ? glm::vec3(slot.byDefault, 0.0f, 0.0f)
+                                                 : glm::vec3(slot.byDefault);
+            if (slot.optional) // an unset comb: the tangent is not a value
+                fail(cat(join(path, "mask"), ": the comb cannot be masked"));
+            if (const Json* e = find(j, "else"))
+                desc.maskElse = fieldValue(*e, join(path, "else"), slot.components, r);
+        } else if (find(j, "else")) {
+            fail(cat(join(path, "else"), ": \"else\" is the value outside the mask; it needs "
+                                        "\"mask\""));
+        }
+        return desc;
+    }
+
+    /// The base and the paint layer of a slot's object form.
+    FieldDesc slotBase(const Json& j, const std::string& path, const FieldSlot& slot,
+                       const Interval& r) const {
         FieldDesc desc;
         if (const Json* base = find(j, "base")) {
             desc = field(*base, join(path, "base"), slot.components, r);
@@ -222,8 +253,11 @@ public:
             desc.value = slot.components == 1 ? glm::vec3(slot.byDefault, 0.0f, 0.0f)
                                               : glm::vec3(slot.byDefault);
         }
+        const Json* paintJson = find(j, "paint");
+        if (!paintJson)
+            return desc;
         const std::string paintPath = join(path, "paint");
-        const Json& paint = require(j, path, "paint");
+        const Json& paint = *paintJson;
         requireObject(paint, paintPath, {"file", "grid"});
         FieldDesc::Paint layer;
         layer.file = string(require(paint, paintPath, "file"), join(paintPath, "file"), false);
@@ -362,8 +396,36 @@ void parseFields(const Reader& rd, const Json& j, const std::string& path, Prese
     }
 }
 
+ClumpDesc parseClump(const Reader& rd, const Json& j, const std::string& path) {
+    rd.requireObject(j, path, {"size", "variation", "shape", "seed", "secondary"});
+    ClumpDesc c;
+    c.on = true;
+    if (const Json* v = Reader::find(j, "size"))
+        c.size = rd.real(*v, join(path, "size"), kClumpSize);
+    if (const Json* v = Reader::find(j, "variation"))
+        c.variation = rd.real(*v, join(path, "variation"), kUnit);
+    if (const Json* v = Reader::find(j, "shape"))
+        c.shape = rd.real(*v, join(path, "shape"), kUnit);
+    if (const Json* v = Reader::find(j, "seed"))
+        c.seed = static_cast<std::uint32_t>(
+            rd.integer(*v, join(path, "seed"), 0, std::int64_t{UINT32_MAX}));
+    if (const Json* s = Reader::find(j, "secondary")) {
+        const std::string sPath = join(path, "secondary");
+        rd.requireObject(*s, sPath, {"size", "strength"});
+        c.secondarySize = rd.real(rd.require(*s, sPath, "size"), join(sPath, "size"), kClumpSize);
+        if (!(c.secondarySize < c.size))
+            rd.fail(cat(join(sPath, "size"), " = ", c.secondarySize,
+                        " must be smaller than clump.size = ", c.size,
+                        " (secondary clumps lie inside the clumps)"));
+        if (const Json* v = Reader::find(*s, "strength"))
+            c.secondaryStrength = rd.real(*v, join(sPath, "strength"), kUnit);
+    }
+    return c;
+}
+
 VariationDesc parseVariation(const Reader& rd, const Json& j, const std::string& path) {
-    rd.requireObject(j, path, {"tilt_deg", "spin_deg", "bend_deg", "scale", "color", "weight"});
+    rd.requireObject(j, path,
+                     {"tilt_deg", "spin_deg", "bend_deg", "scale", "color", "weight", "clump"});
     VariationDesc v;
     const auto read = [&](std::string_view key, const Interval& r, float& out) {
         if (const Json* x = Reader::find(j, key))
@@ -375,10 +437,16 @@ VariationDesc parseVariation(const Reader& rd, const Json& j, const std::string&
     read("scale", kUnitOpenHi, v.scale);
     read("color", kUnitOpenHi, v.color);
     read("weight", kUnitOpenHi, v.weight);
+    read("clump", kUnitOpenHi, v.clump);
     return v;
 }
 
 } // namespace
+
+bool clumpFieldSet(const FieldDesc& clump) {
+    return !(clump.kind == FieldDesc::Kind::Constant && clump.value.x == 0.0f && !clump.paint &&
+             clump.mask == FieldDesc::MaskUse::None);
+}
 
 const FieldSlot* findFieldSlot(std::string_view key) {
     for (const FieldSlot& slot : kFieldSlots)
@@ -400,10 +468,14 @@ FieldDesc* presetField(PresetDesc& p, int index) {
                   kFieldSlots[SPOT_FIELD_BEND].index == SPOT_FIELD_BEND &&
                   kFieldSlots[SPOT_FIELD_SCALE].index == SPOT_FIELD_SCALE &&
                   kFieldSlots[SPOT_FIELD_COLOR].index == SPOT_FIELD_COLOR &&
-                  kFieldSlots[SPOT_FIELD_WEIGHT].index == SPOT_FIELD_WEIGHT);
+                  kFieldSlots[SPOT_FIELD_WEIGHT].index == SPOT_FIELD_WEIGHT &&
+                  kFieldSlots[SPOT_FIELD_CLUMP].index == SPOT_FIELD_CLUMP &&
+                  kFieldSlots[SPOT_FIELD_CLUMP_SIZE].index == SPOT_FIELD_CLUMP_SIZE &&
+                  kFieldSlots[SPOT_FIELD_MASK].index == SPOT_FIELD_MASK);
     // The PresetDesc members, in the table's order.
     FieldDesc* const members[] = {&p.density, p.comb ? &*p.comb : nullptr, &p.tiltDeg, &p.spinDeg,
-                                  &p.bendDeg, &p.scale, &p.color, &p.weight};
+                                  &p.bendDeg, &p.scale, &p.color, &p.weight,
+                                  &p.clump, &p.clumpSize, &p.mask};
     static_assert(std::size(members) == std::size(kFieldSlots));
     if (index < 0 || index >= kFieldSlotCount)
         throw InputError(cat("field slot ", index, " is not one of 0..", kFieldSlotCount - 1));
@@ -418,7 +490,8 @@ PresetDesc parsePreset(std::string_view text, const std::string& name) {
     const Reader rd(name);
     rd.requireObject(
         root, "",
-        {"version", "name", "description", "kernel", "distribution", "fields", "variation"});
+        {"version", "name", "description", "kernel", "distribution", "fields", "variation",
+         "clump"});
 
     PresetDesc p;
     const Json& version = rd.require(root, "", "version");
@@ -448,6 +521,9 @@ PresetDesc parsePreset(std::string_view text, const std::string& name) {
         parseFields(rd, *f, "fields", p);
     if (const Json* v = Reader::find(root, "variation"))
         p.variation = parseVariation(rd, *v, "variation");
+    if (const Json* c = Reader::find(root, "clump"))
+        p.clumpDesc = parseClump(rd, *c, "clump");
+    p.clumpDesc.on = p.clumpDesc.on || clumpFieldSet(p.clump);
     return p;
 }
 

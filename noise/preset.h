@@ -6,6 +6,7 @@
 /// path and the file.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <iterator>
 #include <optional>
@@ -76,6 +77,20 @@ struct VariationDesc {
     float scale = 0.0f;   ///< relative, uniform in [1 - v, 1 + v], same for all axes
     float color = 0.0f;   ///< relative brightness, uniform in [1 - v, 1 + v]
     float weight = 0.0f;  ///< relative, uniform in [1 - v, 1 + v]
+    float clump = 0.0f;   ///< relative clump strength, uniform in [1 - v, 1 + v]
+};
+
+/// Clumps (presets/README.md "clump"; docs/design.md section 3, "Clumps"; shaders/spot_clump.h):
+/// strands gather towards clump centres scattered on the surface. The strength is the `clump`
+/// field, the relative size the `clump_size` field.
+struct ClumpDesc {
+    bool on = false;               ///< the preset clumps (a `clump` object or a `clump` field)
+    float size = 0.1f;             ///< world units, (0, 1e3]: a clump's mean width (area size^2)
+    float variation = 0.3f;        ///< [0, 1]: 0 clumps of even size, 1 very unequal ones
+    float shape = 0.5f;            ///< [0, 1]: 0 a lean (linear in height), 1 a bend (quadratic)
+    std::uint32_t seed = 0;        ///< the centres' seed (mixed with the scene's impulse seed)
+    float secondarySize = 0.0f;    ///< world units, [0, size): smaller clumps inside; 0: none
+    float secondaryStrength = 0.5f; ///< [0, 1]: their strength relative to the clump field
 };
 
 struct PresetDesc {
@@ -91,6 +106,10 @@ struct PresetDesc {
     FieldDesc scale;                ///< 3 components, world units per kernel unit, > 0
     FieldDesc color;                ///< 3 components, multiplies each lobe's colour
     FieldDesc weight;               ///< scalar |w| multiplying extinction, >= 0
+    FieldDesc clump;                ///< scalar clump strength in [0, 1]; default 0
+    FieldDesc clumpSize;            ///< scalar relative clump size in [0.5, 2]; default 1
+    FieldDesc mask;                 ///< scalar mask in [0, 1] (what masked slots are limited to)
+    ClumpDesc clumpDesc;
     VariationDesc variation;
     std::filesystem::path baseDir;  ///< folder the preset came from (for relative image paths)
 };
@@ -117,6 +136,9 @@ inline constexpr FieldSlot kFieldSlots[] = {
     {5, "scale", 3, 0.0, 1e3, true, 1.0f, false},          // world units per kernel unit
     {6, "color", 3, 0.0, 1.0, false, 1.0f, false},         // linear RGB
     {7, "weight", 1, 0.0, 1e3, false, 1.0f, false},        // multiplies extinction
+    {8, "clump", 1, 0.0, 1.0, false, 0.0f, false},         // clump strength
+    {9, "clump_size", 1, 0.5, 2.0, false, 1.0f, false},    // relative clump size
+    {10, "mask", 1, 0.0, 1.0, false, 0.0f, false},         // the groom's mask
 };
 inline constexpr int kFieldSlotCount = int(std::size(kFieldSlots));
 
@@ -126,6 +148,10 @@ const FieldSlot* findFieldSlot(std::string_view key);
 /// an index out of range.
 FieldDesc* presetField(PresetDesc& preset, int index);
 const FieldDesc* presetField(const PresetDesc& preset, int index);
+
+/// Whether a `clump` field asks for clumps: anything but the constant 0 (a painted layer, even
+/// an empty one, counts: the editor's clump brush turns clumps on with its first stroke).
+bool clumpFieldSet(const FieldDesc& clump);
 
 /// Parse preset JSON from memory; `name` (the file) is used in messages.
 PresetDesc parsePreset(std::string_view json, const std::string& name);

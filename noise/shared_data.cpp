@@ -10,8 +10,8 @@ SpotImpulse toGpu(const noise::Impulse& m) {
     g.normal = vec4(m.normal, m.bend);
     g.comb = vec4(m.comb, m.height);
     g.frameX = vec4(m.frame[0], 1.0f);
-    g.frameY = vec4(m.frame[1], 0.0f);
-    g.frameZ = vec4(m.frame[2], 0.0f);
+    g.frameY = vec4(m.frame[1], m.clumpStrength);
+    g.frameZ = vec4(m.frame[2], m.clumpDistance);
     g.scale = vec4(m.scale, std::bit_cast<float>(m.triangle));
     g.color = vec4(m.color, m.barycentric.x);
     g.cell = ivec4(m.cell, std::bit_cast<std::int32_t>(m.barycentric.y));
@@ -27,6 +27,8 @@ noise::Impulse fromGpu(const SpotImpulse& g) {
     m.comb = glm::vec3(g.comb);
     m.height = g.comb.w;
     m.frame = glm::mat3(glm::vec3(g.frameX), glm::vec3(g.frameY), glm::vec3(g.frameZ));
+    m.clumpStrength = g.frameY.w;
+    m.clumpDistance = g.frameZ.w;
     m.scale = glm::vec3(g.scale);
     m.triangle = std::bit_cast<std::uint32_t>(g.scale.w);
     m.color = glm::vec3(g.color);

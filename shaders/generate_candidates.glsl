@@ -11,6 +11,11 @@
 #else
 #define SPOT_GEN_NO_JITTERED
 #endif
+// The groom modules (compiled with SPOT_GEN_GROOM) carry the clumps, the masks and the mask
+// overlay; the others leave them out (spot_generate.h).
+#ifndef SPOT_GEN_GROOM
+#define SPOT_GEN_NO_GROOM
+#endif
 #include "spot_shared.h"
 #include "spot_layout.h"
 #include "spot_generate_layout.h"
@@ -52,6 +57,9 @@ layout(constant_id = kGenSpecFieldKind + 4u) const int kKind4 = 0;
 layout(constant_id = kGenSpecFieldKind + 5u) const int kKind5 = 0;
 layout(constant_id = kGenSpecFieldKind + 6u) const int kKind6 = 0;
 layout(constant_id = kGenSpecFieldKind + 7u) const int kKind7 = 0;
+layout(constant_id = kGenSpecFieldKind + 8u) const int kKind8 = 0;
+layout(constant_id = kGenSpecFieldKind + 9u) const int kKind9 = 0;
+layout(constant_id = kGenSpecFieldKind + 10u) const int kKind10 = 0;
 layout(constant_id = kGenSpecFieldComponents + 0u) const int kComponents0 = 1;
 layout(constant_id = kGenSpecFieldComponents + 1u) const int kComponents1 = 1;
 layout(constant_id = kGenSpecFieldComponents + 2u) const int kComponents2 = 1;
@@ -60,6 +68,10 @@ layout(constant_id = kGenSpecFieldComponents + 4u) const int kComponents4 = 1;
 layout(constant_id = kGenSpecFieldComponents + 5u) const int kComponents5 = 1;
 layout(constant_id = kGenSpecFieldComponents + 6u) const int kComponents6 = 1;
 layout(constant_id = kGenSpecFieldComponents + 7u) const int kComponents7 = 1;
+layout(constant_id = kGenSpecFieldComponents + 8u) const int kComponents8 = 1;
+layout(constant_id = kGenSpecFieldComponents + 9u) const int kComponents9 = 1;
+layout(constant_id = kGenSpecFieldComponents + 10u) const int kComponents10 = 1;
+layout(constant_id = kGenSpecClump) const uint kClumpBits = 0u;
 
 // The accessors spot_generate.h reads: buffers, with what the specialization fixes as constants
 // (the slot is a constant at every call, so each field folds to its one kind).
@@ -98,9 +110,15 @@ ivec2 spotParamFieldKind(uint slot) {
     case 4u: return ivec2(kKind4, kComponents4);
     case 5u: return ivec2(kKind5, kComponents5);
     case 6u: return ivec2(kKind6, kComponents6);
-    default: return ivec2(kKind7, kComponents7);
+    case 7u: return ivec2(kKind7, kComponents7);
+    case 8u: return ivec2(kKind8, kComponents8);
+    case 9u: return ivec2(kKind9, kComponents9);
+    default: return ivec2(kKind10, kComponents10);
     }
 }
+vec4 spotParamClump() { return params.clump; }
+vec4 spotParamClump2() { return params.clump2; }
+uvec4 spotParamClumpFlags() { return uvec4(params.clumpFlags.x, kClumpBits, 0u, 0u); }
 
 #include "spot_generate.h"
 

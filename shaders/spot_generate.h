@@ -6,7 +6,8 @@
  *   SpotPiece spotCellPiece(uint i); real spotFieldData(uint i);
  *   vec4 spotParamDistribution(); vec4 spotParamVariation0(); vec4 spotParamVariation1();
  *   uvec4 spotParamFlags(); vec4 spotParamLod(); SpotField spotParamField(uint slot);
- *   ivec2 spotParamFieldKind(uint slot) (the slot's SpotField.kind.xy: kind, components).
+ *   ivec2 spotParamFieldKind(uint slot) (the slot's SpotField.kind.xy: kind, components);
+ *   vec4 spotParamClump(); vec4 spotParamClump2(); uvec4 spotParamClumpFlags() (spot_clump.h).
  * In GLSL these read storage buffers, except what the pipeline is specialized for (the
  * distribution and flags, each field's kind: generate_candidates.comp), which are constants so
  * that only the paths a preset uses are compiled; in C++ this file is included inside a class
@@ -150,6 +151,14 @@ SPOT_CONST int kFieldKindMask = 15;
 SPOT_CONST int kFieldLayered = 16;
 SPOT_CONST int kFieldLayeredDensity = 32;
 SPOT_CONST uint kFieldFloats = 36u;
+/* A slot limited to the mask (the mask slot's value m at the point; presets/README.md "Masks")
+ * carries one of these in its kind: its value v becomes e + (v - e) m (inside) or
+ * e + (v - e) (1 - m) (outside), e its value outside (4 floats in the field data at the offset
+ * in value.w, bits). Applied by spotSlotValue, not spotFieldEval: a field is the same field
+ * wherever it is bound. */
+SPOT_CONST int kFieldMaskedInside = 64;
+SPOT_CONST int kFieldMaskedOutside = 128;
+SPOT_CONST int kFieldLayerFlags = 48; /* kFieldLayered | kFieldLayeredDensity */
 
 SPOT_FN ivec4 spotDataIvec4(uint at) {
     return ivec4(floatBitsToInt(spotFieldData(at)), floatBitsToInt(spotFieldData(at + 1u)),
@@ -261,11 +270,52 @@ SPOT_FN rvec3 spotFieldBase(SpotField f, int kind, int components, SpotSurface s
 SPOT_FN rvec3 spotFieldEval(uint slot, SpotSurface s) {
     SpotField f = spotParamField(slot);
     ivec2 kindComponents = spotParamFieldKind(slot);
-    int flags = kindComponents.x & ~kFieldKindMask;
+    int flags = kindComponents.x & kFieldLayerFlags;
     rvec3 base = spotFieldBase(f, kindComponents.x & kFieldKindMask, kindComponents.y, s);
     if (flags == 0)
         return base;
     return spotFieldLayer(floatBitsToUint(f.axis.w), flags, base, s.position);
+}
+
+/* Clumps (spot_clump.h), the mask overlay: spotParamClumpFlags().y's bits. */
+SPOT_CONST uint kClumpOn = 1u;
+SPOT_CONST uint kClumpSecondary = 2u;
+SPOT_CONST uint kClumpMaskOverlay = 4u;
+/* The overlay's tint: the colour masked impulses are drawn towards, and how far. */
+SPOT_CONST real kMaskOverlayAmount = real(0.8);
+
+/* The groom's part of the generator (clumps, masks, the mask overlay) is compiled into the GPU
+ * modules that need it only (SPOT_GEN_NO_GROOM defined before inclusion leaves it out: every
+ * inlined field evaluation costs lavapipe's pipeline creation, used or not); C++ has it all. */
+#ifndef SPOT_GEN_NO_GROOM
+
+/* Whether an impulse reads the mask: a slot limited to it, or the overlay. */
+SPOT_FN bool spotMaskRead() {
+    if ((spotParamClumpFlags().y & kClumpMaskOverlay) != 0u)
+        return true;
+    for (uint slot = 0u; slot < uint(SPOT_FIELD_COUNT); ++slot)
+        if ((spotParamFieldKind(slot).x & (kFieldMaskedInside | kFieldMaskedOutside)) != 0)
+            return true;
+    return false;
+}
+
+#include "spot_clump.h"
+
+#endif /* SPOT_GEN_NO_GROOM */
+
+/* A slot's value for an impulse: its field, limited to the mask (its value `mask` at the
+ * impulse, evaluated once) when the slot says so. */
+SPOT_FN rvec3 spotSlotValue(uint slot, SpotSurface s, real mask) {
+    rvec3 v = spotFieldEval(slot, s);
+#ifndef SPOT_GEN_NO_GROOM
+    int kind = spotParamFieldKind(slot).x;
+    if ((kind & (kFieldMaskedInside | kFieldMaskedOutside)) != 0) {
+        real m = (kind & kFieldMaskedOutside) != 0 ? real(1.0) - mask : mask;
+        rvec3 e = rvec3(spotDataVec4(floatBitsToUint(spotParamField(slot).value.w)));
+        v = e + (v - e) * m;
+    }
+#endif
+    return v;
 }
 
 SPOT_FN real spotSymmetric(uint key, uint counter) { return real(2.0) * spotRand(key, counter) - real(1.0); }
@@ -273,7 +323,12 @@ SPOT_FN real spotSymmetric(uint key, uint counter) { return real(2.0) * spotRand
 /* The candidate at barycentric `bary` of triangle `tri`: the density test, then the impulse. */
 SPOT_FN bool spotFinishImpulse(ivec3 cell, uint key, uint tri, rvec3 bary, SPOT_OUT(SpotImpulse) imp) {
     SpotSurface sp = spotSurfaceAt(tri, bary);
-    real density = spotFieldEval(uint(SPOT_FIELD_DENSITY), sp).x;
+    real mask = real(0.0);
+#ifndef SPOT_GEN_NO_GROOM
+    if (spotMaskRead())
+        mask = spotFieldEval(uint(SPOT_FIELD_MASK), sp).x;
+#endif
+    real density = spotSlotValue(uint(SPOT_FIELD_DENSITY), sp, mask).x;
     if (!(spotRand(key, kRandDensity) < density))
         return false;
     rvec4 dist = rvec4(spotParamDistribution());
@@ -281,19 +336,19 @@ SPOT_FN bool spotFinishImpulse(ivec3 cell, uint key, uint tri, rvec3 bary, SPOT_
     rvec4 var1 = rvec4(spotParamVariation1());
     uvec4 flags = spotParamFlags();
     real height = dist.z + dist.w * spotSymmetric(key, kRandHeight);
-    rvec3 comb = flags.z != 0u ? spotFieldEval(uint(SPOT_FIELD_COMB), sp) : sp.tangent;
-    real tilt = radians(spotFieldEval(uint(SPOT_FIELD_TILT), sp).x + var0.x * spotSymmetric(key, kRandTilt));
-    real spin = radians(spotFieldEval(uint(SPOT_FIELD_SPIN), sp).x + var0.y * spotSymmetric(key, kRandSpin));
+    rvec3 comb = flags.z != 0u ? spotSlotValue(uint(SPOT_FIELD_COMB), sp, mask) : sp.tangent;
+    real tilt = radians(spotSlotValue(uint(SPOT_FIELD_TILT), sp, mask).x + var0.x * spotSymmetric(key, kRandTilt));
+    real spin = radians(spotSlotValue(uint(SPOT_FIELD_SPIN), sp, mask).x + var0.y * spotSymmetric(key, kRandSpin));
     rmat3 frame = spotKernelFrame(sp.normal, comb, sp.tangent, tilt, spin);
     /* The comb as it lies in the tangent plane: the frame's x axis before tilt and spin. */
     rvec3 combPlane = normalize(frame[0] * cos(spin) - frame[1] * sin(spin));
     combPlane = normalize(combPlane * cos(tilt) + frame[2] * sin(tilt));
-    real bend = radians(spotFieldEval(uint(SPOT_FIELD_BEND), sp).x + var0.z * spotSymmetric(key, kRandBend));
-    rvec3 scale = spotFieldEval(uint(SPOT_FIELD_SCALE), sp) * (real(1.0) + var0.w * spotSymmetric(key, kRandScale));
+    real bend = radians(spotSlotValue(uint(SPOT_FIELD_BEND), sp, mask).x + var0.z * spotSymmetric(key, kRandBend));
+    rvec3 scale = spotSlotValue(uint(SPOT_FIELD_SCALE), sp, mask) * (real(1.0) + var0.w * spotSymmetric(key, kRandScale));
     scale = max(scale, rvec3(real(1e-12)));
-    rvec3 color = clamp(spotFieldEval(uint(SPOT_FIELD_COLOR), sp) * (real(1.0) + var1.x * spotSymmetric(key, kRandColor)),
+    rvec3 color = clamp(spotSlotValue(uint(SPOT_FIELD_COLOR), sp, mask) * (real(1.0) + var1.x * spotSymmetric(key, kRandColor)),
                         rvec3(real(0.0)), rvec3(real(1.0)));
-    real weight = max(real(0.0), spotFieldEval(uint(SPOT_FIELD_WEIGHT), sp).x *
+    real weight = max(real(0.0), spotSlotValue(uint(SPOT_FIELD_WEIGHT), sp, mask).x *
                                      (real(1.0) + var1.y * spotSymmetric(key, kRandWeight)));
     /* Level of detail: thin the impulses of cells far below the LOD size on screen, conserving
      * their expected mass. */
@@ -309,12 +364,48 @@ SPOT_FN bool spotFinishImpulse(ivec3 cell, uint key, uint tri, rvec3 bary, SPOT_
             weight /= keep;
         }
     }
+    /* Clumps: the kernel's tip moves towards its clump's axis, its root stays (spot_clump.h). */
+    real clumpStrength = real(0.0);
+    real clumpDistance = real(0.0);
+#ifndef SPOT_GEN_NO_GROOM
+    uvec4 clumpFlags = spotParamClumpFlags();
+    if ((clumpFlags.y & kClumpOn) != 0u) {
+        rvec4 clump = rvec4(spotParamClump());
+        rvec4 clump2 = rvec4(spotParamClump2());
+        real strength = spotSlotValue(uint(SPOT_FIELD_CLUMP), sp, mask).x *
+                        (real(1.0) + clump2.z * spotSymmetric(key, kRandClump));
+        strength = clamp(strength, real(0.0), real(1.0));
+        /* Without strength the impulse is exactly the unclumped one (and costs no search). */
+        if (strength > real(0.0)) {
+            real size = spotSlotValue(uint(SPOT_FIELD_CLUMP_SIZE), sp, mask).x;
+            SpotClump c1 = spotNearestClump(sp.position, sp.normal, clump.x, size, clump.y,
+                                            clumpFlags.x);
+            rvec3 move = rvec3(real(0.0));
+            if (c1.found) {
+                clumpStrength = strength;
+                clumpDistance = c1.distance;
+                move = strength * (c1.centre - sp.position);
+            }
+            if ((clumpFlags.y & kClumpSecondary) != 0u) {
+                real strength2 = clamp(clump2.y * strength, real(0.0), real(1.0)) * (real(1.0) - strength);
+                SpotClump c2 = spotNearestClump(sp.position, sp.normal, clump2.x, size, clump.y,
+                                                spotHash(clumpFlags.x ^ kClumpSecondarySalt));
+                if (c2.found)
+                    move += strength2 * (c2.centre - sp.position);
+            }
+            if (dot(move, move) > real(0.0))
+                spotClumpKernel(move, clump.z, clump.w, scale, frame, bend);
+        }
+    }
+    if ((clumpFlags.y & kClumpMaskOverlay) != 0u)
+        color = mix(color, rvec3(real(1.0), real(0.12), real(0.08)), kMaskOverlayAmount * mask);
+#endif
     imp.position = rvec4(sp.position + height * sp.normal, weight);
     imp.normal = rvec4(sp.normal, bend);
     imp.comb = rvec4(combPlane, height);
     imp.frameX = rvec4(frame[0], real(1.0));
-    imp.frameY = rvec4(frame[1], real(0.0));
-    imp.frameZ = rvec4(frame[2], real(0.0));
+    imp.frameY = rvec4(frame[1], clumpStrength);
+    imp.frameZ = rvec4(frame[2], clumpDistance);
     imp.scale = rvec4(scale, uintBitsToFloat(tri));
     imp.color = rvec4(color, bary.y);
     imp.cell = ivec4(cell, floatBitsToInt(float(bary.z)));

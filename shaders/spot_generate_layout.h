@@ -64,7 +64,10 @@ SPOT_CONST uint kGenSpecTangents = 2u;   /* bool: the mesh has tangents */
 /* int: field slot s's kind (SpotField.kind.x) at id kGenSpecFieldKind + s, its component count
  * (1 or 3) at kGenSpecFieldComponents + s; s < SPOT_FIELD_COUNT. */
 SPOT_CONST uint kGenSpecFieldKind = 3u;
-SPOT_CONST uint kGenSpecFieldComponents = 11u;
+SPOT_CONST uint kGenSpecFieldComponents = 14u;
+/* uint: SpotGenParams.clumpFlags.y (clumps, secondary clumps, the mask overlay: spot_generate.h
+ * kClump*), so that a preset without clumps compiles none of their code. */
+SPOT_CONST uint kGenSpecClump = 25u;
 
 SPOT_CONST uint kGenGroup = 64u;          /* workgroup size of the per-candidate passes */
 SPOT_CONST uint kGenScanThreads = 256u;   /* the scan's one workgroup */

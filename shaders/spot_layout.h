@@ -27,8 +27,8 @@ struct SpotImpulse {
     vec4 normal;   /* xyz: surface normal; w: bend (radians per kernel unit) */
     vec4 comb;     /* xyz: comb direction in the tangent plane; w: height offset */
     vec4 frameX;   /* kernel frame columns (kernel -> world rotation); w unused */
-    vec4 frameY;
-    vec4 frameZ;
+    vec4 frameY;   /* w: the clump strength the kernel was clumped with (0: none) */
+    vec4 frameZ;   /* w: the distance from the anchor to its clump's centre (0: none) */
     vec4 scale;    /* xyz: world units per kernel unit; w: uintBitsToFloat(triangle) */
     vec4 color;    /* rgb: colour multiplier; w: barycentric b1 */
     ivec4 cell;    /* xyz: generating cell; w: floatBitsToInt(barycentric b2) */
@@ -87,7 +87,10 @@ struct SpotField {
 #define SPOT_FIELD_SCALE 5
 #define SPOT_FIELD_COLOR 6
 #define SPOT_FIELD_WEIGHT 7
-#define SPOT_FIELD_COUNT 8
+#define SPOT_FIELD_CLUMP 8      /* clump strength in [0, 1] (spot_clump.h) */
+#define SPOT_FIELD_CLUMP_SIZE 9 /* relative clump size in [0.5, 2] */
+#define SPOT_FIELD_MASK 10      /* the groom's mask in [0, 1]: what masked fields are limited to */
+#define SPOT_FIELD_COUNT 11
 
 struct SpotGenParams {
     vec4 distribution; /* x: density_max (1 / world unit^2); y: jitter; z: height offset; w: height jitter */
@@ -101,5 +104,13 @@ struct SpotGenParams {
                           the kept ones' weight by it (stochastic simplification). The CPU
                           generator leaves it off; the GPU's comes per generation in
                           SpotGenPush.lod (spot_generate_layout.h). */
+    vec4 clump;        /* clumps (spot_clump.h): x: cell edge G = clump.size (world units);
+                          y: size variation (the seeds' weight spread); z: shape (0 a lean,
+                          1 a bend); w: the kernel's tip height (kernel units) */
+    vec4 clump2;       /* x: secondary clumps' cell edge (0: none); y: their strength
+                          (relative to the clump field); z: per-impulse strength variation;
+                          w: unused */
+    uvec4 clumpFlags;  /* x: the clumps' seed; y: bit 0 clumping on, bit 1 secondary clumps,
+                          bit 2 the mask overlay (the editor's view); z, w: unused */
     SpotField fields[SPOT_FIELD_COUNT];
 };

@@ -19,6 +19,6 @@ static_assert(sizeof(SpotImpulse) == 144);
 static_assert(sizeof(SpotLobe) == 64);
 static_assert(sizeof(SpotWorldLobe) == 64);
 static_assert(sizeof(SpotField) == 144);
-static_assert(sizeof(SpotGenParams) == 80 + 8 * 144);
+static_assert(sizeof(SpotGenParams) == 128 + SPOT_FIELD_COUNT * 144);
 static_assert(alignof(SpotImpulse) <= 16);
 } // namespace spot::gpu

@@ -6,8 +6,12 @@
 #include <vector>
 
 #include "generate_jittered.comp.h"
+#include "generate_jittered_groom.comp.h"
+#include "generate_jittered_groom_partial.comp.h"
 #include "generate_jittered_partial.comp.h"
 #include "generate_poisson.comp.h"
+#include "generate_poisson_groom.comp.h"
+#include "generate_poisson_groom_partial.comp.h"
 #include "generate_poisson_partial.comp.h"
 #include "generate_scan.comp.h"
 #include "generate_scatter.comp.h"
@@ -138,6 +142,7 @@ std::vector<std::int32_t> GpuGenerator::specializationKey() const {
     std::vector<std::int32_t> key = {std::int32_t(params.flags.z != 0u)};
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
         key.insert(key.end(), {params.fields[slot].kind.x, params.fields[slot].kind.y});
+    key.push_back(std::int32_t(params.clumpFlags.y)); // clumps, secondary, the mask overlay
     return key;
 }
 
@@ -222,8 +227,9 @@ const Pipeline& GpuGenerator::candidatePipeline() {
     m_candidateKey = specializationKey();
     for (auto it = m_prepared.begin(); it != m_prepared.end(); ++it)
         if (it->key == m_candidateKey) {
-            // Made on its thread (waits for it when it is not done yet).
+            // Made on their thread (waits for it when it is not done yet).
             m_candidatePipeline = it->pipeline.get();
+            m_partialPipeline = it->partial.get();
             m_prepared.erase(it);
             return m_candidatePipeline;
         }
@@ -248,6 +254,13 @@ void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
     key[2 + 2 * slot] = components;
     if (slot == SPOT_FIELD_COMB)
         key[0] = 1; // a comb field is bound
+    if (slot == SPOT_FIELD_CLUMP) { // a clump layer turns clumps on (noise::clumpFieldSet)
+        const gpu::SpotGenParams& params = m_generator.sharedParams();
+        key.back() |= std::int32_t(shared::f32::SharedGenerator::kClumpOn) |
+                      (params.clump2.x > 0.0f
+                           ? std::int32_t(shared::f32::SharedGenerator::kClumpSecondary)
+                           : 0);
+    }
     if (m_candidatePipeline.handle() && key == m_candidateKey)
         return;
     for (const Prepared& p : m_prepared)
@@ -258,13 +271,18 @@ void GpuGenerator::prepareFieldKind(std::uint32_t slot, std::int32_t kind,
     const bool uv = (params.flags.w & 1u) != 0u, tangents = (params.flags.w & 2u) != 0u;
     constexpr std::size_t kKept = 4; // the editor's slots: a few kinds armed in turn
     if (m_prepared.size() >= kKept) {
-        m_prepared.front().pipeline.wait(); // its thread must end before its pipeline is dropped
+        // Their threads must end before their pipelines are dropped.
+        m_prepared.front().pipeline.wait();
+        m_prepared.front().partial.wait();
         m_prepared.pop_front();
     }
+    // The first stroke's pipeline and its partial twin (the strokes after it), each on a thread.
     m_prepared.push_back(
-        {key, std::async(std::launch::async, [this, key, uv, tangents] {
-                  return makeCandidatePipeline(key, false, uv, tangents);
-              })});
+        {key,
+         std::async(std::launch::async,
+                    [this, key, uv, tangents] { return makeCandidatePipeline(key, false, uv, tangents); }),
+         std::async(std::launch::async,
+                    [this, key, uv, tangents] { return makeCandidatePipeline(key, true, uv, tangents); })});
 }
 
 Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& key, bool partial) {
@@ -282,6 +300,7 @@ Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& ke
     for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
         spec.set(kGenSpecFieldKind + slot, key[1 + 2 * slot])
             .set(kGenSpecFieldComponents + slot, key[2 + 2 * slot]);
+    spec.set(kGenSpecClump, std::uint32_t(key[1 + 2 * SPOT_FIELD_COUNT]));
     Bindings bindings = {storageBuffer(kGenBindParams),    storageBuffer(kGenBindCells),
                          storageBuffer(kGenBindPieces),    storageBuffer(kGenBindTriangles),
                          storageBuffer(kGenBindPositions), storageBuffer(kGenBindNormals),
@@ -292,12 +311,21 @@ Pipeline GpuGenerator::makeCandidatePipeline(const std::vector<std::int32_t>& ke
         bindings.push_back(storageBuffer(kGenBindSites));
     if (partial)
         bindings.push_back(storageBuffer(kGenBindDirty));
-    // A module per sampling and per full or partial generation, each declaring what it reads.
+    // A module per sampling and per full or partial generation, each declaring what it reads,
+    // and with the groom's part (clumps, masks, the mask overlay) only where the preset uses it.
+    bool groom = key[1 + 2 * SPOT_FIELD_COUNT] != 0;
+    for (std::uint32_t slot = 0; slot < SPOT_FIELD_COUNT; ++slot)
+        groom |= (key[1 + 2 * slot] & (shared::f32::SharedGenerator::kFieldMaskedInside |
+                                       shared::f32::SharedGenerator::kFieldMaskedOutside)) != 0;
     const std::span<const std::uint32_t> module =
-        m_jittered ? (partial ? spirv(spv_generate_jittered_partial_comp)
-                              : spirv(spv_generate_jittered_comp))
-                   : (partial ? spirv(spv_generate_poisson_partial_comp)
-                              : spirv(spv_generate_poisson_comp));
+        groom ? (m_jittered ? (partial ? spirv(spv_generate_jittered_groom_partial_comp)
+                                       : spirv(spv_generate_jittered_groom_comp))
+                            : (partial ? spirv(spv_generate_poisson_groom_partial_comp)
+                                       : spirv(spv_generate_poisson_groom_comp)))
+              : (m_jittered ? (partial ? spirv(spv_generate_jittered_partial_comp)
+                                       : spirv(spv_generate_jittered_comp))
+                            : (partial ? spirv(spv_generate_poisson_partial_comp)
+                                       : spirv(spv_generate_poisson_comp)));
     return makeComputePipeline(m_ctx, module, bindings, sizeof(SpotGenPush), spec);
 }
 

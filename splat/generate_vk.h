@@ -78,9 +78,10 @@ public:
     /// Start making, ahead of its use, the candidates pipeline for the current fields with field
     /// `slot` (SPOT_FIELD_*) of kind `kind` and `components` components, so that a setField
     /// that gives the slot that kind later (the editor's first stroke on a slot swaps in its
-    /// painted grid) does not compile in its frame. The compile runs on a thread of its own
-    /// (seconds on lavapipe: the editor's brush arms at once); the generation that needs the
-    /// pipeline waits for it. Keeps the pipelines of the last few kinds prepared.
+    /// painted grid) does not compile in its frame, nor the partial generations after it (its
+    /// partial twin is made too). The compiles run on threads of their own (seconds on
+    /// lavapipe: the editor's brush arms at once); the generation that needs a pipeline waits for
+    /// it. Keeps the pipelines of the last few kinds prepared.
     void prepareFieldKind(std::uint32_t slot, std::int32_t kind, std::int32_t components);
     /// refreshFields() when the fields changed only where the model cells `cells` (indices into
     /// the generator's cells) read them: the next prepare(), if it chooses the cells and level of
@@ -135,11 +136,12 @@ private:
     Pipeline m_candidatePipeline;                 ///< specialized for the preset; made on first use
     Pipeline m_partialPipeline;                   ///< the same for partial generations
     std::vector<std::int32_t> m_candidateKey;     ///< specializationKey() it was made for
-    /// prepareFieldKind's pipelines, made or being made on their threads, until their key is
-    /// used (the oldest dropped past a few).
+    /// prepareFieldKind's pipelines (and their partial twins), made or being made on their
+    /// threads, until their key is used (the oldest dropped past a few).
     struct Prepared {
         std::vector<std::int32_t> key;
         std::future<Pipeline> pipeline;
+        std::future<Pipeline> partial;
     };
     std::deque<Prepared> m_prepared;
     Pipeline m_scanPipeline, m_scatterPipeline;

@@ -3,10 +3,14 @@
 // (timings are ratios within one run; this machine is shared and noisy).
 #include <benchmark/benchmark.h>
 
+#include <chrono>
+
 #include "noise/cells.h"
 #include "noise/impulses.h"
 #include "noise/mesh.h"
 #include "noise/preset.h"
+#include "splat/context_vk.h"
+#include "splat/generate_vk.h"
 
 namespace {
 
@@ -74,9 +78,43 @@ void BM_PresetImpulses(benchmark::State& state, const char* name) {
     state.counters["impulses/s"] =
         benchmark::Counter(double(count) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
+BENCHMARK_CAPTURE(BM_PresetImpulses, fur, "fur")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_PresetImpulses, fur_clumped, "fur-clumped")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_PresetImpulses, grass, "grass")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_PresetImpulses, grass_tufts, "grass-tufts")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_PresetImpulses, lichen, "lichen")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_PresetImpulses, ring, "ring")->Unit(benchmark::kMillisecond);
+
+/// The GPU generator's passes on the whole bunny (their GPU time, GpuImpulses::milliseconds):
+/// what a frame that regenerates its impulses pays; clumped against unclumped presets.
+void BM_GpuGenerate(benchmark::State& state, const char* name) {
+    static splat::Context ctx;
+    const noise::PresetDesc p = preset(name);
+    noise::GeneratorOptions options;
+    options.seed = 1;
+    const noise::ImpulseGenerator generator(bunny(), p, options);
+    const auto start = std::chrono::steady_clock::now();
+    splat::GpuGenerator gpu(ctx, bunny(), generator);
+    (void)gpu.generate(); // compiles the pipeline
+    // The first generation's wall time: the pipeline's creation (lavapipe compiles at first use).
+    state.counters["first_ms"] =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    std::uint32_t count = 0;
+    for (auto _ : state) {
+        const splat::GpuImpulses g = gpu.generate();
+        state.SetIterationTime(g.milliseconds * 1e-3);
+        count = g.count;
+    }
+    state.counters["impulses"] = double(count);
+}
+BENCHMARK_CAPTURE(BM_GpuGenerate, fur, "fur")->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_GpuGenerate, fur_clumped, "fur-clumped")
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_GpuGenerate, grass, "grass")->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_GpuGenerate, grass_tufts, "grass-tufts")
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 
 } // namespace
 

@@ -46,7 +46,8 @@ inline bool sameImpulse(const noise::Impulse& a, const noise::Impulse& b) {
     return a.position == b.position && a.normal == b.normal && a.comb == b.comb &&
            a.frame == b.frame && a.scale == b.scale && a.color == b.color && a.weight == b.weight &&
            a.bend == b.bend && a.height == b.height && a.triangle == b.triangle &&
-           a.barycentric == b.barycentric && a.cell == b.cell;
+           a.barycentric == b.barycentric && a.cell == b.cell &&
+           a.clumpStrength == b.clumpStrength && a.clumpDistance == b.clumpDistance;
 }
 
 inline void expectSameImpulses(const std::vector<noise::Impulse>& a,

@@ -148,12 +148,16 @@ TEST(EditInput, KeysUndoRedoFrameAndTheBrush) {
     const InputAction weaker = key(GLFW_KEY_LEFT_BRACKET, GLFW_MOD_SHIFT);
     EXPECT_EQ(weaker.type, Type::BrushStrength);
     EXPECT_EQ(weaker.step, -1);
-    for (int k = 0; k < 7; ++k) {
+    for (int k = 0; k < 9; ++k) { // 1..9: density-add .. clump-size
         const InputAction kind = key(GLFW_KEY_1 + k);
         EXPECT_EQ(kind.type, Type::BrushKind);
         EXPECT_EQ(kind.kind, k);
     }
-    EXPECT_EQ(key(GLFW_KEY_8).type, Type::None);
+    const InputAction mask = key(GLFW_KEY_0); // the tenth: the mask brush
+    EXPECT_EQ(mask.type, Type::BrushKind);
+    EXPECT_EQ(mask.kind, 9);
+    EXPECT_EQ(key(GLFW_KEY_M).type, Type::MaskOverlay);
+    EXPECT_EQ(key(GLFW_KEY_M, 0, idle(), GLFW_REPEAT).type, Type::None); // one toggle a press
     EXPECT_EQ(key(GLFW_KEY_X).type, Type::MirrorX);
     EXPECT_EQ(key(GLFW_KEY_F12).type, Type::Export);
     EXPECT_EQ(key(GLFW_KEY_F12, 0, idle(), GLFW_REPEAT).type, Type::None); // one file a press

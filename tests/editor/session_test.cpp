@@ -704,7 +704,8 @@ bool sameImpulse(const noise::Impulse& a, const noise::Impulse& b) {
     return a.position == b.position && a.normal == b.normal && a.comb == b.comb &&
            a.frame == b.frame && a.scale == b.scale && a.color == b.color &&
            a.weight == b.weight && a.bend == b.bend && a.cell == b.cell &&
-           a.triangle == b.triangle && a.barycentric == b.barycentric;
+           a.triangle == b.triangle && a.barycentric == b.barycentric &&
+           a.clumpStrength == b.clumpStrength && a.clumpDistance == b.clumpDistance;
 }
 
 // Paint layers over the procedural fields: an erase stroke on fur's noise density keeps every

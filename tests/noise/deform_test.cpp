@@ -14,6 +14,7 @@
 #include "noise/preset.h"
 #include "noise/scene.h"
 #include "shaders/spot_deform.hpp"
+#include "test_support.h"
 
 namespace {
 
@@ -120,6 +121,41 @@ TEST(Deform, ImpulsesNeverSwimOverSixtyFrames) {
     const std::vector<noise::Impulse> again = deformer.move(rest, generator.cellSize());
     for (std::size_t i = 0; i < rest.size(); i += 97)
         EXPECT_LT(glm::length(again[i].position - rest[i].position), 1e-5f);
+}
+
+// Clumped kernels on an animated surface keep their clumping: the deformer turns each kernel with
+// its triangle (it never rebuilds the frame from the comb and tilt), so a kernel's lean towards
+// its clump, seen from its surface normal, is the rest's at every pose.
+TEST(Deform, ClumpedKernelsKeepTheirLeanWhenPosed) {
+    const noise::AnimatedMesh clip = noise::AnimatedMesh::loadGltf(spot::test::bendClip(tmp("bend-clump.glb")));
+    noise::PresetDesc preset =
+        noise::loadPreset(std::string(SPOT_SOURCE_DIR) + "/presets/fur-clumped.json");
+    const noise::ImpulseGenerator generator(clip.rest(), preset, {});
+    const std::vector<noise::Impulse> rest = generator.generate();
+    preset.clump = spot::test::constantField(glm::vec3(0.0f), 1);
+    const std::vector<noise::Impulse> unclumped =
+        noise::ImpulseGenerator(clip.rest(), preset, {}).generate();
+    ASSERT_EQ(rest.size(), unclumped.size());
+    ASSERT_GT(rest.size(), 1000u);
+    noise::Deformer deformer(clip);
+    for (const double t : {0.5, 1.0}) {
+        deformer.pose(t);
+        const std::vector<noise::Impulse> now = deformer.move(rest, generator.cellSize());
+        const std::vector<noise::Impulse> plain = deformer.move(unclumped, generator.cellSize());
+        double worst = 0.0, leaned = 0.0;
+        for (std::size_t i = 0; i < rest.size(); ++i) {
+            ASSERT_EQ(now[i].clumpStrength, rest[i].clumpStrength);
+            ASSERT_EQ(now[i].clumpDistance, rest[i].clumpDistance);
+            // The clumped axis in the frame of the unclumped one, at rest and posed: the same
+            // rotation (the triangle's turns both).
+            const glm::mat3 atRest = glm::transpose(unclumped[i].frame) * rest[i].frame;
+            const glm::mat3 posed = glm::transpose(plain[i].frame) * now[i].frame;
+            worst = std::max(worst, double(maxAbs(atRest, posed)));
+            leaned = std::max(leaned, double(glm::length(atRest[2] - glm::vec3(0, 0, 1))));
+        }
+        EXPECT_LT(worst, 1e-4) << "t " << t;
+        EXPECT_GT(leaned, 0.3) << "the clumps turn kernels";
+    }
 }
 
 TEST(Deform, WindTurnsAboutTheRootDeterministicallyInTime) {

@@ -19,7 +19,8 @@ namespace spot::noise {
 namespace {
 
 const std::filesystem::path kPresetDir = std::filesystem::path(SPOT_SOURCE_DIR) / "presets";
-const std::vector<std::string> kShipped = {"fur", "grass", "lichen", "ring", "uniform"};
+const std::vector<std::string> kShipped = {"fur",  "grass",       "lichen",     "ring",
+                                           "uniform", "fur-clumped", "grass-tufts"};
 
 /// A valid preset with the given pieces; `rest` is appended inside the top-level object.
 std::string
@@ -549,6 +550,110 @@ TEST(Preset, PaintLayerForms) {
     EXPECT_NE(parseError(withFields(R"({"density": {"base": 2, "paint": {"file": "p.vdb",
                "grid": "g"}}})"))
                   .find("fields.density.base"),
+              std::string::npos);
+}
+
+} // namespace
+} // namespace spot::noise
+
+namespace spot::noise {
+namespace {
+
+TEST(Preset, ClumpKeysAndRanges) {
+    const PresetDesc fur = loadPreset(kPresetDir / "fur.json");
+    EXPECT_FALSE(fur.clumpDesc.on); // no clump object, no clump field: off
+    EXPECT_EQ(fur.clump.value.x, 0.0f);
+    EXPECT_EQ(fur.clumpSize.value.x, 1.0f);
+    EXPECT_EQ(fur.mask.value.x, 0.0f);
+
+    const PresetDesc c = loadPreset(kPresetDir / "fur-clumped.json");
+    EXPECT_TRUE(c.clumpDesc.on);
+    EXPECT_EQ(c.clumpDesc.size, 0.05f);
+    EXPECT_EQ(c.clumpDesc.variation, 0.4f);
+    EXPECT_EQ(c.clumpDesc.shape, 0.5f);
+    EXPECT_EQ(c.clumpDesc.seed, 3u);
+    EXPECT_EQ(c.clumpDesc.secondarySize, 0.0f);
+    EXPECT_EQ(c.clump.value.x, 0.85f);
+    EXPECT_EQ(c.variation.clump, 0.15f);
+    const PresetDesc g = loadPreset(kPresetDir / "grass-tufts.json");
+    EXPECT_EQ(g.clumpDesc.secondarySize, 0.05f);
+    EXPECT_EQ(g.clumpDesc.secondaryStrength, 0.6f);
+
+    // A clump field alone turns clumps on with the defaults; a clump object alone too.
+    const PresetDesc fieldOnly = parsePreset(withFields(R"({"clump": 0.5})"), "t.json");
+    EXPECT_TRUE(fieldOnly.clumpDesc.on);
+    EXPECT_EQ(fieldOnly.clumpDesc.size, 0.1f);
+    const PresetDesc objectOnly = parsePreset(
+        makePreset(R"({"lobes": [{}]})", R"({"type": "poisson", "density_max": 100})",
+                   R"(, "clump": {"size": 0.2})"),
+        "t.json");
+    EXPECT_TRUE(objectOnly.clumpDesc.on);
+    EXPECT_EQ(objectOnly.clumpDesc.size, 0.2f);
+
+    const auto clump = [](const std::string& body) {
+        return makePreset(R"({"lobes": [{}]})", R"({"type": "poisson", "density_max": 100})",
+                          R"(, "clump": )" + body);
+    };
+    EXPECT_EQ(parseError(clump(R"({"size": 0})")), "t.json: clump.size = 0 is out of range (0, 1000]");
+    EXPECT_NE(parseError(clump(R"({"variation": 1.5})")).find("clump.variation"), std::string::npos);
+    EXPECT_NE(parseError(clump(R"({"shape": -0.1})")).find("clump.shape"), std::string::npos);
+    EXPECT_NE(parseError(clump(R"({"sise": 0.1})")).find("unknown key \"clump.sise\""),
+              std::string::npos);
+    EXPECT_NE(parseError(clump(R"({"size": 0.1, "secondary": {"size": 0.1}})"))
+                  .find("clump.secondary.size = 0.1 must be smaller than clump.size"),
+              std::string::npos);
+    EXPECT_NE(parseError(clump(R"({"secondary": {"strength": 0.5}})")).find("clump.secondary"),
+              std::string::npos); // its size is required
+    EXPECT_NE(parseError(withFields(R"({"clump": 1.5})")).find("fields.clump = 1.5 is out of range"),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"clump_size": 4})")).find("fields.clump_size = 4"),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"mask": -1})")).find("fields.mask"), std::string::npos);
+    EXPECT_NE(parseError(makePreset(R"({"lobes": [{}]})",
+                                    R"({"type": "poisson", "density_max": 100})",
+                                    R"(, "variation": {"clump": 1})"))
+                  .find("variation.clump"),
+              std::string::npos);
+}
+
+TEST(Preset, MaskedSlotForms) {
+    const PresetDesc p = parsePreset(
+        withFields(R"({"mask": {"type": "gradient", "from": [0, 0, 0], "to": [1, 0, 0],
+                                "values": [0, 1]},
+                       "clump": {"base": 0.8, "mask": "inside"},
+                       "density": {"base": {"type": "noise", "frequency": 2, "range": [0.5, 1]},
+                                   "mask": "outside", "else": 0},
+                       "color": {"mask": "inside", "else": [1, 0, 0]}})"),
+        "t.json");
+    EXPECT_EQ(p.mask.kind, FieldDesc::Kind::Gradient);
+    EXPECT_EQ(p.clump.mask, FieldDesc::MaskUse::Inside);
+    EXPECT_EQ(p.clump.value.x, 0.8f);
+    EXPECT_EQ(p.clump.maskElse.x, 0.0f); // the slot's default
+    EXPECT_EQ(p.density.mask, FieldDesc::MaskUse::Outside);
+    EXPECT_EQ(p.density.kind, FieldDesc::Kind::Noise);
+    EXPECT_EQ(p.density.maskElse.x, 0.0f);
+    EXPECT_EQ(p.color.mask, FieldDesc::MaskUse::Inside);
+    EXPECT_EQ(p.color.value, glm::vec3(1.0f)); // no base: the slot's default
+    EXPECT_EQ(p.color.maskElse, glm::vec3(1.0f, 0.0f, 0.0f));
+    EXPECT_EQ(p.tiltDeg.mask, FieldDesc::MaskUse::None);
+
+    EXPECT_NE(parseError(withFields(R"({"clump": {"base": 0.5, "mask": "within"}})"))
+                  .find("fields.clump.mask = \"within\" is not one of \"inside\", \"outside\""),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"mask": {"base": 0.5, "mask": "inside"}})"))
+                  .find("the mask cannot be limited to itself"),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"clump": {"base": 0.5, "else": 0}})"))
+                  .find("needs \"mask\""),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"clump": {"mask": "inside", "else": 2}})"))
+                  .find("fields.clump.else = 2 is out of range"),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"comb": {"base": [1, 0, 0], "mask": "inside"}})"))
+                  .find("the comb cannot be masked"),
+              std::string::npos);
+    EXPECT_NE(parseError(withFields(R"({"clump": {"base": 0.5, "mask": "inside", "x": 1}})"))
+                  .find("unknown key \"fields.clump.x\""),
               std::string::npos);
 }
 

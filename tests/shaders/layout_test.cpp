@@ -72,6 +72,10 @@ using uint = std::uint32_t;
 #include "generate_jittered.comp.h"
 #include "generate_jittered_partial.comp.h"
 #include "generate_poisson.comp.h"
+#include "generate_poisson_groom.comp.h"
+#include "generate_poisson_groom_partial.comp.h"
+#include "generate_jittered_groom.comp.h"
+#include "generate_jittered_groom_partial.comp.h"
 #include "generate_poisson_partial.comp.h"
 #include "generate_scan.comp.h"
 #include "generate_scatter.comp.h"
@@ -148,7 +152,10 @@ namespace {
     X(spot::gpu, SpotGenParams, variation1, 32)                                                    \
     X(spot::gpu, SpotGenParams, flags, 48)                                                         \
     X(spot::gpu, SpotGenParams, lod, 64)                                                           \
-    X(spot::gpu, SpotGenParams, fields, 80)                                                        \
+    X(spot::gpu, SpotGenParams, clump, 80)                                                         \
+    X(spot::gpu, SpotGenParams, clump2, 96)                                                        \
+    X(spot::gpu, SpotGenParams, clumpFlags, 112)                                                   \
+    X(spot::gpu, SpotGenParams, fields, 128)                                                       \
     X(layout_splat, SpotSplatFrame, eye, 0)                                                        \
     X(layout_splat, SpotSplatFrame, forward, 16)                                                   \
     X(layout_splat, SpotSplatFrame, right, 32)                                                     \
@@ -215,7 +222,7 @@ namespace {
     X(spot::gpu, SpotLobe, 64)                                                                     \
     X(spot::gpu, SpotWorldLobe, 64)                                                                \
     X(spot::gpu, SpotField, 144)                                                                   \
-    X(spot::gpu, SpotGenParams, 80 + 8 * 144)                                                      \
+    X(spot::gpu, SpotGenParams, 128 + 11 * 144)                                                    \
     X(layout_splat, SpotSplatFrame, 128)                                                           \
     X(layout_splat, SpotMeshVertex, 32)                                                            \
     X(layout_splat, SpotScreenLobe, 64)                                                            \
@@ -342,6 +349,10 @@ TEST(SharedLayout, EveryFieldOffsetTheShadersUseIsTheHosts) {
                               SPOT_MODULE(spv_splat_resolve_hybrid_comp),
                               SPOT_MODULE(spv_generate_poisson_partial_comp),
                               SPOT_MODULE(spv_generate_jittered_partial_comp),
+                              SPOT_MODULE(spv_generate_poisson_groom_comp),
+                              SPOT_MODULE(spv_generate_jittered_groom_comp),
+                              SPOT_MODULE(spv_generate_poisson_groom_partial_comp),
+                              SPOT_MODULE(spv_generate_jittered_groom_partial_comp),
                               SPOT_MODULE(spv_baked_march_2_comp),
                               SPOT_MODULE(spv_baked_march_3_comp),
                               SPOT_MODULE(spv_baked_march_4_comp),

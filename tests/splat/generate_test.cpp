@@ -67,6 +67,10 @@ void expectSameImpulses(const noise::PresetDesc& preset, const noise::Mesh& mesh
         EXPECT_NEAR(glm::length(m.scale - cpu[i].scale), 0.0f, 1e-4f * glm::length(cpu[i].scale));
         EXPECT_NEAR(glm::length(m.color - cpu[i].color), 0.0f, 1e-4f);
         EXPECT_GT(glm::dot(m.frame[2], cpu[i].frame[2]), 0.9999f);
+        EXPECT_GT(glm::dot(m.frame[0], cpu[i].frame[0]), 0.9999f);
+        EXPECT_NEAR(m.bend, cpu[i].bend, 1e-4f * (1.0f + std::abs(cpu[i].bend)));
+        EXPECT_NEAR(m.clumpStrength, cpu[i].clumpStrength, 1e-6f);
+        EXPECT_NEAR(m.clumpDistance, cpu[i].clumpDistance, 1e-5f * generator.cellSize());
     }
     EXPECT_LE(worst, tolerance) << presetName << " on " << meshName;
     // The host's bound of the count sizes the impulse buffer: between the two.
@@ -91,6 +95,13 @@ TEST(GpuGenerate, FurOnTheBunny) {
 } // poisson, noise density
 TEST(GpuGenerate, DenseFurOnTheBunny) {
     expectSameImpulses("fur-dense", "bunny");
+}
+// Clumps: the same clumped kernels on both sides (frames within the comparison's tolerance).
+TEST(GpuGenerate, ClumpedFurOnTheBunny) {
+    expectSameImpulses("fur-clumped", "bunny");
+}
+TEST(GpuGenerate, TuftedGrassOnAPlane) {
+    expectSameImpulses("grass-tufts", "plane");
 }
 TEST(GpuGenerate, GrassOnAPlane) {
     expectSameImpulses("grass", "plane");
