@@ -97,8 +97,12 @@ std::string defaultPipelineCacheFolder() {
 }
 
 std::string pipelineCacheFile(const std::string& folder, const VkPhysicalDeviceProperties& p) {
-    char name[64];
-    std::snprintf(name, sizeof(name), "pipelines-%04x-%04x.bin", p.vendorID, p.deviceID);
+    // The driver's cache UUID in the name too: nodes of one shot with different driver builds
+    // keep a file each rather than overwrite one another's.
+    char name[96];
+    std::snprintf(name, sizeof(name), "pipelines-%04x-%04x-%02x%02x%02x%02x.bin", p.vendorID,
+                  p.deviceID, p.pipelineCacheUUID[0], p.pipelineCacheUUID[1],
+                  p.pipelineCacheUUID[2], p.pipelineCacheUUID[3]);
     return (std::filesystem::path(folder) / name).string();
 }
 

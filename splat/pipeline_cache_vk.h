@@ -56,8 +56,9 @@ inline constexpr std::uint32_t kPipelineCacheFormat = 1;
 /// $XDG_CACHE_HOME/spotshell, else $HOME/.cache/spotshell, else none (empty).
 std::string defaultPipelineCacheFolder();
 
-/// The cache file for a device inside `folder`: pipelines-<vendor>-<device>.bin (hexadecimal
-/// ids), so that machines with different GPUs may share one folder.
+/// The cache file for a device inside `folder`: pipelines-<vendor>-<device>-<uuid>.bin
+/// (hexadecimal ids and the first 4 bytes of pipelineCacheUUID), so that machines with different
+/// GPUs or driver builds may share one folder.
 std::string pipelineCacheFile(const std::string& folder, const VkPhysicalDeviceProperties& p);
 
 /// A VkPipelineCache read from and written to one file. The file begins with a header that keys
