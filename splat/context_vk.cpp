@@ -951,7 +951,8 @@ Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
     // The creation runs on a pipeline thread: it owns copies of what it reads, and the module.
     p.m_job = ctx.pipelineCompiler().submit([&ctx, module, layout, spec, k = key.get()] {
         VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-        ci.flags = VK_PIPELINE_CREATE_DISPATCH_BASE_BIT; // a tile's passes: dispatchPixels (pass_vk.h)
+        ci.flags =
+            VK_PIPELINE_CREATE_DISPATCH_BASE_BIT; // a tile's passes: dispatchPixels (pass_vk.h)
         ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
         ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
         ci.stage.module = module;
@@ -963,8 +964,8 @@ Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
         ci.pNext = &feedback.info;
         const auto start = std::chrono::steady_clock::now();
         VkPipeline pipeline = VK_NULL_HANDLE;
-        const VkResult r = vkCreateComputePipelines(ctx.device(), ctx.pipelineCacheHandle(), 1,
-                                                    &ci, nullptr, &pipeline);
+        const VkResult r = vkCreateComputePipelines(ctx.device(), ctx.pipelineCacheHandle(), 1, &ci,
+                                                    nullptr, &pipeline);
         vkDestroyShaderModule(ctx.device(), module, nullptr);
         vkCheck(r, "vkCreateComputePipelines");
         ctx.countCreated(k, msSince(start), feedback.hit());
@@ -987,7 +988,8 @@ Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc) {
     hashSpecialization(key, desc.spec);
     for (const Binding& b : desc.bindings)
         key.value(b.binding).value(b.type);
-    key.value(desc.pushBytes).add(desc.colorFormats.data(), desc.colorFormats.size() * sizeof(VkFormat));
+    key.value(desc.pushBytes)
+        .add(desc.colorFormats.data(), desc.colorFormats.size() * sizeof(VkFormat));
     key.add(desc.blends.data(), desc.blends.size() * sizeof(VkPipelineColorBlendAttachmentState));
     key.value(desc.depthFormat).value(desc.depthTest).value(desc.depthWrite);
     key.value(desc.depthCompare).value(desc.topology).value(desc.cull);
@@ -1007,71 +1009,80 @@ Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc) {
     const VkPipelineLayout layout = p.m_layout;
     p.m_job = ctx.pipelineCompiler().submit([&ctx, modules, layout, desc = std::move(state),
                                              k = key.get()] {
-    std::vector<VkPipelineShaderStageCreateInfo> shaderStages;
-    const VkSpecializationInfo specInfo = desc.spec.info();
-    for (const auto& [module, stage] : modules) {
-        VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-        s.stage = stage;
-        s.module = module;
-        s.pName = "main";
-        s.pSpecializationInfo = desc.spec.empty() ? nullptr : &specInfo;
-        shaderStages.push_back(s);
-    }
+        std::vector<VkPipelineShaderStageCreateInfo> shaderStages;
+        const VkSpecializationInfo specInfo = desc.spec.info();
+        for (const auto& [module, stage] : modules) {
+            VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+            s.stage = stage;
+            s.module = module;
+            s.pName = "main";
+            s.pSpecializationInfo = desc.spec.empty() ? nullptr : &specInfo;
+            shaderStages.push_back(s);
+        }
 
-    VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-    assembly.topology = desc.topology;
-    VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-    viewport.viewportCount = 1;
-    viewport.scissorCount = 1;
-    VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-    raster.polygonMode = VK_POLYGON_MODE_FILL;
-    raster.cullMode = desc.cull;
-    raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-    raster.lineWidth = 1.0f;
-    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
-    VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-    depth.depthTestEnable = desc.depthTest;
-    depth.depthWriteEnable = desc.depthWrite;
-    depth.depthCompareOp = desc.depthCompare;
-    VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-    SPOT_CHECK_EQ(desc.blends.size(), desc.colorFormats.size());
-    blend.attachmentCount = std::uint32_t(desc.blends.size());
-    blend.pAttachments = desc.blends.data();
-    const VkDynamicState dynamicStates[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-    VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-    dynamic.dynamicStateCount = 2;
-    dynamic.pDynamicStates = dynamicStates;
-    VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-    rendering.colorAttachmentCount = std::uint32_t(desc.colorFormats.size());
-    rendering.pColorAttachmentFormats = desc.colorFormats.data();
-    rendering.depthAttachmentFormat = desc.depthFormat;
+        VkPipelineVertexInputStateCreateInfo vertexInput{
+            VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+        VkPipelineInputAssemblyStateCreateInfo assembly{
+            VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+        assembly.topology = desc.topology;
+        VkPipelineViewportStateCreateInfo viewport{
+            VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+        viewport.viewportCount = 1;
+        viewport.scissorCount = 1;
+        VkPipelineRasterizationStateCreateInfo raster{
+            VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+        raster.polygonMode = VK_POLYGON_MODE_FILL;
+        raster.cullMode = desc.cull;
+        raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+        raster.lineWidth = 1.0f;
+        VkPipelineMultisampleStateCreateInfo multisample{
+            VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+        multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+        VkPipelineDepthStencilStateCreateInfo depth{
+            VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+        depth.depthTestEnable = desc.depthTest;
+        depth.depthWriteEnable = desc.depthWrite;
+        depth.depthCompareOp = desc.depthCompare;
+        VkPipelineColorBlendStateCreateInfo blend{
+            VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+        SPOT_CHECK_EQ(desc.blends.size(), desc.colorFormats.size());
+        blend.attachmentCount = std::uint32_t(desc.blends.size());
+        blend.pAttachments = desc.blends.data();
+        const VkDynamicState dynamicStates[] = {VK_DYNAMIC_STATE_VIEWPORT,
+                                                VK_DYNAMIC_STATE_SCISSOR};
+        VkPipelineDynamicStateCreateInfo dynamic{
+            VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+        dynamic.dynamicStateCount = 2;
+        dynamic.pDynamicStates = dynamicStates;
+        VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+        rendering.colorAttachmentCount = std::uint32_t(desc.colorFormats.size());
+        rendering.pColorAttachmentFormats = desc.colorFormats.data();
+        rendering.depthAttachmentFormat = desc.depthFormat;
 
-    VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    ci.pNext = &rendering;
-    ci.stageCount = std::uint32_t(shaderStages.size());
-    ci.pStages = shaderStages.data();
-    ci.pVertexInputState = &vertexInput;
-    ci.pInputAssemblyState = &assembly;
-    ci.pViewportState = &viewport;
-    ci.pRasterizationState = &raster;
-    ci.pMultisampleState = &multisample;
-    ci.pDepthStencilState = &depth;
-    ci.pColorBlendState = &blend;
-    ci.pDynamicState = &dynamic;
-    ci.layout = layout;
-    Feedback feedback;
-    rendering.pNext = &feedback.info;
-    const auto start = std::chrono::steady_clock::now();
-    VkPipeline pipeline = VK_NULL_HANDLE;
-    const VkResult r = vkCreateGraphicsPipelines(ctx.device(), ctx.pipelineCacheHandle(), 1, &ci,
-                                                 nullptr, &pipeline);
-    for (const auto& m : modules)
-        vkDestroyShaderModule(ctx.device(), m.first, nullptr);
-    vkCheck(r, "vkCreateGraphicsPipelines");
-    ctx.countCreated(k, msSince(start), feedback.hit());
-    return pipeline;
+        VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+        ci.pNext = &rendering;
+        ci.stageCount = std::uint32_t(shaderStages.size());
+        ci.pStages = shaderStages.data();
+        ci.pVertexInputState = &vertexInput;
+        ci.pInputAssemblyState = &assembly;
+        ci.pViewportState = &viewport;
+        ci.pRasterizationState = &raster;
+        ci.pMultisampleState = &multisample;
+        ci.pDepthStencilState = &depth;
+        ci.pColorBlendState = &blend;
+        ci.pDynamicState = &dynamic;
+        ci.layout = layout;
+        Feedback feedback;
+        rendering.pNext = &feedback.info;
+        const auto start = std::chrono::steady_clock::now();
+        VkPipeline pipeline = VK_NULL_HANDLE;
+        const VkResult r = vkCreateGraphicsPipelines(ctx.device(), ctx.pipelineCacheHandle(), 1,
+                                                     &ci, nullptr, &pipeline);
+        for (const auto& m : modules)
+            vkDestroyShaderModule(ctx.device(), m.first, nullptr);
+        vkCheck(r, "vkCreateGraphicsPipelines");
+        ctx.countCreated(k, msSince(start), feedback.hit());
+        return pipeline;
     });
     return p;
 }

@@ -62,8 +62,7 @@ std::string parse(const std::string& bytes, const VkPhysicalDeviceProperties& p,
         return cat("format ", h.format, ", this spotshell writes ", kPipelineCacheFormat);
     const FileHeader mine = headerFor(p);
     if (h.vendorId != mine.vendorId || h.deviceId != mine.deviceId ||
-        h.driverVersion != mine.driverVersion ||
-        std::memcmp(h.uuid, mine.uuid, VK_UUID_SIZE) != 0)
+        h.driverVersion != mine.driverVersion || std::memcmp(h.uuid, mine.uuid, VK_UUID_SIZE) != 0)
         return cat("made by another driver or device (vendor 0x", std::hex, h.vendorId,
                    ", device 0x", h.deviceId, ", driver 0x", h.driverVersion, ")");
     const std::uint64_t expected = sizeof(h) + std::uint64_t(h.keyCount) * 8 + h.dataBytes;
@@ -158,7 +157,9 @@ PipelineCache::~PipelineCache() {
         vkDestroyPipelineCache(m_device, m_cache, nullptr);
 }
 
-bool PipelineCache::listed(std::uint64_t key) const { return m_loadedKeys.count(key) > 0; }
+bool PipelineCache::listed(std::uint64_t key) const {
+    return m_loadedKeys.count(key) > 0;
+}
 
 void PipelineCache::record(std::uint64_t key) {
     const std::lock_guard<std::mutex> lock(m_mutex);
@@ -176,7 +177,8 @@ void PipelineCache::save() {
     }
     try {
         std::size_t size = 0;
-        vkCheck(vkGetPipelineCacheData(m_device, m_cache, &size, nullptr), "vkGetPipelineCacheData");
+        vkCheck(vkGetPipelineCacheData(m_device, m_cache, &size, nullptr),
+                "vkGetPipelineCacheData");
         std::string body(keys.size() * 8 + size, '\0');
         std::memcpy(body.data(), keys.data(), keys.size() * 8);
         vkCheck(vkGetPipelineCacheData(m_device, m_cache, &size, body.data() + keys.size() * 8),

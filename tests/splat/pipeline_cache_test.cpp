@@ -37,15 +37,15 @@ StartSetup loadStartScene(const std::string& name, int size) {
     s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
     noise::GeneratorOptions options;
     options.seed = s.scene.seed;
-    s.generator =
-        std::make_unique<noise::ImpulseGenerator>(s.mesh, noise::loadPreset(s.scene.preset), options);
+    s.generator = std::make_unique<noise::ImpulseGenerator>(
+        s.mesh, noise::loadPreset(s.scene.preset), options);
     return s;
 }
 
 /// A fresh folder for one test's cache.
 fs::path cacheFolder(const std::string& name) {
-    const fs::path dir = fs::path(SPOT_TEST_TMP_DIR) /
-                         ("pipeline-cache-" + name + "-" + std::to_string(::getpid()));
+    const fs::path dir =
+        fs::path(SPOT_TEST_TMP_DIR) / ("pipeline-cache-" + name + "-" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
@@ -79,7 +79,8 @@ Rendered renderOnce(const StartSetup& s, const splat::ContextOptions& o,
 
 bool sameBytes(const noise::Image& a, const noise::Image& b) {
     return a.width == b.width && a.height == b.height && a.pixels.size() == b.pixels.size() &&
-           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(glm::vec3)) == 0 &&
+           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(glm::vec3)) ==
+               0 &&
            a.alpha == b.alpha;
 }
 
