@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
@@ -35,6 +36,7 @@ struct Rendered {
     std::size_t kernels = 0;
     double seconds = 0.0;
     std::string summary; ///< for the closing line
+    nlohmann::json firstPipelines; ///< a GPU method's pipeline counters after its first frame
 };
 
 /// A number for --stats: an integer when it is one.
@@ -112,6 +114,19 @@ Rendered renderGpu(const cli::Args& args, cli::SceneJob& job, splat::Context& ct
                            job.scene.baseColor};
     Rendered r;
     const splat::FrameStats first = frame.render(method.name, view, settings, &r.image);
+    {
+        const splat::PipelineStats p = ctx.pipelineStats();
+        const splat::PipelineCacheInfo c = ctx.pipelineCacheInfo();
+        r.firstPipelines = {{"created", p.created},
+                            {"used", p.used},
+                            {"from_cache", p.fromCache},
+                            {"driver_cache_hits", p.driverCacheHits},
+                            {"create_ms", p.createMs},
+                            {"wait_ms", p.waitMs},
+                            {"cache_file", c.path},
+                            {"cache_loaded", c.loaded},
+                            {"cache_bytes", c.bytes}};
+    }
     splat::FrameStats last = first;
     std::vector<double> gpu, wall;
     // Each pass's milliseconds per frame (a name marked more than once in a frame, such as a
@@ -234,6 +249,11 @@ int render(int argc, char** argv) {
     if (!info->gpu() && args.has("repeat"))
         throw InputError(cat("spotshell render: --repeat times the warm frames of a GPU method (",
                              splat::gpuMethodNames(), "), not of ", method));
+    const auto commandStart = std::chrono::steady_clock::now();
+    const auto msSince = [](std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t)
+            .count();
+    };
     const auto threads = args.integer("threads", 0, 0, 1024);
     std::optional<tbb::global_control> threadLimit;
     if (threads > 0)
@@ -241,6 +261,7 @@ int render(int argc, char** argv) {
 
     // A CPU method renders the impulses generated on the host.
     cli::SceneJob job = cli::prepareScene(args, !info->gpu());
+    const double sceneMs = msSince(commandStart);
     splat::requireLitSupport(*info, job.scene.shading); // before the device starts, not after
 
     const std::string out = args.str("out");
@@ -265,11 +286,18 @@ int render(int argc, char** argv) {
                              "(spotshell bake makes one)"));
     std::optional<splat::Context> ctx;
     std::optional<splat::Frame> frame;
+    // --stats: where a GPU method's start-up went (docs/design.md, "Start-up"), host ms.
+    nlohmann::json startup;
     if (info->gpu()) {
         ctx.emplace();
+        const auto uploadStart = std::chrono::steady_clock::now();
         frame.emplace(*ctx, job.mesh, *job.generator);
         if (job.animated())
             frame->animate(job.animation, job.scene.wind);
+        startup = {{"scene_ms", sceneMs},
+                   {"instance_ms", ctx->instanceMs()},
+                   {"device_ms", ctx->deviceMs()},
+                   {"upload_ms", msSince(uploadStart)}};
     }
     cli::ProgressBar bar(shot.frames.size() > 1 ? "frames" : "");
     Rendered r;
@@ -289,6 +317,11 @@ int render(int argc, char** argv) {
         if (info->gpu()) {
             frame->setTime(t);
             r = renderGpu(args, job, *ctx, *frame, *info, settings);
+            if (!startup.contains("first_frame_ms")) {
+                startup["first_frame_ms"] = double(r.stats["first_frame"]["wall_ms"]);
+                startup["to_first_frame_ms"] = msSince(commandStart);
+                startup["pipelines"] = r.firstPipelines;
+            }
         } else {
             r = renderCpu(job, *info, settings, shot.frames.size() > 1);
         }
@@ -358,6 +391,8 @@ int render(int argc, char** argv) {
             j["frames"] = perFrame;
             j["frame_count"] = perFrame.size();
         }
+        if (!startup.empty())
+            j["startup"] = startup;
         writeFileAtomic(args.str("stats"), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
     }
     const std::string chosen =

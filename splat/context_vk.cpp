@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <malloc.h>
@@ -40,6 +41,7 @@ ContextOptions contextOptionsFromEnvironment() {
     o.validation = v && std::strcmp(v, "1") == 0;
     if (const char* device = std::getenv("SPOT_DEVICE"))
         o.device = device;
+    o.pipelineCache = defaultPipelineCacheFolder();
     return o;
 }
 
@@ -332,6 +334,11 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
         throw std::runtime_error("Vulkan validation requested (SPOT_VALIDATION=1) but "
                                  "VK_LAYER_KHRONOS_validation is not installed "
                                  "(Debian package vulkan-validationlayers)");
+    const auto start = std::chrono::steady_clock::now();
+    const auto msSince = [](std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t)
+            .count();
+    };
     const VkDebugUtilsMessengerCreateInfoEXT messenger = messengerInfo(m_messages.get());
     m_instance = createInstance(options, m_validation ? &messenger : nullptr);
     if (m_validation) {
@@ -342,6 +349,8 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
                 "vkCreateDebugUtilsMessengerEXT");
     }
 
+    m_instanceMs = msSince(start);
+    const auto deviceStart = std::chrono::steady_clock::now();
     const DeviceChoice chosen = chooseDevice(m_instance, options);
     m_physical = chosen.device;
     m_queueFamily = chosen.family;
@@ -363,10 +372,66 @@ Context::Context(const ContextOptions& options) : m_messages(std::make_unique<Me
     vkCheck(vkCreateCommandPool(m_device, &pci, nullptr, &m_pool), "vkCreateCommandPool");
 
     m_budget = options.memoryBudget ? options.memoryBudget : memoryBudgetBytes() / 10 * 8;
+    // The pipeline cache and the threads that fill it. Nothing below throws: a cache that
+    // cannot be read is a warning, and one that cannot be made is none.
+    if (!options.pipelineCache.empty())
+        m_pipelineCache = std::make_unique<PipelineCache>(
+            m_device, m_properties, pipelineCacheFile(options.pipelineCache, m_properties));
+    int threads = options.pipelineThreads;
+    if (threads < 0) {
+        const char* v = std::getenv("SPOT_PIPELINE_THREADS");
+        threads = v && *v ? std::atoi(v) : int(std::thread::hardware_concurrency());
+    }
+    m_compiler = std::make_unique<PipelineCompiler>(unsigned(std::clamp(threads, 0, 8)));
+    m_deviceMs = msSince(deviceStart);
     releaseOnThrow.armed = false;
 }
 
-Context::~Context() { destroyHandles(m_instance, m_messenger, m_device, m_pool); }
+Context::~Context() {
+    m_compiler.reset(); // finishes what is queued
+    if (m_pipelineCache) {
+        m_pipelineCache->save();
+        m_pipelineCache.reset();
+    }
+    destroyHandles(m_instance, m_messenger, m_device, m_pool);
+}
+
+PipelineStats Context::pipelineStats() const {
+    const std::lock_guard<std::mutex> lock(m_pipelineMutex);
+    return m_pipelineStats;
+}
+
+PipelineCacheInfo Context::pipelineCacheInfo() const {
+    return m_pipelineCache ? m_pipelineCache->info() : PipelineCacheInfo{};
+}
+
+void Context::savePipelineCache() {
+    if (m_pipelineCache)
+        m_pipelineCache->save();
+}
+
+VkPipelineCache Context::pipelineCacheHandle() const {
+    return m_pipelineCache ? m_pipelineCache->handle() : VK_NULL_HANDLE;
+}
+
+void Context::countCreated(std::uint64_t key, double ms, bool driverHit) {
+    bool listed = false;
+    if (m_pipelineCache) {
+        listed = m_pipelineCache->listed(key);
+        m_pipelineCache->record(key);
+    }
+    const std::lock_guard<std::mutex> lock(m_pipelineMutex);
+    ++m_pipelineStats.created;
+    m_pipelineStats.fromCache += listed;
+    m_pipelineStats.driverCacheHits += driverHit;
+    m_pipelineStats.createMs += ms;
+}
+
+void Context::countUsed(double waitMs) {
+    const std::lock_guard<std::mutex> lock(m_pipelineMutex);
+    ++m_pipelineStats.used;
+    m_pipelineStats.waitMs += waitMs;
+}
 
 ValidationCounts Context::validation() const {
     const std::lock_guard<std::mutex> lock(m_messages->mutex);
@@ -690,6 +755,7 @@ Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
     if (this != &o) {
         destroy();
         std::swap(m_ctx, o.m_ctx);
+        std::swap(m_job, o.m_job);
         std::swap(m_pipeline, o.m_pipeline);
         std::swap(m_layout, o.m_layout);
         std::swap(m_setLayout, o.m_setLayout);
@@ -699,9 +765,26 @@ Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
     return *this;
 }
 
+void Pipeline::finish() const {
+    std::shared_ptr<PipelineJob> job = m_job;
+    double waited = 0.0;
+    m_pipeline = job->wait(&waited); // throws the creation's error (the job stays: it rethrows)
+    m_job.reset();
+    m_ctx->countUsed(waited);
+}
+
 void Pipeline::destroy() {
     if (!m_ctx)
         return;
+    if (m_job) {
+        // Made on another thread, perhaps still being made; never asked for.
+        try {
+            m_job->wait();
+        } catch (...) {
+        }
+        m_pipeline = m_job->result();
+        m_job.reset();
+    }
     if (m_pipeline)
         vkDestroyPipeline(m_ctx->device(), m_pipeline, nullptr);
     if (m_layout)
@@ -825,6 +908,28 @@ checkedBindings(const Bindings& bindings,
     return layout;
 }
 
+void hashSpecialization(PipelineKey& key, const Specialization& spec) {
+    const VkSpecializationInfo info = spec.info();
+    key.add(info.pMapEntries, info.mapEntryCount * sizeof(VkSpecializationMapEntry));
+    key.add(info.pData, info.dataSize);
+}
+
+/// The driver's report of one pipeline's creation (core in Vulkan 1.3).
+struct Feedback {
+    VkPipelineCreationFeedback pipeline{};
+    VkPipelineCreationFeedbackCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_CREATION_FEEDBACK_CREATE_INFO,
+                                              nullptr, &pipeline, 0, nullptr};
+    bool hit() const {
+        return (pipeline.flags & VK_PIPELINE_CREATION_FEEDBACK_VALID_BIT) &&
+               (pipeline.flags & VK_PIPELINE_CREATION_FEEDBACK_APPLICATION_PIPELINE_CACHE_HIT_BIT);
+    }
+};
+
+double msSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+        .count();
+}
+
 } // namespace
 
 Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
@@ -835,19 +940,37 @@ Pipeline makeComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
     p.m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
     p.m_bindings = checkedBindings(bindings, {spirv});
     makeLayout(ctx, bindings, pushBytes, VK_SHADER_STAGE_COMPUTE_BIT, p.m_setLayout, p.m_layout);
+    PipelineKey key;
+    key.value(std::uint32_t(1)).add(spirv);
+    hashSpecialization(key, spec);
+    for (const Binding& b : bindings)
+        key.value(b.binding).value(b.type);
+    key.value(pushBytes);
     VkShaderModule module = makeModule(ctx, spirv);
-    VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-    ci.flags = VK_PIPELINE_CREATE_DISPATCH_BASE_BIT; // a tile's passes: dispatchPixels (pass_vk.h)
-    ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-    ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    ci.stage.module = module;
-    ci.stage.pName = "main";
-    const VkSpecializationInfo specInfo = spec.info();
-    ci.stage.pSpecializationInfo = spec.empty() ? nullptr : &specInfo;
-    ci.layout = p.m_layout;
-    const VkResult r = vkCreateComputePipelines(ctx.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &p.m_pipeline);
-    vkDestroyShaderModule(ctx.device(), module, nullptr);
-    vkCheck(r, "vkCreateComputePipelines");
+    const VkPipelineLayout layout = p.m_layout;
+    // The creation runs on a pipeline thread: it owns copies of what it reads, and the module.
+    p.m_job = ctx.pipelineCompiler().submit([&ctx, module, layout, spec, k = key.get()] {
+        VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+        ci.flags =
+            VK_PIPELINE_CREATE_DISPATCH_BASE_BIT; // a tile's passes: dispatchPixels (pass_vk.h)
+        ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+        ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+        ci.stage.module = module;
+        ci.stage.pName = "main";
+        const VkSpecializationInfo specInfo = spec.info();
+        ci.stage.pSpecializationInfo = spec.empty() ? nullptr : &specInfo;
+        ci.layout = layout;
+        Feedback feedback;
+        ci.pNext = &feedback.info;
+        const auto start = std::chrono::steady_clock::now();
+        VkPipeline pipeline = VK_NULL_HANDLE;
+        const VkResult r = vkCreateComputePipelines(ctx.device(), ctx.pipelineCacheHandle(), 1, &ci,
+                                                    nullptr, &pipeline);
+        vkDestroyShaderModule(ctx.device(), module, nullptr);
+        vkCheck(r, "vkCreateComputePipelines");
+        ctx.countCreated(k, msSince(start), feedback.hit());
+        return pipeline;
+    });
     return p;
 }
 
@@ -860,71 +983,107 @@ Pipeline makeGraphicsPipeline(Context& ctx, const GraphicsPipelineDesc& desc) {
     p.m_bindings = checkedBindings(desc.bindings, {desc.vertex, desc.geometry, desc.fragment});
     makeLayout(ctx, desc.bindings, desc.pushBytes, stages, p.m_setLayout, p.m_layout);
 
-    std::vector<VkShaderModule> modules;
-    std::vector<VkPipelineShaderStageCreateInfo> shaderStages;
-    const VkSpecializationInfo specInfo = desc.spec.info();
-    auto addStage = [&](std::span<const std::uint32_t> code, VkShaderStageFlagBits stage) {
-        if (code.empty())
-            return;
-        modules.push_back(makeModule(ctx, code));
-        VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-        s.stage = stage;
-        s.module = modules.back();
-        s.pName = "main";
-        s.pSpecializationInfo = desc.spec.empty() ? nullptr : &specInfo;
-        shaderStages.push_back(s);
+    PipelineKey key;
+    key.value(std::uint32_t(2)).add(desc.vertex).add(desc.geometry).add(desc.fragment);
+    hashSpecialization(key, desc.spec);
+    for (const Binding& b : desc.bindings)
+        key.value(b.binding).value(b.type);
+    key.value(desc.pushBytes)
+        .add(desc.colorFormats.data(), desc.colorFormats.size() * sizeof(VkFormat));
+    key.add(desc.blends.data(), desc.blends.size() * sizeof(VkPipelineColorBlendAttachmentState));
+    key.value(desc.depthFormat).value(desc.depthTest).value(desc.depthWrite);
+    key.value(desc.depthCompare).value(desc.topology).value(desc.cull);
+
+    // The modules are made here; the creation runs on a pipeline thread with a copy of the
+    // description (its code spans are not read there) and owns the modules.
+    std::vector<std::pair<VkShaderModule, VkShaderStageFlagBits>> modules;
+    const auto addStage = [&](std::span<const std::uint32_t> code, VkShaderStageFlagBits stage) {
+        if (!code.empty())
+            modules.emplace_back(makeModule(ctx, code), stage);
     };
     addStage(desc.vertex, VK_SHADER_STAGE_VERTEX_BIT);
     addStage(desc.geometry, VK_SHADER_STAGE_GEOMETRY_BIT);
     addStage(desc.fragment, VK_SHADER_STAGE_FRAGMENT_BIT);
+    GraphicsPipelineDesc state = desc;
+    state.vertex = state.geometry = state.fragment = {};
+    const VkPipelineLayout layout = p.m_layout;
+    p.m_job = ctx.pipelineCompiler().submit([&ctx, modules, layout, desc = std::move(state),
+                                             k = key.get()] {
+        std::vector<VkPipelineShaderStageCreateInfo> shaderStages;
+        const VkSpecializationInfo specInfo = desc.spec.info();
+        for (const auto& [module, stage] : modules) {
+            VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+            s.stage = stage;
+            s.module = module;
+            s.pName = "main";
+            s.pSpecializationInfo = desc.spec.empty() ? nullptr : &specInfo;
+            shaderStages.push_back(s);
+        }
 
-    VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-    assembly.topology = desc.topology;
-    VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-    viewport.viewportCount = 1;
-    viewport.scissorCount = 1;
-    VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-    raster.polygonMode = VK_POLYGON_MODE_FILL;
-    raster.cullMode = desc.cull;
-    raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-    raster.lineWidth = 1.0f;
-    VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
-    VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-    depth.depthTestEnable = desc.depthTest;
-    depth.depthWriteEnable = desc.depthWrite;
-    depth.depthCompareOp = desc.depthCompare;
-    VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-    SPOT_CHECK_EQ(desc.blends.size(), desc.colorFormats.size());
-    blend.attachmentCount = std::uint32_t(desc.blends.size());
-    blend.pAttachments = desc.blends.data();
-    const VkDynamicState dynamicStates[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-    VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-    dynamic.dynamicStateCount = 2;
-    dynamic.pDynamicStates = dynamicStates;
-    VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-    rendering.colorAttachmentCount = std::uint32_t(desc.colorFormats.size());
-    rendering.pColorAttachmentFormats = desc.colorFormats.data();
-    rendering.depthAttachmentFormat = desc.depthFormat;
+        VkPipelineVertexInputStateCreateInfo vertexInput{
+            VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+        VkPipelineInputAssemblyStateCreateInfo assembly{
+            VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+        assembly.topology = desc.topology;
+        VkPipelineViewportStateCreateInfo viewport{
+            VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+        viewport.viewportCount = 1;
+        viewport.scissorCount = 1;
+        VkPipelineRasterizationStateCreateInfo raster{
+            VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+        raster.polygonMode = VK_POLYGON_MODE_FILL;
+        raster.cullMode = desc.cull;
+        raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+        raster.lineWidth = 1.0f;
+        VkPipelineMultisampleStateCreateInfo multisample{
+            VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+        multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+        VkPipelineDepthStencilStateCreateInfo depth{
+            VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+        depth.depthTestEnable = desc.depthTest;
+        depth.depthWriteEnable = desc.depthWrite;
+        depth.depthCompareOp = desc.depthCompare;
+        VkPipelineColorBlendStateCreateInfo blend{
+            VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+        SPOT_CHECK_EQ(desc.blends.size(), desc.colorFormats.size());
+        blend.attachmentCount = std::uint32_t(desc.blends.size());
+        blend.pAttachments = desc.blends.data();
+        const VkDynamicState dynamicStates[] = {VK_DYNAMIC_STATE_VIEWPORT,
+                                                VK_DYNAMIC_STATE_SCISSOR};
+        VkPipelineDynamicStateCreateInfo dynamic{
+            VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+        dynamic.dynamicStateCount = 2;
+        dynamic.pDynamicStates = dynamicStates;
+        VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+        rendering.colorAttachmentCount = std::uint32_t(desc.colorFormats.size());
+        rendering.pColorAttachmentFormats = desc.colorFormats.data();
+        rendering.depthAttachmentFormat = desc.depthFormat;
 
-    VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    ci.pNext = &rendering;
-    ci.stageCount = std::uint32_t(shaderStages.size());
-    ci.pStages = shaderStages.data();
-    ci.pVertexInputState = &vertexInput;
-    ci.pInputAssemblyState = &assembly;
-    ci.pViewportState = &viewport;
-    ci.pRasterizationState = &raster;
-    ci.pMultisampleState = &multisample;
-    ci.pDepthStencilState = &depth;
-    ci.pColorBlendState = &blend;
-    ci.pDynamicState = &dynamic;
-    ci.layout = p.m_layout;
-    const VkResult r = vkCreateGraphicsPipelines(ctx.device(), VK_NULL_HANDLE, 1, &ci, nullptr, &p.m_pipeline);
-    for (VkShaderModule m : modules)
-        vkDestroyShaderModule(ctx.device(), m, nullptr);
-    vkCheck(r, "vkCreateGraphicsPipelines");
+        VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+        ci.pNext = &rendering;
+        ci.stageCount = std::uint32_t(shaderStages.size());
+        ci.pStages = shaderStages.data();
+        ci.pVertexInputState = &vertexInput;
+        ci.pInputAssemblyState = &assembly;
+        ci.pViewportState = &viewport;
+        ci.pRasterizationState = &raster;
+        ci.pMultisampleState = &multisample;
+        ci.pDepthStencilState = &depth;
+        ci.pColorBlendState = &blend;
+        ci.pDynamicState = &dynamic;
+        ci.layout = layout;
+        Feedback feedback;
+        rendering.pNext = &feedback.info;
+        const auto start = std::chrono::steady_clock::now();
+        VkPipeline pipeline = VK_NULL_HANDLE;
+        const VkResult r = vkCreateGraphicsPipelines(ctx.device(), ctx.pipelineCacheHandle(), 1,
+                                                     &ci, nullptr, &pipeline);
+        for (const auto& m : modules)
+            vkDestroyShaderModule(ctx.device(), m.first, nullptr);
+        vkCheck(r, "vkCreateGraphicsPipelines");
+        ctx.countCreated(k, msSince(start), feedback.hit());
+        return pipeline;
+    });
     return p;
 }
 

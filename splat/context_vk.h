@@ -22,6 +22,8 @@
 
 #include <vulkan/vulkan.h>
 
+#include "splat/pipeline_cache_vk.h"
+
 namespace spot::splat {
 
 struct ContextOptions {
@@ -42,9 +44,18 @@ struct ContextOptions {
     /// When set, only a queue family for which this returns true is chosen (the editor: whether
     /// the family can present to its window system). Called after the instance exists.
     std::function<bool(VkInstance, VkPhysicalDevice, std::uint32_t family)> canPresent;
+    /// The folder of the pipeline cache file (pipeline_cache_vk.h: read at start, written when
+    /// the context goes away); empty: no cache. Default: defaultPipelineCacheFolder()
+    /// ($SPOT_PIPELINE_CACHE, else $XDG_CACHE_HOME/spotshell or ~/.cache/spotshell).
+    std::string pipelineCache;
+    /// Threads that make pipelines while the caller goes on; 0: each is made when asked for, on
+    /// the caller's thread (serial). -1 (default): SPOT_PIPELINE_THREADS when set, else the
+    /// hardware's threads (at most 8).
+    int pipelineThreads = -1;
 };
 
-/// ContextOptions with `validation` taken from SPOT_VALIDATION and `device` from SPOT_DEVICE.
+/// ContextOptions with `validation` taken from SPOT_VALIDATION, `device` from SPOT_DEVICE and
+/// `pipelineCache` from defaultPipelineCacheFolder().
 ContextOptions contextOptionsFromEnvironment();
 
 struct ValidationCounts {
@@ -88,6 +99,25 @@ public:
     std::uint64_t memoryBudget() const { return m_budget; }
     VkCommandPool commandPool() const { return m_pool; }
 
+    /// Start-up phases of the constructor, host milliseconds: the instance (with the loader and
+    /// the driver's libraries), and the device (choosing it, creating it, the pipeline cache).
+    double instanceMs() const { return m_instanceMs; }
+    double deviceMs() const { return m_deviceMs; }
+    /// Pipeline creation so far (pipeline_cache_vk.h).
+    PipelineStats pipelineStats() const;
+    /// The pipeline cache file as read at start (an empty path: no cache).
+    PipelineCacheInfo pipelineCacheInfo() const;
+    /// Write the pipeline cache file now if pipelines were made that it lacks (the destructor
+    /// does too); never throws.
+    void savePipelineCache();
+
+    /// For the pipeline makers (makeComputePipeline, makeGraphicsPipeline): the driver's cache
+    /// (may be null), the compiler, and the counters.
+    VkPipelineCache pipelineCacheHandle() const;
+    PipelineCompiler& pipelineCompiler() { return *m_compiler; }
+    void countCreated(std::uint64_t key, double ms, bool driverHit);
+    void countUsed(double waitMs);
+
     struct Messenger; ///< the debug messenger's state (defined in the .cpp)
 
 private:
@@ -105,6 +135,11 @@ private:
     std::uint64_t m_budget = 0;
     std::atomic<std::uint64_t> m_allocated{0};
     std::atomic<std::uint64_t> m_peak{0};
+    double m_instanceMs = 0.0, m_deviceMs = 0.0;
+    std::unique_ptr<PipelineCache> m_pipelineCache;
+    std::unique_ptr<PipelineCompiler> m_compiler;
+    mutable std::mutex m_pipelineMutex;
+    PipelineStats m_pipelineStats;
 };
 
 /// An owned Vulkan handle whose parent (a device or an instance) destroys it with `Destroy`
@@ -300,6 +335,12 @@ std::vector<std::uint32_t> declaredBindings(std::span<const std::uint32_t> spirv
 
 /// A pipeline with its layout and its push-descriptor set layout (set 0).
 ///
+/// The driver makes it on the context's pipeline threads (pipeline_cache_vk.h): the makers
+/// return at once with the layout made, and handle() waits for the pipeline, or makes it on the
+/// calling thread when no thread has started it. Make pipelines as soon as it is known that a
+/// frame needs them, and ask for handle() only when recording them, so that they are made in
+/// parallel with each other and with the caller's work; make none a frame does not use.
+///
 /// Its layout holds exactly the bindings its modules declare (checked when it is made), and a
 /// push writes exactly those (checked at each push): no binding is filled with a stand-in for a
 /// resource the pipeline does not read. A module that reads something a setting does not need is
@@ -311,7 +352,12 @@ public:
     Pipeline(Pipeline&& other) noexcept;
     Pipeline& operator=(Pipeline&& other) noexcept;
 
-    VkPipeline handle() const { return m_pipeline; }
+    /// The pipeline; waits until it is made (rethrowing a creation's error).
+    VkPipeline handle() const {
+        if (m_job)
+            finish();
+        return m_pipeline;
+    }
     VkPipelineLayout layout() const { return m_layout; }
     VkPipelineBindPoint bindPoint() const { return m_bindPoint; }
     /// Its binding numbers, ascending.
@@ -323,8 +369,10 @@ private:
     friend struct GraphicsPipelineDesc;
     friend Pipeline makeGraphicsPipeline(Context&, const struct GraphicsPipelineDesc&);
     void destroy();
+    void finish() const;
     Context* m_ctx = nullptr;
-    VkPipeline m_pipeline = VK_NULL_HANDLE;
+    mutable std::shared_ptr<PipelineJob> m_job; ///< while being made
+    mutable VkPipeline m_pipeline = VK_NULL_HANDLE;
     VkPipelineLayout m_layout = VK_NULL_HANDLE;
     VkDescriptorSetLayout m_setLayout = VK_NULL_HANDLE;
     VkPipelineBindPoint m_bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;

@@ -83,8 +83,7 @@ MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_c
     desc.depthTest = true;
     desc.depthWrite = true;
     desc.depthCompare = VK_COMPARE_OP_GREATER;
-    m_pipeline = makeGraphicsPipeline(ctx, desc);
-    m_desc = desc;
+    m_desc = desc; // its pipelines are made at the first frame that draws them (pipeline())
     // The test sorts 3 edges of 8 bytes per triangle: above 2 million triangles (48 MB, about
     // half a second) the pass draws both faces rather than spend that at every start.
     constexpr std::size_t kMaxTestedTriangles = 2'000'000;
@@ -94,12 +93,25 @@ MeshPass::MeshPass(Context& ctx, const noise::Mesh& mesh, const char* who) : m_c
         m_lo = b.lo;
         m_hi = b.hi;
     }
-    if (m_closed) {
-        // Counter-clockwise seen from outside stays so in the framebuffer: the vertex shader
-        // flips y, so that NDC y points down, as framebuffer rows do.
-        desc.cull = VK_CULL_MODE_BACK_BIT;
-        m_culled = makeGraphicsPipeline(ctx, desc);
+}
+
+const Pipeline& MeshPass::pipeline(bool lit, bool culled) const {
+    Pipeline& p = m_pipelines[(lit ? 2 : 0) + (culled ? 1 : 0)];
+    if (p.layout())
+        return p;
+    GraphicsPipelineDesc desc = m_desc;
+    if (lit) {
+        desc.vertex = spirv(spv_splat_mesh_lit_vert);
+        desc.fragment = spirv(spv_splat_mesh_lit_frag);
+        const Bindings lookup = LightSpace::lookupBindings();
+        desc.bindings.insert(desc.bindings.end(), lookup.begin(), lookup.end());
     }
+    // Counter-clockwise seen from outside stays so in the framebuffer: the vertex shader flips
+    // y, so that NDC y points down, as framebuffer rows do.
+    if (culled)
+        desc.cull = VK_CULL_MODE_BACK_BIT;
+    p = makeGraphicsPipeline(*m_ctx, desc);
+    return p;
 }
 
 bool MeshPass::cullsBackFaces(const gpu_splat::SpotSplatFrame& frame) const {
@@ -128,21 +140,7 @@ void MeshPass::record(VkCommandBuffer cmd, const gpu_splat::SpotSplatFrame& fram
                                     glm::vec4(gpu_splat::kSplatNoMesh))},
                    &depthInfo);
     if (m_indexCount > 0) {
-        const bool culled = cullsBackFaces(frame);
-        if (light && !m_lit.handle()) {
-            GraphicsPipelineDesc desc = m_desc;
-            desc.vertex = spirv(spv_splat_mesh_lit_vert);
-            desc.fragment = spirv(spv_splat_mesh_lit_frag);
-            const Bindings lookup = LightSpace::lookupBindings();
-            desc.bindings.insert(desc.bindings.end(), lookup.begin(), lookup.end());
-            m_lit = makeGraphicsPipeline(*m_ctx, desc);
-            if (m_closed) {
-                desc.cull = VK_CULL_MODE_BACK_BIT;
-                m_litCulled = makeGraphicsPipeline(*m_ctx, desc);
-            }
-        }
-        const Pipeline& pipeline =
-            light ? (culled ? m_litCulled : m_lit) : (culled ? m_culled : m_pipeline);
+        const Pipeline& pipeline = this->pipeline(light != nullptr, cullsBackFaces(frame));
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle());
         pushFrame(cmd, pipeline, frame);
         Descriptors d;

@@ -128,9 +128,12 @@ private:
     std::uint32_t m_indexCount = 0;
     bool m_closed = false;
     glm::vec3 m_lo{0.0f}, m_hi{0.0f};
-    Pipeline m_pipeline, m_culled; ///< m_culled only for a closed mesh
-    GraphicsPipelineDesc m_desc;   ///< the unlit pipeline's, for the lit ones
-    mutable Pipeline m_lit, m_litCulled; ///< made at the first lit frame
+    GraphicsPipelineDesc m_desc; ///< the unlit pipeline's, for the others
+    /// The pipeline for unlit or lit frames, drawing both faces or culling back faces, made at
+    /// the first frame that draws with it.
+    const Pipeline& pipeline(bool lit, bool culled) const;
+    /// Unlit, unlit culled, lit, lit culled: each made by pipeline() when first drawn.
+    mutable Pipeline m_pipelines[4];
 };
 /// The kernel's lobes (gpu::SpotLobe[]); InputError for 0 or more than 8 lobes or a bad support.
 Buffer uploadKernelLobes(Context& ctx, const noise::Kernel& kernel, const char* who);

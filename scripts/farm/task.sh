@@ -7,7 +7,8 @@
 #
 #   task.sh SPOTSHELL SCENE FRAMES TILES PER_TASK OUT_DIR EXT [render options...]
 #     FRAMES A-B[:STEP]; TILES >= 1; PER_TASK >= 1 frames; EXT exr | png.
-# Outputs: OUT_DIR/frames/shot.%04d.EXT with one tile, else OUT_DIR/tiles/shot.%04d.tileT.EXT.
+# Outputs: OUT_DIR/frames/shot.%04d.EXT with one tile, else OUT_DIR/tiles/shot.%04d.tileT.EXT;
+# the pipeline cache in OUT_DIR/cache (unless SPOT_PIPELINE_CACHE names another folder).
 set -euo pipefail
 if [ $# -lt 7 ]; then
   echo "usage: task.sh SPOTSHELL SCENE FRAMES TILES PER_TASK OUT_DIR EXT [render options...]" >&2
@@ -43,6 +44,9 @@ else
   tile_option=()
 fi
 mkdir -p "$dir"
+# The shot's pipeline cache (README, "Shots on a farm"): in its folder, so that the tasks after
+# the first make their pipelines from it (one file per device kind; written atomically).
+export SPOT_PIPELINE_CACHE=${SPOT_PIPELINE_CACHE:-$out/cache}
 echo "task $task on $(hostname -s): frames $a-$b:$step, tile $tile of $tiles"
 exec "$spotshell" render --scene "$scene" --frames "$a-$b:$step" "${tile_option[@]}" \
   --out "$pattern" --resume "$@"
