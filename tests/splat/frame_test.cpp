@@ -17,27 +17,6 @@ namespace {
 using namespace spot;
 using namespace spot::test;
 
-struct FrameSetup {
-    noise::SceneDesc scene;
-    noise::Mesh mesh;
-    std::unique_ptr<noise::ImpulseGenerator> generator;
-    splat::View view() const {
-        return {scene.camera, scene.shading, scene.background, scene.baseColor};
-    }
-};
-
-FrameSetup loadFrameSetup(const std::string& name, int size) {
-    FrameSetup s;
-    s.scene = test::loadShippedScene(name);
-    s.scene.camera.width = s.scene.camera.height = size;
-    s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
-    noise::GeneratorOptions options;
-    options.seed = s.scene.seed;
-    s.generator = std::make_unique<noise::ImpulseGenerator>(s.mesh, noise::loadPreset(s.scene.preset),
-                                                            options);
-    return s;
-}
-
 bool sameBytes(const noise::Image& a, const noise::Image& b) {
     return a.width == b.width && a.height == b.height &&
            std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(glm::vec3)) == 0;

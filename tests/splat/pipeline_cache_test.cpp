@@ -20,28 +20,6 @@ using namespace spot;
 using namespace spot::test;
 namespace fs = std::filesystem;
 
-struct StartSetup {
-    noise::SceneDesc scene;
-    noise::Mesh mesh;
-    std::unique_ptr<noise::ImpulseGenerator> generator;
-    splat::View view() const {
-        return {scene.camera, scene.shading, scene.background, scene.baseColor};
-    }
-};
-
-/// The default job's scene (lit fur on the bunny), small.
-StartSetup loadStartScene(const std::string& name, int size) {
-    StartSetup s;
-    s.scene = test::loadShippedScene(name);
-    s.scene.camera.width = s.scene.camera.height = size;
-    s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
-    noise::GeneratorOptions options;
-    options.seed = s.scene.seed;
-    s.generator = std::make_unique<noise::ImpulseGenerator>(
-        s.mesh, noise::loadPreset(s.scene.preset), options);
-    return s;
-}
-
 /// A fresh folder for one test's cache.
 fs::path cacheFolder(const std::string& name) {
     const fs::path dir =
@@ -65,7 +43,7 @@ struct Rendered {
 };
 
 /// One frame of `method` in a context of its own (its cache written when it goes away).
-Rendered renderOnce(const StartSetup& s, const splat::ContextOptions& o,
+Rendered renderOnce(const FrameSetup& s, const splat::ContextOptions& o,
                     const std::string& method = "sorted") {
     Rendered r;
     splat::Context ctx(o);
@@ -92,7 +70,7 @@ fs::path theFile(const fs::path& dir) {
 }
 
 TEST(PipelineCache, ASecondContextMakesItsPipelinesFromTheFirstOnesFile) {
-    const StartSetup s = loadStartScene("fur-bunny", 48);
+    const FrameSetup s = loadFrameSetup("fur-bunny", 48);
     const fs::path dir = cacheFolder("second");
     const Rendered first = renderOnce(s, options(dir, 2));
     EXPECT_FALSE(first.cache.loaded); // nothing there yet
@@ -114,7 +92,7 @@ TEST(PipelineCache, ASecondContextMakesItsPipelinesFromTheFirstOnesFile) {
 }
 
 TEST(PipelineCache, ImagesAreBitIdenticalSerialParallelAndFromTheCache) {
-    const StartSetup s = loadStartScene("fur-bunny", 48);
+    const FrameSetup s = loadFrameSetup("fur-bunny", 48);
     const fs::path dir = cacheFolder("identical");
     // Made one by one when drawn, no cache: the start-up before the pipeline threads.
     const Rendered serial = renderOnce(s, options({}, 0));
@@ -125,7 +103,7 @@ TEST(PipelineCache, ImagesAreBitIdenticalSerialParallelAndFromTheCache) {
     EXPECT_TRUE(sameBytes(serial.image, parallel.image));
     EXPECT_TRUE(sameBytes(serial.image, cached.image));
     // An unlit method too (other pipelines: the unlit mesh pass, oit's passes).
-    StartSetup unlit = loadStartScene("fur-bunny", 48);
+    FrameSetup unlit = loadFrameSetup("fur-bunny", 48);
     unlit.scene.shading.mode = noise::Shading::Mode::Unlit;
     EXPECT_TRUE(sameBytes(renderOnce(unlit, options({}, 0), "oit").image,
                           renderOnce(unlit, options(dir, 2), "oit").image));
@@ -133,13 +111,13 @@ TEST(PipelineCache, ImagesAreBitIdenticalSerialParallelAndFromTheCache) {
 }
 
 TEST(PipelineCache, AFrameMakesOnlyThePipelinesItDraws) {
-    const StartSetup lit = loadStartScene("fur-bunny", 48);
+    const FrameSetup lit = loadFrameSetup("fur-bunny", 48);
     for (const char* method : {"sorted", "oit"}) {
         const Rendered r = renderOnce(lit, options({}, 2), method);
         EXPECT_GT(r.stats.created, 0u) << method;
         EXPECT_EQ(r.stats.used, r.stats.created) << method << ": pipelines made but not drawn";
     }
-    StartSetup unlit = loadStartScene("fur-bunny", 48);
+    FrameSetup unlit = loadFrameSetup("fur-bunny", 48);
     unlit.scene.shading.mode = noise::Shading::Mode::Unlit;
     const Rendered r = renderOnce(unlit, options({}, 2), "sorted");
     EXPECT_EQ(r.stats.used, r.stats.created) << "unlit: pipelines made but not drawn";
@@ -148,7 +126,7 @@ TEST(PipelineCache, AFrameMakesOnlyThePipelinesItDraws) {
 /// Write `bytes` as the cache file `file` names and start a context with it: the file is
 /// ignored with one warning line naming it and why, and rewritten whole when the context goes
 /// away (the next one reads it). With `expected`, a frame is rendered too, as without a cache.
-void expectIgnored(const StartSetup& s, const fs::path& dir, const fs::path& file,
+void expectIgnored(const FrameSetup& s, const fs::path& dir, const fs::path& file,
                    const std::string& bytes, const std::string& why,
                    const noise::Image* expected = nullptr) {
     {
@@ -176,7 +154,7 @@ void expectIgnored(const StartSetup& s, const fs::path& dir, const fs::path& fil
 }
 
 TEST(PipelineCache, ACorruptOrForeignFileIsIgnoredWithOneWarning) {
-    StartSetup s = loadStartScene("fur-bunny", 32);
+    FrameSetup s = loadFrameSetup("fur-bunny", 32);
     s.scene.shading.mode = noise::Shading::Mode::Unlit; // fewer pipelines: a quicker test
     const fs::path dir = cacheFolder("corrupt");
     const Rendered made = renderOnce(s, options(dir, 2));
@@ -204,7 +182,7 @@ TEST(PipelineCache, ACorruptOrForeignFileIsIgnoredWithOneWarning) {
 }
 
 TEST(PipelineCache, AFolderThatCannotBeWrittenIsAWarningNotAnError) {
-    StartSetup s = loadStartScene("fur-bunny", 32);
+    FrameSetup s = loadFrameSetup("fur-bunny", 32);
     s.scene.shading.mode = noise::Shading::Mode::Unlit;
     const fs::path dir = cacheFolder("unwritable");
     const fs::path blocked = dir / "a-file-not-a-folder";

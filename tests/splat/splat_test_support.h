@@ -116,6 +116,28 @@ inline SceneSetup loadSetup(const std::string& name, int size) {
     return s;
 }
 
+/// A shipped scene at a square size with its generator (not its impulses), for a splat::Frame.
+struct FrameSetup {
+    noise::SceneDesc scene;
+    noise::Mesh mesh;
+    std::unique_ptr<noise::ImpulseGenerator> generator;
+    splat::View view() const {
+        return {scene.camera, scene.shading, scene.background, scene.baseColor};
+    }
+};
+
+inline FrameSetup loadFrameSetup(const std::string& name, int size) {
+    FrameSetup s;
+    s.scene = loadShippedScene(name);
+    s.scene.camera.width = s.scene.camera.height = size;
+    s.mesh = noise::loadMeshOrGenerated(s.scene.mesh);
+    noise::GeneratorOptions options;
+    options.seed = s.scene.seed;
+    s.generator = std::make_unique<noise::ImpulseGenerator>(s.mesh, noise::loadPreset(s.scene.preset),
+                                                            options);
+    return s;
+}
+
 /// The reference of a shipped scene (sample pattern seed 3), rendered once per test process.
 inline const noise::Image& referenceImage(const std::string& name, int size, int spp) {
     static std::map<std::tuple<std::string, int, int>, noise::Image> cache;
